@@ -1,0 +1,65 @@
+# hapsyn_add_plugin(<name> SOURCES <src>... SCHEMA <schema.json> [LIBRARIES <lib>...]
+#                   [OUTPUT_DIRECTORY <dir>] [INSTALL_DESTINATION <dir>] [NO_INSTALL] [DEFINITIONS <def>...])
+#
+# Builds the shared library hapsyn-<name>.so that the hapsyn registry loads by name.
+# The plugin's schema.json is embedded in the library, so a plugin file is self-contained.
+# Works in the hapsyn tree and out of tree after find_package(hapsyn).
+set(_HAPSYN_PLUGIN_CMAKE_DIR ${CMAKE_CURRENT_LIST_DIR})
+function(hapsyn_add_plugin name)
+  cmake_parse_arguments(ARG "NO_INSTALL" "SCHEMA;OUTPUT_DIRECTORY;INSTALL_DESTINATION" "SOURCES;LIBRARIES;DEFINITIONS" ${ARGN})
+  if(NOT ARG_SCHEMA)
+    message(FATAL_ERROR "hapsyn_add_plugin(${name}): SCHEMA is required")
+  endif()
+  get_filename_component(schema_abs ${ARG_SCHEMA} ABSOLUTE)
+  set(schema_cpp ${CMAKE_CURRENT_BINARY_DIR}/${name}_schema.cpp)
+  add_custom_command(OUTPUT ${schema_cpp}
+    COMMAND ${CMAKE_COMMAND} -DSCHEMA=${schema_abs} -DOUT=${schema_cpp} -P ${_HAPSYN_PLUGIN_CMAKE_DIR}/embed_schema.cmake
+    DEPENDS ${schema_abs} ${_HAPSYN_PLUGIN_CMAKE_DIR}/embed_schema.cmake
+    COMMENT "Embedding ${name} schema")
+  set(target hapsyn_plugin_${name})
+  add_library(${target} MODULE ${ARG_SOURCES} ${schema_cpp})
+  set_target_properties(${target} PROPERTIES OUTPUT_NAME "hapsyn-${name}" PREFIX ""
+    CXX_VISIBILITY_PRESET hidden VISIBILITY_INLINES_HIDDEN ON)
+  if(TARGET hapsyn::hapsyn)
+    target_link_libraries(${target} PRIVATE hapsyn::hapsyn ${ARG_LIBRARIES})
+  else()
+    target_link_libraries(${target} PRIVATE hapsyn ${ARG_LIBRARIES})
+  endif()
+  if(DEFINED HAPSYN_WARNINGS)
+    target_compile_options(${target} PRIVATE ${HAPSYN_WARNINGS})
+  endif()
+  if(ARG_OUTPUT_DIRECTORY)
+    set_target_properties(${target} PROPERTIES LIBRARY_OUTPUT_DIRECTORY ${ARG_OUTPUT_DIRECTORY})
+  elseif(DEFINED HAPSYN_PLUGIN_OUTPUT_DIR)
+    set_target_properties(${target} PROPERTIES LIBRARY_OUTPUT_DIRECTORY ${HAPSYN_PLUGIN_OUTPUT_DIR})
+  endif()
+  if(ARG_DEFINITIONS)
+    target_compile_definitions(${target} PRIVATE ${ARG_DEFINITIONS})
+  endif()
+  if(ARG_NO_INSTALL)
+  elseif(ARG_INSTALL_DESTINATION)
+    install(TARGETS ${target} LIBRARY DESTINATION ${ARG_INSTALL_DESTINATION})
+  elseif(DEFINED HAPSYN_PLUGIN_INSTALL_DIR)
+    install(TARGETS ${target} LIBRARY DESTINATION ${HAPSYN_PLUGIN_INSTALL_DIR})
+  endif()
+endfunction()
+
+# hapsyn_add_test(<name> <sources>... [LIBRARIES <lib>...] [LABELS <label>...])
+# A GoogleTest executable registered with CTest (in-tree only). Tests run with the build tree's
+# bin/ directory and the repository root available as HAPSYN_BINARY_DIR / HAPSYN_SOURCE_DIR.
+function(hapsyn_add_test name)
+  cmake_parse_arguments(ARG "" "" "LIBRARIES;LABELS" ${ARGN})
+  add_executable(${name} ${ARG_UNPARSED_ARGUMENTS})
+  target_link_libraries(${name} PRIVATE hapsyn GTest::gtest GTest::gtest_main ${ARG_LIBRARIES})
+  target_compile_options(${name} PRIVATE ${HAPSYN_WARNINGS})
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+  target_compile_definitions(${name} PRIVATE
+    HAPSYN_SOURCE_DIR="${PROJECT_SOURCE_DIR}" HAPSYN_BINARY_DIR="${PROJECT_BINARY_DIR}"
+    HAPSYN_PLUGIN_DIR="${HAPSYN_PLUGIN_OUTPUT_DIR}"
+    HAPSYN_TEST_PLUGIN_DIR="${PROJECT_BINARY_DIR}/test-plugins")
+  set(labels fast)
+  if(ARG_LABELS)
+    set(labels ${ARG_LABELS})
+  endif()
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${labels}" TIMEOUT 600)
+endfunction()

@@ -1,0 +1,74 @@
+#pragma once
+/// \file
+/// Design variables and design spaces.
+///
+/// A mechanism declares its variables (VariableDecl); the problem file narrows them (bounds,
+/// grid step, fixed value). Vector variables are flattened into scalar components named
+/// "name[i]"; solvers only ever see a flat vector of the *free* (not fixed) components.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace hapsyn {
+
+/// A design variable as a mechanism declares it. Units are SI (m, rad, kg) unless `unit` says.
+struct VariableDecl {
+  std::string name;         ///< key in the problem file's "design" object, e.g. "l1"
+  std::string description;  ///< one line for `hapsyn describe`
+  std::string unit;         ///< e.g. "m"; "" for dimensionless or codes
+  int size = 1;             ///< 1 for a scalar, n for a vector variable
+  bool integer = false;     ///< integer-valued (joint size codes, gear codes)
+  /// Default bounds (per component; a single entry is broadcast) used when the problem file
+  /// does not narrow them.
+  std::vector<double> default_lower, default_upper;
+  /// Hard limits: bounds in the problem file must stay inside them (e.g. a length >= 0).
+  std::vector<double> hard_lower, hard_upper;
+};
+
+/// A design constraint g(p) <= 0 as a mechanism declares it (evaluated by Mechanism::constraints).
+struct ConstraintDecl {
+  std::string name;
+  std::string description;
+};
+
+/// One scalar component of the resolved design space.
+struct DesignComponent {
+  std::string name;      ///< "l1" or "l[2]"
+  std::string variable;  ///< the variable it belongs to ("l")
+  int index = 0;         ///< component index within the variable
+  bool integer = false;
+  double lower = 0.0, upper = 0.0;
+  double step = 0.0;     ///< grid step; 0 = no grid (continuous)
+  bool fixed = false;    ///< fixed to `lower` (== upper)
+};
+
+/// The resolved design space of a study (all components, fixed and free).
+class DesignSpace {
+ public:
+  DesignSpace() = default;
+  explicit DesignSpace(std::vector<DesignComponent> components);
+
+  /// All components in declaration order (the layout of a full design vector).
+  const std::vector<DesignComponent>& components() const { return components_; }
+  std::size_t size() const { return components_.size(); }
+  /// Indices (into components()) of the free components, in order: the solver's vector.
+  const std::vector<int>& free_indices() const { return free_; }
+  std::size_t free_size() const { return free_.size(); }
+
+  /// Full design from a free vector (fixed components take their value).
+  void expand(const double* free_values, double* full) const;
+  Eigen::VectorXd expand(const Eigen::VectorXd& free_values) const;
+  /// Number of grid points of free component k (requires a step): floor((upper-lower)/step)+1,
+  /// with a relative tolerance so that an upper bound on the grid is included.
+  long long grid_count(std::size_t free_k) const;
+  /// Grid value i of free component k: lower + i*step (clamped to upper).
+  double grid_value(std::size_t free_k, long long i) const;
+  /// Index of a component by name ("l1", "l[2]"); -1 if absent.
+  int find(const std::string& name) const;
+
+ private:
+  std::vector<DesignComponent> components_;
+  std::vector<int> free_;
+};
+
+}  // namespace hapsyn

@@ -1,0 +1,159 @@
+#pragma once
+/// \file
+/// The evaluation interface every solver sees: bounds, integer components, grid steps,
+/// constraints, objectives, and design evaluation (full or on a subset of samples).
+///
+/// This is also where the framework checks plugin input and output once, centrally: a solver
+/// passing a design of the wrong size, with NaN/inf or outside the bounds, and a metric or
+/// mechanism returning NaN/inf, raise hapsyn::Error naming the plugin, the design and the sample.
+#include <hapsyn/design_space.hpp>
+#include <hapsyn/mechanism.hpp>
+#include <hapsyn/metric.hpp>
+#include <hapsyn/scene.hpp>
+
+#include <functional>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hapsyn {
+
+enum class Sense { kMaximize, kMinimize };
+
+/// One objective of the study: a metric with a sense and, for weighted sums, a weight.
+struct Objective {
+  std::string name;      ///< label (defaults to the metric's plugin name)
+  int metric = 0;        ///< index into Problem::metrics()
+  Sense sense = Sense::kMaximize;
+  double weight = 1.0;   ///< weight in the scalar score (weighted-sum studies)
+};
+
+/// A metric instance in the problem, with its plugin name.
+struct MetricEntry {
+  std::string plugin;
+  std::shared_ptr<const Metric> metric;
+};
+
+enum class EvalStatus {
+  kFeasible,            ///< every objective computed
+  kConstraintViolated,  ///< a design constraint g(p) <= 0 failed; no sample evaluated
+  kSampleFailed,        ///< a worst-case metric met an unreachable/singular/invalid sample
+  kPruned,              ///< stopped early: the score's upper bound fell below EvalOptions::prune_below
+};
+const char* to_string(EvalStatus status);
+
+/// Result of one design evaluation.
+struct Evaluation {
+  EvalStatus status = EvalStatus::kFeasible;
+  std::vector<double> objectives;  ///< per objective, natural value (valid when feasible; an
+                                   ///< upper bound for worst-case metrics on a sample subset)
+  double score = -std::numeric_limits<double>::infinity();  ///< sum_i w_i * s_i * f_i, s = +1
+                                   ///< maximize, -1 minimize; -inf when not feasible
+  int failed_constraint = -1;      ///< index, for kConstraintViolated
+  int failed_sample = -1;          ///< sample index, for kSampleFailed
+  SampleStatus failed_status = SampleStatus::kReachable;
+  long long samples_evaluated = 0; ///< mechanism solves performed
+  /// For worst-case metrics: per metric, per local value, the sample attaining the reduction
+  /// (the critical samples culling collects). Empty entries (-1) for sum reductions.
+  std::vector<std::vector<int>> critical_samples;
+  /// Per metric, the reduced local values (same order as Metric::locals()).
+  std::vector<std::vector<double>> reduced;
+};
+
+/// Called for every evaluated sample when a per-sample record is wanted.
+/// Arguments: sample index, the mechanism's quantities, per metric the local values.
+using SampleCallback =
+    std::function<void(int sample, const SampleQuantities& q, const std::vector<std::vector<double>>& locals)>;
+
+struct EvalOptions {
+  /// Evaluate only these samples (indices into samples()); empty = all, in priority order.
+  const std::vector<int>* subset = nullptr;
+  /// Worst-case studies only: stop with kPruned as soon as the score's upper bound (computed
+  /// from the samples seen so far) is strictly below this value. Exact: a design whose score
+  /// is >= prune_below is never pruned.
+  double prune_below = -std::numeric_limits<double>::infinity();
+  /// Called per evaluated sample (sequential evaluation only).
+  const SampleCallback* on_sample = nullptr;
+};
+
+/// The study's problem. Immutable and shared by threads; per-thread state is a Workspace.
+class Problem {
+ public:
+  /// \throws Error if a metric needs quantities the mechanism does not provide, or the scene is
+  ///         not one the mechanism serves, or an objective refers to a missing metric.
+  Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> mechanism,
+          std::shared_ptr<const SampleSet> samples, std::vector<MetricEntry> metrics,
+          std::vector<Objective> objectives, DesignSpace space);
+
+  const DesignSpace& design_space() const { return space_; }
+  const SampleSet& samples() const { return *samples_; }
+  const Mechanism& mechanism() const { return *mechanism_; }
+  const std::vector<MetricEntry>& metrics() const { return metrics_; }
+  const std::vector<Objective>& objectives() const { return objectives_; }
+  std::size_t dimension() const { return space_.free_size(); }
+  std::size_t constraint_count() const { return constraint_names_.size(); }
+  const std::vector<std::string>& constraint_names() const { return constraint_names_; }
+  /// True when every metric in the study is worst-case (culling and pruning apply).
+  bool worst_case() const { return worst_case_; }
+  /// Union of the metrics' needs: what the mechanism computes per sample, and nothing else.
+  Needs needs() const { return needs_; }
+  /// Sample order used for full evaluations: the scene's extreme samples first (far from the
+  /// centroid), so infeasible designs and worst cases are met early. Deterministic.
+  const std::vector<int>& sample_order() const { return order_; }
+
+  /// Per-thread evaluation state (mechanism scratch, accumulators). Not shareable; its
+  /// members are the evaluator's business.
+  class Workspace {
+   public:
+    const Evaluation& last() const { return result; }
+
+   private:
+    friend class Problem;
+    std::unique_ptr<MechanismScratch> scratch;
+    SampleQuantities quantities;
+    Eigen::VectorXd full;
+    std::vector<double> locals;       // flat local values of the current sample
+    std::vector<double> accumulator;  // flat reduced values
+    std::vector<int> argument;        // flat sample index attaining each reduction
+    std::vector<double> g;
+    std::vector<std::vector<double>> nested_locals;  // for SampleCallback
+    Evaluation result;
+  };
+  std::unique_ptr<Workspace> make_workspace() const;
+
+  /// Evaluates a design given as the free vector (size dimension()).
+  /// \throws Error on a wrong size, NaN/inf or out-of-bounds component, or NaN from a plugin.
+  const Evaluation& evaluate(const double* free_design, Workspace& workspace,
+                             const EvalOptions& options = {}) const;
+  /// Same, over all samples split across `threads` threads (deterministic merge).
+  Evaluation evaluate_parallel(const double* free_design, int threads) const;
+  /// Evaluates the design constraints into g (size constraint_count()); true when all <= 0.
+  bool constraints(const double* free_design, double* g) const;
+
+  /// Full design (all components) from a free vector.
+  Eigen::VectorXd full_design(const double* free_design) const;
+  /// {"l0": 0.1, "l": [..], ...} from a full design vector, grouped by variable.
+  Json design_to_json(const Eigen::VectorXd& full_design) const;
+  /// Score of objective values: sum_i w_i * s_i * f_i.
+  double score(const std::vector<double>& objectives) const;
+
+ private:
+  void check_design(const double* free_design) const;
+
+  std::string mechanism_plugin_;
+  std::shared_ptr<const Mechanism> mechanism_;
+  std::shared_ptr<const SampleSet> samples_;
+  std::vector<MetricEntry> metrics_;
+  std::vector<Objective> objectives_;
+  DesignSpace space_;
+  std::vector<std::string> constraint_names_;
+  std::vector<int> order_;
+  std::vector<int> local_offset_;        // first local of metric m in the flat local array
+  std::vector<Reduction> local_reduction_;
+  bool worst_case_ = true;
+  bool any_worst_case_ = false;
+  Needs needs_ = 0;
+};
+
+}  // namespace hapsyn

@@ -1,0 +1,52 @@
+#pragma once
+/// \file
+/// What a metric may ask of a mechanism at one task-space sample, and the fixed-capacity
+/// storage a mechanism fills (no heap allocation in the per-sample loop).
+#include <Eigen/Core>
+#include <cstdint>
+
+namespace hapsyn {
+
+/// Quantities computed at a sample, as bit flags. Pose (the inverse kinematics and its
+/// classification) is always computed; everything else only when some metric asks for it.
+enum Need : std::uint32_t {
+  kNeedPose = 0,
+  kNeedJacobian = 1u << 0,        ///< task Jacobian J (task velocity = J * actuator rates)
+  kNeedInertia = 1u << 1,         ///< joint-space inertia D (actuated coordinates)
+  kNeedEffectiveMass = 1u << 2,   ///< end-effector effective mass M = J^-T D J^-1
+  kNeedGravity = 1u << 3,         ///< gravity torque at the actuators
+  kNeedActuatorLimits = 1u << 4,  ///< actuator velocity / torque limits
+};
+using Needs = std::uint32_t;
+
+/// Classification of one sample for one design.
+enum class SampleStatus : std::uint8_t {
+  kReachable = 0,    ///< valid configuration, quantities filled
+  kUnreachable = 1,  ///< outside the reachable set (no IK solution)
+  kSingular = 2,     ///< reachable but at or too near a singularity
+  kInvalid = 3,      ///< a solution exists but violates the working mode / joint limits
+};
+const char* to_string(SampleStatus status);
+
+/// Largest matrix a mechanism may fill (6-DOF spatial). Fixed capacity => no allocation.
+constexpr int kMaxDof = 8;
+constexpr int kMaxTask = 6;
+using JointVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxDof, 1>;
+using TaskJointMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxTask, kMaxDof>;
+using JointMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxDof, kMaxDof>;
+using TaskMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxTask, kMaxTask>;
+
+/// Everything a mechanism computes at one sample. Only the members requested by Needs are
+/// meaningful; the others keep whatever they held.
+struct SampleQuantities {
+  SampleStatus status = SampleStatus::kUnreachable;
+  JointVector q;                  ///< joint angles of the chosen configuration [rad]
+  TaskJointMatrix jacobian;       ///< J: task velocity [m/s] per actuator rate [rad/s]
+  JointMatrix inertia;            ///< D [kg m^2] in actuated coordinates
+  TaskMatrix effective_mass;      ///< M = J^-T D J^-1 [kg]
+  JointVector gravity;            ///< gravity torque [N m]
+  JointVector max_velocity;       ///< actuator velocity limits [rad/s]
+  JointVector max_torque;         ///< actuator torque limits [N m]
+};
+
+}  // namespace hapsyn

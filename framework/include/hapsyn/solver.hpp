@@ -1,0 +1,66 @@
+#pragma once
+/// \file
+/// Solvers: single-objective (maximize a metric or a weighted sum) or Pareto (a front).
+/// An optimizer outcome (converged, budget spent, infeasible) is a status and a message in
+/// the SolverResult, never an exception; exceptions are for bad input only.
+#include <hapsyn/json.hpp>
+#include <hapsyn/problem.hpp>
+
+#include <Eigen/Core>
+#include <atomic>
+#include <cstdint>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace hapsyn {
+
+enum class SolverStatus {
+  kConverged,        ///< the solver's optimality/termination criterion was met
+  kBudgetExhausted,  ///< evaluation, iteration or time budget spent
+  kInfeasible,       ///< no feasible design found
+  kStopped,          ///< interrupted on request
+  kFailed,           ///< the method failed (message says why)
+};
+const char* to_string(SolverStatus status);
+
+/// A design with its objective values.
+struct SolutionPoint {
+  Eigen::VectorXd design;          ///< full design (all components)
+  std::vector<double> objectives;  ///< natural values, one per objective
+  double score = 0.0;              ///< weighted, sense-signed sum (maximized)
+};
+
+struct SolverResult {
+  SolverStatus status = SolverStatus::kFailed;
+  std::string message;
+  std::optional<SolutionPoint> best;   ///< single-objective solvers
+  std::vector<SolutionPoint> front;    ///< Pareto solvers: non-dominated points
+  long long design_evaluations = 0;    ///< designs evaluated (any status)
+  long long sample_evaluations = 0;    ///< mechanism solves (IK + quantities) performed
+  Json statistics = Json::object();    ///< solver-specific figures for result.json
+};
+
+/// What the framework hands a solver besides the problem.
+struct SolverContext {
+  int threads = 1;                  ///< worker threads the solver may use
+  std::uint64_t seed = 0;           ///< for stochastic solvers
+  std::ostream* progress = nullptr; ///< progress lines (stderr), nullptr = quiet
+  std::string output_directory;     ///< where the solver may write extra files
+  const std::atomic<bool>* stop = nullptr;  ///< set when the user asks to stop (may be null)
+};
+
+/// Solver plugin.
+class Solver {
+ public:
+  virtual ~Solver() = default;
+  /// Solves the problem. Never throws for an optimizer outcome.
+  virtual SolverResult solve(const Problem& problem, const SolverContext& context) const = 0;
+  /// True for Pareto solvers (several objectives give a front instead of a weighted sum).
+  virtual bool pareto() const { return false; }
+  /// Throws hapsyn::Error if the problem is not one this solver handles (called before solve).
+  virtual void check(const Problem& problem) const {}
+};
+
+}  // namespace hapsyn

@@ -1,0 +1,64 @@
+#pragma once
+/// \file
+/// Problem files: loading (with clear errors), --set overrides, and running a study.
+#include <hapsyn/json.hpp>
+#include <hapsyn/problem.hpp>
+#include <hapsyn/registry.hpp>
+#include <hapsyn/solver.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace hapsyn {
+
+/// Parses a problem file. \throws Error("problem: FILE:LINE:COLUMN: ...") on malformed JSON,
+/// or when the file cannot be read.
+Json read_problem_file(const std::string& path);
+/// Parses JSON text; `source` names it in errors.
+Json parse_problem_text(const std::string& text, const std::string& source);
+
+/// Applies one override "path=value" (path with '.' separators; array elements by index,
+/// "objectives.0.metric" or "objectives[0].metric"). The value is JSON when it parses as
+/// JSON, else a string. Missing objects on the path are created.
+/// \throws Error("set: ...") for a malformed override or a path through a non-object.
+void apply_override(Json& problem, const std::string& assignment);
+
+/// A validated, ready-to-run study.
+struct Study {
+  Json resolved;                         ///< the problem with defaults and overrides applied
+  std::shared_ptr<Problem> problem;
+  std::shared_ptr<Solver> solver;
+  std::string solver_plugin;
+  std::vector<PluginRecord> plugins;     ///< every plugin the study uses
+  std::string output_directory;          ///< from the file, or --out
+};
+
+/// Validates a problem document completely (framework rules, each plugin's schema, design
+/// bounds against the mechanism's limits) and builds the scene and problem. Nothing runs.
+/// \throws Error naming the JSON path, the value and the rule.
+Study load_study(const Json& problem, const Registry& registry);
+
+struct RunOptions {
+  std::string output_directory;  ///< overrides output.directory when not empty
+  int threads = 0;               ///< 0 = hardware concurrency
+  std::optional<std::uint64_t> seed;
+  bool quiet = false;
+  bool write_samples = true;     ///< per-sample CSV of the best design
+};
+
+/// Runs a loaded study: solves, then writes result.json (atomically) and samples.csv into the
+/// output directory. Returns the result document. The solver's outcome is in "status".
+Json run_study(Study& study, const RunOptions& options);
+
+/// Writes `content` to `path` atomically (temporary file in the same directory, then rename).
+void write_file_atomically(const std::string& path, const std::string& content);
+
+/// Machine description for logs: host, CPU model, cores, OS.
+Json machine_info();
+/// "0.1.0" (the project version).
+const char* version();
+
+}  // namespace hapsyn

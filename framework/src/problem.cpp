@@ -1,0 +1,348 @@
+#include <hapsyn/error.hpp>
+#include <hapsyn/parallel.hpp>
+#include <hapsyn/problem.hpp>
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+namespace hapsyn {
+
+
+namespace {
+std::string format_design(const Problem& problem, const Eigen::VectorXd& full) {
+  return problem.design_to_json(full).dump();
+}
+
+bool better(Reduction r, double value, int index, double current, int current_index) {
+  switch (r) {
+    case Reduction::kMin: return value < current || (value == current && index < current_index);
+    case Reduction::kMax: return value > current || (value == current && index < current_index);
+    case Reduction::kSum: return false;
+  }
+  return false;
+}
+}  // namespace
+
+Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> mechanism,
+                 std::shared_ptr<const SampleSet> samples, std::vector<MetricEntry> metrics,
+                 std::vector<Objective> objectives, DesignSpace space)
+    : mechanism_plugin_(std::move(mechanism_plugin)),
+      mechanism_(std::move(mechanism)),
+      samples_(std::move(samples)),
+      metrics_(std::move(metrics)),
+      objectives_(std::move(objectives)),
+      space_(std::move(space)) {
+  assert(mechanism_ && samples_);
+  if (samples_->size() == 0) throw Error("problem", "scene: the scene has no samples");
+  if (!samples_->poses.allFinite()) throw Error("problem", "scene: the scene's samples contain NaN or infinity");
+  mechanism_->check_scene(*samples_);
+  if (objectives_.empty()) throw Error("problem", "objectives: at least one objective is required");
+  for (const ConstraintDecl& c : mechanism_->constraints()) constraint_names_.push_back(c.name);
+
+  const Needs provided = mechanism_->provides();
+  for (std::size_t m = 0; m < metrics_.size(); ++m) {
+    const Metric& metric = *metrics_[m].metric;
+    const Needs missing = metric.needs() & ~provided;
+    if (missing != 0) {
+      throw Error("problem", "objectives: metric '" + metrics_[m].plugin +
+                                 "' needs quantities the mechanism '" + mechanism_plugin_ +
+                                 "' does not provide (need flags " + std::to_string(missing) + ")");
+    }
+    needs_ |= metric.needs();
+    const bool wc = metric.aggregation() == Aggregation::kWorstCase;
+    worst_case_ = worst_case_ && wc;
+    any_worst_case_ = any_worst_case_ || wc;
+    local_offset_.push_back(static_cast<int>(local_reduction_.size()));
+    const std::vector<LocalValue> locals = metric.locals();
+    if (locals.empty()) throw Error("problem", "metric '" + metrics_[m].plugin + "' declares no local values");
+    for (const LocalValue& l : locals) local_reduction_.push_back(l.reduction);
+  }
+  local_offset_.push_back(static_cast<int>(local_reduction_.size()));
+  for (const Objective& o : objectives_) {
+    if (o.metric < 0 || o.metric >= static_cast<int>(metrics_.size())) {
+      throw Error("problem", "objective '" + o.name + "' refers to no metric");
+    }
+    if (!std::isfinite(o.weight)) throw Error("problem", "objective '" + o.name + "': weight must be finite");
+  }
+
+  // Extreme samples first: far from the centroid (corners of a square) is where reach fails
+  // and where worst cases usually sit, so infeasible designs and pruning are decided early.
+  const Eigen::RowVectorXd centroid = samples_->poses.colwise().mean();
+  std::vector<double> distance(static_cast<std::size_t>(samples_->size()));
+  for (int i = 0; i < samples_->size(); ++i) {
+    distance[static_cast<std::size_t>(i)] = (samples_->poses.row(i) - centroid).squaredNorm();
+  }
+  order_.resize(distance.size());
+  std::iota(order_.begin(), order_.end(), 0);
+  std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) {
+    return distance[static_cast<std::size_t>(a)] > distance[static_cast<std::size_t>(b)];
+  });
+}
+
+std::unique_ptr<Problem::Workspace> Problem::make_workspace() const {
+  auto ws = std::make_unique<Workspace>();
+  ws->scratch = mechanism_->make_scratch();
+  ws->full.resize(static_cast<Eigen::Index>(space_.size()));
+  ws->locals.resize(local_reduction_.size());
+  ws->accumulator.resize(local_reduction_.size());
+  ws->argument.resize(local_reduction_.size());
+  ws->g.resize(constraint_names_.size());
+  for (std::size_t m = 0; m < metrics_.size(); ++m) {
+    ws->nested_locals.emplace_back(static_cast<std::size_t>(local_offset_[m + 1] - local_offset_[m]));
+  }
+  ws->result.objectives.resize(objectives_.size());
+  ws->result.critical_samples.resize(metrics_.size());
+  ws->result.reduced.resize(metrics_.size());
+  return ws;
+}
+
+void Problem::check_design(const double* free_design) const {
+  for (std::size_t k = 0; k < space_.free_size(); ++k) {
+    const DesignComponent& c = space_.components()[static_cast<std::size_t>(space_.free_indices()[k])];
+    const double v = free_design[k];
+    const double tol = 1e-9 * std::max(1.0, c.upper - c.lower);
+    if (std::isfinite(v) && v >= c.lower - tol && v <= c.upper + tol) continue;
+    // Only a failing design pays for formatting the message.
+    std::ostringstream message;
+    message.precision(17);
+    message << "design component " << c.name << " = " << v << " from the solver: ";
+    if (!std::isfinite(v)) {
+      message << "must be finite";
+    } else {
+      message << "must lie within the bounds [" << c.lower << ", " << c.upper << "]";
+    }
+    throw Error("problem", message.str());
+  }
+}
+
+bool Problem::constraints(const double* free_design, double* g) const {
+  check_design(free_design);
+  const Eigen::VectorXd full = full_design(free_design);
+  mechanism_->evaluate_constraints(full.data(), *samples_, g);
+  bool ok = true;
+  for (std::size_t i = 0; i < constraint_names_.size(); ++i) {
+    if (std::isnan(g[i])) {
+      throw Error("problem", "mechanism '" + mechanism_plugin_ + "' returned constraint '" + constraint_names_[i] +
+                                 "' = nan for design " + format_design(*this, full));
+    }
+    ok = ok && g[i] <= 0.0;
+  }
+  return ok;
+}
+
+Eigen::VectorXd Problem::full_design(const double* free_design) const {
+  Eigen::VectorXd full(static_cast<Eigen::Index>(space_.size()));
+  space_.expand(free_design, full.data());
+  return full;
+}
+
+Json Problem::design_to_json(const Eigen::VectorXd& full) const {
+  Json out = Json::object();
+  for (std::size_t i = 0; i < space_.size(); ++i) {
+    const DesignComponent& c = space_.components()[i];
+    const double v = full[static_cast<Eigen::Index>(i)];
+    const Json value = c.integer ? Json(static_cast<long long>(std::llround(v))) : Json(v);
+    if (c.name == c.variable) {
+      out[c.variable] = value;
+    } else {
+      out[c.variable].push_back(value);
+    }
+  }
+  return out;
+}
+
+double Problem::score(const std::vector<double>& objectives) const {
+  double s = 0.0;
+  for (std::size_t i = 0; i < objectives_.size(); ++i) {
+    const double sign = objectives_[i].sense == Sense::kMaximize ? 1.0 : -1.0;
+    s += objectives_[i].weight * sign * objectives[i];
+  }
+  return s;
+}
+
+namespace {
+void reset_accumulators(const std::vector<Reduction>& reductions, std::vector<double>& acc, std::vector<int>& arg) {
+  for (std::size_t i = 0; i < reductions.size(); ++i) {
+    acc[i] = reductions[i] == Reduction::kMin   ? std::numeric_limits<double>::infinity()
+             : reductions[i] == Reduction::kMax ? -std::numeric_limits<double>::infinity()
+                                                : 0.0;
+    arg[i] = -1;
+  }
+}
+}  // namespace
+
+const Evaluation& Problem::evaluate(const double* free_design, Workspace& ws, const EvalOptions& options) const {
+  check_design(free_design);
+  Evaluation& out = ws.result;
+  out.status = EvalStatus::kFeasible;
+  out.failed_constraint = -1;
+  out.failed_sample = -1;
+  out.failed_status = SampleStatus::kReachable;
+  out.samples_evaluated = 0;
+  out.score = -std::numeric_limits<double>::infinity();
+
+  space_.expand(free_design, ws.full.data());
+  if (!constraint_names_.empty()) {
+    mechanism_->evaluate_constraints(ws.full.data(), *samples_, ws.g.data());
+    for (std::size_t i = 0; i < constraint_names_.size(); ++i) {
+      if (std::isnan(ws.g[i])) {
+        throw Error("problem", "mechanism '" + mechanism_plugin_ + "' returned constraint '" + constraint_names_[i] +
+                                   "' = nan for design " + format_design(*this, ws.full));
+      }
+      if (ws.g[i] > 0.0) {
+        out.status = EvalStatus::kConstraintViolated;
+        out.failed_constraint = static_cast<int>(i);
+        return out;
+      }
+    }
+  }
+
+  const std::unique_ptr<const MechanismModel> model = mechanism_->build(ws.full.data());
+  reset_accumulators(local_reduction_, ws.accumulator, ws.argument);
+  const bool prune = std::isfinite(options.prune_below) && worst_case_ &&
+                     std::all_of(objectives_.begin(), objectives_.end(), [](const Objective& o) {
+                       return o.sense == Sense::kMaximize && o.weight >= 0.0;
+                     });
+  const std::vector<int>& indices = options.subset ? *options.subset : order_;
+  for (const int sample : indices) {
+    model->solve(samples_->pose(sample), needs_, *ws.scratch, ws.quantities);
+    ++out.samples_evaluated;
+    const bool reachable = ws.quantities.status == SampleStatus::kReachable;
+    if (!reachable && any_worst_case_) {
+      out.status = EvalStatus::kSampleFailed;
+      out.failed_sample = sample;
+      out.failed_status = ws.quantities.status;
+      return out;
+    }
+    for (std::size_t m = 0; m < metrics_.size(); ++m) {
+      const int begin = local_offset_[m];
+      const int end = local_offset_[m + 1];
+      metrics_[m].metric->local(ws.quantities, ws.locals.data() + begin);
+      for (int i = begin; i < end; ++i) {
+        const double v = ws.locals[static_cast<std::size_t>(i)];
+        if (!std::isfinite(v)) {
+          std::ostringstream where;
+          where << "metric '" << metrics_[m].plugin << "' returned " << v << " for local value " << (i - begin)
+                << " at sample " << sample << " (" << to_string(ws.quantities.status) << ") of design "
+                << format_design(*this, ws.full);
+          throw Error("problem", where.str());
+        }
+        const std::size_t ui = static_cast<std::size_t>(i);
+        if (local_reduction_[ui] == Reduction::kSum) {
+          ws.accumulator[ui] += v;
+        } else if (better(local_reduction_[ui], v, sample, ws.accumulator[ui], ws.argument[ui])) {
+          ws.accumulator[ui] = v;
+          ws.argument[ui] = sample;
+        }
+      }
+      if (options.on_sample) {
+        std::copy(ws.locals.begin() + begin, ws.locals.begin() + end, ws.nested_locals[m].begin());
+      }
+    }
+    if (options.on_sample) (*options.on_sample)(sample, ws.quantities, ws.nested_locals);
+    if (prune) {
+      // The metrics over the samples seen so far bound their final values from above.
+      double bound = 0.0;
+      for (std::size_t o = 0; o < objectives_.size(); ++o) {
+        const int m = objectives_[o].metric;
+        bound += objectives_[o].weight *
+                 metrics_[static_cast<std::size_t>(m)].metric->combine(
+                     ws.accumulator.data() + local_offset_[static_cast<std::size_t>(m)],
+                     static_cast<int>(out.samples_evaluated));
+      }
+      if (bound < options.prune_below) {
+        out.status = EvalStatus::kPruned;
+        return out;
+      }
+    }
+  }
+
+  for (std::size_t m = 0; m < metrics_.size(); ++m) {
+    const int begin = local_offset_[m];
+    const int end = local_offset_[m + 1];
+    out.reduced[m].assign(ws.accumulator.begin() + begin, ws.accumulator.begin() + end);
+    out.critical_samples[m].assign(ws.argument.begin() + begin, ws.argument.begin() + end);
+  }
+  for (std::size_t o = 0; o < objectives_.size(); ++o) {
+    const std::size_t m = static_cast<std::size_t>(objectives_[o].metric);
+    const double value = metrics_[m].metric->combine(out.reduced[m].data(), static_cast<int>(out.samples_evaluated));
+    if (!std::isfinite(value)) {
+      std::ostringstream where;
+      where << "metric '" << metrics_[m].plugin << "' combined its local values into " << value << " for design "
+            << format_design(*this, ws.full);
+      throw Error("problem", where.str());
+    }
+    out.objectives[o] = value;
+  }
+  out.score = score(out.objectives);
+  return out;
+}
+
+Evaluation Problem::evaluate_parallel(const double* free_design, int threads) const {
+  check_design(free_design);
+  threads = std::max(1, std::min(threads, samples_->size()));
+  if (threads == 1) {
+    auto ws = make_workspace();
+    return evaluate(free_design, *ws);
+  }
+  // Each thread evaluates a contiguous chunk of the sample order; the reductions are merged
+  // with the same tie rule (lower sample index wins) as a sequential run, so the result does
+  // not depend on the thread count.
+  std::vector<std::unique_ptr<Workspace>> spaces(static_cast<std::size_t>(threads));
+  std::vector<std::vector<int>> chunks(static_cast<std::size_t>(threads));
+  const long long n = static_cast<long long>(order_.size());
+  for (int t = 0; t < threads; ++t) {
+    spaces[static_cast<std::size_t>(t)] = make_workspace();
+    chunks[static_cast<std::size_t>(t)].assign(order_.begin() + n * t / threads, order_.begin() + n * (t + 1) / threads);
+  }
+  parallel_for(threads, threads, [&](long long b, long long e, int) {
+    for (long long t = b; t < e; ++t) {
+      EvalOptions o;
+      o.subset = &chunks[static_cast<std::size_t>(t)];
+      evaluate(free_design, *spaces[static_cast<std::size_t>(t)], o);
+    }
+  });
+  Evaluation merged = spaces[0]->result;
+  merged.samples_evaluated = 0;
+  for (const auto& ws : spaces) merged.samples_evaluated += ws->result.samples_evaluated;
+  for (const auto& ws : spaces) {
+    if (ws->result.status != EvalStatus::kFeasible) {
+      Evaluation failed = ws->result;  // the first chunk (in sample order) that failed
+      failed.samples_evaluated = merged.samples_evaluated;
+      return failed;
+    }
+  }
+  std::vector<double> acc(local_reduction_.size());
+  std::vector<int> arg(local_reduction_.size());
+  reset_accumulators(local_reduction_, acc, arg);
+  for (const auto& ws : spaces) {
+    for (std::size_t m = 0; m < metrics_.size(); ++m) {
+      for (std::size_t j = 0; j < ws->result.reduced[m].size(); ++j) {
+        const std::size_t i = static_cast<std::size_t>(local_offset_[m]) + j;
+        const double v = ws->result.reduced[m][j];
+        const int a = ws->result.critical_samples[m][j];
+        if (local_reduction_[i] == Reduction::kSum) {
+          acc[i] += v;
+        } else if (better(local_reduction_[i], v, a, acc[i], arg[i])) {
+          acc[i] = v;
+          arg[i] = a;
+        }
+      }
+    }
+  }
+  for (std::size_t m = 0; m < metrics_.size(); ++m) {
+    merged.reduced[m].assign(acc.begin() + local_offset_[m], acc.begin() + local_offset_[m + 1]);
+    merged.critical_samples[m].assign(arg.begin() + local_offset_[m], arg.begin() + local_offset_[m + 1]);
+  }
+  for (std::size_t o = 0; o < objectives_.size(); ++o) {
+    const std::size_t m = static_cast<std::size_t>(objectives_[o].metric);
+    merged.objectives[o] = metrics_[m].metric->combine(merged.reduced[m].data(), static_cast<int>(merged.samples_evaluated));
+  }
+  merged.score = score(merged.objectives);
+  return merged;
+}
+
+}  // namespace hapsyn

@@ -1,0 +1,235 @@
+#include <hapsyn/error.hpp>
+#include <hapsyn/plugin.hpp>
+#include <hapsyn/registry.hpp>
+#include <hapsyn/schema.hpp>
+
+#include <boost/dll/import.hpp>
+#include <boost/dll/runtime_symbol_info.hpp>
+#include <boost/dll/shared_library.hpp>
+#include <boost/filesystem.hpp>
+
+#include <algorithm>
+#include <cstdlib>
+#include <functional>
+#include <set>
+#include <sstream>
+
+namespace hapsyn {
+
+namespace fs = boost::filesystem;
+
+namespace {
+constexpr const char* kPrefix = "hapsyn-";
+constexpr const char* kSuffix = ".so";
+
+bool is_plugin_file_name(const std::string& file) {
+  return file.size() > std::string(kPrefix).size() + std::string(kSuffix).size() &&
+         file.compare(0, 7, kPrefix) == 0 && file.compare(file.size() - 3, 3, kSuffix) == 0;
+}
+
+std::string plugin_name_of(const std::string& file) {
+  return file.substr(7, file.size() - 10);
+}
+
+std::string join(const std::vector<std::string>& items, const std::string& separator) {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? separator : "") + items[i];
+  return out;
+}
+}  // namespace
+
+struct Registry::Loaded {
+  boost::dll::shared_library library;
+  PluginRecord record;
+};
+
+std::vector<std::string> Registry::default_search_path() {
+  std::vector<std::string> path;
+  if (const char* env = std::getenv("HAPSYN_PLUGIN_PATH")) {
+    std::stringstream ss(env);
+    std::string dir;
+    while (std::getline(ss, dir, ':')) {
+      if (!dir.empty()) path.push_back(dir);
+    }
+  }
+  // Plugins live in <libdir>/hapsyn/plugins next to libhapsyn, in the build tree and in the
+  // install prefix alike, so locating this library locates them.
+  const fs::path self = boost::dll::this_line_location();
+  path.push_back((self.parent_path() / "hapsyn" / "plugins").string());
+  return path;
+}
+
+Registry::Registry(std::vector<std::string> search_path) : search_path_(std::move(search_path)) {}
+Registry::~Registry() = default;
+
+std::vector<std::string> Registry::known_names() const {
+  std::set<std::string> names;
+  for (const std::string& dir : search_path_) {
+    boost::system::error_code ec;
+    if (!fs::is_directory(dir, ec)) continue;
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string file = it->path().filename().string();
+      if (is_plugin_file_name(file)) names.insert(plugin_name_of(file));
+    }
+  }
+  return {names.begin(), names.end()};
+}
+
+const Registry::Loaded& Registry::load(const std::string& path_in) const {
+  boost::system::error_code ec;
+  const std::string path = fs::weakly_canonical(path_in, ec).string();
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto found = loaded_.find(path);
+  if (found != loaded_.end()) return *found->second;
+
+  auto loaded = std::make_unique<Loaded>();
+  try {
+    loaded->library.load(path, boost::dll::load_mode::rtld_lazy | boost::dll::load_mode::rtld_local);
+  } catch (const std::exception& e) {
+    throw Error("registry", path + ": cannot load the shared library: " + e.what());
+  }
+  if (!loaded->library.has("hapsyn_plugin_info") || !loaded->library.has("hapsyn_plugin_create")) {
+    throw Error("registry", path +
+                                ": not a hapsyn plugin (the symbols hapsyn_plugin_info and hapsyn_plugin_create "
+                                "are missing; register the class with HAPSYN_*_PLUGIN and build it with "
+                                "hapsyn_add_plugin)");
+  }
+  // The info function's signature is the same for every API version: that makes the version
+  // check itself safe before anything else of the plugin is trusted.
+  const auto& info_fn = loaded->library.get_alias<PluginInfo()>("hapsyn_plugin_info");
+  const PluginInfo info = info_fn();
+  if (info.api_version != HAPSYN_PLUGIN_API_VERSION) {
+    throw Error("registry", path + ": plugin '" + (info.name ? info.name : "?") + "' was built for plugin API version " +
+                                std::to_string(info.api_version) + ", this hapsyn has API version " +
+                                std::to_string(HAPSYN_PLUGIN_API_VERSION) + "; rebuild the plugin against this hapsyn");
+  }
+  PluginRecord& r = loaded->record;
+  r.name = info.name ? info.name : "";
+  r.kind = info.kind ? info.kind : "";
+  r.version = info.version ? info.version : "";
+  r.description = info.description ? info.description : "";
+  r.thread_safety = info.thread_safety ? info.thread_safety : "";
+  r.file = path;
+  static const std::set<std::string> kinds = {"mechanism", "scene", "metric", "solver"};
+  if (!kinds.count(r.kind)) {
+    throw Error("registry", path + ": plugin '" + r.name + "' has unknown kind '" + r.kind +
+                                "' (known: mechanism, scene, metric, solver)");
+  }
+  const std::string file = fs::path(path).filename().string();
+  if (is_plugin_file_name(file) && plugin_name_of(file) != r.name) {
+    throw Error("registry", path + ": the file is named for plugin '" + plugin_name_of(file) +
+                                "' but the plugin registers itself as '" + r.name + "'");
+  }
+  try {
+    r.schema = Json::parse(info.schema ? info.schema : "");
+  } catch (const Json::parse_error& e) {
+    throw Error("registry", path + ": plugin '" + r.name + "' ships a malformed schema.json: " + e.what());
+  }
+  check_schema(r.schema, "plugin '" + r.name + "' schema.json");
+  auto& slot = loaded_[path];
+  slot = std::move(loaded);
+  return *slot;
+}
+
+const PluginRecord& Registry::load_file(const std::string& path) const { return load(path).record; }
+
+const PluginRecord& Registry::find(const std::string& name) const {
+  for (const std::string& dir : search_path_) {
+    const fs::path candidate = fs::path(dir) / (kPrefix + name + kSuffix);
+    boost::system::error_code ec;
+    if (fs::exists(candidate, ec)) return load(candidate.string()).record;
+  }
+  const std::vector<std::string> known = known_names();
+  std::string message = "unknown plugin '" + name + "'";
+  const std::string near = nearest_name(name, known);
+  if (!near.empty()) message += " (did you mean '" + near + "'?)";
+  message += known.empty() ? "; no plugins found in " + join(search_path_, ":") : "; known plugins: " + join(known, ", ");
+  throw Error("registry", message);
+}
+
+std::vector<PluginRecord> Registry::list(std::vector<std::string>* errors) const {
+  std::vector<PluginRecord> out;
+  std::set<std::string> seen;
+  for (const std::string& dir : search_path_) {
+    boost::system::error_code ec;
+    if (!fs::is_directory(dir, ec)) continue;
+    std::vector<std::string> files;
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+      if (is_plugin_file_name(it->path().filename().string())) files.push_back(it->path().string());
+    }
+    std::sort(files.begin(), files.end());
+    for (const std::string& f : files) {
+      const std::string name = plugin_name_of(fs::path(f).filename().string());
+      if (seen.count(name)) continue;  // shadowed by an earlier directory
+      try {
+        out.push_back(load(f).record);
+        seen.insert(name);
+      } catch (const Error& e) {
+        if (errors) errors->push_back(e.what());
+      }
+    }
+  }
+  std::sort(out.begin(), out.end(), [](const PluginRecord& a, const PluginRecord& b) {
+    return a.kind != b.kind ? a.kind < b.kind : a.name < b.name;
+  });
+  return out;
+}
+
+Json Registry::resolve_options(const std::string& name, const Json& options, const std::string& json_path) const {
+  const PluginRecord& r = find(name);
+  return validate_and_fill(r.schema, options.is_null() ? Json::object() : options, json_path);
+}
+
+template <class T>
+std::shared_ptr<T> Registry::create(const std::string& name, const char* kind, const Json& options,
+                                    const std::string& json_path) const {
+  const PluginRecord& record = find(name);
+  if (record.kind != kind) {
+    throw Error("problem", json_path + ".plugin = \"" + name + "\": '" + name + "' is a " + record.kind +
+                               " plugin, not a " + kind + " plugin");
+  }
+  const Json resolved = validate_and_fill(record.schema, options.is_null() ? Json::object() : options,
+                                          json_path + ".options");
+  const Loaded* loaded = nullptr;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    loaded = loaded_.at(record.file).get();
+  }
+  const auto& factory = loaded->library.get_alias<std::unique_ptr<T>(const Json&)>("hapsyn_plugin_create");
+  std::unique_ptr<T> object;
+  try {
+    object = factory(resolved);
+  } catch (const Error& e) {
+    throw Error("problem", json_path + ".options: " + e.what());
+  } catch (const std::exception& e) {
+    throw Error("registry", "plugin '" + name + "' (" + record.file + ") failed to create its " + kind + ": " + e.what());
+  } catch (...) {
+    throw Error("registry", "plugin '" + name + "' (" + record.file + ") failed to create its " + kind +
+                                ": unknown exception");
+  }
+  if (!object) {
+    throw Error("registry", "plugin '" + name + "' (" + record.file + ") returned no " + kind);
+  }
+  // The deleter holds its own reference to the library, so an object never outlives its code.
+  boost::dll::shared_library library = loaded->library;
+  return std::shared_ptr<T>(object.release(), [library](T* p) { delete p; });
+}
+
+std::shared_ptr<Mechanism> Registry::create_mechanism(const std::string& name, const Json& options,
+                                                      const std::string& json_path) const {
+  return create<Mechanism>(name, "mechanism", options, json_path);
+}
+std::shared_ptr<Scene> Registry::create_scene(const std::string& name, const Json& options,
+                                              const std::string& json_path) const {
+  return create<Scene>(name, "scene", options, json_path);
+}
+std::shared_ptr<Metric> Registry::create_metric(const std::string& name, const Json& options,
+                                                const std::string& json_path) const {
+  return create<Metric>(name, "metric", options, json_path);
+}
+std::shared_ptr<Solver> Registry::create_solver(const std::string& name, const Json& options,
+                                                const std::string& json_path) const {
+  return create<Solver>(name, "solver", options, json_path);
+}
+
+}  // namespace hapsyn

@@ -1,0 +1,312 @@
+#include "fivebar.hpp"
+
+#include <hapsyn/error.hpp>
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace hapsyn::plugins {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+constexpr const char* kName = "fivebar";
+
+std::string show(double value) { return Json(value).dump(); }
+
+double number_option(const Json& options, const char* key, double fallback) {
+  const auto it = options.find(key);
+  if (it == options.end()) return fallback;
+  if (!it->is_number()) {
+    throw Error(kName, std::string("options.") + key + " = " + it->dump() + ": must be a number");
+  }
+  const double value = it->get<double>();
+  if (!std::isfinite(value)) {
+    throw Error(kName, std::string("options.") + key + " = " + show(value) + ": must be finite");
+  }
+  return value;
+}
+
+/// One leg solved in its own frame: the left leg in the mechanism frame, the right leg in the
+/// frame mirrored about x = 0 (so both legs run the same code and the model is exactly
+/// mirror-symmetric).
+struct Leg {
+  double ux = 0.0, uy = 0.0;  // unit vector along the actuated link
+  double wx = 0.0, wy = 0.0;  // free link vector E - B [m]
+  double q_act = 0.0;         // atan2(E - A) + acos(c), in (-pi, 2pi]
+  double q_free = 0.0;        // angle of E - B, in [-pi/2, 3pi/2)
+};
+
+enum class LegResult { kSolved, kUnreachable, kOnJoint };
+
+/// Elbow-out inverse kinematics of one leg with E - A = (dx, dy).
+LegResult solve_leg(double dx, double dy, double l1, double l2, Leg& leg) {
+  const double rho2 = dx * dx + dy * dy;
+  const double rho = std::sqrt(rho2);
+  const double diff = (l1 - l2) * (l1 + l2);  // l1^2 - l2^2 without cancellation
+  const double spread = l1 * l1 + l2 * l2 + rho2;
+  if (!(rho > 0.0)) {
+    // E on the actuated joint: reachable only folded (l1 = l2), with any q1; singular.
+    return std::abs(diff) <= 8.0 * kEps * spread ? LegResult::kOnJoint : LegResult::kUnreachable;
+  }
+  const double den = 2.0 * l1 * rho;
+  double c = (diff + rho2) / den;  // cosine of the angle between E - A and the actuated link
+  // Rounding bound of c: a sample on the reach boundary (|E - A| = l1 + l2 or |l1 - l2|) may
+  // compute |c| a few ulps above 1; it is clamped (and then classified singular), never NaN.
+  const double tolerance = 8.0 * kEps * spread / den;
+  if (!(std::abs(c) <= 1.0 + tolerance)) return LegResult::kUnreachable;
+  c = std::clamp(c, -1.0, 1.0);
+  const double s = std::sqrt((1.0 - c) * (1.0 + c));  // sin(acos(c)) >= 0
+  const double ex = dx / rho, ey = dy / rho;
+  leg.ux = c * ex - s * ey;  // E - A rotated counter-clockwise by acos(c): elbow out
+  leg.uy = c * ey + s * ex;
+  leg.wx = dx - l1 * leg.ux;
+  leg.wy = dy - l1 * leg.uy;
+  leg.q_act = std::atan2(dy, dx) + std::acos(c);
+  double q_free = std::atan2(leg.wy, leg.wx);
+  if (q_free < -0.5 * kPi) q_free += 2.0 * kPi;
+  leg.q_free = q_free;
+  return LegResult::kSolved;
+}
+
+void check_length(const char* name, double value, bool allow_zero) {
+  if (!std::isfinite(value) || value < 0.0 || (!allow_zero && value == 0.0)) {
+    throw Error(kName, std::string("design ") + name + " = " + show(value) +
+                           (allow_zero ? ": must be finite and >= 0" : ": must be finite and > 0"));
+  }
+}
+
+}  // namespace
+
+FiveBarOptions FiveBarOptions::from_json(const Json& options) {
+  FiveBarOptions o;
+  if (options.is_null()) return o;
+  if (!options.is_object()) throw Error(kName, "options = " + options.dump() + ": must be an object");
+  for (const auto& item : options.items()) {
+    const std::string& key = item.key();
+    if (key != "elbow" && key != "rho" && key != "k" && key != "singularity_tolerance") {
+      throw Error(kName, "options." + key + ": unknown option (known: elbow, rho, k, singularity_tolerance)");
+    }
+  }
+  if (const auto it = options.find("elbow"); it != options.end()) {
+    if (!it->is_string() || it->get<std::string>() != "out") {
+      throw Error(kName, "options.elbow = " + it->dump() + ": must be \"out\" (the paper's elbow-out posture)");
+    }
+    o.elbow = it->get<std::string>();
+  }
+  o.rho = number_option(options, "rho", o.rho);
+  if (!(o.rho > 0.0)) throw Error(kName, "options.rho = " + show(o.rho) + ": must be > 0");
+  o.k = number_option(options, "k", o.k);
+  if (!(o.k >= 0.0)) throw Error(kName, "options.k = " + show(o.k) + ": must be >= 0");
+  o.singularity_tolerance = number_option(options, "singularity_tolerance", o.singularity_tolerance);
+  if (!(o.singularity_tolerance > 0.0 && o.singularity_tolerance <= 1.0)) {
+    throw Error(kName, "options.singularity_tolerance = " + show(o.singularity_tolerance) +
+                           ": must be > 0 and <= 1");
+  }
+  return o;
+}
+
+FiveBarModel::FiveBarModel(const FiveBarDesign& design, const FiveBarOptions& options)
+    : design_(design), options_(options) {
+  check_length("l0", design.l0, true);
+  check_length("l1", design.l1, false);
+  check_length("l2", design.l2, false);
+  if (!std::isfinite(design.r)) throw Error(kName, "design r = " + show(design.r) + ": must be finite");
+  h0_ = 0.5 * design.l0;
+  m1_ = options.rho * design.l1;
+  m2_ = options.rho * design.l2;
+  const double k2 = options.k * options.k;
+  inertia_a_ = m1_ * (4.0 * design.l1 * design.l1 + k2) / 12.0;
+  inertia_f_ = m2_ * (design.l2 * design.l2 + k2) / 12.0;
+  l2_squared_ = design.l2 * design.l2;
+}
+
+void FiveBarModel::solve(const double* pose, Needs needs, MechanismScratch& /*scratch*/,
+                         SampleQuantities& out) const {
+  const double l1 = design_.l1, l2 = design_.l2;
+  const double x = pose[0];
+  const double y = pose[1] + design_.r;
+  out.q.resize(4);
+
+  Leg left, right;  // right: solved in the mirrored frame (x -> -x)
+  const LegResult rl = solve_leg(x + h0_, y, l1, l2, left);
+  const LegResult rr = solve_leg(h0_ - x, y, l1, l2, right);
+  if (rl == LegResult::kUnreachable || rr == LegResult::kUnreachable) {
+    out.q.setZero();
+    out.status = SampleStatus::kUnreachable;
+    return;
+  }
+  if (rl == LegResult::kOnJoint || rr == LegResult::kOnJoint) {
+    out.q.setZero();
+    out.status = SampleStatus::kSingular;
+    return;
+  }
+
+  const double q1 = left.q_act, q2 = left.q_free;
+  const double q3 = kPi - right.q_free, q4 = kPi - right.q_act;
+  out.q << q1, q2, q3, q4;
+
+  // Vectors in the mechanism frame.
+  const double u1x = left.ux, u1y = left.uy, w1x = left.wx, w1y = left.wy;
+  const double u4x = -right.ux, u4y = right.uy, w2x = -right.wx, w2y = right.wy;
+
+  // Transmission sines (cross products of the link vectors).
+  const double s12 = (left.wx * left.uy - left.wy * left.ux) / l2;      // sin(q1 - q2)
+  const double s34 = (right.wx * right.uy - right.wy * right.ux) / l2;  // sin(q3 - q4)
+  const double cross12 = w1x * w2y - w1y * w2x;                          // l2^2 sin(q3 - q2)
+  const double s23 = cross12 / l2_squared_;
+  const double tol = options_.singularity_tolerance;
+  if (!(std::abs(s12) >= tol && std::abs(s34) >= tol && std::abs(s23) >= tol)) {
+    out.status = SampleStatus::kSingular;
+    return;
+  }
+
+  // The paper's G, closed inequalities with a small tolerance (DESIGN.md section 6).
+  const double t = kFiveBarAngleTolerance;
+  const double mode = q3 - q2;
+  const bool valid = q2 >= -t && q2 <= kPi + t && q3 >= -t && q3 <= kPi + t && q2 <= q1 + t &&
+                     q4 <= q3 + t && mode > 0.0 && mode < kPi;
+  if (!valid) {
+    out.status = SampleStatus::kInvalid;
+    return;
+  }
+  out.status = SampleStatus::kReachable;
+  if ((needs & (kNeedJacobian | kNeedInertia | kNeedEffectiveMass)) == 0) return;
+
+  // Jacobian. For each leg (E - B_i) . (Edot - l1 qidot perp(u_i)) = 0, i.e.
+  // W Edot = diag(b1, b2) qdot with W = [w1^T; w2^T], b_i = l1 cross(u_i, w_i).
+  const double b1 = l1 * (u1x * w1y - u1y * w1x);  // -l1 l2 sin(q1 - q2)
+  const double b2 = l1 * (u4x * w2y - u4y * w2x);  //  l1 l2 sin(q3 - q4)
+  const double inv_det = 1.0 / cross12;
+  Eigen::Matrix2d jac;
+  jac << w2y * b1 * inv_det, -w1y * b2 * inv_det,  //
+      -w2x * b1 * inv_det, w1x * b2 * inv_det;
+  if (needs & kNeedJacobian) {
+    out.jacobian.resize(2, 2);
+    out.jacobian = jac;
+  }
+  if ((needs & (kNeedInertia | kNeedEffectiveMass)) == 0) return;
+
+  // Joint-space inertia from the kinetic energy of the four bars:
+  //  actuated bars rotate about their joints: 1/2 I_a qidot^2, I_a = m1 (4 l1^2 + k^2) / 12;
+  //  free bar i: centre velocity = (velocity of B_i + velocity of E) / 2 = C_i qdot,
+  //  angular rate = perp(w_i) . (Edot - Bdot_i) / l2^2 = a_i^T qdot, I_f = m2 (l2^2 + k^2) / 12.
+  Eigen::Matrix2d p1 = Eigen::Matrix2d::Zero(), p2 = Eigen::Matrix2d::Zero();
+  p1(0, 0) = -l1 * u1y;  // velocity of B1 per q1dot: l1 perp(u1)
+  p1(1, 0) = l1 * u1x;
+  p2(0, 1) = -l1 * u4y;  // velocity of B2 per q4dot: l1 perp(u4)
+  p2(1, 1) = l1 * u4x;
+  const Eigen::Matrix2d c1 = 0.5 * (p1 + jac);
+  const Eigen::Matrix2d c2 = 0.5 * (p2 + jac);
+  const Eigen::Vector2d a2 = (jac - p1).transpose() * Eigen::Vector2d(-w1y, w1x) / l2_squared_;
+  const Eigen::Vector2d a3 = (jac - p2).transpose() * Eigen::Vector2d(-w2y, w2x) / l2_squared_;
+  Eigen::Matrix2d inertia = m2_ * (c1.transpose() * c1 + c2.transpose() * c2) +
+                            inertia_f_ * (a2 * a2.transpose() + a3 * a3.transpose());
+  inertia(0, 0) += inertia_a_;
+  inertia(1, 1) += inertia_a_;
+  out.inertia.resize(2, 2);
+  out.inertia = inertia;
+  if ((needs & kNeedEffectiveMass) == 0) return;
+
+  // M = J^-T D J^-1 with J^-1 = diag(b1, b2)^-1 W (no inversion of J).
+  Eigen::Matrix2d jac_inv;
+  jac_inv << w1x / b1, w1y / b1,  //
+      w2x / b2, w2y / b2;
+  out.effective_mass.resize(2, 2);
+  out.effective_mass = jac_inv.transpose() * inertia * jac_inv;
+}
+
+bool FiveBarModel::forward(double q1, double q4, double* xy) const {
+  const double l1 = design_.l1, l2 = design_.l2;
+  const double b1x = -h0_ + l1 * std::cos(q1), b1y = l1 * std::sin(q1);
+  const double b2x = h0_ + l1 * std::cos(q4), b2y = l1 * std::sin(q4);
+  const double ex = b2x - b1x, ey = b2y - b1y;
+  const double d = std::hypot(ex, ey);
+  if (!(d > 0.0) || d > 2.0 * l2) return false;
+  const double h = std::sqrt(std::max(0.0, l2_squared_ - 0.25 * d * d));
+  // E = midpoint + h * perp(e) / d: the branch with cross(E - B1, E - B2) > 0.
+  xy[0] = 0.5 * (b1x + b2x) - h * ey / d;
+  xy[1] = 0.5 * (b1y + b2y) + h * ex / d - design_.r;
+  return true;
+}
+
+FiveBar::FiveBar(const Json& options) : options_(FiveBarOptions::from_json(options)) {}
+
+FiveBarDesign FiveBar::design_from(const double* design) {
+  FiveBarDesign d{design[0], design[1], design[2], design[3]};
+  check_length("l0", d.l0, true);
+  check_length("l1", d.l1, false);
+  check_length("l2", d.l2, false);
+  if (!std::isfinite(d.r)) throw Error(kName, "design r = " + show(d.r) + ": must be finite");
+  return d;
+}
+
+std::unique_ptr<const MechanismModel> FiveBar::build(const double* design) const {
+  return std::make_unique<const FiveBarModel>(design_from(design), options_);
+}
+
+std::vector<VariableDecl> FiveBar::variables() const {
+  auto scalar = [](const char* name, const char* description, double lower, double upper,
+                   double hard_lower, double hard_upper) {
+    VariableDecl v;
+    v.name = name;
+    v.description = description;
+    v.unit = "m";
+    v.default_lower = {lower};
+    v.default_upper = {upper};
+    v.hard_lower = {hard_lower};
+    v.hard_upper = {hard_upper};
+    return v;
+  };
+  return {scalar("l0", "distance between the actuated joints", 0.0, 0.3, 0.0, 10.0),
+          scalar("l1", "actuated link length (l1 = l4)", 0.01, 0.3, 1e-4, 10.0),
+          scalar("l2", "free link length (l2 = l3)", 0.01, 0.3, 1e-4, 10.0),
+          scalar("r", "placement: distance from the actuated joints' midpoint to the scene centre",
+                 0.0, 0.6, -10.0, 10.0)};
+}
+
+std::vector<ConstraintDecl> FiveBar::constraints() const {
+  return {ConstraintDecl{"reach",
+                         "farthest corner of the scene's bounding box within l1 + l2 of both actuated "
+                         "joints: max_i |corner - A_i|^2 - (l1 + l2)^2 <= 0 [m^2]"}};
+}
+
+double FiveBar::reach_constraint(const FiveBarDesign& design, double xmin, double xmax, double ymin,
+                                 double ymax) {
+  const double h0 = 0.5 * design.l0;
+  const double ay = std::max(std::abs(ymin + design.r), std::abs(ymax + design.r));
+  const double ax1 = std::max(std::abs(xmin + h0), std::abs(xmax + h0));  // from A1 = (-h0, 0)
+  const double ax2 = std::max(std::abs(xmin - h0), std::abs(xmax - h0));  // from A2 = (+h0, 0)
+  const double ax = std::max(ax1, ax2);
+  const double reach = design.l1 + design.l2;
+  return (ax * ax + ay * ay) - reach * reach;
+}
+
+void FiveBar::evaluate_constraints(const double* design, const SampleSet& scene, double* g) const {
+  if (scene.dimension() != 2 || scene.size() == 0) check_scene(scene);
+  // The bounding box (SampleSet::lower_corner/upper_corner) in one pass, without allocating.
+  double xmin = std::numeric_limits<double>::infinity(), ymin = xmin;
+  double xmax = -xmin, ymax = -xmin;
+  const double* p = scene.poses.data();
+  for (int i = 0, n = scene.size(); i < n; ++i, p += 2) {
+    xmin = std::min(xmin, p[0]);
+    xmax = std::max(xmax, p[0]);
+    ymin = std::min(ymin, p[1]);
+    ymax = std::max(ymax, p[1]);
+  }
+  g[0] = reach_constraint(FiveBarDesign{design[0], design[1], design[2], design[3]}, xmin, xmax, ymin, ymax);
+}
+
+void FiveBar::check_scene(const SampleSet& scene) const {
+  if (scene.dimension() != 2) {
+    throw Error(kName, "scene samples have " + std::to_string(scene.dimension()) +
+                           " coordinates: the five-bar serves planar scenes of (x, y) [m] samples");
+  }
+  if (scene.size() == 0) throw Error(kName, "scene has no samples");
+}
+
+Needs FiveBar::provides() const { return kNeedJacobian | kNeedInertia | kNeedEffectiveMass; }
+
+}  // namespace hapsyn::plugins

@@ -1,0 +1,130 @@
+#pragma once
+/// \file
+/// The symmetric planar five-bar linkage of Unal, Kiziltas & Patoglu (Haptics Symposium 2008),
+/// elbow-out posture, as a hapsyn mechanism.
+///
+/// Frames and conventions (DESIGN.md section 3):
+/// - Design vector (SI metres): l0 (distance between the actuated joints), l1 (actuated links,
+///   l1 = l4), l2 (free links, l2 = l3), r (placement: the scene's centre lies at (0, r) in the
+///   mechanism frame).
+/// - Mechanism frame: actuated joints A1 = (-l0/2, 0), A2 = (+l0/2, 0); a scene sample (x, y)
+///   [m] puts the end effector at E = (x, y + r). Angles are measured from +x, counter-clockwise.
+/// - Joint vector q = (q1, q2, q3, q4) [rad]: q1, q4 the actuated links, q2, q3 the free links
+///   (left and right). Actuated coordinates (q1, q4).
+/// - Elbow-out inverse kinematics: q1 = atan2(E - A1) + acos(c1), q4 = atan2(E - A2) - acos(c2)
+///   (law of cosines), q2 = angle(E - B1), q3 = angle(E - B2), B1, B2 the elbows.
+///   Representations: q1 in (-pi, 2pi], q2 in [-pi/2, 3pi/2), and their exact mirror images
+///   q4 = pi - (mirrored q1) in [-pi, 2pi), q3 = pi - (mirrored q2) in (-pi/2, 3pi/2], so that
+///   reflecting a sample about x = 0 maps (q1, q2, q3, q4) to (pi - q4, pi - q3, pi - q2, pi - q1)
+///   bit for bit.
+/// - Validity (the paper's G): 0 <= q2 <= pi, q2 <= q1, 0 <= q3 <= pi, q4 <= q3 (within
+///   kAngleTolerance), working mode 0 < q3 - q2 < pi, and |sin(q1 - q2)|, |sin(q3 - q4)|,
+///   |sin(q3 - q2)| >= singularity_tolerance.
+/// - J maps (q1dot, q4dot) [rad/s] to (xdot, ydot) [m/s]; D is the joint-space inertia in
+///   (q1, q4) [kg m^2] of four uniform bars of width k and linear density rho; the effective
+///   mass at the end effector is M = J^-T D J^-1 [kg].
+#include <hapsyn/json.hpp>
+#include <hapsyn/mechanism.hpp>
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hapsyn::plugins {
+
+/// Options of the five-bar (see schema.json). The defaults repeat schema.json's so that a model
+/// can be built from an empty options object (tests); the unit test checks that they agree.
+struct FiveBarOptions {
+  std::string elbow = "out";            ///< assembly branch; only "out" (the paper's)
+  double rho = 1.08;                    ///< linear density of every bar [kg/m]
+  double k = 0.005;                     ///< width of every bar [m] (enters the bar inertias)
+  double singularity_tolerance = 1e-4;  ///< smallest admissible |sin| of the three
+                                        ///< transmission angles [-]
+
+  /// Reads and checks options (missing keys keep the defaults above).
+  /// \throws Error("fivebar: options.<key> = <value>: <rule>") on a wrong type or value.
+  static FiveBarOptions from_json(const Json& options);
+};
+
+/// One design in SI units [m].
+struct FiveBarDesign {
+  double l0 = 0.0;  ///< distance between the actuated joints [m]
+  double l1 = 0.0;  ///< actuated link length (l1 = l4) [m]
+  double l2 = 0.0;  ///< free link length (l2 = l3) [m]
+  double r = 0.0;   ///< placement: scene centre at (0, r) in the mechanism frame [m]
+};
+
+/// Tolerance [rad] of the closed inequalities of the validity set G (one-ulp rounding at a
+/// limit must not change a classification; DESIGN.md section 6).
+constexpr double kFiveBarAngleTolerance = 1e-9;
+
+/// The five-bar for one design. Immutable; solve() is const, allocation-free and thread-safe
+/// (it needs no scratch).
+class FiveBarModel final : public MechanismModel {
+ public:
+  /// \throws Error when a length is not finite, l0 < 0 or l1, l2 <= 0, or r is not finite.
+  FiveBarModel(const FiveBarDesign& design, const FiveBarOptions& options);
+
+  /// Classifies the sample (x, y) [m] (scene frame) and fills q, and on request J, D and M.
+  /// q is filled for reachable, singular and invalid samples (the computed configuration; zeros
+  /// when the end effector sits exactly on an actuated joint) and zeroed for unreachable ones.
+  void solve(const double* pose, Needs needs, MechanismScratch& scratch,
+             SampleQuantities& out) const override;
+
+  /// Forward kinematics: the end effector (x, y) [m] in the scene frame from the actuated
+  /// angles q1, q4 [rad], on the working-mode branch (sin(q3 - q2) > 0, E to the left of
+  /// B1 -> B2). \return false when the elbows are farther apart than 2 l2 or coincide.
+  bool forward(double q1, double q4, double* xy) const;
+
+  const FiveBarDesign& design() const { return design_; }
+  const FiveBarOptions& options() const { return options_; }
+  double actuated_mass() const { return m1_; }  ///< m1 = m4 = rho l1 [kg]
+  double free_mass() const { return m2_; }      ///< m2 = m3 = rho l2 [kg]
+
+ private:
+  FiveBarDesign design_;
+  FiveBarOptions options_;
+  double h0_ = 0.0;         // l0 / 2 [m]
+  double m1_ = 0.0;         // actuated bar mass [kg]
+  double m2_ = 0.0;         // free bar mass [kg]
+  double inertia_a_ = 0.0;  // actuated bar about its joint, m1 (4 l1^2 + k^2) / 12 [kg m^2]
+  double inertia_f_ = 0.0;  // free bar about its centre, m2 (l2^2 + k^2) / 12 [kg m^2]
+  double l2_squared_ = 0.0;
+};
+
+/// The five-bar mechanism plugin ("fivebar").
+class FiveBar final : public Mechanism {
+ public:
+  /// \param options validated options (schema.json); missing keys take the defaults.
+  explicit FiveBar(const Json& options);
+
+  /// \param design l0, l1, l2, r [m]. \throws Error for a non-finite or non-positive length.
+  std::unique_ptr<const MechanismModel> build(const double* design) const override;
+  /// l0, l1, l2, r [m] with the paper's default bounds and hard limits.
+  std::vector<VariableDecl> variables() const override;
+  /// One constraint, "reach" [m^2]: see reach_constraint().
+  std::vector<ConstraintDecl> constraints() const override;
+  /// g[0] = reach_constraint(design, scene bounding box). O(scene size), no allocation.
+  void evaluate_constraints(const double* design, const SampleSet& scene, double* g) const override;
+  /// \throws Error unless the scene has samples with exactly two coordinates (x, y) [m].
+  void check_scene(const SampleSet& scene) const override;
+  /// kNeedJacobian | kNeedInertia | kNeedEffectiveMass.
+  Needs provides() const override;
+
+  const FiveBarOptions& options() const { return options_; }
+
+  /// The paper's reach condition generalised to a bounding box [xmin, xmax] x [ymin, ymax] [m]
+  /// (scene frame): max over both actuated joints of the squared distance to the farthest box
+  /// corner, minus (l1 + l2)^2 [m^2]. For a square of side s centred at (0, 0) and r >= 0 this
+  /// is (l0/2 + s/2)^2 + (r + s/2)^2 - (l1 + l2)^2.
+  static double reach_constraint(const FiveBarDesign& design, double xmin, double xmax, double ymin,
+                                 double ymax);
+  /// The design (l0, l1, l2, r) from a design vector. \throws Error as FiveBarModel does.
+  static FiveBarDesign design_from(const double* design);
+
+ private:
+  FiveBarOptions options_;
+};
+
+}  // namespace hapsyn::plugins

@@ -1,0 +1,34 @@
+#pragma once
+/// \file
+/// The global dynamic index (Stocco et al. 1998; Unal 2008 eq. 2), a worst-case metric:
+///   GDI = min over samples 1 / (1 + sigma_max(M)) = 1 / (1 + max over samples sigma_max(M)),
+/// M = J^-T D J^-1 the effective mass at the end effector [kg].
+#include <hapsyn/json.hpp>
+#include <hapsyn/metric.hpp>
+
+#include <vector>
+
+namespace hapsyn::plugins {
+
+/// The "gdi" metric. Local: sigma_max_M [kg] (reduced by max); combine = 1 / (1 + reduced[0]).
+/// Thread safety: stateless; every method is const and thread-safe; local() never allocates.
+class Gdi final : public Metric {
+ public:
+  /// \param options an empty object (or null). \throws Error for any key.
+  explicit Gdi(const Json& options);
+
+  /// out[0] = sigma_max(M) of q.effective_mass [kg].
+  void local(const SampleQuantities& q, double* out) const override;
+  Needs needs() const override { return kNeedEffectiveMass; }
+  std::vector<LocalValue> locals() const override;
+  /// 1 / (1 + reduced[0]) [-]; 0 for an infinite reduced[0].
+  double combine(const double* reduced, int samples) const override;
+
+  /// Largest singular value of a matrix. 2 x 2: closed form
+  /// sqrt(E^2 + H^2) + sqrt(F^2 + G^2) with E = (a + d)/2, F = (a - d)/2, G = (c + b)/2,
+  /// H = (c - b)/2 (never NaN for finite input); other shapes: Eigen::JacobiSVD (fixed
+  /// capacity, no allocation); empty: 0.
+  static double largest_singular_value(const TaskMatrix& matrix);
+};
+
+}  // namespace hapsyn::plugins

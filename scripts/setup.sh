@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Installs the Debian packages hapsyn needs, only those that are missing.
+# Quick (a dpkg query) when everything is present. Run as root (or with sudo available).
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build pkg-config
+  libeigen3-dev libboost-dev libboost-filesystem-dev
+  libpagmo-dev nlohmann-json3-dev libcli11-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  libnlopt-cxx-dev liborocos-kdl-dev
+)
+# Extra packages requested through the environment (e.g. HAPSYN_EXTRA_PACKAGES="gnuplot").
+if [[ -n "${HAPSYN_EXTRA_PACKAGES:-}" ]]; then
+  read -r -a extra <<<"${HAPSYN_EXTRA_PACKAGES}"
+  packages+=("${extra[@]}")
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if [[ ${#missing[@]} -eq 0 ]]; then
+  exit 0
+fi
+
+echo "hapsyn setup: installing ${missing[*]}" >&2
+SUDO=""
+if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

@@ -1,0 +1,166 @@
+// End-to-end: the hapsyn program as a user runs it.
+#include "test_support.hpp"
+
+#include <boost/filesystem.hpp>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+
+namespace fs = boost::filesystem;
+using hapsyn::Json;
+
+namespace {
+struct Output {
+  int code = -1;
+  std::string out;  // stdout and stderr together
+};
+
+Output hapsyn_cli(const std::string& args) {
+  const std::string command = std::string(HAPSYN_BINARY_DIR) + "/bin/hapsyn " + args + " 2>&1";
+  Output o;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  std::array<char, 4096> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) o.out += buffer.data();
+  const int status = ::pclose(pipe);
+  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return o;
+}
+
+std::string problem(const std::string& name) { return std::string(HAPSYN_SOURCE_DIR) + "/problems/" + name; }
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("hapsyn-cli-test-" + name + "-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  return dir;
+}
+
+Json read_json(const fs::path& p) {
+  std::ifstream in(p.string());
+  return Json::parse(in);
+}
+
+long count_lines(const fs::path& p) {
+  std::ifstream in(p.string());
+  std::string line;
+  long n = 0;
+  while (std::getline(in, line)) ++n;
+  return n;
+}
+}  // namespace
+
+TEST(Cli, RunWritesResultJsonAndSamplesCsv) {
+  const fs::path out = fresh_dir("run");
+  const Output o = hapsyn_cli("run " + problem("fivebar-table2-best-gii.json") + " --out " + out.string() + " --threads 2 --seed 5");
+  ASSERT_EQ(o.code, 0) << o.out;
+  EXPECT_NE(o.out.find("gii = 0.783"), std::string::npos) << o.out;
+  const Json result = read_json(out / "result.json");
+  EXPECT_EQ(result["status"], "converged");
+  EXPECT_NEAR(result["best"]["objectives"]["gii"].get<double>(), 0.783, 0.0005);
+  EXPECT_NEAR(result["best"]["objectives"]["gdi"].get<double>(), 0.622, 0.0005);
+  EXPECT_EQ(result["seed"], 5);
+  EXPECT_EQ(result["threads"], 2);
+  EXPECT_TRUE(result["machine"].contains("cpu"));
+  EXPECT_EQ(result["problem"]["scene"]["options"]["step"], 0.001);
+  EXPECT_FALSE(result["hapsyn"]["version"].get<std::string>().empty());
+  EXPECT_EQ(result["plugins"].size(), 5u);
+  EXPECT_EQ(count_lines(out / "samples.csv"), 101 * 101 + 1);
+  fs::remove_all(out);
+}
+
+TEST(Cli, SetOverridesAnyKey) {
+  const fs::path out = fresh_dir("set");
+  const Output o = hapsyn_cli("run " + problem("fivebar-table2-best-gii.json") + " --quiet --out " + out.string() +
+                              " --set scene.options.step=0.01 --set 'objectives=[{\"metric\":\"gdi\"}]'");
+  ASSERT_EQ(o.code, 0) << o.out;
+  const Json result = read_json(out / "result.json");
+  EXPECT_EQ(result["problem"]["scene"]["options"]["step"], 0.01);
+  EXPECT_EQ(result["samples_in_scene"], 121);
+  EXPECT_FALSE(result["best"]["objectives"].contains("gii"));
+  fs::remove_all(out);
+}
+
+TEST(Cli, BadInputGivesPathValueAndRuleWithoutStackTrace) {
+  const Output o = hapsyn_cli("validate " + problem("fivebar-gii-coarse.json") + " --set design.l1.upper=-3");
+  EXPECT_EQ(o.code, 1);
+  EXPECT_NE(o.out.find("hapsyn: error: problem: design.l1.upper = -3"), std::string::npos) << o.out;
+  EXPECT_EQ(o.out.find("terminate"), std::string::npos) << o.out;
+  EXPECT_EQ(o.out.find("Aborted"), std::string::npos) << o.out;
+}
+
+TEST(Cli, MalformedJsonReportsLineAndColumn) {
+  const fs::path dir = fresh_dir("malformed");
+  fs::create_directories(dir);
+  const fs::path file = dir / "broken.json";
+  std::ofstream(file.string()) << "{\n  \"name\": \"x\",\n  \"scene\": {,\n}\n";
+  const Output o = hapsyn_cli("validate " + file.string());
+  EXPECT_EQ(o.code, 1);
+  EXPECT_NE(o.out.find("broken.json:3:"), std::string::npos) << o.out;
+  fs::remove_all(dir);
+}
+
+TEST(Cli, ValidateAcceptsEveryShippedProblem) {
+  for (const auto& entry : fs::directory_iterator(std::string(HAPSYN_SOURCE_DIR) + "/problems")) {
+    if (entry.path().extension() != ".json") continue;
+    const Output o = hapsyn_cli("validate " + entry.path().string());
+    EXPECT_EQ(o.code, 0) << entry.path() << "\n" << o.out;
+    EXPECT_NE(o.out.find("valid"), std::string::npos) << o.out;
+  }
+}
+
+TEST(Cli, PluginsListsNameKindVersionAndFile) {
+  const Output o = hapsyn_cli("plugins");
+  ASSERT_EQ(o.code, 0) << o.out;
+  for (const char* s : {"fivebar", "planar_square", "gii", "gdi", "evaluate", "grid", "mechanism", "scene", "metric",
+                        "solver", "hapsyn-fivebar.so"}) {
+    EXPECT_NE(o.out.find(s), std::string::npos) << s << "\n" << o.out;
+  }
+}
+
+TEST(Cli, DescribeShowsOptionsDefaultsUnitsAndVariables) {
+  const Output o = hapsyn_cli("describe fivebar");
+  ASSERT_EQ(o.code, 0) << o.out;
+  for (const char* s : {"mechanism plugin", "rho", "1.08", "kg/m", "design variables", "l0", "reach"}) {
+    EXPECT_NE(o.out.find(s), std::string::npos) << s << "\n" << o.out;
+  }
+  const Output unknown = hapsyn_cli("describe fivebr");
+  EXPECT_EQ(unknown.code, 1);
+  EXPECT_NE(unknown.out.find("did you mean 'fivebar'"), std::string::npos) << unknown.out;
+}
+
+TEST(Cli, UnwritableOutputDirectoryIsRefusedBeforeAnyWork) {
+  const Output o = hapsyn_cli("run " + problem("fivebar-table2-best-gii.json") + " --out /proc/hapsyn-cannot-write");
+  EXPECT_EQ(o.code, 1);
+  EXPECT_NE(o.out.find("hapsyn: error: output:"), std::string::npos) << o.out;
+}
+
+TEST(Cli, FailedRunLeavesNoResultBehind) {
+  const fs::path out = fresh_dir("nothing");
+  const Output o = hapsyn_cli("run " + problem("fivebar-gii-coarse.json") + " --out " + out.string() +
+                              " --set design.l0.step=5");
+  EXPECT_EQ(o.code, 1);
+  EXPECT_FALSE(fs::exists(out / "result.json"));
+  fs::remove_all(out);
+}
+
+TEST(Cli, CoarseGridStudyFindsAFeasibleOptimum) {
+  const fs::path out = fresh_dir("grid");
+  // The shipped study at a 50 mm design grid (a few seconds at most).
+  const Output o = hapsyn_cli("run " + problem("fivebar-gii-coarse.json") + " --quiet --out " + out.string() +
+                              " --set design.l0.step=0.05 --set design.l1.step=0.05 --set design.l2.step=0.05"
+                              " --set design.r.step=0.05 --set design.l1.lower=0.05 --set design.l2.lower=0.05");
+  ASSERT_EQ(o.code, 0) << o.out;
+  const Json result = read_json(out / "result.json");
+  EXPECT_EQ(result["status"], "converged");
+  EXPECT_GT(result["best"]["objectives"]["gii"].get<double>(), 0.5);
+  EXPECT_LE(result["best"]["objectives"]["gii"].get<double>(), 1.0);
+  fs::remove_all(out);
+}
+
+TEST(Cli, UsageErrorsExitWithTwo) {
+  EXPECT_EQ(hapsyn_cli("").code, 2);
+  EXPECT_EQ(hapsyn_cli("run").code, 2);
+  EXPECT_EQ(hapsyn_cli("frobnicate").code, 2);
+}

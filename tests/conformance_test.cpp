@@ -1,0 +1,92 @@
+// Every plugin found in the build tree: it loads, its schema is complete, it can be created with
+// its defaults, and a study using it gives identical results twice under the same seed.
+//
+// The study for a plugin is plugins/<kind>/<name>/conformance.json when the plugin ships one,
+// else the kind's default study below with the plugin substituted. A plugin that fits neither
+// fails here: ship a conformance.json with it.
+#include "test_support.hpp"
+
+#include <boost/filesystem.hpp>
+
+#include <set>
+
+using hapsyn::Json;
+namespace fs = boost::filesystem;
+
+namespace {
+Json default_study(const hapsyn::PluginRecord& plugin) {
+  Json doc = Json::parse(R"({
+    "name": "conformance",
+    "mechanism": {"plugin": "fivebar"},
+    "scene": {"plugin": "planar_square", "options": {"side": 0.1, "step": 0.01}},
+    "design": {"l0": {"value": 0.0004}, "l1": {"value": 0.2997}, "l2": {"value": 0.3}, "r": {"value": 0.4196}},
+    "objectives": [{"metric": "gii"}],
+    "solver": {"plugin": "evaluate"},
+    "seed": 7
+  })");
+  if (plugin.kind == "mechanism") doc["mechanism"]["plugin"] = plugin.name;
+  if (plugin.kind == "scene") doc["scene"] = {{"plugin", plugin.name}};
+  if (plugin.kind == "metric") doc["objectives"][0]["metric"] = plugin.name;
+  if (plugin.kind == "solver") {
+    doc = hapsyn::test::fivebar_study(plugin.name);
+    doc["seed"] = 7;
+  }
+  return doc;
+}
+
+Json study_for(const hapsyn::PluginRecord& plugin) {
+  for (const char* kind : {"mechanisms", "scenes", "metrics", "solvers"}) {
+    const fs::path file = fs::path(HAPSYN_SOURCE_DIR) / "plugins" / kind / plugin.name / "conformance.json";
+    if (fs::exists(file)) return hapsyn::read_problem_file(file.string());
+  }
+  return default_study(plugin);
+}
+
+Json solve_once(const Json& doc) {
+  hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  hapsyn::SolverContext context;
+  context.threads = 2;
+  context.seed = 7;
+  const hapsyn::SolverResult r = study.solver->solve(*study.problem, context);
+  Json j = {{"status", hapsyn::to_string(r.status)}, {"message", r.message}, {"statistics", r.statistics}};
+  if (r.best) {
+    j["best_design"] = study.problem->design_to_json(r.best->design);
+    j["best_objectives"] = r.best->objectives;
+  }
+  for (const auto& p : r.front) j["front"].push_back(p.objectives);
+  return j;
+}
+
+void check_schema_is_documented(const Json& schema, const std::string& path) {
+  if (!schema.contains("properties")) return;
+  std::set<std::string> required;
+  if (schema.contains("required")) {
+    for (const auto& r : schema["required"]) required.insert(r.get<std::string>());
+  }
+  for (auto it = schema["properties"].begin(); it != schema["properties"].end(); ++it) {
+    const std::string p = path + "." + it.key();
+    EXPECT_TRUE(it.value().contains("description")) << p << " has no description";
+    EXPECT_TRUE(it.value().contains("default") || required.count(it.key())) << p << " has neither a default nor is required";
+    check_schema_is_documented(it.value(), p);
+  }
+}
+}  // namespace
+
+TEST(Conformance, EveryPluginLoadsValidatesAndEvaluatesDeterministically) {
+  std::vector<std::string> errors;
+  const auto plugins = hapsyn::test::registry().list(&errors);
+  EXPECT_TRUE(errors.empty()) << errors.front();
+  ASSERT_GE(plugins.size(), 6u);
+  for (const auto& plugin : plugins) {
+    SCOPED_TRACE("plugin " + plugin.name);
+    EXPECT_TRUE(plugin.schema.contains("description")) << "schema.json has no top-level description";
+    check_schema_is_documented(plugin.schema, plugin.name);
+    const Json doc = study_for(plugin);
+    Json first, second;
+    ASSERT_NO_THROW(first = solve_once(doc)) << "no conformance study fits; ship plugins/<kind>/" << plugin.name
+                                              << "/conformance.json";
+    second = solve_once(doc);
+    EXPECT_EQ(first, second);
+    EXPECT_TRUE(first.contains("best_design") || first.contains("front")) << first.dump();
+  }
+}

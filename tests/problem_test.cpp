@@ -1,0 +1,123 @@
+// The evaluator: determinism across threads, exactness of the per-sample bound and pruning,
+// and the central checks of plugin input and output.
+#include "test_support.hpp"
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+using hapsyn::EvalStatus;
+using hapsyn::Json;
+using hapsyn::test::expect_error;
+using hapsyn::test::fivebar_study;
+
+namespace {
+hapsyn::Study study_with(const std::vector<std::string>& metrics, double scene_step = 0.01) {
+  Json doc = fivebar_study();
+  doc["scene"]["options"]["step"] = scene_step;
+  doc["objectives"] = Json::array();
+  for (const auto& m : metrics) doc["objectives"].push_back({{"metric", m}});
+  return hapsyn::load_study(doc, hapsyn::test::registry());
+}
+// A feasible design (the Table 2 best-GII design) as a free vector (l0, l1, l2, r).
+const std::vector<double> kGood = {0.0004, 0.2997, 0.3, 0.4196};
+}  // namespace
+
+TEST(Problem, ParallelEvaluationEqualsSequentialForAnyThreadCount) {
+  const auto study = study_with({"gii", "gdi"});
+  auto ws = study.problem->make_workspace();
+  const hapsyn::Evaluation sequential = study.problem->evaluate(kGood.data(), *ws);
+  ASSERT_EQ(sequential.status, EvalStatus::kFeasible);
+  for (int threads : {1, 2, 3, 4, 7}) {
+    const hapsyn::Evaluation parallel = study.problem->evaluate_parallel(kGood.data(), threads);
+    EXPECT_EQ(parallel.status, EvalStatus::kFeasible);
+    EXPECT_EQ(parallel.objectives, sequential.objectives) << threads;
+    EXPECT_EQ(parallel.critical_samples, sequential.critical_samples) << threads;
+    EXPECT_EQ(parallel.samples_evaluated, study.problem->samples().size());
+  }
+}
+
+TEST(Problem, SubsetValueIsAnUpperBoundOfTheWorstCaseValue) {
+  const auto study = study_with({"gii", "gdi"});
+  auto ws = study.problem->make_workspace();
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int feasible = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const std::vector<double> x = {0.3 * u(rng), 0.05 + 0.25 * u(rng), 0.05 + 0.25 * u(rng), 0.6 * u(rng)};
+    const hapsyn::Evaluation full = study.problem->evaluate(x.data(), *ws);
+    if (full.status != EvalStatus::kFeasible) continue;
+    ++feasible;
+    std::vector<int> subset;
+    for (int s = 0; s < study.problem->samples().size(); ++s) {
+      if (u(rng) < 0.2) subset.push_back(s);
+    }
+    if (subset.empty()) subset.push_back(0);
+    hapsyn::EvalOptions options;
+    options.subset = &subset;
+    const hapsyn::Evaluation part = study.problem->evaluate(x.data(), *ws, options);
+    ASSERT_EQ(part.status, EvalStatus::kFeasible);
+    for (std::size_t o = 0; o < full.objectives.size(); ++o) EXPECT_GE(part.objectives[o], full.objectives[o]);
+    // The critical samples alone reproduce the full value exactly (what culling relies on).
+    std::vector<int> critical;
+    for (const auto& per_metric : full.critical_samples) critical.insert(critical.end(), per_metric.begin(), per_metric.end());
+    options.subset = &critical;
+    const hapsyn::Evaluation at_critical = study.problem->evaluate(x.data(), *ws, options);
+    EXPECT_EQ(at_critical.objectives, full.objectives);
+  }
+  EXPECT_GT(feasible, 20);
+}
+
+TEST(Problem, PruningStopsOnlyBelowTheThreshold) {
+  const auto study = study_with({"gii"});
+  auto ws = study.problem->make_workspace();
+  const double value = study.problem->evaluate(kGood.data(), *ws).score;
+  hapsyn::EvalOptions options;
+  options.prune_below = value;  // a design that ties is never pruned
+  EXPECT_EQ(study.problem->evaluate(kGood.data(), *ws, options).status, EvalStatus::kFeasible);
+  options.prune_below = value + 1e-9;
+  const hapsyn::Evaluation& pruned = study.problem->evaluate(kGood.data(), *ws, options);
+  EXPECT_EQ(pruned.status, EvalStatus::kPruned);
+  EXPECT_LE(pruned.samples_evaluated, study.problem->samples().size());
+}
+
+TEST(Problem, ConstraintViolationIsAStatusAndSkipsTheSamples) {
+  const auto study = study_with({"gii"});
+  auto ws = study.problem->make_workspace();
+  const std::vector<double> short_links = {0.3, 0.05, 0.05, 0.6};
+  const hapsyn::Evaluation& e = study.problem->evaluate(short_links.data(), *ws);
+  EXPECT_EQ(e.status, EvalStatus::kConstraintViolated);
+  EXPECT_EQ(e.samples_evaluated, 0);
+  EXPECT_EQ(study.problem->constraint_names()[static_cast<std::size_t>(e.failed_constraint)], "reach");
+  EXPECT_EQ(e.score, -std::numeric_limits<double>::infinity());
+}
+
+TEST(Problem, ExtremeSamplesAreEvaluatedFirst) {
+  const auto study = study_with({"gii"});
+  const auto& order = study.problem->sample_order();
+  ASSERT_EQ(order.size(), static_cast<std::size_t>(study.problem->samples().size()));
+  for (int k = 0; k < 4; ++k) {
+    const double* p = study.problem->samples().pose(order[static_cast<std::size_t>(k)]);
+    EXPECT_NEAR(std::abs(p[0]), 0.05, 1e-12);
+    EXPECT_NEAR(std::abs(p[1]), 0.05, 1e-12);
+  }
+}
+
+TEST(Problem, DesignFromASolverIsCheckedCentrally) {
+  const auto study = study_with({"gii"});
+  auto ws = study.problem->make_workspace();
+  const std::vector<double> nan_design = {std::nan(""), 0.2, 0.2, 0.3};
+  expect_error([&] { study.problem->evaluate(nan_design.data(), *ws); }, {"design component l0 = nan", "must be finite"});
+  const std::vector<double> outside = {0.0, 0.2, 0.2, 0.7};
+  expect_error([&] { study.problem->evaluate(outside.data(), *ws); }, {"design component r = 0.7", "must lie within the bounds [0, 0.6]"});
+}
+
+TEST(Problem, NanFromAMetricIsAnErrorNamingTheMetricAndSample) {
+  hapsyn::Registry registry({HAPSYN_PLUGIN_DIR, HAPSYN_TEST_PLUGIN_DIR});
+  Json doc = fivebar_study();
+  doc["objectives"] = Json::array({{{"metric", "nanmetric"}}});
+  const hapsyn::Study study = hapsyn::load_study(doc, registry);
+  auto ws = study.problem->make_workspace();
+  expect_error([&] { study.problem->evaluate(kGood.data(), *ws); },
+               {"metric 'nanmetric' returned nan", "at sample", "\"l1\":0.2997"});
+}

@@ -1,0 +1,50 @@
+#pragma once
+// Helpers shared by the tests: the in-tree plugin registry and error-message assertions.
+#include <hapsyn/error.hpp>
+#include <hapsyn/registry.hpp>
+#include <hapsyn/study.hpp>
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace hapsyn::test {
+
+/// A registry over the build tree's plugins only (independent of HAPSYN_PLUGIN_PATH).
+inline const Registry& registry() {
+  static Registry r({HAPSYN_PLUGIN_DIR});
+  return r;
+}
+
+/// Runs fn and expects a hapsyn::Error whose message contains every fragment.
+template <class Fn>
+void expect_error(Fn&& fn, std::initializer_list<std::string> fragments) {
+  try {
+    fn();
+    ADD_FAILURE() << "expected a hapsyn::Error";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    for (const std::string& f : fragments) {
+      EXPECT_NE(what.find(f), std::string::npos) << "message: " << what << "\nmissing: " << f;
+    }
+  }
+}
+
+/// A five-bar study document (coarse, fast) that tests modify.
+inline Json fivebar_study(const std::string& solver = "grid") {
+  return Json::parse(R"({
+    "name": "test",
+    "mechanism": {"plugin": "fivebar", "options": {"rho": 1.08}},
+    "scene": {"plugin": "planar_square", "options": {"side": 0.1, "step": 0.025}},
+    "design": {
+      "l0": {"lower": 0.0, "upper": 0.3, "step": 0.1},
+      "l1": {"lower": 0.05, "upper": 0.3, "step": 0.05},
+      "l2": {"lower": 0.05, "upper": 0.3, "step": 0.05},
+      "r":  {"lower": 0.0, "upper": 0.6, "step": 0.1}
+    },
+    "objectives": [{"metric": "gii"}],
+    "solver": {"plugin": ")" + solver + R"("}
+  })");
+}
+
+}  // namespace hapsyn::test
