@@ -107,7 +107,7 @@ void Problem::check_design(const double* free_design) const {
     if (std::isfinite(v) && v >= c.lower - tol && v <= c.upper + tol) continue;
     // Only a failing design pays for formatting the message.
     std::ostringstream message;
-    message.precision(17);
+    message.precision(12);
     message << "design component " << c.name << " = " << v << " from the solver: ";
     if (!std::isfinite(v)) {
       message << "must be finite";

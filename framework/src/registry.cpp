@@ -125,7 +125,11 @@ const Registry::Loaded& Registry::load(const std::string& path_in) const {
   } catch (const Json::parse_error& e) {
     throw Error("registry", path + ": plugin '" + r.name + "' ships a malformed schema.json: " + e.what());
   }
-  check_schema(r.schema, "plugin '" + r.name + "' schema.json");
+  try {
+    check_schema(r.schema, "plugin '" + r.name + "' schema.json");
+  } catch (const Error& e) {
+    throw Error("registry", path + ": " + e.what());
+  }
   auto& slot = loaded_[path];
   slot = std::move(loaded);
   return *slot;

@@ -45,9 +45,10 @@ Brute brute_force(const hapsyn::Problem& problem) {
 Json random_box(std::mt19937& rng) {
   std::uniform_int_distribution<int> cells(0, 6);
   Json doc = hapsyn::test::fivebar_study();
-  // Sub-boxes of the paper's bounds on a 25 mm grid, each 3-5 grid points wide.
+  // Sub-boxes of the paper's bounds on a 25 mm grid, each 3-5 grid points wide, placed where
+  // most designs reach the workspace (so that the comparison is not about infeasibility alone).
   const std::vector<std::tuple<std::string, double, double>> vars = {
-      {"l0", 0.0, 0.3}, {"l1", 0.01, 0.3}, {"l2", 0.01, 0.3}, {"r", 0.0, 0.6}};
+      {"l0", 0.0, 0.3}, {"l1", 0.1, 0.3}, {"l2", 0.1, 0.3}, {"r", 0.1, 0.6}};
   for (const auto& [name, lo, hi] : vars) {
     const double step = 0.025;
     const double lower = std::min(lo + step * cells(rng) * (name == "r" ? 2 : 1), hi - 2 * step);
@@ -65,7 +66,7 @@ TEST(Grid, MatchesBruteForceOnRandomSubBoxesForGiiGdiAndWeightedSum) {
       Json::array({{{"metric", "gdi"}}}),
       Json::array({{{"metric", "gii"}, {"weight", 0.3}}, {{"metric", "gdi"}, {"weight", 0.7}}})};
   int compared = 0;
-  for (int box = 0; box < 8; ++box) {
+  for (int box = 0; box < 10; ++box) {
     Json doc = random_box(rng);
     for (const Json& objectives : objective_sets) {
       doc["objectives"] = objectives;
@@ -77,8 +78,13 @@ TEST(Grid, MatchesBruteForceOnRandomSubBoxesForGiiGdiAndWeightedSum) {
           hapsyn::SolverContext context;
           context.threads = threads;
           const hapsyn::SolverResult result = solver.solve(*study.problem, context);
-          EXPECT_EQ(result.statistics["feasible"].get<long long>() + result.statistics["pruned"].get<long long>(),
-                    brute.feasible);
+          // A pruned design may also have failed at a later sample, so pruning can only blur the
+          // feasible count upwards; without pruning it is exact.
+          const long long feasible = result.statistics["feasible"].get<long long>();
+          const long long pruned = result.statistics["pruned"].get<long long>();
+          EXPECT_LE(feasible, brute.feasible);
+          EXPECT_GE(feasible + pruned, brute.feasible);
+          if (!prune) EXPECT_EQ(feasible, brute.feasible);
           if (brute.feasible == 0) {
             EXPECT_EQ(result.status, hapsyn::SolverStatus::kInfeasible);
             EXPECT_FALSE(result.best.has_value());
@@ -93,7 +99,7 @@ TEST(Grid, MatchesBruteForceOnRandomSubBoxesForGiiGdiAndWeightedSum) {
       }
     }
   }
-  EXPECT_GT(compared, 20);  // most random boxes hold feasible designs
+  EXPECT_GT(compared, 60);  // most random boxes hold feasible designs
 }
 
 TEST(Grid, StatusCountsAddUpToTheGridSize) {

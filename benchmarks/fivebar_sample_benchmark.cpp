@@ -1,0 +1,143 @@
+// LIBRARIES: hapsyn_fivebar_model hapsyn_gii_model hapsyn_gdi_model hapsyn_planar_square_model
+//
+// Per-sample cost of the five-bar study (Unal 2008) on the 441 samples of a 0.1 m square at a
+// 0.005 m step, for the best-GII design of Table 2 (0.4, 299.7, 300.0, 419.6) mm:
+//   pose only (IK + classification)      -- what a coverage-only metric needs
+//   IK + J                                -- what GII needs
+//   IK + J + D + M                        -- what GDI needs
+//   IK + J + D + M and both metrics' local() -- one full GII + GDI design evaluation
+//   gii.local() and gdi.local() alone     -- the metrics' closed-form singular values
+//   the reach constraint                  -- once per design, O(samples)
+// Compare the rows with each other (ratios), not as bare times: "per_sample" is the time per
+// sample (inverted rate), so IK+J+D+M / IK+J is the price of the dynamic index.
+#include <fivebar.hpp>
+#include <gdi.hpp>
+#include <gii.hpp>
+#include <planar_square.hpp>
+
+#include <benchmark/benchmark.h>
+
+#include <vector>
+
+namespace {
+
+using hapsyn::Json;
+using hapsyn::SampleQuantities;
+using hapsyn::SampleSet;
+using namespace hapsyn::plugins;
+
+const SampleSet& scene() {
+  static const SampleSet set = PlanarSquare(Json{{"side", 0.1}, {"step", 0.005}}).build({});
+  return set;
+}
+
+const FiveBarModel& model() {
+  static const FiveBarModel m(FiveBarDesign{0.0004, 0.2997, 0.3000, 0.4196}, FiveBarOptions{});
+  return m;
+}
+
+void per_sample(benchmark::State& state) {
+  const double samples = static_cast<double>(state.iterations()) * scene().size();
+  state.SetItemsProcessed(static_cast<int64_t>(samples));
+  state.counters["per_sample"] = benchmark::Counter(samples, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+void solve_all(benchmark::State& state, hapsyn::Needs needs) {
+  const SampleSet& set = scene();
+  const FiveBarModel& m = model();
+  hapsyn::MechanismScratch scratch;
+  SampleQuantities q;
+  for (auto _ : state) {
+    for (int i = 0; i < set.size(); ++i) {
+      m.solve(set.pose(i), needs, scratch, q);
+      benchmark::DoNotOptimize(q);
+    }
+    benchmark::ClobberMemory();
+  }
+  per_sample(state);
+}
+
+void BM_FiveBarPoseOnly(benchmark::State& state) { solve_all(state, hapsyn::kNeedPose); }
+void BM_FiveBarIkJacobian(benchmark::State& state) { solve_all(state, hapsyn::kNeedJacobian); }
+void BM_FiveBarIkJacobianInertiaMass(benchmark::State& state) { solve_all(state, hapsyn::kNeedEffectiveMass); }
+
+void BM_FiveBarGiiAndGdiFullEvaluation(benchmark::State& state) {
+  const SampleSet& set = scene();
+  const FiveBarModel& m = model();
+  const Gii gii(Json::object());
+  const Gdi gdi(Json::object());
+  hapsyn::MechanismScratch scratch;
+  SampleQuantities q;
+  for (auto _ : state) {
+    double sigma_min = 1e300, sigma_max = 0.0, mass = 0.0;
+    for (int i = 0; i < set.size(); ++i) {
+      m.solve(set.pose(i), hapsyn::kNeedJacobian | hapsyn::kNeedEffectiveMass, scratch, q);
+      double local[2];
+      gii.local(q, local);
+      sigma_min = std::min(sigma_min, local[0]);
+      sigma_max = std::max(sigma_max, local[1]);
+      gdi.local(q, local);
+      mass = std::max(mass, local[0]);
+    }
+    const double reduced[2] = {sigma_min, sigma_max};
+    benchmark::DoNotOptimize(gii.combine(reduced, set.size()));
+    benchmark::DoNotOptimize(gdi.combine(&mass, set.size()));
+  }
+  per_sample(state);
+}
+
+std::vector<SampleQuantities> solved_samples() {
+  std::vector<SampleQuantities> out(scene().size());
+  hapsyn::MechanismScratch scratch;
+  for (int i = 0; i < scene().size(); ++i) {
+    model().solve(scene().pose(i), hapsyn::kNeedJacobian | hapsyn::kNeedEffectiveMass, scratch, out[i]);
+  }
+  return out;
+}
+
+void BM_GiiLocal(benchmark::State& state) {
+  const std::vector<SampleQuantities> samples = solved_samples();
+  const Gii gii(Json::object());
+  for (auto _ : state) {
+    for (const SampleQuantities& q : samples) {
+      double local[2];
+      gii.local(q, local);
+      benchmark::DoNotOptimize(local);
+    }
+  }
+  per_sample(state);
+}
+
+void BM_GdiLocal(benchmark::State& state) {
+  const std::vector<SampleQuantities> samples = solved_samples();
+  const Gdi gdi(Json::object());
+  for (auto _ : state) {
+    for (const SampleQuantities& q : samples) {
+      double local = 0.0;
+      gdi.local(q, &local);
+      benchmark::DoNotOptimize(local);
+    }
+  }
+  per_sample(state);
+}
+
+void BM_FiveBarReachConstraint(benchmark::State& state) {
+  const FiveBar mechanism(Json::object());
+  const double design[4] = {0.0004, 0.2997, 0.3000, 0.4196};
+  double g = 0.0;
+  for (auto _ : state) {
+    mechanism.evaluate_constraints(design, scene(), &g);
+    benchmark::DoNotOptimize(g);
+  }
+  per_sample(state);
+}
+
+BENCHMARK(BM_FiveBarPoseOnly);
+BENCHMARK(BM_FiveBarIkJacobian);
+BENCHMARK(BM_FiveBarIkJacobianInertiaMass);
+BENCHMARK(BM_FiveBarGiiAndGdiFullEvaluation);
+BENCHMARK(BM_GiiLocal);
+BENCHMARK(BM_GdiLocal);
+BENCHMARK(BM_FiveBarReachConstraint);
+
+}  // namespace

@@ -1,0 +1,137 @@
+// Tests of the GDI metric: closed-form largest singular value against Eigen's SVD,
+// hand-checkable one- and two-sample scenes, a five-bar sample, declarations and options.
+#include "gdi.hpp"
+
+#include <fivebar.hpp>
+
+#include <hapsyn/error.hpp>
+#include <hapsyn/schema.hpp>
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace {
+
+using hapsyn::Json;
+using hapsyn::Reduction;
+using hapsyn::SampleQuantities;
+using hapsyn::TaskMatrix;
+using hapsyn::plugins::Gdi;
+
+TaskMatrix matrix2(double a, double b, double c, double d) {
+  TaskMatrix m(2, 2);
+  m << a, b, c, d;
+  return m;
+}
+
+double gdi_of(const std::vector<TaskMatrix>& masses) {
+  const Gdi gdi(Json::object());
+  double reduced = 0.0;
+  for (const auto& m : masses) {
+    SampleQuantities q;
+    q.effective_mass = m;
+    double local = 0.0;
+    gdi.local(q, &local);
+    reduced = std::max(reduced, local);
+  }
+  return gdi.combine(&reduced, static_cast<int>(masses.size()));
+}
+
+TEST(GdiSingularValue, ClosedFormMatchesJacobiSvdOnRandomMatrices) {
+  std::mt19937 rng(42);
+  std::normal_distribution<double> normal;
+  std::uniform_int_distribution<int> exponent(-8, 8);
+  for (int i = 0; i < 10000; ++i) {
+    const double scale = std::pow(10.0, exponent(rng));
+    // Symmetric positive semi-definite (an effective mass) and general matrices alike.
+    Eigen::Matrix2d a;
+    a << normal(rng), normal(rng), normal(rng), normal(rng);
+    a *= scale;
+    const Eigen::Matrix2d m = (i % 2) ? Eigen::Matrix2d(a.transpose() * a) : a;
+    const double value = Gdi::largest_singular_value(TaskMatrix(m));
+    const double expected = Eigen::JacobiSVD<Eigen::Matrix2d>(m).singularValues()(0);
+    ASSERT_NEAR(value, expected, 1e-14 * expected) << m;
+  }
+}
+
+TEST(GdiSingularValue, ZeroRankOneAndOtherShapesNeverNan) {
+  EXPECT_EQ(Gdi::largest_singular_value(matrix2(0, 0, 0, 0)), 0.0);
+  EXPECT_NEAR(Gdi::largest_singular_value(matrix2(1, 2, 2, 4)), 5.0, 1e-15);
+  EXPECT_EQ(Gdi::largest_singular_value(TaskMatrix(0, 0)), 0.0);
+  TaskMatrix cube(3, 3);
+  cube << 2, -1, 0, -1, 2, -1, 0, -1, 2;  // eigenvalues 2 - sqrt(2), 2, 2 + sqrt(2)
+  EXPECT_NEAR(Gdi::largest_singular_value(cube), 2.0 + std::sqrt(2.0), 1e-14);
+}
+
+TEST(Gdi, OneSampleSceneIsOneOverOnePlusTheLargestMass) {
+  EXPECT_DOUBLE_EQ(gdi_of({matrix2(0.5, 0.0, 0.0, 1.0)}), 0.5);  // sigma_max = 1 kg
+  EXPECT_DOUBLE_EQ(gdi_of({matrix2(0.0, 0.0, 0.0, 0.0)}), 1.0);  // massless
+  // [[2, 1], [1, 2]]: eigenvalues 1 and 3 -> 1 / 4.
+  EXPECT_NEAR(gdi_of({matrix2(2.0, 1.0, 1.0, 2.0)}), 0.25, 1e-15);
+}
+
+TEST(Gdi, TwoSampleSceneTakesTheHeaviestSample) {
+  EXPECT_DOUBLE_EQ(gdi_of({matrix2(0.5, 0.0, 0.0, 0.25), matrix2(3.0, 0.0, 0.0, 1.0)}), 0.25);
+  EXPECT_DOUBLE_EQ(gdi_of({matrix2(3.0, 0.0, 0.0, 1.0), matrix2(0.5, 0.0, 0.0, 0.25)}), 0.25);
+}
+
+TEST(Gdi, FiveBarSampleMatchesTheSvdOfItsEffectiveMass) {
+  using namespace hapsyn::plugins;
+  const FiveBarModel model(FiveBarDesign{0.0001, 0.0899, 0.1152, 0.1236}, FiveBarOptions{});
+  hapsyn::MechanismScratch scratch;
+  SampleQuantities q;
+  const double pose[2] = {0.05, 0.05};
+  model.solve(pose, hapsyn::kNeedEffectiveMass, scratch, q);
+  ASSERT_EQ(q.status, hapsyn::SampleStatus::kReachable);
+  double local = 0.0;
+  Gdi(Json::object()).local(q, &local);
+  const Eigen::Matrix2d m = q.effective_mass;
+  const double expected = Eigen::JacobiSVD<Eigen::Matrix2d>(m).singularValues()(0);
+  EXPECT_NEAR(local, expected, 1e-15);
+  // For the symmetric positive-definite M this is its largest eigenvalue.
+  const Eigen::Vector2d eigen = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(m).eigenvalues();
+  EXPECT_NEAR(local, eigen(1), 1e-14);
+  EXPECT_GT(eigen(0), 0.0);
+  EXPECT_NEAR(gdi_of({q.effective_mass}), 1.0 / (1.0 + expected), 1e-15);
+}
+
+TEST(Gdi, DeclaresItsLocalNeedsAndWorstCaseAggregation) {
+  const Gdi gdi(Json::object());
+  const auto locals = gdi.locals();
+  ASSERT_EQ(locals.size(), 1u);
+  EXPECT_EQ(locals[0].name, "sigma_max_M");
+  EXPECT_EQ(locals[0].reduction, Reduction::kMax);
+  EXPECT_EQ(locals[0].unit, "kg");
+  EXPECT_EQ(gdi.needs(), hapsyn::kNeedEffectiveMass);
+  EXPECT_EQ(gdi.aggregation(), hapsyn::Aggregation::kWorstCase);
+}
+
+TEST(Gdi, CombineIsFiniteForAnInfiniteMass) {
+  const Gdi gdi(Json::object());
+  const double infinite = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(gdi.combine(&infinite, 1), 0.0);
+}
+
+TEST(Gdi, RefusesOptionsAndShipsAnEmptySchema) {
+  EXPECT_NO_THROW(Gdi{Json(nullptr)});
+  try {
+    Gdi gdi(Json{{"scale", 2.0}});
+    FAIL() << "no error";
+  } catch (const hapsyn::Error& e) {
+    EXPECT_STREQ(e.what(), "gdi: options.scale: unknown option (gdi takes no options)");
+  }
+  std::ifstream file(HAPSYN_SOURCE_DIR "/plugins/metrics/gdi/schema.json");
+  ASSERT_TRUE(file.good());
+  const Json schema = Json::parse(file);
+  EXPECT_NO_THROW(hapsyn::check_schema(schema, "gdi"));
+  EXPECT_EQ(hapsyn::validate_and_fill(schema, Json::object(), "metrics[0].options"), Json::object());
+}
+
+}  // namespace
