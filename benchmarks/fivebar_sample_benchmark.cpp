@@ -9,7 +9,10 @@
 //   gii.local() and gdi.local() alone     -- the metrics' closed-form singular values
 //   the reach constraint                  -- once per design, O(samples)
 // Compare the rows with each other (ratios), not as bare times: "per_sample" is the time per
-// sample (inverted rate), so IK+J+D+M / IK+J is the price of the dynamic index.
+// sample (inverted rate), so IK+J+D+M / IK+J is the price of the dynamic index; the ratios
+// are printed at the end of the run.
+#include "common.hpp"
+
 #include <fivebar.hpp>
 #include <gdi.hpp>
 #include <gii.hpp>
@@ -141,3 +144,15 @@ BENCHMARK(BM_GdiLocal);
 BENCHMARK(BM_FiveBarReachConstraint);
 
 }  // namespace
+
+int main(int argc, char** argv) {
+  hapsyn::bench::record_context(Json{{"mechanism", "fivebar"},
+                                     {"design", {0.0004, 0.2997, 0.3000, 0.4196}},
+                                     {"scene", {{"plugin", "planar_square"}, {"side", 0.1}, {"step", 0.005}}}});
+  // Printed as "ratio <second> / <first>": the cost of each step relative to the cheaper one.
+  hapsyn::bench::compare("BM_FiveBarPoseOnly", "BM_FiveBarIkJacobian");
+  hapsyn::bench::compare("BM_FiveBarIkJacobian", "BM_FiveBarIkJacobianInertiaMass");
+  hapsyn::bench::compare("BM_FiveBarIkJacobian", "BM_FiveBarGiiAndGdiFullEvaluation");
+  hapsyn::bench::compare("BM_GdiLocal", "BM_GiiLocal");
+  return hapsyn::bench::run_main(argc, argv);
+}

@@ -49,6 +49,10 @@ endfunction()
 # bin/ directory and the repository root available as HAPSYN_BINARY_DIR / HAPSYN_SOURCE_DIR.
 function(hapsyn_add_test name)
   cmake_parse_arguments(ARG "" "" "LIBRARIES;LABELS" ${ARGN})
+  if(NOT TARGET hapsyn OR NOT TARGET GTest::gtest OR NOT COMMAND gtest_discover_tests)
+    message(FATAL_ERROR "hapsyn_add_test(${name}): only available inside the hapsyn source tree "
+      "with HAPSYN_BUILD_TESTS=ON; out of tree, use add_executable() and add_test() directly")
+  endif()
   add_executable(${name} ${ARG_UNPARSED_ARGUMENTS})
   target_link_libraries(${name} PRIVATE hapsyn GTest::gtest GTest::gtest_main ${ARG_LIBRARIES})
   target_compile_options(${name} PRIVATE ${HAPSYN_WARNINGS})

@@ -163,11 +163,12 @@ void FiveBarModel::solve(const double* pose, Needs needs, MechanismScratch& /*sc
     return;
   }
 
-  // The paper's G, closed inequalities with a small tolerance (DESIGN.md section 6).
+  // The paper's G: q2 >= 0, q2 <= q1, q3 <= pi, q3 >= q4 (closed inequalities with a small
+  // tolerance, DESIGN.md section 6) and the working mode 0 < q3 - q2 < pi. Together they give
+  // 0 <= q2 < q3 <= pi: the end effector lies above both elbows.
   const double t = kFiveBarAngleTolerance;
   const double mode = q3 - q2;
-  const bool valid = q2 >= -t && q2 <= kPi + t && q3 >= -t && q3 <= kPi + t && q2 <= q1 + t &&
-                     q4 <= q3 + t && mode > 0.0 && mode < kPi;
+  const bool valid = q2 >= -t && q2 <= q1 + t && q3 <= kPi + t && q4 <= q3 + t && mode > 0.0 && mode < kPi;
   if (!valid) {
     out.status = SampleStatus::kInvalid;
     return;

@@ -17,9 +17,11 @@
 ///   q4 = pi - (mirrored q1) in [-pi, 2pi), q3 = pi - (mirrored q2) in (-pi/2, 3pi/2], so that
 ///   reflecting a sample about x = 0 maps (q1, q2, q3, q4) to (pi - q4, pi - q3, pi - q2, pi - q1)
 ///   bit for bit.
-/// - Validity (the paper's G): 0 <= q2 <= pi, q2 <= q1, 0 <= q3 <= pi, q4 <= q3 (within
-///   kAngleTolerance), working mode 0 < q3 - q2 < pi, and |sin(q1 - q2)|, |sin(q3 - q4)|,
-///   |sin(q3 - q2)| >= singularity_tolerance.
+/// - Validity (the paper's G): q2 >= 0, q2 <= q1, q3 <= pi, q4 <= q3 (within
+///   kFiveBarAngleTolerance), working mode 0 < q3 - q2 < pi (so 0 <= q2 < q3 <= pi: the end
+///   effector above both elbows), and |sin(q1 - q2)|, |sin(q3 - q4)|, |sin(q3 - q2)| >=
+///   singularity_tolerance. Classification order: no IK solution -> kUnreachable, a sine
+///   below the tolerance -> kSingular, G violated -> kInvalid, else kReachable.
 /// - J maps (q1dot, q4dot) [rad/s] to (xdot, ydot) [m/s]; D is the joint-space inertia in
 ///   (q1, q4) [kg m^2] of four uniform bars of width k and linear density rho; the effective
 ///   mass at the end effector is M = J^-T D J^-1 [kg].

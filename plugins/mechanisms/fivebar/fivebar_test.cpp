@@ -7,6 +7,7 @@
 #include <planar_square.hpp>
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/registry.hpp>
 #include <hapsyn/schema.hpp>
 
 #include <gtest/gtest.h>
@@ -204,7 +205,7 @@ double bar_energy(const FiveBarModel& m, double q1, double q4, const Eigen::Vect
 }
 
 // Smallest |sin| of the three transmission angles: finite differences through FK lose accuracy
-// as it approaches 0 (the velocities blow up), so the energy checks use samples above 0.05.
+// as it approaches 0 (the velocities blow up), so the energy checks use samples above 0.1.
 double transmission(const SampleQuantities& q) {
   return std::min({std::abs(std::sin(q.q(0) - q.q(1))), std::abs(std::sin(q.q(2) - q.q(3))),
                    std::abs(std::sin(q.q(2) - q.q(1)))});
@@ -367,7 +368,7 @@ TEST(FiveBarDynamics, InertiaMatchesKineticEnergyOfTheFourBars) {
       const FiveBarModel model(design, options_with(k));
       int checked = 0;
       for_random_reachable(model, seed++, 200, [&](const double*, const SampleQuantities& q) {
-        if (transmission(q) < 0.05) return;
+        if (transmission(q) < 0.1) return;
         ++checked;
         const Eigen::Vector2d qdot(normal(rng), normal(rng));
         const Eigen::Matrix2d d = q.inertia;
@@ -390,7 +391,7 @@ TEST(FiveBarDynamics, EffectiveMassMatchesKineticEnergyInTaskCoordinates) {
     const FiveBarModel model(design, options_with());
     int checked = 0;
     for_random_reachable(model, seed++, 300, [&](const double*, const SampleQuantities& q) {
-      if (transmission(q) < 0.05) return;
+      if (transmission(q) < 0.1) return;
       ++checked;
       const Eigen::Vector2d v(normal(rng), normal(rng));  // end-effector velocity [m/s]
       const Eigen::Matrix2d jac = q.jacobian, mass = q.effective_mass;
@@ -515,6 +516,25 @@ TEST(FiveBarExtremes, SamplesWithinRoundingOfTheReachBoundaryAreClassifiedNeverN
   const double past[2] = {0.0, 1e-9};
   model.solve(past, kAll, scratch, q);
   EXPECT_EQ(q.status, SampleStatus::kUnreachable);
+}
+
+TEST(FiveBarExtremes, SamplesAtTheRoundedReachOfRandomLegsAreSingularNotUnreachable) {
+  // |E - A| = fl(l1 + l2) or fl(|l1 - l2|) is the reach boundary up to one rounding; c may
+  // compute a few ulps beyond +-1 there. Such samples are clamped and classified singular.
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> length(0.01, 0.3);
+  MechanismScratch scratch;
+  SampleQuantities q;
+  for (int i = 0; i < 2000; ++i) {
+    const double l1 = length(rng), l2 = length(rng);
+    const FiveBarModel model(FiveBarDesign{0.0, l1, l2, 0.0}, options_with());
+    for (double distance : {l1 + l2, std::abs(l1 - l2)}) {
+      const double pose[2] = {0.0, distance};
+      model.solve(pose, kAll, scratch, q);
+      ASSERT_EQ(q.status, SampleStatus::kSingular) << "l1 = " << l1 << ", l2 = " << l2 << ", |E - A| = " << distance;
+      ASSERT_TRUE(q.q.allFinite());
+    }
+  }
 }
 
 TEST(FiveBarExtremes, SampleExactlyOnTheInnerReachBoundaryIsSingular) {
@@ -892,6 +912,47 @@ TEST(FiveBarConformance, CheckSceneRefusesNonPlanarScenes) {
   double g = 0.0;
   const double design[4] = {0.1, 0.2, 0.2, 0.2};
   EXPECT_THROW(mechanism.evaluate_constraints(design, spatial, &g), hapsyn::Error);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The plugin files: loaded by name through the registry, with their embedded schemas.
+
+TEST(FiveBarPlugin, LoadedPluginsReproduceTable2) {
+  const hapsyn::Registry registry({HAPSYN_PLUGIN_DIR});
+  const hapsyn::PluginRecord& record = registry.find("fivebar");
+  EXPECT_EQ(record.kind, "mechanism");
+  EXPECT_EQ(record.version, "1.0.0");
+  EXPECT_EQ(record.schema.at("properties").at("rho").at("default").get<double>(), 1.08);
+  const auto mechanism = registry.create_mechanism("fivebar", Json::object(), "mechanism.options");
+  const auto scene = registry.create_scene("planar_square", Json{{"step", 0.001}}, "scene.options");
+  const auto gii = registry.create_metric("gii", Json::object(), "metrics[0].options");
+  const auto gdi = registry.create_metric("gdi", Json::object(), "metrics[1].options");
+  const SampleSet samples = scene->build({});
+  mechanism->check_scene(samples);
+  ASSERT_EQ(samples.size(), 101 * 101);
+  const double design[4] = {kBestGii.l0, kBestGii.l1, kBestGii.l2, kBestGii.r};
+  double g = 0.0;
+  mechanism->evaluate_constraints(design, samples, &g);
+  EXPECT_LT(g, 0.0);
+  const auto model = mechanism->build(design);
+  const auto scratch = mechanism->make_scratch();
+  SampleQuantities q;
+  double reduced_gii[2] = {std::numeric_limits<double>::infinity(), 0.0}, reduced_gdi = 0.0;
+  for (int i = 0; i < samples.size(); ++i) {
+    model->solve(samples.pose(i), gii->needs() | gdi->needs(), *scratch, q);
+    ASSERT_EQ(q.status, SampleStatus::kReachable);
+    double local[2];
+    gii->local(q, local);
+    reduced_gii[0] = std::min(reduced_gii[0], local[0]);
+    reduced_gii[1] = std::max(reduced_gii[1], local[1]);
+    gdi->local(q, local);
+    reduced_gdi = std::max(reduced_gdi, local[0]);
+  }
+  EXPECT_NEAR(gii->combine(reduced_gii, samples.size()), 0.783, 0.0005);
+  EXPECT_NEAR(gdi->combine(&reduced_gdi, samples.size()), 0.622, 0.0005);
+  // Options are validated against the embedded schema.
+  EXPECT_THROW(registry.create_mechanism("fivebar", Json{{"rho", 0.0}}, "mechanism.options"), hapsyn::Error);
+  EXPECT_THROW(registry.create_scene("planar_square", Json{{"step", 0.03}}, "scene.options"), hapsyn::Error);
 }
 
 }  // namespace
