@@ -42,12 +42,12 @@
 #define HAPSYN_COUNT_ALLOCATIONS 0
 #endif
 
+#if HAPSYN_COUNT_ALLOCATIONS
 namespace {
 thread_local bool t_counting = false;
 thread_local long long t_allocations = 0;
 }  // namespace
 
-#if HAPSYN_COUNT_ALLOCATIONS
 extern "C" {
 void* __libc_malloc(std::size_t size);
 void* __libc_calloc(std::size_t count, std::size_t size);
