@@ -4,6 +4,8 @@
 #include <hapsyn/scene.hpp>
 #include <hapsyn/solver.hpp>
 
+#include <cassert>
+
 namespace hapsyn {
 
 const char* to_string(SampleStatus status) {
@@ -44,7 +46,18 @@ Aggregation Metric::aggregation() const {
   return Aggregation::kWorstCase;
 }
 
-Eigen::VectorXd SampleSet::lower_corner() const { return poses.colwise().minCoeff().transpose(); }
-Eigen::VectorXd SampleSet::upper_corner() const { return poses.colwise().maxCoeff().transpose(); }
+SampleSet::Corner SampleSet::lower_corner() const {
+  if (cached_lower_.size() == poses.cols()) return cached_lower_;
+  return poses.colwise().minCoeff().transpose();
+}
+SampleSet::Corner SampleSet::upper_corner() const {
+  if (cached_upper_.size() == poses.cols()) return cached_upper_;
+  return poses.colwise().maxCoeff().transpose();
+}
+void SampleSet::cache_bounds() {
+  assert(poses.cols() <= 16 && "SampleSet::Corner holds at most 16 pose coordinates");
+  cached_lower_ = poses.colwise().minCoeff().transpose();
+  cached_upper_ = poses.colwise().maxCoeff().transpose();
+}
 
 }  // namespace hapsyn

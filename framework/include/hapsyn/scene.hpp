@@ -14,6 +14,8 @@ namespace hapsyn {
 /// The samples of a scene. Each sample is a row of `poses` (e.g. (x, y) [m] for a planar
 /// scene), optionally with named per-sample attributes (e.g. the human's ellipsoid axes).
 struct SampleSet {
+  /// A point of the pose space (fixed capacity: returned by value without heap allocation).
+  using Corner = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 16, 1>;
   using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   std::vector<std::string> coordinates;  ///< names of the pose columns, e.g. {"x", "y"}
   std::string unit = "m";                ///< unit of the position columns
@@ -23,9 +25,15 @@ struct SampleSet {
   int size() const { return static_cast<int>(poses.rows()); }
   int dimension() const { return static_cast<int>(poses.cols()); }
   const double* pose(int i) const { return poses.data() + static_cast<Eigen::Index>(i) * poses.cols(); }
-  /// Componentwise minimum / maximum over all samples (the scene's bounding box).
-  Eigen::VectorXd lower_corner() const;
-  Eigen::VectorXd upper_corner() const;
+  /// Componentwise minimum / maximum over all samples (the scene's bounding box). O(1) once
+  /// cache_bounds() ran (the framework calls it after Scene::build), else a scan.
+  Corner lower_corner() const;
+  Corner upper_corner() const;
+  /// Computes the bounding box once, so that per-design constraints need not scan the samples.
+  void cache_bounds();
+
+ private:
+  Corner cached_lower_, cached_upper_;
 };
 
 /// What the scene must provide, derived from the study's metrics (e.g. the human ellipsoids

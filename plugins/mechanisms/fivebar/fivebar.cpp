@@ -287,16 +287,10 @@ double FiveBar::reach_constraint(const FiveBarDesign& design, double xmin, doubl
 
 void FiveBar::evaluate_constraints(const double* design, const SampleSet& scene, double* g) const {
   if (scene.dimension() != 2 || scene.size() == 0) check_scene(scene);
-  // The bounding box (SampleSet::lower_corner/upper_corner) in one pass, without allocating.
-  double xmin = std::numeric_limits<double>::infinity(), ymin = xmin;
-  double xmax = -xmin, ymax = -xmin;
-  const double* p = scene.poses.data();
-  for (int i = 0, n = scene.size(); i < n; ++i, p += 2) {
-    xmin = std::min(xmin, p[0]);
-    xmax = std::max(xmax, p[0]);
-    ymin = std::min(ymin, p[1]);
-    ymax = std::max(ymax, p[1]);
-  }
+  // Cached by the framework once per study: O(1) and allocation-free per design.
+  const SampleSet::Corner lower = scene.lower_corner();
+  const SampleSet::Corner upper = scene.upper_corner();
+  const double xmin = lower[0], ymin = lower[1], xmax = upper[0], ymax = upper[1];
   g[0] = reach_constraint(FiveBarDesign{design[0], design[1], design[2], design[3]}, xmin, xmax, ymin, ymax);
 }
 

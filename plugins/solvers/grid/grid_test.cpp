@@ -84,7 +84,9 @@ TEST(Grid, MatchesBruteForceOnRandomSubBoxesForGiiGdiAndWeightedSum) {
           const long long pruned = result.statistics["pruned"].get<long long>();
           EXPECT_LE(feasible, brute.feasible);
           EXPECT_GE(feasible + pruned, brute.feasible);
-          if (!prune) EXPECT_EQ(feasible, brute.feasible);
+          if (!prune) {
+            EXPECT_EQ(feasible, brute.feasible);
+          }
           if (brute.feasible == 0) {
             EXPECT_EQ(result.status, hapsyn::SolverStatus::kInfeasible);
             EXPECT_FALSE(result.best.has_value());
