@@ -200,7 +200,12 @@ const Evaluation& Problem::evaluate(const double* free_design, Workspace& ws, co
     }
   }
 
-  const std::unique_ptr<const MechanismModel> model = mechanism_->build(ws.full.data());
+  std::unique_ptr<const MechanismModel> owned;
+  const MechanismModel* model = mechanism_->build_in(ws.full.data(), *ws.scratch);
+  if (!model) {
+    owned = mechanism_->build(ws.full.data());
+    model = owned.get();
+  }
   reset_accumulators(local_reduction_, ws.accumulator, ws.argument);
   const bool prune = std::isfinite(options.prune_below) && worst_case_ &&
                      std::all_of(objectives_.begin(), objectives_.end(), [](const Objective& o) {

@@ -495,6 +495,7 @@ Json run_study(Study& study, const RunOptions& options) {
   doc["message"] = result.message;
   doc["evaluations"] = {{"designs", result.design_evaluations}, {"samples", result.sample_evaluations}};
   doc["samples_in_scene"] = study.problem->samples().size();
+  doc["scene"] = study.problem->samples().info;
   if (result.best) doc["best"] = point_to_json(*study.problem, *result.best);
   if (!result.front.empty()) {
     Json front = Json::array();

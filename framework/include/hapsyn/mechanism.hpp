@@ -36,6 +36,12 @@ class Mechanism {
   virtual ~Mechanism() = default;
   /// Builds the model for a full design vector (layout: DesignSpace::components()).
   virtual std::unique_ptr<const MechanismModel> build(const double* design) const = 0;
+  /// Optional fast path: builds the model for `design` inside the per-thread `scratch` and
+  /// returns it (valid until the next call with the same scratch), so that a solver visiting
+  /// millions of designs allocates nothing per design. Default: nullptr (build() is used).
+  virtual const MechanismModel* build_in(const double* design, MechanismScratch& scratch) const {
+    return nullptr;
+  }
   /// The design variables (defaults and hard limits).
   virtual std::vector<VariableDecl> variables() const { return {}; }
   /// Design constraints g(p) <= 0 (may depend on the scene's extent; never on a sample).

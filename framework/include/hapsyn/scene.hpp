@@ -21,6 +21,9 @@ struct SampleSet {
   std::string unit = "m";                ///< unit of the position columns
   RowMatrix poses;                       ///< one sample per row
   std::map<std::string, RowMatrix> attributes;  ///< per-sample extras, one row per sample
+  /// What the scene reports about itself (e.g. build time, cache file, counts); copied into
+  /// result.json under "scene" and printed by `hapsyn scene`.
+  Json info = Json::object();
 
   int size() const { return static_cast<int>(poses.rows()); }
   int dimension() const { return static_cast<int>(poses.cols()); }

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <limits>
 
 namespace hapsyn::plugins {
@@ -246,6 +247,23 @@ FiveBarDesign FiveBar::design_from(const double* design) {
 
 std::unique_ptr<const MechanismModel> FiveBar::build(const double* design) const {
   return std::make_unique<const FiveBarModel>(design_from(design), options_);
+}
+
+namespace {
+// The model lives in the thread's scratch, so solvers that visit ~1e9 grid designs (culling)
+// rebuild it in place instead of allocating one per design.
+struct FiveBarScratch final : MechanismScratch {
+  std::optional<FiveBarModel> model;
+};
+}  // namespace
+
+std::unique_ptr<MechanismScratch> FiveBar::make_scratch() const { return std::make_unique<FiveBarScratch>(); }
+
+const MechanismModel* FiveBar::build_in(const double* design, MechanismScratch& scratch) const {
+  auto* own = dynamic_cast<FiveBarScratch*>(&scratch);
+  if (!own) return nullptr;
+  own->model.emplace(design_from(design), options_);
+  return &*own->model;
 }
 
 std::vector<VariableDecl> FiveBar::variables() const {

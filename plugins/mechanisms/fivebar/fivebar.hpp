@@ -103,6 +103,10 @@ class FiveBar final : public Mechanism {
 
   /// \param design l0, l1, l2, r [m]. \throws Error for a non-finite or non-positive length.
   std::unique_ptr<const MechanismModel> build(const double* design) const override;
+  /// The same model, built in the per-thread scratch (no allocation per design).
+  const MechanismModel* build_in(const double* design, MechanismScratch& scratch) const override;
+  /// Scratch holding the model that build_in() rebuilds.
+  std::unique_ptr<MechanismScratch> make_scratch() const override;
   /// l0, l1, l2, r [m] with the paper's default bounds and hard limits.
   std::vector<VariableDecl> variables() const override;
   /// One constraint, "reach" [m^2]: see reach_constraint().
