@@ -259,6 +259,11 @@ const Evaluation& Problem::evaluate(const double* free_design, Workspace& ws, co
                      static_cast<int>(out.samples_evaluated));
       }
       if (bound < options.prune_below) {
+        // The samples attaining the reductions so far are what made the bound fall: culling
+        // collects them as critical samples.
+        for (std::size_t m = 0; m < metrics_.size(); ++m) {
+          out.critical_samples[m].assign(ws.argument.begin() + local_offset_[m], ws.argument.begin() + local_offset_[m + 1]);
+        }
         out.status = EvalStatus::kPruned;
         return out;
       }

@@ -12,6 +12,10 @@ class TestMetric : public hapsyn::Metric {
     throw std::runtime_error("deliberate failure in the factory");
 #endif
   }
+#ifdef TEST_PLUGIN_SUM
+  // An averaging metric: reduced by a sum.
+  std::vector<hapsyn::LocalValue> locals() const override { return {{"one", hapsyn::Reduction::kSum, ""}}; }
+#endif
   void local(const hapsyn::SampleQuantities&, double* out) const override {
 #ifdef TEST_PLUGIN_NAN
     out[0] = std::numeric_limits<double>::quiet_NaN();

@@ -55,7 +55,8 @@ struct Evaluation {
   SampleStatus failed_status = SampleStatus::kReachable;
   long long samples_evaluated = 0; ///< mechanism solves performed
   /// For worst-case metrics: per metric, per local value, the sample attaining the reduction
-  /// (the critical samples culling collects). Empty entries (-1) for sum reductions.
+  /// (the critical samples culling collects), also when kPruned (over the samples seen).
+  /// -1 for sum reductions.
   std::vector<std::vector<int>> critical_samples;
   /// Per metric, the reduced local values (same order as Metric::locals()).
   std::vector<std::vector<double>> reduced;

@@ -1,0 +1,840 @@
+// Tests of the human_arm scene: forward kinematics against KDL and a second formulation, IK round
+// trips, joint limits, manipulability selection by brute force, M_v / M_a against a direct SVD,
+// the orientation set (Kolmogorov-Smirnov on the rotation angle), extremes without NaN, the
+// scene's samples and attributes, the disk cache (hit, corrupt, truncated, stale), arm-file and
+// option errors, and the schema.
+#include "human_arm.hpp"
+
+#include <hapsyn/error.hpp>
+#include <hapsyn/schema.hpp>
+
+#include <gtest/gtest.h>
+
+#include <Eigen/SVD>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <unistd.h>
+
+#ifdef HAPSYN_HAVE_KDL
+#include <kdl/chain.hpp>
+#include <kdl/chainfksolverpos_recursive.hpp>
+#include <kdl/chainjnttojacsolver.hpp>
+#endif
+
+namespace {
+
+namespace fs = std::filesystem;
+using hapsyn::Json;
+using hapsyn::SampleSet;
+using namespace hapsyn::plugins;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+
+const std::string kArmFile = HAPSYN_SOURCE_DIR "/share/human_arm/fennel2022_right_arm.json";
+
+const HumanArm& arm() {
+  static const HumanArm a(load_human_arm(kArmFile));
+  return a;
+}
+
+Json arm_document() {
+  std::ifstream in(kArmFile);
+  return Json::parse(in);
+}
+
+std::string arm_error(const Json& doc) {
+  try {
+    parse_human_arm(doc, "arm.json");
+  } catch (const hapsyn::Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+template <class Fn>
+std::string error_of(Fn&& fn) {
+  try {
+    fn();
+  } catch (const hapsyn::Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+Vector7d random_q(std::mt19937& rng, bool q3_on_grid, int steps = 17) {
+  const HumanArmData& d = arm().data();
+  Vector7d q;
+  for (int i = 0; i < 7; ++i) q(i) = std::uniform_real_distribution<double>(d.lower(i), d.upper(i))(rng);
+  if (q3_on_grid) {
+    const std::vector<double> grid = arm().joint3_grid(steps);
+    q(2) = grid[std::uniform_int_distribution<int>(0, steps - 1)(rng)];
+  }
+  return q;
+}
+
+// An independent formulation of the same chain: each DH row as a product of elementary
+// rotations and translations built with Eigen's geometry module.
+Eigen::Isometry3d second_dh(const Vector7d& q) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < 7; ++i) {
+    const DhRow& r = arm().data().dh[i];
+    T = T * Eigen::AngleAxisd(q(i) + r.theta_offset, Eigen::Vector3d::UnitZ()) * Eigen::Translation3d(0, 0, r.d) *
+        Eigen::Translation3d(r.a, 0, 0) * Eigen::AngleAxisd(r.alpha, Eigen::Vector3d::UnitX());
+  }
+  return T;
+}
+
+double rotation_distance(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B) { return (A - B).cwiseAbs().maxCoeff(); }
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("hapsyn-human-arm-" + name + "-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+Json small_scene(const fs::path& cache_dir) {
+  return Json{{"lattice_step", 0.2},  {"lattice_extent", 0.6},   {"orientations", 40},
+              {"joint3_steps", 5},    {"cache_directory", cache_dir.string()}, {"threads", 2}};
+}
+
+// ------------------------------------------------------------------------- model ----
+
+TEST(HumanArm, ArmFileHoldsTableTwoInRadians) {
+  const HumanArmData& d = arm().data();
+  EXPECT_EQ(d.name, "fennel2022_right_arm");
+  EXPECT_EQ(d.side, "right");
+  EXPECT_NEAR(d.dh[2].d, -0.326, 1e-15);
+  EXPECT_NEAR(d.dh[4].d, -0.256, 1e-15);
+  EXPECT_NEAR(d.dh[6].a, -0.095, 1e-15);
+  EXPECT_NEAR(d.lower(2), -80 * kDeg, 1e-15);
+  EXPECT_NEAR(d.upper(3), 160 * kDeg, 1e-15);
+  EXPECT_NEAR(d.velocity_max(4), 486 * kDeg, 1e-12);
+  EXPECT_NEAR(d.acceleration_max(0), 1312 * kDeg, 1e-12);
+  EXPECT_NEAR(arm().reach(), 0.326 + 0.256 + 0.095, 1e-12);
+}
+
+TEST(HumanArm, ForwardKinematicsMatchesASecondDhFormulation) {
+  std::mt19937 rng(1);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Vector7d q = random_q(rng, false);
+    const Eigen::Isometry3d a = arm().forward(q), b = second_dh(q);
+    EXPECT_LT((a.translation() - b.translation()).norm(), 1e-12);
+    EXPECT_LT(rotation_distance(a.linear(), b.linear()), 1e-12);
+  }
+  // The zero configuration: the arm hangs along +x_S (down), elbow straight, palm l_p off the
+  // forearm axis.
+  const Eigen::Vector3d p0 = arm().forward(Vector7d::Zero()).translation();
+  EXPECT_NEAR(p0.x(), 0.326 + 0.256, 1e-12);
+}
+
+#ifdef HAPSYN_HAVE_KDL
+KDL::Chain kdl_chain() {
+  KDL::Chain chain;
+  for (const DhRow& r : arm().data().dh) {
+    chain.addSegment(KDL::Segment(KDL::Joint(KDL::Joint::RotZ), KDL::Frame::DH(r.a, r.alpha, r.d, r.theta_offset)));
+  }
+  return chain;
+}
+
+TEST(HumanArm, ForwardKinematicsAndJacobianMatchKdl) {
+  const KDL::Chain chain = kdl_chain();
+  KDL::ChainFkSolverPos_recursive fk(chain);
+  KDL::ChainJntToJacSolver jac(chain);
+  std::mt19937 rng(2);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Vector7d q = random_q(rng, false);
+    KDL::JntArray jq(7);
+    for (int i = 0; i < 7; ++i) jq(i) = q(i);
+    KDL::Frame frame;
+    ASSERT_GE(fk.JntToCart(jq, frame), 0);
+    const Eigen::Isometry3d T = arm().forward(q);
+    for (int r = 0; r < 3; ++r) {
+      EXPECT_NEAR(T.translation()(r), frame.p(r), 1e-12);
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(T.linear()(r, c), frame.M(r, c), 1e-12);
+    }
+    KDL::Jacobian jk(7);
+    ASSERT_GE(jac.JntToJac(jq, jk), 0);
+    const Matrix67d J = arm().jacobian(q);
+    for (int c = 0; c < 7; ++c) {
+      for (int r = 0; r < 3; ++r) {
+        EXPECT_NEAR(J(r, c), jk(3 + r, c), 1e-12);  // KDL rows are (v, omega); ours (omega, v)
+        EXPECT_NEAR(J(3 + r, c), jk(r, c), 1e-12);
+      }
+    }
+  }
+}
+#endif
+
+TEST(HumanArm, JacobianMatchesFiniteDifferencesOfForwardKinematics) {
+  std::mt19937 rng(3);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Vector7d q = random_q(rng, false);
+    const Matrix67d J = arm().jacobian(q);
+    const Eigen::Isometry3d T = arm().forward(q);
+    for (int i = 0; i < 7; ++i) {
+      const double h = 1e-6;
+      Vector7d qp = q, qm = q;
+      qp(i) += h;
+      qm(i) -= h;
+      const Eigen::Isometry3d Tp = arm().forward(qp), Tm = arm().forward(qm);
+      const Eigen::Vector3d v = (Tp.translation() - Tm.translation()) / (2 * h);
+      const Eigen::AngleAxisd d(Tp.linear() * Tm.linear().transpose());
+      const Eigen::Vector3d w = d.axis() * d.angle() / (2 * h);
+      EXPECT_LT((J.block<3, 1>(3, i) - v).norm(), 1e-7);
+      EXPECT_LT((J.block<3, 1>(0, i) - w).norm(), 1e-7);
+    }
+    (void)T;
+  }
+}
+
+TEST(HumanArm, IkRoundTripsRandomConfigurationsWithJointThreeOnTheGrid) {
+  std::mt19937 rng(4);
+  int found = 0;
+  const int trials = 2000;
+  for (int trial = 0; trial < trials; ++trial) {
+    const Vector7d q = random_q(rng, true);
+    const Eigen::Isometry3d T = arm().forward(q);
+    ArmIkSolution solutions[8];
+    const int n = arm().solve(T.linear(), T.translation(), q(2), solutions);
+    ASSERT_GE(n, 1) << q.transpose();
+    double nearest = 1e9;
+    for (int i = 0; i < n; ++i) {
+      nearest = std::min(nearest, (solutions[i].q - q).cwiseAbs().maxCoeff());
+      // Every returned solution reaches the pose.
+      const Eigen::Isometry3d Ti = arm().forward(solutions[i].q);
+      EXPECT_LT((Ti.translation() - T.translation()).norm(), 1e-10);
+      EXPECT_LT(rotation_distance(Ti.linear(), T.linear()), 1e-10);
+    }
+    if (nearest < 1e-7) ++found;
+  }
+  EXPECT_EQ(found, trials);
+}
+
+TEST(HumanArm, BestSolutionReachesThePoseAndBeatsTheSourceConfiguration) {
+  std::mt19937 rng(5);
+  const std::vector<double> grid = arm().joint3_grid(17);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Vector7d q = random_q(rng, true);
+    const Eigen::Isometry3d T = arm().forward(q);
+    Vector7d best;
+    double m = -1;
+    ASSERT_TRUE(arm().best(T.linear(), T.translation(), grid, &best, &m));
+    EXPECT_GE(m, arm().manipulability(q) - 1e-12);
+    EXPECT_DOUBLE_EQ(m, arm().manipulability(best));
+    const Eigen::Isometry3d Tb = arm().forward(best);
+    EXPECT_LT((Tb.translation() - T.translation()).norm(), 1e-10);
+    EXPECT_LT(rotation_distance(Tb.linear(), T.linear()), 1e-10);
+  }
+}
+
+TEST(HumanArm, NoSolutionOutsideTheJointLimits) {
+  std::mt19937 rng(6);
+  const HumanArmData& d = arm().data();
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  long solutions_seen = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const Eigen::Vector3d p(0.7 * unit(rng), 0.7 * unit(rng), 0.7 * unit(rng));
+    const Eigen::Matrix3d R = Eigen::Quaterniond::UnitRandom().toRotationMatrix();
+    const double q3 = d.lower(2) + (d.upper(2) - d.lower(2)) * (unit(rng) + 1) / 2;
+    ArmIkSolution s[8];
+    const int n = arm().solve(R, p, q3, s);
+    solutions_seen += n;
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < 7; ++j) {
+        ASSERT_GE(s[i].q(j), d.lower(j)) << "joint " << j + 1;
+        ASSERT_LE(s[i].q(j), d.upper(j)) << "joint " << j + 1;
+        ASSERT_TRUE(std::isfinite(s[i].q(j)));
+      }
+    }
+  }
+  EXPECT_GT(solutions_seen, 100);  // the check saw real solutions
+}
+
+// Brute force: with joint 3 fixed, the remaining 6 joints are found by damped Newton from many
+// random starts (no closed form involved); the best manipulability over all solutions found on
+// the joint-3 grid must equal the scene's choice.
+TEST(HumanArm, ManipulabilitySelectionMatchesBruteForce) {
+  std::mt19937 rng(7);
+  const HumanArmData& d = arm().data();
+  const int steps = 5;
+  const std::vector<double> grid = arm().joint3_grid(steps);
+  for (int pose = 0; pose < 4; ++pose) {
+    const Vector7d source = random_q(rng, true, steps);
+    const Eigen::Isometry3d T = arm().forward(source);
+    double brute = -1;
+    for (const double q3 : grid) {
+      for (int start = 0; start < 150; ++start) {
+        Vector7d q = random_q(rng, false);
+        q(2) = q3;
+        bool converged = false;
+        for (int it = 0; it < 100; ++it) {
+          const Eigen::Isometry3d Tq = arm().forward(q);
+          Eigen::Matrix<double, 6, 1> e;
+          const Eigen::AngleAxisd rot(T.linear() * Tq.linear().transpose());
+          e.head<3>() = rot.axis() * rot.angle();
+          e.tail<3>() = T.translation() - Tq.translation();
+          if (e.norm() < 1e-12) {
+            converged = true;
+            break;
+          }
+          Matrix67d J = arm().jacobian(q);
+          J.col(2).setZero();
+          const Eigen::Matrix<double, 7, 1> dq =
+              J.transpose() * (J * J.transpose() + 1e-10 * Matrix6d::Identity()).ldlt().solve(e);
+          q += dq;
+          q(2) = q3;
+        }
+        if (!converged) continue;
+        bool inside = true;
+        for (int j = 0; j < 7; ++j) {
+          const double wrapped = d.lower(j) + std::fmod(std::fmod(q(j) - d.lower(j), 2 * kPi) + 2 * kPi, 2 * kPi);
+          inside = inside && wrapped <= d.upper(j) + 1e-9;
+        }
+        if (inside) brute = std::max(brute, arm().manipulability(q));
+      }
+    }
+    Vector7d best;
+    double m = -1;
+    ASSERT_TRUE(arm().best(T.linear(), T.translation(), grid, &best, &m));
+    ASSERT_GT(brute, 0.0) << "brute force found nothing for pose " << pose;
+    EXPECT_NEAR(m, brute, 1e-9 * std::max(1.0, brute)) << "pose " << pose;
+  }
+}
+
+TEST(HumanArm, ManipulabilityIsTheProductOfSingularValues) {
+  std::mt19937 rng(8);
+  for (int trial = 0; trial < 50; ++trial) {
+    const Vector7d q = random_q(rng, false);
+    const Eigen::JacobiSVD<Matrix67d> svd(arm().jacobian(q));
+    EXPECT_NEAR(arm().manipulability(q), svd.singularValues().prod(), 1e-12);
+  }
+}
+
+TEST(HumanArm, EllipsoidAxesMatchADirectSvd) {
+  std::mt19937 rng(9);
+  const HumanArmData& d = arm().data();
+  for (int trial = 0; trial < 100; ++trial) {
+    const Vector7d q = random_q(rng, false);
+    const Matrix67d J = arm().jacobian(q);
+    for (const Vector7d* scale : {&d.velocity_max, &d.acceleration_max}) {
+      const Matrix6d M = ellipsoid_axes(J, *scale);
+      const Matrix67d Js = J * scale->asDiagonal();
+      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Js, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      for (int c = 0; c < 6; ++c) {
+        const Eigen::Matrix<double, 6, 1> expected = svd.matrixU().col(c) * svd.singularValues()(c);
+        const double same = (M.col(c) - expected).norm(), flipped = (M.col(c) + expected).norm();
+        EXPECT_LT(std::min(same, flipped), 1e-9 * svd.singularValues()(0)) << "column " << c;
+      }
+      // Sign-free check: M M^T = J diag(s)^2 J^T.
+      EXPECT_LT((M * M.transpose() - Js * Js.transpose()).norm(), 1e-9 * (Js * Js.transpose()).norm());
+    }
+  }
+}
+
+// Uniform rotations have angle density (1 - cos t) / pi on [0, pi]: CDF (t - sin t) / pi.
+double ks_statistic(const std::vector<Eigen::Quaterniond>& set) {
+  std::vector<double> angles;
+  for (const auto& q : set) angles.push_back(2 * std::acos(std::min(1.0, q.w())));
+  std::sort(angles.begin(), angles.end());
+  const double n = static_cast<double>(angles.size());
+  double D = 0;
+  for (std::size_t i = 0; i < angles.size(); ++i) {
+    const double F = (angles[i] - std::sin(angles[i])) / kPi;
+    D = std::max({D, (i + 1) / n - F, F - i / n});
+  }
+  return D;
+}
+
+TEST(HumanArm, OrientationSetIsUnitHemisphereAndUniformInRotationAngle) {
+  for (const int n : {505, 100, 2000}) {
+    const std::vector<Eigen::Quaterniond> set = orientation_set(n);
+    ASSERT_EQ(static_cast<int>(set.size()), n);
+    for (const auto& q : set) {
+      EXPECT_NEAR(q.norm(), 1.0, 1e-15);
+      EXPECT_GE(q.w(), 0.0);
+    }
+    // Kolmogorov-Smirnov at 5 %: D < 1.358 / sqrt(n). A deterministic low-discrepancy set
+    // should do much better than random; half the critical value is required.
+    const double D = ks_statistic(set);
+    EXPECT_LT(D, 0.5 * 1.358 / std::sqrt(n)) << "n = " << n << ", D = " << D;
+  }
+  // The test can fail: a set clustered near the identity is rejected.
+  std::vector<Eigen::Quaterniond> biased = orientation_set(505);
+  for (auto& q : biased) q = Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * Eigen::AngleAxisd(q).angle(), Eigen::AngleAxisd(q).axis()));
+  EXPECT_GT(ks_statistic(biased), 1.358 / std::sqrt(505.0));
+}
+
+TEST(HumanArm, OrientationSetCoversSo3WithoutLargeHoles) {
+  const std::vector<Eigen::Quaterniond> set = orientation_set(505);
+  // Every random rotation has a set member within ~ the covering radius of 505 points
+  // (the volume of SO(3) is pi^2: a ball of angle r holds (r - sin r)/pi of it).
+  std::mt19937 rng(10);
+  double worst = 0;
+  for (int t = 0; t < 2000; ++t) {
+    const Eigen::Quaterniond r = Eigen::Quaterniond::UnitRandom();
+    double nearest = 10;
+    for (const auto& q : set) nearest = std::min(nearest, 2 * std::acos(std::min(1.0, std::abs(q.dot(r)))));
+    worst = std::max(worst, nearest);
+  }
+  EXPECT_LT(worst, 0.6);  // ~34 deg; a single point's share of SO(3) is a ball of ~0.31 rad
+}
+
+TEST(HumanArm, LatticeIsSymmetricAroundTheShoulder) {
+  const std::vector<double> axis = lattice_axis(0.1, 0.7);
+  ASSERT_EQ(axis.size(), 15u);
+  EXPECT_EQ(axis[7], 0.0);
+  for (int k = 0; k < 15; ++k) EXPECT_EQ(axis[k], -axis[14 - k]);
+  EXPECT_NEAR(axis.back(), 0.7, 1e-15);
+  EXPECT_EQ(lattice_axis(0.3, 0.7).size(), 5u);  // 0, +-0.3, +-0.6
+}
+
+TEST(HumanArm, PointsAtAndBeyondReachGiveNoNaN) {
+  const std::vector<double> grid = arm().joint3_grid(17);
+  const std::vector<Eigen::Quaterniond> set = orientation_set(505);
+  Vector7d q;
+  double m;
+  // Fully stretched (q4 = 0, the elbow's lower limit): the palm exactly at the reach boundary.
+  Vector7d stretched = Vector7d::Zero();
+  stretched(3) = 0.0;
+  const Eigen::Isometry3d T = arm().forward(stretched);
+  ASSERT_TRUE(arm().best(T.linear(), T.translation(), grid, &q, &m));
+  EXPECT_TRUE(std::isfinite(m));
+  EXPECT_TRUE(q.allFinite());
+  // Slightly beyond it along the arm: unreachable, not NaN.
+  const Eigen::Vector3d beyond = T.translation() * 1.001;
+  EXPECT_FALSE(arm().best(T.linear(), beyond, grid, &q, &m));
+  // Far lattice points (corners of the 0.7 m cube), the shoulder itself and a point on axis 1.
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(0.7, 0.7, 0.7), Eigen::Vector3d(0.0, 0.0, 0.0),
+                                   Eigen::Vector3d(0.0, 0.0, 0.3), Eigen::Vector3d(0.677, 0.0, 0.0)}) {
+    for (const auto& r : set) {
+      ArmIkSolution s[8];
+      for (double q3 : grid) {
+        const int n = arm().solve(r.toRotationMatrix(), p, q3, s);
+        for (int i = 0; i < n; ++i) ASSERT_TRUE(s[i].q.allFinite());
+      }
+      if (arm().best(r.toRotationMatrix(), p, grid, &q, &m)) {
+        ASSERT_TRUE(q.allFinite());
+        ASSERT_TRUE(std::isfinite(m));
+      }
+    }
+  }
+}
+
+TEST(HumanArm, PosesAtJointLimitsAreFound) {
+  const HumanArmData& d = arm().data();
+  const std::vector<double> grid = arm().joint3_grid(17);
+  int corners = 0;
+  // Every joint at its lower or upper limit (q3 = +-80 deg, on the grid's ends): 2^7 poses.
+  for (int mask = 0; mask < 128; ++mask) {
+    Vector7d q;
+    for (int j = 0; j < 7; ++j) q(j) = (mask >> j & 1) ? d.upper(j) : d.lower(j);
+    const Eigen::Isometry3d T = arm().forward(q);
+    ArmIkSolution s[8];
+    const int n = arm().solve(T.linear(), T.translation(), q(2), s);
+    double nearest = 1e9;
+    for (int i = 0; i < n; ++i) {
+      nearest = std::min(nearest, (s[i].q - q).cwiseAbs().maxCoeff());
+      ASSERT_TRUE(s[i].q.allFinite());
+    }
+    EXPECT_LT(nearest, 1e-7) << "mask " << mask;
+    Vector7d best;
+    double m;
+    EXPECT_TRUE(arm().best(T.linear(), T.translation(), grid, &best, &m));
+    ++corners;
+  }
+  EXPECT_EQ(corners, 128);
+  // The grid ends are exactly the limits (no rounding off the end).
+  EXPECT_EQ(grid.front(), d.lower(2));
+  EXPECT_EQ(grid.back(), d.upper(2));
+}
+
+// ------------------------------------------------------------------------- scene ----
+
+TEST(HumanArm, SceneSamplesAreConsistentReachablePoses) {
+  const fs::path dir = temp_dir("consistent");
+  Json options = small_scene(dir);
+  options["cache"] = false;
+  const HumanArmScene scene(options);
+  const SampleSet set = scene.build({});
+  ASSERT_GT(set.size(), 100);
+  EXPECT_EQ(set.coordinates, (std::vector<std::string>{"x", "y", "z", "qw", "qx", "qy", "qz"}));
+  EXPECT_EQ(set.info["n_reach"], set.size());
+  EXPECT_EQ(set.info["lattice_points"], 7 * 7 * 7);
+  EXPECT_EQ(set.info["poses_tried"], 7 * 7 * 7 * 40);
+  EXPECT_EQ(set.info["from_cache"], false);
+  EXPECT_EQ(set.info["cache_status"], "off");
+  EXPECT_EQ(set.attributes.count("M_v"), 0u);
+  EXPECT_EQ(set.attributes.count("M_a"), 0u);
+  const auto& shoulder = set.attributes.at("shoulder_pose");
+  const auto& hq = set.attributes.at("human_q");
+  const auto& manip = set.attributes.at("manipulability");
+  const HumanArmSceneOptions& o = scene.options();
+  for (int i = 0; i < set.size(); ++i) {
+    const Eigen::Vector3d p = shoulder.row(i).head<3>().transpose();
+    const Eigen::Quaterniond r(shoulder(i, 3), shoulder(i, 4), shoulder(i, 5), shoulder(i, 6));
+    const Vector7d q = hq.row(i).transpose();
+    const Eigen::Isometry3d T = arm().forward(q);
+    ASSERT_LT((T.translation() - p).norm(), 1e-9) << i;
+    ASSERT_LT(rotation_distance(T.linear(), r.toRotationMatrix()), 1e-9) << i;
+    ASSERT_EQ(manip(i, 0), arm().manipulability(q));
+    // The pose in B: T_S^B T_P^S T_E^P.
+    const Eigen::Vector3d xb = o.x_S_B + o.C_S_B * p;
+    const Eigen::Matrix3d Cb = o.C_S_B * r.toRotationMatrix() * o.C_E_P;
+    const Eigen::Quaterniond qb(set.poses(i, 3), set.poses(i, 4), set.poses(i, 5), set.poses(i, 6));
+    ASSERT_LT((set.poses.row(i).head<3>().transpose() - xb).norm(), 1e-12);
+    ASSERT_LT(rotation_distance(qb.toRotationMatrix(), Cb), 1e-12);
+    ASSERT_GE(qb.w(), 0.0);
+    ASSERT_TRUE(set.poses.row(i).allFinite());
+  }
+  fs::remove_all(dir);
+}
+
+TEST(HumanArm, SceneDoesNotDependOnTheThreadCount) {
+  const fs::path dir = temp_dir("threads");
+  Json options = small_scene(dir);
+  options["cache"] = false;
+  options["threads"] = 1;
+  const SampleSet one = HumanArmScene(options).build({});
+  options["threads"] = 3;
+  const SampleSet three = HumanArmScene(options).build({});
+  EXPECT_TRUE(one.poses == three.poses);
+  EXPECT_TRUE(one.attributes == three.attributes);
+  fs::remove_all(dir);
+}
+
+TEST(HumanArm, EllipsoidsAreBuiltOnlyWhenRequestedAndExpressedInTheBaseFrame) {
+  const fs::path dir = temp_dir("ellipsoids");
+  Json options = small_scene(dir);
+  options["cache"] = false;
+  options["x_E_P"] = {0.0, 0.0, 0.05};  // a non-zero offset: M is the twist of E, not P
+  const HumanArmScene scene(options);
+  hapsyn::SceneRequest request;
+  request.attributes = {"M_v"};
+  const SampleSet only_v = scene.build(request);
+  EXPECT_EQ(only_v.attributes.count("M_v"), 1u);
+  EXPECT_EQ(only_v.attributes.count("M_a"), 0u);
+  request.attributes = {"M_v", "M_a"};
+  const SampleSet set = scene.build(request);
+  const HumanArmSceneOptions& o = scene.options();
+  const HumanArmData& d = arm().data();
+  for (int i = 0; i < set.size(); i += 7) {
+    const Vector7d q = set.attributes.at("human_q").row(i).transpose();
+    // Reference: the Jacobian of the point E in B, by finite differences of T_E^B.
+    Matrix67d J;
+    const auto pose_b = [&](const Vector7d& qq) {
+      const Eigen::Isometry3d T = arm().forward(qq);
+      Eigen::Isometry3d E;
+      E.linear() = o.C_S_B * T.linear();
+      E.translation() = o.x_S_B + o.C_S_B * (T.translation() + T.linear() * o.x_E_P);
+      return E;
+    };
+    for (int j = 0; j < 7; ++j) {
+      Vector7d qp = q, qm = q;
+      qp(j) += 1e-6;
+      qm(j) -= 1e-6;
+      const Eigen::Isometry3d Tp = pose_b(qp), Tm = pose_b(qm);
+      const Eigen::AngleAxisd w(Tp.linear() * Tm.linear().transpose());
+      J.block<3, 1>(0, j) = w.axis() * w.angle() / 2e-6;
+      J.block<3, 1>(3, j) = (Tp.translation() - Tm.translation()) / 2e-6;
+    }
+    for (const auto& [name, scale] : {std::pair{"M_v", &d.velocity_max}, std::pair{"M_a", &d.acceleration_max}}) {
+      const Eigen::Matrix<double, 6, 6, Eigen::RowMajor> M =
+          Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(set.attributes.at(name).row(i).data());
+      const Matrix67d Js = J * scale->asDiagonal();
+      const Matrix6d expected = Js * Js.transpose();
+      EXPECT_LT((M * M.transpose() - expected).norm(), 1e-6 * expected.norm()) << name << " sample " << i;
+    }
+  }
+  fs::remove_all(dir);
+}
+
+TEST(HumanArm, RefusesUnknownAttributes) {
+  const fs::path dir = temp_dir("attr");
+  Json options = small_scene(dir);
+  options["cache"] = false;
+  hapsyn::SceneRequest request;
+  request.attributes = {"force_axes"};
+  EXPECT_EQ(error_of([&] { HumanArmScene(options).build(request); }),
+            "human_arm: per-sample attribute 'force_axes' requested: this scene provides shoulder_pose, human_q, "
+            "manipulability, lattice_index, M_v, M_a");
+  fs::remove_all(dir);
+}
+
+// ------------------------------------------------------------------------- cache ----
+
+bool same_samples(const SampleSet& a, const SampleSet& b) {
+  return a.poses.rows() == b.poses.rows() && a.poses == b.poses && a.attributes == b.attributes;
+}
+
+TEST(HumanArm, CacheIsWrittenAtomicallyAndLoadsBitForBit) {
+  const fs::path dir = temp_dir("cache");
+  const HumanArmScene scene(small_scene(dir));
+  hapsyn::SceneRequest request;
+  request.attributes = {"M_v", "M_a"};
+  const SampleSet built = scene.build(request);
+  EXPECT_EQ(built.info["from_cache"], false);
+  EXPECT_EQ(built.info["cache_status"], "miss: built");
+  const std::string file = built.info["cache_file"];
+  EXPECT_EQ(file, scene.cache_file(true));
+  ASSERT_TRUE(fs::exists(file));
+  int entries = 0;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    ++entries;
+    EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+  }
+  EXPECT_EQ(entries, 1);
+  const SampleSet loaded = scene.build(request);
+  EXPECT_EQ(loaded.info["from_cache"], true);
+  EXPECT_EQ(loaded.info["cache_status"], "hit");
+  EXPECT_TRUE(same_samples(built, loaded));
+  // A request without the ellipsoids is another cache entry (they are not built for it).
+  const SampleSet plain = scene.build({});
+  EXPECT_EQ(plain.info["from_cache"], false);
+  EXPECT_NE(plain.info["cache_file"], file);
+  fs::remove_all(dir);
+}
+
+void expect_rebuilt(const HumanArmScene& scene, const SampleSet& reference, const std::string& reason) {
+  const SampleSet again = scene.build({});
+  EXPECT_EQ(again.info["from_cache"], false);
+  EXPECT_EQ(again.info["cache_status"], "rebuilt (" + reason + ")");
+  EXPECT_TRUE(same_samples(reference, again));
+  // And the rebuilt file is good again.
+  EXPECT_EQ(scene.build({}).info["cache_status"], "hit");
+}
+
+TEST(HumanArm, CorruptCacheIsDetectedAndRebuilt) {
+  const fs::path dir = temp_dir("corrupt");
+  const HumanArmScene scene(small_scene(dir));
+  const SampleSet reference = scene.build({});
+  const std::string file = reference.info["cache_file"];
+  {
+    std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(-9, std::ios::end);  // inside the manipulability payload
+    char c;
+    f.read(&c, 1);
+    f.seekp(-9, std::ios::end);
+    c = static_cast<char>(c ^ 0x10);
+    f.write(&c, 1);
+  }
+  expect_rebuilt(scene, reference, "corrupt: payload checksum");
+  {
+    std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(0);
+    f.write("XXXX", 4);
+  }
+  expect_rebuilt(scene, reference, "corrupt: not a human_arm cache file");
+  fs::remove_all(dir);
+}
+
+TEST(HumanArm, TruncatedCacheIsDetectedAndRebuilt) {
+  const fs::path dir = temp_dir("truncated");
+  const HumanArmScene scene(small_scene(dir));
+  const SampleSet reference = scene.build({});
+  const std::string file = reference.info["cache_file"];
+  fs::resize_file(file, fs::file_size(file) - 100);
+  expect_rebuilt(scene, reference, "corrupt: truncated or oversized payload");
+  fs::resize_file(file, 30);
+  expect_rebuilt(scene, reference, "corrupt: truncated header");
+  fs::resize_file(file, 0);
+  expect_rebuilt(scene, reference, "corrupt: not a human_arm cache file");
+  fs::remove_all(dir);
+}
+
+TEST(HumanArm, StaleCacheIsDetectedAndRebuilt) {
+  const fs::path dir = temp_dir("stale");
+  Json options = small_scene(dir);
+  const HumanArmScene a(options);
+  const SampleSet built_a = a.build({});
+  options["joint3_steps"] = 3;
+  const HumanArmScene b(options);
+  EXPECT_NE(a.cache_file(false), b.cache_file(false));
+  EXPECT_NE(a.cache_key(false), b.cache_key(false));
+  // A's file placed under B's name (a hash collision, or a file copied by hand) is not trusted.
+  fs::copy_file(a.cache_file(false), b.cache_file(false));
+  const SampleSet built_b = b.build({});
+  EXPECT_EQ(built_b.info["cache_status"], "rebuilt (stale: made for other options or another arm file)");
+  EXPECT_EQ(b.build({}).info["cache_status"], "hit");
+  // The key changes with the arm file's content, not only its name.
+  const fs::path arm_copy = dir / "arm.json";
+  Json doc = arm_document();
+  doc["segments"]["l_p"] = 0.1;
+  std::ofstream(arm_copy) << doc.dump(2);
+  options["arm_file"] = arm_copy.string();
+  options["joint3_steps"] = 5;
+  const HumanArmScene c(options);
+  EXPECT_NE(c.cache_file(false), a.cache_file(false));
+  // Thread count and cache location are not part of the key.
+  Json other = small_scene(dir);
+  other["threads"] = 1;
+  EXPECT_EQ(HumanArmScene(other).cache_key(false), a.cache_key(false));
+  fs::remove_all(dir);
+}
+
+TEST(HumanArm, UnwritableCacheDirectoryDoesNotFailTheBuild) {
+  const fs::path dir = temp_dir("unwritable");
+  const fs::path blocker = dir / "file";
+  std::ofstream(blocker) << "x";
+  Json options = small_scene(blocker / "sub");  // a directory below a regular file
+  const SampleSet set = HumanArmScene(options).build({});
+  EXPECT_GT(set.size(), 0);
+  EXPECT_NE(set.info["cache_status"].get<std::string>().find("cache not written"), std::string::npos)
+      << set.info["cache_status"];
+  fs::remove_all(dir);
+}
+
+// ------------------------------------------------------------------- input errors ----
+
+TEST(HumanArm, ArmFileErrorsNameTheFileThePathTheValueAndTheRule) {
+  Json doc = arm_document();
+  EXPECT_EQ(arm_error(doc), "no error");
+  doc["joints"][3]["upper"] = -10;
+  EXPECT_EQ(arm_error(doc), "human_arm: arm.json: joints[3].upper = -10: must be >= lower (0)");
+  doc = arm_document();
+  doc["joints"][4]["velocity_max"] = 0;
+  EXPECT_EQ(arm_error(doc), "human_arm: arm.json: joints[4].velocity_max = 0: must be > 0");
+  doc = arm_document();
+  doc["joints"][1]["acceleration_max"] = -1;
+  EXPECT_EQ(arm_error(doc), "human_arm: arm.json: joints[1].acceleration_max = -1: must be > 0");
+  doc = arm_document();
+  doc["joints"][0].erase("lower");
+  EXPECT_EQ(arm_error(doc), "human_arm: arm.json: joints[0].lower: missing");
+  doc = arm_document();
+  doc["joints"][0]["lower"] = "low";
+  EXPECT_EQ(arm_error(doc), "human_arm: arm.json: joints[0].lower = \"low\": must be a number");
+  doc = arm_document();
+  doc["dh"][2]["d"] = "-l_upper";
+  EXPECT_EQ(arm_error(doc), "human_arm: arm.json: dh[2].d = \"-l_upper\": unknown segment (known: l_la, l_p, l_ua)");
+  doc = arm_document();
+  doc["dh"][3]["a"] = 0.02;
+  EXPECT_EQ(arm_error(doc),
+            "human_arm: arm.json: dh[3].a = 0.02: must be 0 (the closed-form IK needs a spherical shoulder at the "
+            "origin, an elbow on the upper-arm axis and a spherical wrist)");
+  doc = arm_document();
+  doc["dh"][4]["alpha"] = 0;
+  EXPECT_EQ(arm_error(doc),
+            "human_arm: arm.json: dh[4].alpha = 0: sin(alpha) must not be 0 here (adjacent joint axes would be "
+            "parallel: no closed-form IK)");
+  doc = arm_document();
+  doc["dh"][2]["d"] = 0;
+  EXPECT_EQ(arm_error(doc), "human_arm: arm.json: dh[2].d = 0: must be != 0 (a limb length)");
+  doc = arm_document();
+  doc["dh"].erase(6);
+  EXPECT_EQ(arm_error(doc).rfind("human_arm: arm.json: dh = ", 0), 0u);
+  EXPECT_NE(arm_error(doc).find(": must be an array of 7 rows"), std::string::npos);
+  doc = arm_document();
+  doc["segments"]["l_la"] = -0.2;
+  EXPECT_EQ(arm_error(doc), "human_arm: arm.json: segments.l_la = -0.2: must be > 0");
+  doc = arm_document();
+  doc["units"]["angle"] = "rad";
+  EXPECT_EQ(arm_error(doc), "human_arm: arm.json: units.angle = \"rad\": must be \"deg\"");
+  doc = arm_document();
+  doc["side"] = "both";
+  EXPECT_EQ(arm_error(doc), "human_arm: arm.json: side = \"both\": must be \"right\" or \"left\"");
+  doc = arm_document();
+  doc["dh"][0]["theta"] = 90;
+  EXPECT_EQ(arm_error(doc), "human_arm: arm.json: dh[0].theta: unknown key (known: theta_offset, d, a, alpha)");
+  EXPECT_EQ(arm_error(Json::array()), "human_arm: arm.json: (document) = []: must be a JSON object");
+}
+
+TEST(HumanArm, UnreadableOrMalformedArmFilesAreRefused) {
+  const fs::path dir = temp_dir("armfiles");
+  const std::string missing = (dir / "missing.json").string();
+  EXPECT_EQ(error_of([&] { load_human_arm(missing); }), "human_arm: " + missing + ": cannot be read");
+  const fs::path broken = dir / "broken.json";
+  std::ofstream(broken) << "{ \"dh\": [ }";
+  EXPECT_EQ(error_of([&] { load_human_arm(broken.string()); }).rfind("human_arm: " + broken.string() + ": not valid JSON (", 0),
+            0u);
+  EXPECT_EQ(error_of([&] { HumanArmScene(Json{{"arm_file", missing}}); }),
+            "human_arm: options.arm_file = \"" + missing + "\": no such file");
+  const std::string relative_error = error_of([&] { HumanArmScene(Json{{"arm_file", "nowhere/arm.json"}}); });
+  EXPECT_EQ(relative_error.rfind("human_arm: options.arm_file = \"nowhere/arm.json\": no such file (tried ", 0), 0u);
+  // A relative path resolves against the share directory too.
+  EXPECT_EQ(HumanArmScene(Json{{"arm_file", "human_arm/fennel2022_right_arm.json"}, {"cache", false}}).options().arm_file,
+            fs::path(kArmFile).lexically_normal().string());
+  fs::remove_all(dir);
+}
+
+TEST(HumanArm, LeftArmFileIsTheRightArmMirroredInTheSagittalPlane) {
+  const HumanArm left(load_human_arm(HAPSYN_SOURCE_DIR "/share/human_arm/fennel2022_left_arm.json"));
+  EXPECT_EQ(left.data().side, "left");
+  // y_S is lateral (joint 1 abducts the hanging arm in the x-y plane), so the mirror is
+  // M = diag(1, -1, 1): the left arm reaches M p with orientation M R M exactly when the right
+  // arm reaches (R, p), with the same best manipulability and the negated configuration.
+  const Eigen::Matrix3d M = Eigen::Vector3d(1, -1, 1).asDiagonal();
+  std::mt19937 rng(11);
+  const std::vector<double> grid = left.joint3_grid(17);
+  for (int trial = 0; trial < 100; ++trial) {
+    const Vector7d q = random_q(rng, true);
+    const Eigen::Isometry3d T = arm().forward(q);
+    const Eigen::Isometry3d Tl = left.forward(-q);
+    EXPECT_LT((Tl.translation() - M * T.translation()).norm(), 1e-12);
+    EXPECT_LT(rotation_distance(Tl.linear(), M * T.linear() * M), 1e-12);
+    Vector7d qr, ql;
+    double mr, ml;
+    ASSERT_TRUE(arm().best(T.linear(), T.translation(), grid, &qr, &mr));
+    ASSERT_TRUE(left.best(M * T.linear() * M, M * T.translation(), grid, &ql, &ml)) << q.transpose();
+    EXPECT_NEAR(ml, mr, 1e-12 + 1e-9 * mr);
+  }
+}
+
+TEST(HumanArm, OptionErrorsNameTheOptionTheValueAndTheRule) {
+  EXPECT_EQ(error_of([] { HumanArmScene(Json{{"lattice_stp", 0.1}}); }),
+            "human_arm: options.lattice_stp: unknown option (known: arm_file, lattice_step, lattice_extent, "
+            "orientations, joint3_steps, x_S_B, C_S_B, C_E_P, x_E_P, cache, cache_directory, threads)");
+  EXPECT_EQ(error_of([] { HumanArmScene(Json{{"lattice_step", 0.0}}); }),
+            "human_arm: options.lattice_step = 0.0: must be > 0");
+  EXPECT_EQ(error_of([] { HumanArmScene(Json{{"lattice_step", 0.001}}); }),
+            "human_arm: options.lattice_step = 0.001: gives 1401.0 lattice points per axis; at most 401 are allowed "
+            "(lattice_extent 0.7)");
+  EXPECT_EQ(error_of([] { HumanArmScene(Json{{"orientations", 0}}); }),
+            "human_arm: options.orientations = 0: must be in [1, 1000000]");
+  EXPECT_EQ(error_of([] { HumanArmScene(Json{{"joint3_steps", 2.5}}); }),
+            "human_arm: options.joint3_steps = 2.5: must be an integer");
+  EXPECT_EQ(error_of([] { HumanArmScene(Json{{"x_S_B", {0.0, 1.0}}}); }),
+            "human_arm: options.x_S_B = [0.0,1.0]: must be an array of 3 numbers [m]");
+  const std::string rotation = error_of([] {
+    HumanArmScene(Json{{"C_S_B", {{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, -1.0}}}});
+  });
+  EXPECT_EQ(rotation.rfind("human_arm: options.C_S_B = [[1.0,0.0,0.0],[0.0,1.0,0.0],[0.0,0.0,-1.0]]: must be a "
+                           "rotation matrix (orthonormal, det +1)",
+                           0),
+            0u)
+      << rotation;
+  EXPECT_EQ(error_of([] { HumanArmScene(Json{{"cache", "yes"}}); }),
+            "human_arm: options.cache = \"yes\": must be true or false");
+}
+
+TEST(HumanArm, SchemaIsValidAndItsDefaultsAreTheClassDefaults) {
+  std::ifstream file(HAPSYN_SOURCE_DIR "/plugins/scenes/human_arm/schema.json");
+  ASSERT_TRUE(file.good());
+  const Json schema = Json::parse(file);
+  EXPECT_NO_THROW(hapsyn::check_schema(schema, "human_arm"));
+  Json filled = hapsyn::validate_and_fill(schema, Json::object(), "scene.options");
+  const HumanArmSceneOptions defaults = parse_human_arm_scene_options(Json::object());
+  const HumanArmSceneOptions from_schema = parse_human_arm_scene_options(filled);
+  EXPECT_EQ(from_schema.arm_file, defaults.arm_file);
+  EXPECT_EQ(from_schema.lattice_step, 0.1);
+  EXPECT_EQ(from_schema.lattice_step, defaults.lattice_step);
+  EXPECT_EQ(from_schema.lattice_extent, defaults.lattice_extent);
+  EXPECT_EQ(from_schema.orientations, 505);
+  EXPECT_EQ(from_schema.orientations, defaults.orientations);
+  EXPECT_EQ(from_schema.joint3_steps, defaults.joint3_steps);
+  EXPECT_EQ(from_schema.x_S_B, defaults.x_S_B);
+  EXPECT_EQ(from_schema.C_S_B, defaults.C_S_B);
+  EXPECT_EQ(from_schema.C_E_P, defaults.C_E_P);
+  EXPECT_EQ(from_schema.x_E_P, defaults.x_E_P);
+  EXPECT_EQ(from_schema.cache, defaults.cache);
+  EXPECT_EQ(from_schema.threads, defaults.threads);
+  EXPECT_EQ(defaults.x_S_B, Eigen::Vector3d(0, 0, -0.61));
+  EXPECT_THROW(hapsyn::validate_and_fill(schema, Json{{"orientations", -1}}, "scene.options"), hapsyn::Error);
+}
+
+}  // namespace

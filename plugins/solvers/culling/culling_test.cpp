@@ -1,0 +1,164 @@
+// Culling must return exactly what the exhaustive grid search returns.
+#include "culling.hpp"
+
+#include "../grid/grid.hpp"
+#include "test_support.hpp"
+
+#include <random>
+
+using hapsyn::Json;
+using hapsyn::test::expect_error;
+
+namespace {
+hapsyn::SolverResult solve(const hapsyn::Solver& solver, const hapsyn::Problem& problem, int threads) {
+  hapsyn::SolverContext context;
+  context.threads = threads;
+  return solver.solve(problem, context);
+}
+
+Json culling_options(bool seed, bool polish) {
+  return Json{{"seed", seed}, {"polish", polish}, {"start_points", 3}, {"sqp_xtol", 1e-7}, {"sqp_ftol", 1e-10},
+              {"sqp_max_evaluations", 60}, {"progress_interval", 1e9}};
+}
+
+// A random sub-box of the paper's bounds on a grid of the given step.
+Json random_box(std::mt19937& rng, double step, int min_points, int max_points) {
+  Json doc = hapsyn::test::fivebar_study("culling");
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const std::vector<std::tuple<std::string, double, double>> vars = {
+      {"l0", 0.0, 0.3}, {"l1", 0.05, 0.3}, {"l2", 0.05, 0.3}, {"r", 0.05, 0.6}};
+  for (const auto& [name, lo, hi] : vars) {
+    const int points = min_points + static_cast<int>(u(rng) * (max_points - min_points + 1));
+    const double width = step * (points - 1);
+    const double lower = lo + std::floor(u(rng) * (hi - lo - width) / step) * step;
+    doc["design"][name] = {{"lower", lower}, {"upper", lower + width}, {"step", step}};
+  }
+  return doc;
+}
+}  // namespace
+
+TEST(Culling, ReturnsTheExhaustiveOptimumOnRandomSubBoxes) {
+  std::mt19937 rng(2024);
+  const std::vector<Json> objective_sets = {
+      Json::array({{{"metric", "gii"}}}),
+      Json::array({{{"metric", "gdi"}}}),
+      Json::array({{{"metric", "gii"}, {"weight", 0.6}}, {{"metric", "gdi"}, {"weight", 0.4}}})};
+  int compared = 0;
+  for (int box = 0; box < 12; ++box) {
+    Json doc = random_box(rng, box < 6 ? 0.02 : 0.01, 4, 9);
+    doc["scene"]["options"]["step"] = 0.02;
+    for (const Json& objectives : objective_sets) {
+      doc["objectives"] = objectives;
+      const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+      const hapsyn::plugins::GridSolver grid(Json{{"prune", false}, {"progress_interval", 1e9}});
+      const auto exhaustive = solve(grid, *study.problem, 2);
+      for (bool seed : {false, true}) {
+        for (int threads : {1, 2}) {
+          const hapsyn::plugins::CullingSolver culling(culling_options(seed, false));
+          const auto culled = solve(culling, *study.problem, threads);
+          ASSERT_EQ(culled.status, exhaustive.status) << culled.message << "\n" << doc.dump();
+          if (!exhaustive.best) continue;
+          EXPECT_EQ(culled.best->design, exhaustive.best->design) << doc.dump();
+          EXPECT_EQ(culled.best->score, exhaustive.best->score) << doc.dump();
+          EXPECT_EQ(culled.best->objectives, exhaustive.best->objectives);
+          EXPECT_LE(culled.statistics["full_workspace_searches"].get<long long>(),
+                    exhaustive.statistics["feasible"].get<long long>() + 1);
+          ++compared;
+        }
+      }
+    }
+  }
+  EXPECT_GE(compared, 80);  // most random boxes hold feasible designs
+}
+
+TEST(Culling, SearchesFarFewerWorkspacesThanExhaustiveSearch) {
+  Json doc = hapsyn::test::fivebar_study("culling");
+  for (const char* v : {"l0", "l1", "l2"}) doc["design"][v]["step"] = 0.025;
+  doc["design"]["l1"]["lower"] = 0.05;
+  doc["design"]["r"]["step"] = 0.05;
+  doc["scene"]["options"]["step"] = 0.01;
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  const hapsyn::plugins::GridSolver grid(Json{{"prune", false}, {"progress_interval", 1e9}});
+  const hapsyn::plugins::CullingSolver culling(culling_options(true, false));
+  const auto exhaustive = solve(grid, *study.problem, 2);
+  const auto culled = solve(culling, *study.problem, 2);
+  ASSERT_TRUE(culled.best && exhaustive.best);
+  EXPECT_EQ(culled.best->design, exhaustive.best->design);
+  const long long exhaustive_searches = exhaustive.statistics["feasible"];
+  const long long culling_searches = culled.statistics["full_workspace_searches"];
+  EXPECT_LT(culling_searches * 10, exhaustive_searches);
+  EXPECT_LT(culled.sample_evaluations * 5, exhaustive.sample_evaluations);
+}
+
+TEST(Culling, PolishingKeepsTheCellAndNeverLosesValue) {
+  Json doc = hapsyn::test::fivebar_study("culling");
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  const hapsyn::plugins::CullingSolver culling(culling_options(true, true));
+  const auto result = solve(culling, *study.problem, 2);
+  ASSERT_TRUE(result.best);
+  const Json& grid_optimum = result.statistics["grid_optimum"];
+  EXPECT_GE(result.best->score, grid_optimum["score"].get<double>());
+  const auto& space = study.problem->design_space();
+  for (std::size_t k = 0; k < space.size(); ++k) {
+    const auto& c = space.components()[k];
+    EXPECT_LE(std::abs(result.best->design[static_cast<Eigen::Index>(k)] - grid_optimum["design"][c.name].get<double>()),
+              c.step * (1 + 1e-9))
+        << c.name;
+  }
+  EXPECT_TRUE(result.statistics["polish"].contains("status"));
+}
+
+TEST(Culling, WeightedSumOfWorstCaseMetricsHasAValidBound) {
+  Json doc = hapsyn::test::fivebar_study("culling");
+  doc["objectives"] = Json::array({{{"metric", "gii"}, {"weight", 0.5}}, {{"metric", "gdi"}, {"weight", 2.0}}});
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  auto ws = study.problem->make_workspace();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int checked = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const std::vector<double> x = {0.3 * u(rng), 0.05 + 0.25 * u(rng), 0.05 + 0.25 * u(rng), 0.6 * u(rng)};
+    const double full = study.problem->evaluate(x.data(), *ws).score;
+    if (!std::isfinite(full)) continue;
+    std::vector<int> subset = {static_cast<int>(u(rng) * 25), static_cast<int>(u(rng) * 25)};
+    hapsyn::EvalOptions o;
+    o.subset = &subset;
+    EXPECT_GE(study.problem->evaluate(x.data(), *ws, o).score, full);
+    ++checked;
+  }
+  EXPECT_GT(checked, 30);
+}
+
+TEST(Culling, RefusesAMetricThatIsNotWorstCase) {
+  hapsyn::Registry registry({HAPSYN_PLUGIN_DIR, HAPSYN_TEST_PLUGIN_DIR});
+  Json doc = hapsyn::test::fivebar_study("culling");
+  doc["objectives"] = Json::array({{{"metric", "summetric"}}});
+  expect_error([&] { hapsyn::load_study(doc, registry); },
+               {"culling: metric 'summetric'", "is not worst-case"});
+}
+
+TEST(Culling, RefusesMinimizingAndNegativeWeights) {
+  Json doc = hapsyn::test::fivebar_study("culling");
+  doc["objectives"][0]["sense"] = "minimize";
+  expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); }, {"objective 'gii'", "is minimized"});
+  Json doc2 = hapsyn::test::fivebar_study("culling");
+  doc2["objectives"][0]["weight"] = -1.0;
+  expect_error([&] { hapsyn::load_study(doc2, hapsyn::test::registry()); }, {"objective 'gii' has weight -1"});
+}
+
+TEST(Culling, NeedsAStepForEveryFreeVariable) {
+  Json doc = hapsyn::test::fivebar_study("culling");
+  doc["design"]["r"].erase("step");
+  expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); }, {"culling: design.r has no step"});
+}
+
+TEST(Culling, InfeasibleGridIsAStatus) {
+  Json doc = hapsyn::test::fivebar_study("culling");
+  doc["design"]["l1"] = {{"lower", 0.01}, {"upper", 0.02}, {"step", 0.01}};
+  doc["design"]["l2"] = {{"lower", 0.01}, {"upper", 0.02}, {"step", 0.01}};
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  const hapsyn::plugins::CullingSolver culling(culling_options(true, true));
+  const auto result = solve(culling, *study.problem, 2);
+  EXPECT_EQ(result.status, hapsyn::SolverStatus::kInfeasible);
+  EXPECT_NE(result.message.find("no feasible design"), std::string::npos);
+}
