@@ -11,8 +11,11 @@
 namespace hapsyn::bench {
 
 namespace {
-std::vector<std::pair<std::string, std::string>>& pairs() {
-  static std::vector<std::pair<std::string, std::string>> p;
+struct Comparison {
+  std::string name, baseline, counter;  // counter empty: real time
+};
+std::vector<Comparison>& pairs() {
+  static std::vector<Comparison> p;
   return p;
 }
 
@@ -21,11 +24,14 @@ class RecordingReporter : public benchmark::ConsoleReporter {
  public:
   void ReportRuns(const std::vector<Run>& runs) override {
     for (const Run& r : runs) {
-      if (r.run_type == Run::RT_Iteration) times[r.benchmark_name()] = r.GetAdjustedRealTime();
+      if (r.run_type != Run::RT_Iteration) continue;
+      times[r.benchmark_name()] = r.GetAdjustedRealTime();
+      for (const auto& [key, counter] : r.counters) counters[r.benchmark_name() + "#" + key] = counter.value;
     }
     ConsoleReporter::ReportRuns(runs);
   }
   std::map<std::string, double> times;
+  std::map<std::string, double> counters;
 };
 }  // namespace
 
@@ -37,18 +43,25 @@ void record_context(const Json& resolved_problem, unsigned long long seed) {
   if (!resolved_problem.is_null()) benchmark::AddCustomContext("problem", resolved_problem.dump());
 }
 
-void compare(const std::string& name, const std::string& baseline) { pairs().emplace_back(name, baseline); }
+void compare(const std::string& name, const std::string& baseline) { pairs().push_back({name, baseline, ""}); }
+
+void compare_counter(const std::string& name, const std::string& baseline, const std::string& counter) {
+  pairs().push_back({name, baseline, counter});
+}
 
 int run_main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   RecordingReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
-  for (const auto& [name, baseline] : pairs()) {
-    const auto a = reporter.times.find(name);
-    const auto b = reporter.times.find(baseline);
-    if (a == reporter.times.end() || b == reporter.times.end()) continue;
-    std::cout << "ratio " << baseline << " / " << name << " = " << b->second / a->second << "\n";
+  for (const Comparison& c : pairs()) {
+    const auto& table = c.counter.empty() ? reporter.times : reporter.counters;
+    const std::string suffix = c.counter.empty() ? "" : "#" + c.counter;
+    const auto a = table.find(c.name + suffix);
+    const auto b = table.find(c.baseline + suffix);
+    if (a == table.end() || b == table.end()) continue;
+    std::cout << "ratio " << (c.counter.empty() ? "real time" : c.counter) << ": " << c.baseline << " / " << c.name
+              << " = " << b->second / a->second << "\n";
   }
   benchmark::Shutdown();
   return 0;

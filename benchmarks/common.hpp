@@ -16,6 +16,9 @@ void record_context(const Json& resolved_problem = Json(), unsigned long long se
 /// Pairs (benchmark, baseline) whose real-time ratio baseline/benchmark is printed at the end.
 void compare(const std::string& name, const std::string& baseline);
 
+/// Also prints baseline/benchmark for a user counter of both runs (e.g. "sample_evals").
+void compare_counter(const std::string& name, const std::string& baseline, const std::string& counter);
+
 /// Runs the registered benchmarks, then prints "speed-up" lines for every compare() pair.
 int run_main(int argc, char** argv);
 

@@ -12,6 +12,7 @@
 #include <iomanip>
 #include <limits>
 #include <mutex>
+#include <set>
 #include <sstream>
 
 namespace hapsyn::plugins {
@@ -25,16 +26,146 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 // ---------------------------------------------------------------------------------------------
 // SQP (NLopt SLSQP) on the continuous relaxation, used to seed the reference and to polish.
+//
+// A worst-case score is a min-max function of the design, not smooth where the critical sample
+// changes, so SLSQP is run on its epigraph form, which is smooth:
+//   maximize  sum_o w_o combine_o(z)          over (p, z)
+//   s.t.      z_l <= local_l(p, s)            for every min-reduced local l, s in the active set
+//             local_l(p, s) <= z_l            for every max-reduced local l, s in the active set
+// with the active set the near-critical samples of the current point. After each SLSQP run the
+// design is searched over the whole workspace; samples that became critical join the active set
+// and SLSQP runs again (at most `rounds` times). The best fully evaluated point is kept.
 
-struct SqpRun {
+// Tolerance of the epigraph constraints, in the locals' units (e.g. m/rad for singular values
+// of J). SLSQP follows an infeasible path; NLopt only reports points within this tolerance, and
+// every candidate is then searched over the whole workspace, which decides.
+constexpr double kConstraintTolerance = 1e-8;
+
+struct LocalIndex {
+  std::size_t metric, local;
+  Reduction reduction;
+};
+
+struct Epigraph {
+  const Problem* problem = nullptr;
+  Problem::Workspace* workspace = nullptr;
+  std::vector<LocalIndex> locals;       // the min/max locals, flat (the z layout)
+  std::vector<std::size_t> local_base;  // first flat local of each metric
+  std::vector<int> active;              // active samples
+  std::size_t n = 0;                    // design dimension
+  std::vector<double> lower, upper;
+  long long evaluations = 0, samples = 0;
+  std::vector<double> values;  // scratch: local values per active sample (active x locals)
+  // The best iterate that satisfied every constraint: SLSQP returns its last iterate, which on
+  // a stop (round-off, budget) may violate them.
+  std::vector<double> best_y;
+  double best_objective = -kInf;
+
+  // Local values of design p at the active samples into `values`; false if one fails.
+  bool locals_at(const double* p) {
+    values.assign(active.size() * locals.size(), 0.0);
+    std::size_t row = 0;
+    SampleCallback record = [&](int, const SampleQuantities&, const std::vector<std::vector<double>>& per_metric) {
+      for (std::size_t l = 0; l < locals.size(); ++l) {
+        values[row * locals.size() + l] = per_metric[locals[l].metric][locals[l].local];
+      }
+      ++row;
+    };
+    EvalOptions o;
+    o.subset = &active;
+    o.on_sample = &record;
+    const Evaluation& e = problem->evaluate(p, *workspace, o);
+    ++evaluations;
+    samples += e.samples_evaluated;
+    return e.status == EvalStatus::kFeasible;
+  }
+
+  double objective(const double* z) const {
+    double score = 0.0;
+    for (const Objective& o : problem->objectives()) {
+      const std::size_t m = static_cast<std::size_t>(o.metric);
+      score += o.weight * problem->metrics()[m].metric->combine(z + local_base[m], 1);
+    }
+    return score;
+  }
+};
+
+double epigraph_objective(unsigned dim, const double* y, double* grad, void* data) {
+  Epigraph& g = *static_cast<Epigraph*>(data);
+  const double* z = y + g.n;
+  const double f = g.objective(z);
+  if (grad) {
+    std::fill(grad, grad + dim, 0.0);
+    std::vector<double> probe(z, z + g.locals.size());
+    for (std::size_t l = 0; l < g.locals.size(); ++l) {
+      const double h = 1e-7 * std::max(1.0, std::abs(z[l]));
+      probe[l] = z[l] + h;
+      const double fa = g.objective(probe.data());
+      probe[l] = z[l] - h;
+      const double fb = g.objective(probe.data());
+      probe[l] = z[l];
+      grad[g.n + l] = (fa - fb) / (2 * h);
+    }
+  }
+  return f;
+}
+
+// c[s * L + l] <= 0 for every active sample s and local l.
+void epigraph_constraints(unsigned count, double* c, unsigned dim, const double* y, double* grad, void* data) {
+  Epigraph& g = *static_cast<Epigraph*>(data);
+  const std::size_t L = g.locals.size();
+  const double* z = y + g.n;
+  constexpr double kUnreachable = 1e3;  // a violated constraint where a sample is not reachable
+  auto fill = [&](const double* p, double* out) {
+    const bool ok = g.locals_at(p);
+    for (std::size_t s = 0; s < g.active.size(); ++s) {
+      for (std::size_t l = 0; l < L; ++l) {
+        const double v = g.values[s * L + l];
+        const double sign = g.locals[l].reduction == Reduction::kMin ? 1.0 : -1.0;
+        out[s * L + l] = ok ? sign * (z[l] - v) : kUnreachable;
+      }
+    }
+  };
+  fill(y, c);
+  double violation = 0.0;
+  for (unsigned i = 0; i < count; ++i) violation = std::max(violation, c[i]);
+  if (violation <= kConstraintTolerance) {
+    const double f = g.objective(z);
+    if (f > g.best_objective) {
+      g.best_objective = f;
+      g.best_y.assign(y, y + dim);
+    }
+  }
+  if (!grad) return;
+  std::fill(grad, grad + static_cast<std::size_t>(count) * dim, 0.0);
+  std::vector<double> p(y, y + g.n), ca(count), cb(count);
+  for (std::size_t k = 0; k < g.n; ++k) {
+    const double h = 1e-7 * std::max(g.upper[k] - g.lower[k], 1e-9);
+    const double a = std::min(y[k] + h, g.upper[k]);
+    const double b = std::max(y[k] - h, g.lower[k]);
+    p[k] = a;
+    fill(p.data(), ca.data());
+    p[k] = b;
+    fill(p.data(), cb.data());
+    p[k] = y[k];
+    for (unsigned i = 0; i < count; ++i) grad[i * dim + k] = a > b ? (ca[i] - cb[i]) / (a - b) : 0.0;
+  }
+  for (std::size_t s = 0; s < g.active.size(); ++s) {
+    for (std::size_t l = 0; l < L; ++l) {
+      grad[(s * L + l) * dim + g.n + l] = g.locals[l].reduction == Reduction::kMin ? 1.0 : -1.0;
+    }
+  }
+}
+
+// Plain SLSQP on the score itself with finite-difference gradients: it cannot see the kinks of a
+// min-max function, but it handles the cliff where a sample stops being reachable (an
+// infeasible design scores below every feasible one), which binds the GDI optimum.
+struct PlainRun {
   const Problem* problem = nullptr;
   Problem::Workspace* workspace = nullptr;
   std::vector<double> lower, upper;
-  long long evaluations = 0;
-  long long samples = 0;
+  long long evaluations = 0, samples = 0;
   double lowest_feasible = 0.0;
-  // Best feasible point seen, finite-difference probes included: with a non-smooth objective
-  // SLSQP may end on a worse point than one it visited.
   std::vector<double> best_x;
   double best_score = -kInf;
 
@@ -42,7 +173,7 @@ struct SqpRun {
     const Evaluation& e = problem->evaluate(x, *workspace);
     ++evaluations;
     samples += e.samples_evaluated;
-    if (e.status != EvalStatus::kFeasible) return lowest_feasible - 1.0;  // below every feasible score seen
+    if (e.status != EvalStatus::kFeasible) return lowest_feasible - 1.0;
     lowest_feasible = std::min(lowest_feasible, e.score);
     if (e.score > best_score) {
       best_score = e.score;
@@ -52,12 +183,10 @@ struct SqpRun {
   }
 };
 
-double sqp_objective(unsigned n, const double* x, double* grad, void* data) {
-  SqpRun& run = *static_cast<SqpRun*>(data);
+double plain_objective(unsigned n, const double* x, double* grad, void* data) {
+  PlainRun& run = *static_cast<PlainRun*>(data);
   const double f = run.score(x);
   if (grad) {
-    // Central differences (one-sided at a bound); GII/GDI are min-max functions, so this is a
-    // generalized gradient of the active piece.
     std::vector<double> probe(x, x + n);
     for (unsigned k = 0; k < n; ++k) {
       const double h = 1e-6 * std::max(run.upper[k] - run.lower[k], 1e-9);
@@ -87,43 +216,197 @@ std::string nlopt_result_name(nlopt::result r) {
 }
 
 struct SqpOutcome {
-  std::vector<double> x;  // best feasible point seen (empty if none)
+  std::vector<double> x;  // best fully evaluated feasible point (empty if none)
   double score = -kInf;
   std::string status;
   long long evaluations = 0, samples = 0;
+  int rounds = 0;
+  std::size_t active_samples = 0;
   double seconds = 0.0;
 };
 
-SqpOutcome run_sqp(const Problem& problem, std::vector<double> x, std::vector<double> lower, std::vector<double> upper,
-                   const CullingOptions& options) {
+// Samples whose local value lies within `fraction` of the extreme, per min/max local (at most
+// `per_local` each, the closest first), from one full evaluation of p with every sample's values.
+std::vector<int> near_critical(const Problem& problem, const std::vector<LocalIndex>& locals, const double* p,
+                               Problem::Workspace& ws, double fraction, std::size_t per_local, long long& samples) {
+  const int count = problem.samples().size();
+  std::vector<double> values(static_cast<std::size_t>(count) * locals.size(), std::nan(""));
+  SampleCallback record = [&](int s, const SampleQuantities&, const std::vector<std::vector<double>>& per_metric) {
+    for (std::size_t l = 0; l < locals.size(); ++l) {
+      values[static_cast<std::size_t>(s) * locals.size() + l] = per_metric[locals[l].metric][locals[l].local];
+    }
+  };
+  EvalOptions o;
+  o.on_sample = &record;
+  samples += problem.evaluate(p, ws, o).samples_evaluated;
+  std::vector<int> chosen;
+  for (std::size_t l = 0; l < locals.size(); ++l) {
+    std::vector<std::pair<double, int>> gap;  // distance from the extreme, relative
+    double extreme = locals[l].reduction == Reduction::kMin ? kInf : -kInf;
+    for (int s = 0; s < count; ++s) {
+      const double v = values[static_cast<std::size_t>(s) * locals.size() + l];
+      if (std::isnan(v)) continue;
+      extreme = locals[l].reduction == Reduction::kMin ? std::min(extreme, v) : std::max(extreme, v);
+    }
+    if (!std::isfinite(extreme)) continue;
+    for (int s = 0; s < count; ++s) {
+      const double v = values[static_cast<std::size_t>(s) * locals.size() + l];
+      if (std::isnan(v)) continue;
+      const double d = std::abs(v - extreme) / std::max(std::abs(extreme), 1e-12);
+      if (d <= fraction) gap.emplace_back(d, s);
+    }
+    std::sort(gap.begin(), gap.end());
+    for (std::size_t i = 0; i < gap.size() && i < per_local; ++i) chosen.push_back(gap[i].second);
+  }
+  std::sort(chosen.begin(), chosen.end());
+  chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
+  return chosen;
+}
+
+SqpOutcome run_epigraph(const Problem& problem, std::vector<double> x, std::vector<double> lower,
+                        std::vector<double> upper, const CullingOptions& options) {
   const auto t0 = Clock::now();
   auto workspace = problem.make_workspace();
-  SqpRun run;
+  Epigraph g;
+  g.problem = &problem;
+  g.workspace = workspace.get();
+  g.n = x.size();
+  g.lower = lower;
+  g.upper = upper;
+  for (std::size_t m = 0; m < problem.metrics().size(); ++m) {
+    g.local_base.push_back(g.locals.size());
+    const auto declared = problem.metrics()[m].metric->locals();
+    for (std::size_t l = 0; l < declared.size(); ++l) g.locals.push_back({m, l, declared[l].reduction});
+  }
+  SqpOutcome out;
+  const Evaluation& start = problem.evaluate(x.data(), *workspace);
+  out.samples += start.samples_evaluated;
+  ++out.evaluations;
+  if (start.status != EvalStatus::kFeasible) {
+    out.status = "infeasible start";
+    out.seconds = seconds_since(t0);
+    return out;
+  }
+  out.x = x;
+  out.score = start.score;
+  std::set<int> active;
+  for (int s : near_critical(problem, g.locals, x.data(), *workspace, 0.02, 8, out.samples)) active.insert(s);
+  std::vector<double> current = x;
+  for (int round = 0; round < 6; ++round) {
+    g.active.assign(active.begin(), active.end());
+    const std::size_t L = g.locals.size();
+    const unsigned dim = static_cast<unsigned>(g.n + L);
+    std::vector<double> y(dim), lo(dim, -HUGE_VAL), hi(dim, HUGE_VAL);
+    std::copy(current.begin(), current.end(), y.begin());
+    std::copy(lower.begin(), lower.end(), lo.begin());
+    std::copy(upper.begin(), upper.end(), hi.begin());
+    if (!g.locals_at(current.data())) break;
+    for (std::size_t l = 0; l < L; ++l) {  // z starts at the reductions over the active set
+      double v = g.locals[l].reduction == Reduction::kMin ? kInf : -kInf;
+      for (std::size_t s = 0; s < g.active.size(); ++s) {
+        v = g.locals[l].reduction == Reduction::kMin ? std::min(v, g.values[s * L + l]) : std::max(v, g.values[s * L + l]);
+      }
+      y[g.n + l] = v;
+    }
+    nlopt::opt opt(nlopt::LD_SLSQP, dim);
+    opt.set_lower_bounds(lo);
+    opt.set_upper_bounds(hi);
+    opt.set_max_objective(epigraph_objective, &g);
+    opt.add_inequality_mconstraint(epigraph_constraints, &g, std::vector<double>(g.active.size() * L, kConstraintTolerance));
+    opt.set_xtol_rel(options.sqp_xtol);
+    opt.set_ftol_abs(options.sqp_ftol);
+    opt.set_maxeval(options.sqp_max_evaluations);
+    double f = 0.0;
+    g.best_y.clear();
+    g.best_objective = -kInf;
+    try {
+      out.status = nlopt_result_name(opt.optimize(y, f));
+    } catch (const std::exception& e) {
+      // Round-off and similar NLopt stops are outcomes, not errors: the best point seen stands.
+      out.status = std::string("stopped: ") + e.what();
+    }
+    ++out.rounds;
+    // Candidates: SLSQP's final iterate and the best iterate that met every constraint; each is
+    // searched over the whole workspace, which is what decides.
+    std::vector<std::vector<double>> candidates = {y};
+    if (!g.best_y.empty() && g.best_y != y) candidates.push_back(g.best_y);
+    bool grew = false;
+    std::vector<double> p(g.n);
+    bool any_feasible = false;
+    for (const auto& cand : candidates) {
+      std::vector<double> q(cand.begin(), cand.begin() + static_cast<std::ptrdiff_t>(g.n));
+      for (std::size_t k = 0; k < g.n; ++k) q[k] = std::clamp(q[k], lower[k], upper[k]);
+      const Evaluation& e = problem.evaluate(q.data(), *workspace);
+      ++out.evaluations;
+      out.samples += e.samples_evaluated;
+      if (e.status != EvalStatus::kFeasible) continue;
+      for (const auto& list : e.critical_samples) {
+        for (int s : list) grew = active.insert(s).second || grew;
+      }
+      if (!any_feasible || e.score > out.score) p = q;
+      any_feasible = true;
+      if (e.score > out.score) {
+        out.score = e.score;
+        out.x = q;
+      }
+    }
+    if (!any_feasible) break;
+    current = p;
+    if (!grew) break;  // the full workspace agrees with the active set: converged
+    for (int s : near_critical(problem, g.locals, p.data(), *workspace, 0.02, 8, out.samples)) active.insert(s);
+  }
+  out.evaluations += g.evaluations;
+  out.samples += g.samples;
+  out.active_samples = active.size();
+  out.seconds = seconds_since(t0);
+  return out;
+}
+
+SqpOutcome run_plain(const Problem& problem, std::vector<double> x, const std::vector<double>& lower,
+                     const std::vector<double>& upper, const CullingOptions& options) {
+  const auto t0 = Clock::now();
+  auto workspace = problem.make_workspace();
+  PlainRun run;
   run.problem = &problem;
   run.workspace = workspace.get();
   run.lower = lower;
   run.upper = upper;
-  SqpOutcome out;
-  const unsigned n = static_cast<unsigned>(x.size());
-  nlopt::opt opt(nlopt::LD_SLSQP, n);
+  nlopt::opt opt(nlopt::LD_SLSQP, static_cast<unsigned>(x.size()));
   opt.set_lower_bounds(lower);
   opt.set_upper_bounds(upper);
-  opt.set_max_objective(sqp_objective, &run);
+  opt.set_max_objective(plain_objective, &run);
   opt.set_xtol_rel(options.sqp_xtol);
   opt.set_ftol_abs(options.sqp_ftol);
   opt.set_maxeval(options.sqp_max_evaluations);
+  SqpOutcome out;
   double f = 0.0;
   try {
     out.status = nlopt_result_name(opt.optimize(x, f));
   } catch (const std::exception& e) {
-    // Round-off and similar NLopt stops are outcomes, not errors: the best point seen stands.
     out.status = std::string("stopped: ") + e.what();
   }
   out.x = run.best_x;
   out.score = run.best_score;
   out.evaluations = run.evaluations;
   out.samples = run.samples;
+  out.rounds = 1;
   out.seconds = seconds_since(t0);
+  return out;
+}
+
+// Plain SLSQP first (reaches the feasibility boundary), then the epigraph form from its best
+// point (resolves the min-max kinks); the best fully evaluated point wins.
+SqpOutcome run_sqp(const Problem& problem, const std::vector<double>& x, const std::vector<double>& lower,
+                   const std::vector<double>& upper, const CullingOptions& options) {
+  const SqpOutcome plain = run_plain(problem, x, lower, upper, options);
+  const SqpOutcome epigraph = run_epigraph(problem, plain.x.empty() ? x : plain.x, lower, upper, options);
+  SqpOutcome out = epigraph.score > plain.score ? epigraph : plain;
+  out.status = "plain: " + plain.status + "; epigraph: " + epigraph.status;
+  out.evaluations = plain.evaluations + epigraph.evaluations;
+  out.samples = plain.samples + epigraph.samples;
+  out.rounds = plain.rounds + epigraph.rounds;
+  out.active_samples = epigraph.active_samples;
+  out.seconds = plain.seconds + epigraph.seconds;
   return out;
 }
 
@@ -298,7 +581,7 @@ SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& c
         seed_designs += sqp.evaluations;
         seed_samples += sqp.samples;
         seed_stats["sqp"] = {{"status", sqp.status}, {"evaluations", sqp.evaluations}, {"score", sqp.score},
-                             {"seconds", sqp.seconds}};
+                             {"rounds", sqp.rounds}, {"active_samples", sqp.active_samples}, {"seconds", sqp.seconds}};
         if (!sqp.x.empty()) continuous = sqp.x;
       }
       // Snap: the best feasible corner of the grid cell holding the continuous optimum.
@@ -489,7 +772,8 @@ SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& c
     const SqpOutcome sqp = run_sqp(problem, x, lo, hi, options_);
     result.design_evaluations += sqp.evaluations;
     result.sample_evaluations += sqp.samples;
-    Json polish = {{"status", sqp.status}, {"evaluations", sqp.evaluations}, {"seconds", sqp.seconds}};
+    Json polish = {{"status", sqp.status}, {"evaluations", sqp.evaluations}, {"rounds", sqp.rounds},
+                   {"active_samples", sqp.active_samples}, {"seconds", sqp.seconds}};
     if (!sqp.x.empty() && sqp.score > point.score) {
       const Evaluation polished = problem.evaluate(sqp.x.data(), *ws);
       point = SolutionPoint{problem.full_design(sqp.x.data()), polished.objectives, polished.score};
