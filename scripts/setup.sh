@@ -9,6 +9,7 @@ packages=(
   libpagmo-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libnlopt-cxx-dev liborocos-kdl-dev
+  gnuplot-nox
 )
 # Extra packages requested through the environment (e.g. HAPSYN_EXTRA_PACKAGES="gnuplot").
 if [[ -n "${HAPSYN_EXTRA_PACKAGES:-}" ]]; then

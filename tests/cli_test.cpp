@@ -164,3 +164,83 @@ TEST(Cli, UsageErrorsExitWithTwo) {
   EXPECT_EQ(hapsyn_cli("run").code, 2);
   EXPECT_EQ(hapsyn_cli("frobnicate").code, 2);
 }
+
+// ---- hapsyn scene ----
+
+namespace {
+std::string human_arm_scene_args(const fs::path& cache) {
+  return std::string(HAPSYN_SOURCE_DIR) + "/share/human_arm/paper_scene.json --set scene.options.lattice_step=0.2 " +
+         "--set scene.options.orientations=30 --set scene.options.joint3_steps=5 --set scene.options.cache_directory=" +
+         cache.string();
+}
+}  // namespace
+
+TEST(Cli, SceneBuildsSummarizesAndExportsTheHumanArmScene) {
+  const fs::path dir = fresh_dir("scene");
+  const Output first = hapsyn_cli("scene " + human_arm_scene_args(dir / "cache") + " --threads 2 --csv " +
+                                  (dir / "samples.csv").string());
+  ASSERT_EQ(first.code, 0) << first.out;
+  EXPECT_NE(first.out.find("scene human_arm: "), std::string::npos) << first.out;
+  EXPECT_NE(first.out.find("n_reach: "), std::string::npos) << first.out;
+  EXPECT_NE(first.out.find("build_time_s: "), std::string::npos) << first.out;
+  EXPECT_NE(first.out.find("from_cache: false"), std::string::npos) << first.out;
+  EXPECT_NE(first.out.find("cache_file: " + (dir / "cache").string() + "/human_arm-"), std::string::npos) << first.out;
+  // n_reach from the summary equals the CSV's rows; the header has the pose columns and the
+  // shoulder-frame pose, joint angles and manipulability the issue asks for.
+  const std::size_t at = first.out.find("n_reach: ") + 9;
+  const long n_reach = std::stol(first.out.substr(at));
+  ASSERT_GT(n_reach, 0);
+  EXPECT_EQ(count_lines(dir / "samples.csv"), n_reach + 1);
+  std::ifstream csv((dir / "samples.csv").string());
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("x,y,z,qw,qx,qy,qz,", 0), 0u) << header;
+  for (const char* column : {"human_q[0]", "human_q[6]", "lattice_index", "manipulability", "shoulder_pose[0]",
+                             "shoulder_pose[6]"}) {
+    EXPECT_NE(header.find(column), std::string::npos) << column << "\n" << header;
+  }
+  EXPECT_EQ(header.find("M_v"), std::string::npos) << "ellipsoids are built only on request";
+  // Second run: from the cache.
+  const Output second = hapsyn_cli("scene " + human_arm_scene_args(dir / "cache"));
+  ASSERT_EQ(second.code, 0) << second.out;
+  EXPECT_NE(second.out.find("from_cache: true"), std::string::npos) << second.out;
+  EXPECT_NE(second.out.find("n_reach: " + std::to_string(n_reach)), std::string::npos) << second.out;
+  fs::remove_all(dir);
+}
+
+TEST(Cli, ScenePlotsReachabilityDensitySlices) {
+  const fs::path dir = fresh_dir("scene-plot");
+  const Output o = hapsyn_cli("scene " + human_arm_scene_args(dir / "cache") + " --plot " + (dir / "plot").string());
+  EXPECT_TRUE(fs::exists(dir / "plot" / "density.dat"));
+  EXPECT_TRUE(fs::exists(dir / "plot" / "density.gp"));
+  if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
+    ASSERT_EQ(o.code, 0) << o.out;
+    EXPECT_GT(fs::file_size(dir / "plot" / "density_slices.png"), 1000u);
+  } else {
+    EXPECT_EQ(o.code, 1) << o.out;
+    EXPECT_NE(o.out.find("--plot needs gnuplot, which is not installed"), std::string::npos) << o.out;
+  }
+  fs::remove_all(dir);
+}
+
+TEST(Cli, SceneWorksOnAnyProblemFileAndRefusesBadScenes) {
+  // A full study's file: only its scene section is read; a planar scene has no lattice to plot.
+  const Output planar = hapsyn_cli("scene " + problem("fivebar-gii-coarse.json"));
+  ASSERT_EQ(planar.code, 0) << planar.out;
+  EXPECT_NE(planar.out.find("scene planar_square: 441 samples (x, y; unit m)"), std::string::npos) << planar.out;
+  const Output no_plot = hapsyn_cli("scene " + problem("fivebar-gii-coarse.json") + " --plot " +
+                                    fresh_dir("scene-noplot").string());
+  EXPECT_EQ(no_plot.code, 1);
+  EXPECT_NE(no_plot.out.find("hapsyn: error: scene: --plot needs a lattice scene"), std::string::npos) << no_plot.out;
+  const Output bad_option = hapsyn_cli("scene " + human_arm_scene_args(fresh_dir("scene-bad")) +
+                                       " --set scene.options.orientations=0");
+  EXPECT_EQ(bad_option.code, 1);
+  EXPECT_NE(bad_option.out.find("hapsyn: error: "), std::string::npos) << bad_option.out;
+  EXPECT_NE(bad_option.out.find("orientations"), std::string::npos) << bad_option.out;
+  const Output missing = hapsyn_cli("scene " + problem("fivebar-gii-coarse.json") + " --set 'scene=3'");
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_NE(missing.out.find("hapsyn: error: problem: scene = 3: must be an object"), std::string::npos) << missing.out;
+  const Output attribute = hapsyn_cli("scene " + human_arm_scene_args(fresh_dir("scene-attr")) + " --attribute forces");
+  EXPECT_EQ(attribute.code, 1);
+  EXPECT_NE(attribute.out.find("human_arm: per-sample attribute 'forces' requested"), std::string::npos) << attribute.out;
+}

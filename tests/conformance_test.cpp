@@ -3,7 +3,10 @@
 //
 // The study for a plugin is plugins/<kind>/<name>/conformance.json when the plugin ships one,
 // else the kind's default study below with the plugin substituted. A plugin that fits neither
-// fails here: ship a conformance.json with it.
+// fails here: ship a conformance.json with it. A scene that no existing mechanism can serve
+// (human_arm: 6-D poses) ships plugins/scenes/<name>/conformance_scene.json instead, a
+// scene-only document {"plugin", "options"}: the scene is built twice from it and the two
+// sample sets must agree bit for bit.
 #include "test_support.hpp"
 
 #include <boost/filesystem.hpp>
@@ -42,13 +45,43 @@ Json study_for(const hapsyn::PluginRecord& plugin) {
   return default_study(plugin);
 }
 
+fs::path scene_only_document(const hapsyn::PluginRecord& plugin) {
+  if (plugin.kind != "scene") return {};
+  const fs::path file = fs::path(HAPSYN_SOURCE_DIR) / "plugins" / "scenes" / plugin.name / "conformance_scene.json";
+  return fs::exists(file) ? file : fs::path();
+}
+
+void check_scene_builds_deterministically(const hapsyn::PluginRecord& plugin, const fs::path& file) {
+  const Json doc = hapsyn::read_problem_file(file.string());
+  ASSERT_EQ(doc.value("plugin", ""), plugin.name) << file;
+  const auto scene = hapsyn::test::registry().create_scene(plugin.name, doc.value("options", Json::object()), "scene");
+  const hapsyn::SampleSet first = scene->build({});
+  const hapsyn::SampleSet second = scene->build({});
+  EXPECT_GT(first.size(), 0);
+  EXPECT_FALSE(first.coordinates.empty());
+  EXPECT_EQ(first.coordinates, second.coordinates);
+  EXPECT_TRUE(first.poses.allFinite());
+  EXPECT_TRUE(first.poses == second.poses);
+  EXPECT_TRUE(first.attributes == second.attributes);
+}
+
+// Statistics minus wall-clock durations (keys containing "seconds"): everything else must repeat.
+Json without_durations(const Json& j) {
+  if (!j.is_object()) return j;
+  Json out = Json::object();
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    if (it.key().find("seconds") == std::string::npos) out[it.key()] = without_durations(it.value());
+  }
+  return out;
+}
+
 Json solve_once(const Json& doc) {
   hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
   hapsyn::SolverContext context;
   context.threads = 2;
   context.seed = 7;
   const hapsyn::SolverResult r = study.solver->solve(*study.problem, context);
-  Json j = {{"status", hapsyn::to_string(r.status)}, {"message", r.message}, {"statistics", r.statistics}};
+  Json j = {{"status", hapsyn::to_string(r.status)}, {"message", r.message}, {"statistics", without_durations(r.statistics)}};
   if (r.best) {
     j["best_design"] = study.problem->design_to_json(r.best->design);
     j["best_objectives"] = r.best->objectives;
@@ -81,6 +114,10 @@ TEST(Conformance, EveryPluginLoadsValidatesAndEvaluatesDeterministically) {
     SCOPED_TRACE("plugin " + plugin.name);
     EXPECT_TRUE(plugin.schema.contains("description")) << "schema.json has no top-level description";
     check_schema_is_documented(plugin.schema, plugin.name);
+    if (const fs::path scene_doc = scene_only_document(plugin); !scene_doc.empty()) {
+      check_scene_builds_deterministically(plugin, scene_doc);
+      continue;
+    }
     const Json doc = study_for(plugin);
     Json first, second;
     ASSERT_NO_THROW(first = solve_once(doc)) << "no conformance study fits; ship plugins/<kind>/" << plugin.name

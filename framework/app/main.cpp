@@ -1,4 +1,4 @@
-// The hapsyn command-line program: run, validate, plugins, describe.
+// The hapsyn command-line program: run, validate, plugins, describe, scene.
 //
 // Exit codes: 0 the command did its work (for `run`: result.json written; the solver's outcome
 // is its "status"), 1 bad input (problem file, options, plugins, output directory), 2 usage
@@ -9,10 +9,18 @@
 
 #include <CLI/CLI.hpp>
 
+#include <boost/filesystem.hpp>
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
+#include <unistd.h>
 
 namespace {
 
@@ -140,6 +148,169 @@ int list_plugins(const hapsyn::Registry& registry) {
   return 0;
 }
 
+
+// ---- hapsyn scene: build a problem file's scene alone, summarize, export CSV, plot density ----
+
+// Shortest text that reads back as the same double.
+std::string exact_number(double v) {
+  char buffer[32];
+  const auto r = std::to_chars(buffer, buffer + sizeof buffer, v);
+  return std::string(buffer, r.ptr);
+}
+
+// Writes `text` to `path` atomically (temporary file in the same directory + rename).
+void write_atomically(const boost::filesystem::path& path, const std::string& text, const std::string& what) {
+  namespace fs = boost::filesystem;
+  if (path.has_parent_path()) fs::create_directories(path.parent_path());
+  const fs::path tmp = path.string() + ".tmp." + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp.string(), std::ios::binary | std::ios::trunc);
+    out << text;
+    out.flush();
+    if (!out) {
+      boost::system::error_code ec;
+      fs::remove(tmp, ec);
+      throw hapsyn::Error("scene", what + " " + path.string() + ": cannot be written");
+    }
+  }
+  fs::rename(tmp, path);
+}
+
+// CSV: the pose columns, then every attribute (alphabetical) flattened as name[i] (name alone
+// for a single column).
+std::string samples_csv(const hapsyn::SampleSet& set) {
+  std::string text;
+  for (std::size_t c = 0; c < set.coordinates.size(); ++c) text += (c ? "," : "") + set.coordinates[c];
+  for (const auto& [name, values] : set.attributes) {
+    for (Eigen::Index c = 0; c < values.cols(); ++c) {
+      text += "," + (values.cols() == 1 ? name : name + "[" + std::to_string(c) + "]");
+    }
+  }
+  text += "\n";
+  for (int i = 0; i < set.size(); ++i) {
+    for (int c = 0; c < set.dimension(); ++c) text += (c ? "," : "") + exact_number(set.pose(i)[c]);
+    for (const auto& [name, values] : set.attributes) {
+      for (Eigen::Index c = 0; c < values.cols(); ++c) text += "," + exact_number(values(i, c));
+    }
+    text += "\n";
+  }
+  return text;
+}
+
+// Reachability density per lattice position (reachable orientations / orientations tried), as
+// slices through the shoulder along x_S (x_S points down: each slice is one height), written
+// as gnuplot data + script and rendered to density_slices.png (Fennel 2022, Figure 3).
+void plot_density(const hapsyn::SampleSet& set, const std::string& directory) {
+  namespace fs = boost::filesystem;
+  const auto index = set.attributes.find("lattice_index");
+  if (index == set.attributes.end() || !set.info.contains("lattice_per_axis") || !set.info.contains("lattice_step") ||
+      !set.info.contains("orientations")) {
+    throw hapsyn::Error("scene", "--plot needs a lattice scene (attribute lattice_index and info lattice_per_axis, "
+                                 "lattice_step, orientations), e.g. human_arm");
+  }
+  const int n = set.info["lattice_per_axis"].get<int>();
+  const double step = set.info["lattice_step"].get<double>();
+  const double orientations = set.info["orientations"].get<double>();
+  const int half = (n - 1) / 2;
+  std::vector<double> density(static_cast<std::size_t>(n) * n * n, 0.0);
+  for (int i = 0; i < set.size(); ++i) density[static_cast<std::size_t>(index->second(i, 0))] += 1.0 / orientations;
+  std::ostringstream data;
+  data << "# reachability density per lattice point: reachable orientations / " << orientations << "\n"
+       << "# one block per slice x_S = k * step (x_S points down), rows of (y_S, z_S, density)\n";
+  for (int ix = 0; ix < n; ++ix) {
+    data << "# x_S = " << (ix - half) * step << "\n";
+    for (int iy = 0; iy < n; ++iy) {
+      for (int iz = 0; iz < n; ++iz) {
+        data << (iy - half) * step << " " << (iz - half) * step << " "
+             << density[static_cast<std::size_t>(ix) + n * (static_cast<std::size_t>(iy) + n * iz)] << "\n";
+      }
+      data << "\n";
+    }
+    data << "\n";
+  }
+  const int columns = static_cast<int>(std::ceil(std::sqrt(n)));
+  const int rows = (n + columns - 1) / columns;
+  std::ostringstream script;
+  script << "# hapsyn scene --plot: reachability density slices (gnuplot " << "density.gp" << ")\n"
+         << "set terminal pngcairo size " << 320 * columns << "," << 300 * rows << " font ',9'\n"
+         << "set output 'density_slices.png'\n"
+         << "set multiplot layout " << rows << "," << columns
+         << " title 'reachable orientations / " << orientations << " per position; slices by height above the shoulder'\n"
+         << "set cbrange [0:" << std::max(1e-9, *std::max_element(density.begin(), density.end())) << "]\n"
+         << "set palette rgbformulae 33,13,10\nset size ratio -1\n"
+         << "set xlabel 'y_S [m]'\nset ylabel 'z_S [m]'\nunset key\n";
+  for (int ix = 0; ix < n; ++ix) {
+    script << "set title sprintf('height %.2f m', " << -(ix - half) * step << ")\n"
+           << "plot 'density.dat' index " << ix << " using 1:2:3 with image\n";
+  }
+  script << "unset multiplot\n";
+  fs::create_directories(directory);
+  write_atomically(fs::path(directory) / "density.dat", data.str(), "--plot data");
+  write_atomically(fs::path(directory) / "density.gp", script.str(), "--plot script");
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
+    throw hapsyn::Error("scene", "--plot needs gnuplot, which is not installed (apt-get install gnuplot-nox); " +
+                                     directory + "/density.dat and density.gp were written");
+  }
+  const std::string command = "cd '" + directory + "' && gnuplot density.gp 2>&1";
+  if (std::system(command.c_str()) != 0) throw hapsyn::Error("scene", "gnuplot failed on " + directory + "/density.gp");
+}
+
+int scene_command(const std::string& file, const std::vector<std::string>& sets, const std::string& csv,
+                  const std::string& plot, int threads, bool threads_given, const std::vector<std::string>& attributes,
+                  const hapsyn::Registry& registry) {
+  Json doc = hapsyn::read_problem_file(file);
+  for (const std::string& s : sets) hapsyn::apply_override(doc, s);
+  if (!doc.is_object() || !doc.contains("scene")) throw hapsyn::Error("problem", "scene: missing");
+  const Json& scene = doc["scene"];
+  if (!scene.is_object()) {
+    throw hapsyn::Error("problem", "scene = " + hapsyn::render_value(scene) + ": must be an object {\"plugin\", \"options\"}");
+  }
+  for (auto it = scene.begin(); it != scene.end(); ++it) {
+    if (it.key() != "plugin" && it.key() != "options") {
+      throw hapsyn::Error("problem", "scene." + it.key() + ": unknown key; known keys: options, plugin");
+    }
+  }
+  if (!scene.contains("plugin") || !scene["plugin"].is_string()) {
+    throw hapsyn::Error("problem", "scene.plugin = " + hapsyn::render_value(scene.value("plugin", Json())) +
+                                       ": must be a plugin name (string)");
+  }
+  const std::string name = scene["plugin"];
+  Json options = scene.value("options", Json::object());
+  if (threads_given) {
+    const hapsyn::PluginRecord& record = registry.find(name);
+    if (record.schema.contains("properties") && record.schema["properties"].contains("threads") && options.is_object()) {
+      options["threads"] = threads;
+    }
+  }
+  const auto plugin = registry.create_scene(name, options, "scene");
+  hapsyn::SceneRequest request;
+  request.attributes = attributes;
+  const auto start = std::chrono::steady_clock::now();
+  const hapsyn::SampleSet set = plugin->build(request);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::cout << "scene " << name << ": " << set.size() << " samples (";
+  for (std::size_t c = 0; c < set.coordinates.size(); ++c) std::cout << (c ? ", " : "") << set.coordinates[c];
+  std::cout << "; unit " << set.unit << ") in " << format_number(seconds) << " s\n";
+  if (!set.attributes.empty()) {
+    std::cout << "attributes:";
+    for (const auto& [attribute, values] : set.attributes) std::cout << " " << attribute << "[" << values.cols() << "]";
+    std::cout << "\n";
+  }
+  for (auto it = set.info.begin(); it != set.info.end(); ++it) {
+    std::cout << "  " << it.key() << ": "
+              << (it.value().is_string() ? it.value().get<std::string>() : it.value().dump()) << "\n";
+  }
+  if (!csv.empty()) {
+    write_atomically(csv, samples_csv(set), "--csv");
+    std::cout << "csv: " << csv << " (" << set.size() << " rows)\n";
+  }
+  if (!plot.empty()) {
+    plot_density(set, plot);
+    std::cout << "plot: " << plot << "/density_slices.png\n";
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -172,6 +343,19 @@ int main(int argc, char** argv) {
   CLI::App* describe_cmd = app.add_subcommand("describe", "Show a plugin's options, defaults and units");
   describe_cmd->add_option("name", plugin_name, "Plugin name")->required();
 
+  std::string csv_out, plot_dir;
+  std::vector<std::string> scene_attributes;
+  CLI::App* scene_cmd = app.add_subcommand(
+      "scene", "Build a problem file's scene alone: summary, CSV export, reachability-density plots");
+  scene_cmd->add_option("file", file, "Problem or scene file (JSON); only its \"scene\" section is read")->required();
+  scene_cmd->add_option("--set", sets, "Override a key: path=value (e.g. scene.options.lattice_step=0.2)");
+  scene_cmd->add_option("--csv", csv_out, "Write the samples as CSV: pose columns, then every attribute as name[i]");
+  scene_cmd->add_option("--plot", plot_dir, "Write reachability-density slices (gnuplot) into this directory");
+  CLI::Option* scene_threads =
+      scene_cmd->add_option("--threads", threads, "Threads for building (sets scene.options.threads when the scene has it)")
+          ->check(CLI::NonNegativeNumber);
+  scene_cmd->add_option("--attribute", scene_attributes, "Request a per-sample attribute (e.g. M_v, M_a); repeatable");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -200,6 +384,9 @@ int main(int argc, char** argv) {
     }
     if (app.got_subcommand("plugins")) return list_plugins(registry);
     if (*describe_cmd) return describe(plugin_name, registry);
+    if (*scene_cmd) {
+      return scene_command(file, sets, csv_out, plot_dir, threads, scene_threads->count() > 0, scene_attributes, registry);
+    }
   } catch (const hapsyn::Error& e) {
     std::cerr << "hapsyn: error: " << e.what() << "\n";
     return 1;

@@ -68,6 +68,13 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
     if (!std::isfinite(o.weight)) throw Error("problem", "objective '" + o.name + "': weight must be finite");
   }
 
+  for (int index : space_.free_indices()) {
+    const DesignComponent& c = space_.components()[static_cast<std::size_t>(index)];
+    const double tol = 1e-9 * std::max(1.0, c.upper - c.lower);  // rounding of lower + i*step
+    free_lower_.push_back(c.lower - tol);
+    free_upper_.push_back(c.upper + tol);
+  }
+
   // Extreme samples first: far from the centroid (corners of a square) is where reach fails
   // and where worst cases usually sit, so infeasible designs and pruning are decided early.
   const Eigen::RowVectorXd centroid = samples_->poses.colwise().mean();
@@ -100,12 +107,11 @@ std::unique_ptr<Problem::Workspace> Problem::make_workspace() const {
 }
 
 void Problem::check_design(const double* free_design) const {
-  for (std::size_t k = 0; k < space_.free_size(); ++k) {
-    const DesignComponent& c = space_.components()[static_cast<std::size_t>(space_.free_indices()[k])];
+  for (std::size_t k = 0; k < free_lower_.size(); ++k) {
     const double v = free_design[k];
-    const double tol = 1e-9 * std::max(1.0, c.upper - c.lower);
-    if (std::isfinite(v) && v >= c.lower - tol && v <= c.upper + tol) continue;
+    if (v >= free_lower_[k] && v <= free_upper_[k]) continue;  // false for NaN too
     // Only a failing design pays for formatting the message.
+    const DesignComponent& c = space_.components()[static_cast<std::size_t>(space_.free_indices()[k])];
     std::ostringstream message;
     message.precision(12);
     message << "design component " << c.name << " = " << v << " from the solver: ";

@@ -126,7 +126,7 @@ class FiveBar final : public Mechanism {
   /// is (l0/2 + s/2)^2 + (r + s/2)^2 - (l1 + l2)^2.
   static double reach_constraint(const FiveBarDesign& design, double xmin, double xmax, double ymin,
                                  double ymax);
-  /// The design (l0, l1, l2, r) from a design vector. \throws Error as FiveBarModel does.
+  /// The design (l0, l1, l2, r) from a design vector (unchecked: FiveBarModel checks it).
   static FiveBarDesign design_from(const double* design);
 
  private:

@@ -95,11 +95,21 @@ double positive_mod(double x, double m) {
 }
 
 // Maps a DH angle theta to the joint angle q = theta - offset inside [lower, upper], wrapping by
-// 2 pi and clamping within the tolerance (an exact 80 deg limit must not drop a pose over 1 ulp).
-bool fit_limit(double theta, double offset, double lower, double upper, double* q) {
-  const double base = lower - kJointLimitTolerance;
+// 2 pi. Within kJointLimitTolerance of a limit the angle is clamped onto it (an exact 80 deg
+// limit must not drop a pose over 1 ulp). Up to kSnapTolerance outside, it is clamped too but
+// flagged in *snapped: near a singularity that coincides with a limit (q2 = 90 deg) the
+// closed form loses digits (acos near 1 turns 1e-16 into 1e-8 rad, an axis-distance division
+// amplifies that further), so the caller must verify such a solution by forward kinematics.
+constexpr double kSnapTolerance = 1e-4;
+bool fit_limit(double theta, double offset, double lower, double upper, double* q, bool* snapped = nullptr) {
+  const double base = lower - kSnapTolerance;
   double x = base + positive_mod(theta - offset - base, 2.0 * kPi);
-  if (!(x <= upper + kJointLimitTolerance)) return false;
+  if (!(x <= upper + kSnapTolerance)) return false;
+  const bool outside = x < lower - kJointLimitTolerance || x > upper + kJointLimitTolerance;
+  if (outside) {
+    if (!snapped) return false;
+    *snapped = true;
+  }
   *q = std::min(std::max(x, lower), upper);
   return true;
 }
@@ -342,7 +352,8 @@ int HumanArm::solve(const Eigen::Matrix3d& R, const Eigen::Vector3d& p, double q
   for (int i4 = 0; i4 < n4; ++i4) {
     Vector7d q;
     q(2) = q3_fit;
-    if (!fit_limit(theta4s[i4], dh[3].theta_offset, lo(3), hi(3), &q(3))) continue;
+    bool snap4 = false;
+    if (!fit_limit(theta4s[i4], dh[3].theta_offset, lo(3), hi(3), &q(3), &snap4)) continue;
     const double theta4 = q(3) + dh[3].theta_offset;
     const Eigen::Matrix3d R34 = rz_rx(theta4, dh[3].alpha);
     const Eigen::Vector3d v2 = Eigen::Vector3d(0.0, 0.0, d3) + d5 * (R23 * R34.col(2));
@@ -364,7 +375,8 @@ int HumanArm::solve(const Eigen::Matrix3d& R, const Eigen::Vector3d& p, double q
       for (int j = 0; j < n2; ++j) theta2s[j] = phi + a[j];
     }
     for (int i2 = 0; i2 < n2; ++i2) {
-      if (!fit_limit(theta2s[i2], dh[1].theta_offset, lo(1), hi(1), &q(1))) continue;
+      bool snap2 = snap4;
+      if (!fit_limit(theta2s[i2], dh[1].theta_offset, lo(1), hi(1), &q(1), &snap2)) continue;
       const double theta2 = q(1) + dh[1].theta_offset;
       const Eigen::Vector3d m = rx(dh[0].alpha) * (Eigen::AngleAxisd(theta2, Eigen::Vector3d::UnitZ()) * u);
       double theta1;
@@ -373,7 +385,7 @@ int HumanArm::solve(const Eigen::Matrix3d& R, const Eigen::Vector3d& p, double q
       } else {
         theta1 = std::atan2(w.y(), w.x()) - std::atan2(m.y(), m.x());
       }
-      if (!fit_limit(theta1, dh[0].theta_offset, lo(0), hi(0), &q(0))) continue;
+      if (!fit_limit(theta1, dh[0].theta_offset, lo(0), hi(0), &q(0), &snap2)) continue;
       const double theta1f = q(0) + dh[0].theta_offset;
       const Eigen::Matrix3d R02 = rz_rx(theta1f, dh[0].alpha) * rz_rx(theta2, dh[1].alpha);
       const Eigen::Matrix3d R04 = R02 * R23 * R34;
@@ -383,7 +395,8 @@ int HumanArm::solve(const Eigen::Matrix3d& R, const Eigen::Vector3d& p, double q
       double theta6s[2];
       const int n6 = acos_pair((ca5 * ca6 - r.z()) / (sa5 * sa6), theta6s);
       for (int i6 = 0; i6 < n6; ++i6) {
-        if (!fit_limit(theta6s[i6], dh[5].theta_offset, lo(5), hi(5), &q(5))) continue;
+        bool snap6 = snap2;
+        if (!fit_limit(theta6s[i6], dh[5].theta_offset, lo(5), hi(5), &q(5), &snap6)) continue;
         const double theta6 = q(5) + dh[5].theta_offset;
         const Eigen::Vector3d n = rx(dh[4].alpha) * (rz_rx(theta6, dh[5].alpha).col(2));
         double theta5;
@@ -392,11 +405,16 @@ int HumanArm::solve(const Eigen::Matrix3d& R, const Eigen::Vector3d& p, double q
         } else {
           theta5 = std::atan2(r.y(), r.x()) - std::atan2(n.y(), n.x());
         }
-        if (!fit_limit(theta5, dh[4].theta_offset, lo(4), hi(4), &q(4))) continue;
+        if (!fit_limit(theta5, dh[4].theta_offset, lo(4), hi(4), &q(4), &snap6)) continue;
         const double theta5f = q(4) + dh[4].theta_offset;
         const Eigen::Matrix3d G = (rz_rx(theta5f, dh[4].alpha) * rz_rx(theta6, dh[5].alpha)).transpose() * Rw;
         const double theta7 = std::atan2(G(1, 0), G(0, 0));
-        if (!fit_limit(theta7, dh[6].theta_offset, lo(6), hi(6), &q(6))) continue;
+        if (!fit_limit(theta7, dh[6].theta_offset, lo(6), hi(6), &q(6), &snap6)) continue;
+        if (snap6) {
+          // A clamped angle is kept only when the clamped configuration still reaches the pose.
+          const Eigen::Isometry3d T = forward(q);
+          if (!((T.translation() - p).norm() <= 1e-9 && (T.linear() - R).cwiseAbs().maxCoeff() <= 1e-9)) continue;
+        }
         out[count++].q = q;
       }
     }
