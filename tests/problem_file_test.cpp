@@ -8,21 +8,16 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/json.hpp>
 #include <hapsyn/study.hpp>
+
+#include "test_support.hpp"
 #include <string>
 #include <vector>
 
 namespace {
 
 using hapsyn::Json;
+using hapsyn::test::error_of;
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const hapsyn::Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
 
 std::string parse_error(const std::string& text) {
   return error_of([&] { hapsyn::parse_problem_text(text, "p.json"); });

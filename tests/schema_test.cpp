@@ -6,22 +6,16 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/json.hpp>
 #include <hapsyn/schema.hpp>
+
+#include "test_support.hpp"
 #include <limits>
 #include <string>
 
 namespace {
 
 using hapsyn::Json;
+using hapsyn::test::error_of;
 
-// The full what() of the hapsyn::Error thrown by `f`, or a marker when it throws nothing.
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const hapsyn::Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
 
 std::string validation_error(const Json& schema, const Json& value, const std::string& path) {
   return error_of([&] { hapsyn::validate_and_fill(schema, value, path); });

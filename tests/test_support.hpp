@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <string>
 
 namespace hapsyn::test {
@@ -14,6 +15,16 @@ namespace hapsyn::test {
 inline const Registry& registry() {
   static Registry r({HAPSYN_PLUGIN_DIR});
   return r;
+}
+
+/// The full what() of the hapsyn::Error thrown by `f`, or "(no error)" when it throws nothing.
+inline std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no error)";
 }
 
 /// Runs fn and expects a hapsyn::Error whose message contains every fragment.

@@ -41,6 +41,19 @@ double DesignSpace::grid_value(std::size_t free_k, long long i) const {
   return std::min(c.upper, c.lower + static_cast<double>(i) * c.step);
 }
 
+std::vector<long long> DesignSpace::grid_counts() const {
+  std::vector<long long> counts(free_.size());
+  for (std::size_t k = 0; k < counts.size(); ++k) counts[k] = grid_count(k);
+  return counts;
+}
+
+void DesignSpace::grid_point(long long index, const std::vector<long long>& counts, double* free_values) const {
+  for (std::size_t k = counts.size(); k-- > 0;) {
+    free_values[k] = grid_value(k, index % counts[k]);
+    index /= counts[k];
+  }
+}
+
 int DesignSpace::find(const std::string& name) const {
   for (std::size_t i = 0; i < components_.size(); ++i) {
     if (components_[i].name == name) return static_cast<int>(i);

@@ -63,6 +63,11 @@ class DesignSpace {
   long long grid_count(std::size_t free_k) const;
   /// Grid value i of free component k: lower + i*step (clamped to upper).
   double grid_value(std::size_t free_k, long long i) const;
+  /// Grid counts of every free component (each needs a step).
+  std::vector<long long> grid_counts() const;
+  /// The free design of grid point `index` in the mixed-radix numbering of `counts` (the last
+  /// component varies fastest): x_k = grid_value(k, i_k).
+  void grid_point(long long index, const std::vector<long long>& counts, double* free_values) const;
   /// Index of a component by name ("l1", "l[2]"); -1 if absent.
   int find(const std::string& name) const;
 

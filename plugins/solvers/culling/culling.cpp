@@ -418,16 +418,10 @@ struct Grid {
   std::vector<long long> counts;
   long long total = 1;
 
-  explicit Grid(const DesignSpace& s) : space(&s), counts(s.free_size()) {
-    for (std::size_t k = 0; k < counts.size(); ++k) total *= (counts[k] = s.grid_count(k));
+  explicit Grid(const DesignSpace& s) : space(&s), counts(s.grid_counts()) {
+    for (long long c : counts) total *= c;
   }
-  // Linear index -> free design (last component fastest), and back.
-  void decode(long long index, double* x) const {
-    for (std::size_t k = counts.size(); k-- > 0;) {
-      x[k] = space->grid_value(k, index % counts[k]);
-      index /= counts[k];
-    }
-  }
+  void decode(long long index, double* x) const { space->grid_point(index, counts, x); }
   long long nearest_cell(std::size_t k, double v) const {
     const DesignComponent& c = space->components()[static_cast<std::size_t>(space->free_indices()[k])];
     const double i = std::floor((v - c.lower) / c.step);

@@ -30,14 +30,6 @@ void GridSolver::check(const Problem& problem) const {
 }
 
 namespace {
-// Decodes a linear grid index into the free design vector (last component fastest).
-void decode(const DesignSpace& space, const std::vector<long long>& counts, long long index, double* x) {
-  for (std::size_t k = counts.size(); k-- > 0;) {
-    x[k] = space.grid_value(k, index % counts[k]);
-    index /= counts[k];
-  }
-}
-
 void raise_to(std::atomic<double>& target, double value) {
   double current = target.load(std::memory_order_relaxed);
   while (value > current && !target.compare_exchange_weak(current, value, std::memory_order_relaxed)) {
@@ -49,12 +41,9 @@ SolverResult GridSolver::solve(const Problem& problem, const SolverContext& cont
   using clock = std::chrono::steady_clock;
   const DesignSpace& space = problem.design_space();
   const std::size_t n = space.free_size();
-  std::vector<long long> counts(n);
+  const std::vector<long long> counts = space.grid_counts();
   long long total = 1;
-  for (std::size_t k = 0; k < n; ++k) {
-    counts[k] = space.grid_count(k);
-    total *= counts[k];
-  }
+  for (long long c : counts) total *= c;
   const bool prune = prune_ && problem.worst_case();
   const int threads = std::max(1, context.threads);
 
@@ -80,7 +69,7 @@ SolverResult GridSolver::solve(const Problem& problem, const SolverContext& cont
   parallel_for_dynamic(total, threads, block, [&](long long index, int t) {
     ThreadState& s = states[static_cast<std::size_t>(t)];
     if (context.stop && context.stop->load(std::memory_order_relaxed)) return;
-    decode(space, counts, index, s.x.data());
+    space.grid_point(index, counts, s.x.data());
     EvalOptions options;
     if (prune) options.prune_below = incumbent.load(std::memory_order_relaxed);
     const Evaluation& e = problem.evaluate(s.x.data(), *s.workspace, options);
@@ -148,7 +137,7 @@ SolverResult GridSolver::solve(const Problem& problem, const SolverContext& cont
   }
   // Re-evaluate the winner in full (its running evaluation may have been bounded).
   std::vector<double> x(n);
-  decode(space, counts, sum.best_index, x.data());
+  space.grid_point(sum.best_index, counts, x.data());
   auto ws = problem.make_workspace();
   const Evaluation& e = problem.evaluate(x.data(), *ws);
   result.sample_evaluations += e.samples_evaluated;
