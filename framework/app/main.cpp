@@ -6,6 +6,7 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/registry.hpp>
 #include <hapsyn/study.hpp>
+#include <hapsyn/sweep.hpp>
 
 #include <CLI/CLI.hpp>
 
@@ -313,6 +314,27 @@ int scene_command(const std::string& file, const std::vector<std::string>& sets,
 
 }  // namespace
 
+void print_sweep(const Json& summary, std::ostream& out) {
+  out << "sweep: " << summary["runs"].size() << " runs; reference " << summary["reference"]["overrides"].dump()
+      << " (" << format_number(summary["reference"]["wall_time_s"].get<double>()) << " s)\n";
+  std::vector<std::string> keys;
+  if (!summary["runs"].empty()) {
+    for (auto it = summary["runs"][0]["values"].begin(); it != summary["runs"][0]["values"].end(); ++it) keys.push_back(it.key());
+  }
+  for (const auto& k : keys) out << std::left << std::setw(std::max<std::size_t>(k.size(), 8) + 2) << k;
+  out << std::setw(12) << "time [s]" << std::setw(14) << "samples" << std::setw(13) << "obj. error" << std::setw(14)
+      << "design dist." << std::setw(10) << "igd" << "status\n";
+  auto cell = [](const Json& v) { return v.is_null() ? std::string("-") : format_number(v.get<double>()); };
+  for (const Json& r : summary["runs"]) {
+    for (const auto& k : keys) out << std::left << std::setw(std::max<std::size_t>(k.size(), 8) + 2) << r["values"][k].dump();
+    out << std::setw(12) << format_number(r["wall_time_s"].get<double>()) << std::setw(14)
+        << r["evaluations"]["samples"].dump() << std::setw(13) << cell(r["errors"]["objective_error"]) << std::setw(14)
+        << cell(r["errors"]["design_distance"]) << std::setw(10) << cell(r["errors"]["igd"])
+        << r["status"].get<std::string>() << "\n";
+  }
+  out << "written: " << summary["output_directory"].get<std::string>() << "/sweep.csv, sweep.json\n";
+}
+
 int main(int argc, char** argv) {
   CLI::App app{"hapsyn: optimization-driven design of haptic interfaces and robot mechanisms"};
   app.set_version_flag("--version", std::string("hapsyn ") + hapsyn::version());
@@ -356,6 +378,24 @@ int main(int argc, char** argv) {
           ->check(CLI::NonNegativeNumber);
   scene_cmd->add_option("--attribute", scene_attributes, "Request a per-sample attribute (e.g. M_v, M_a); repeatable");
 
+  std::vector<std::string> vary, reference;
+  std::string sweep_out = "results/sweep";
+  std::uint64_t sweep_seed = 1;
+  CLI::App* sweep_cmd = app.add_subcommand(
+      "sweep", "Run a study across values of some keys; error against a reference run versus time");
+  sweep_cmd->add_option("file", file, "Problem file (JSON)")->required();
+  sweep_cmd->add_option("--vary", vary,
+                        "path[,path...]=v1,v2,...: keys set together to each value (repeatable: a grid)")
+      ->required();
+  sweep_cmd->add_option("--reference", reference,
+                        "path=value overrides of the reference run (repeatable; default: the last combination)");
+  sweep_cmd->add_option("--set", sets, "Override a key in every run: path=value");
+  sweep_cmd->add_option("--out", sweep_out, "Output directory (sweep.csv, sweep.json, sweep.png/svg, one folder per run)");
+  sweep_cmd->add_option("--threads", threads, "Worker threads per run (default: all cores)")->check(CLI::NonNegativeNumber);
+  sweep_cmd->add_option("--seed", sweep_seed, "Random seed of every run");
+  bool sweep_progress = false;
+  sweep_cmd->add_flag("--progress", sweep_progress, "Show each run's progress");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -384,6 +424,19 @@ int main(int argc, char** argv) {
     }
     if (app.got_subcommand("plugins")) return list_plugins(registry);
     if (*describe_cmd) return describe(plugin_name, registry);
+    if (*sweep_cmd) {
+      Json doc = hapsyn::read_problem_file(file);
+      for (const std::string& s : sets) hapsyn::apply_override(doc, s);
+      hapsyn::SweepOptions options;
+      for (const std::string& v : vary) options.axes.push_back(hapsyn::parse_sweep_axis(v));
+      options.reference = reference;
+      options.output_directory = sweep_out;
+      options.threads = threads;
+      options.seed = sweep_seed;
+      options.quiet = !sweep_progress;
+      print_sweep(hapsyn::run_sweep(doc, options, registry), std::cout);
+      return 0;
+    }
     if (*scene_cmd) {
       return scene_command(file, sets, csv_out, plot_dir, threads, scene_threads->count() > 0, scene_attributes, registry);
     }

@@ -1,0 +1,298 @@
+#include <hapsyn/error.hpp>
+#include <hapsyn/study.hpp>
+#include <hapsyn/sweep.hpp>
+
+#include <boost/filesystem.hpp>
+
+#include <cstdlib>
+#include <fstream>
+
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <sstream>
+
+namespace hapsyn {
+
+namespace fs = boost::filesystem;
+
+namespace {
+// Splits on `separator` outside brackets, braces and quotes (so JSON values may hold commas).
+std::vector<std::string> split_top_level(const std::string& text, char separator) {
+  std::vector<std::string> parts;
+  std::string current;
+  int depth = 0;
+  bool quoted = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (quoted) {
+      if (c == '\\' && i + 1 < text.size()) {
+        current += c;
+        current += text[++i];
+        continue;
+      }
+      if (c == '"') quoted = false;
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == '[' || c == '{') {
+      ++depth;
+    } else if (c == ']' || c == '}') {
+      --depth;
+    } else if (c == separator && depth == 0) {
+      parts.push_back(current);
+      current.clear();
+      continue;
+    }
+    current += c;
+  }
+  parts.push_back(current);
+  return parts;
+}
+
+Json as_value(const std::string& text) {
+  try {
+    return Json::parse(text);
+  } catch (const Json::parse_error&) {
+    return Json(text);
+  }
+}
+
+std::string assignment(const std::string& path, const Json& value) {
+  return path + "=" + (value.is_string() ? value.get<std::string>() : value.dump());
+}
+}  // namespace
+
+SweepAxis parse_sweep_axis(const std::string& spec) {
+  const auto eq = spec.find('=');
+  if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size()) {
+    throw Error("sweep", "--vary '" + spec + "': expected path[,path...]=value1,value2,...");
+  }
+  SweepAxis axis;
+  for (const std::string& p : split_top_level(spec.substr(0, eq), ',')) {
+    if (p.empty()) throw Error("sweep", "--vary '" + spec + "': empty path");
+    axis.paths.push_back(p);
+  }
+  for (const std::string& v : split_top_level(spec.substr(eq + 1), ',')) {
+    if (v.empty()) throw Error("sweep", "--vary '" + spec + "': empty value");
+    axis.values.push_back(as_value(v));
+  }
+  return axis;
+}
+
+double inverted_generational_distance(const std::vector<std::vector<double>>& front,
+                                      const std::vector<std::vector<double>>& reference) {
+  if (reference.empty()) return 0.0;
+  if (front.empty()) return std::numeric_limits<double>::infinity();
+  double sum = 0.0;
+  for (const auto& r : reference) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const auto& f : front) {
+      double d2 = 0.0;
+      for (std::size_t i = 0; i < r.size() && i < f.size(); ++i) d2 += (r[i] - f[i]) * (r[i] - f[i]);
+      nearest = std::min(nearest, std::sqrt(d2));
+    }
+    sum += nearest;
+  }
+  return sum / static_cast<double>(reference.size());
+}
+
+namespace {
+
+struct RunRecord {
+  Json values;  // path -> value
+  Json result;  // result.json of the run
+};
+
+std::vector<std::vector<double>> front_of(const Json& result) {
+  std::vector<std::vector<double>> points;
+  if (!result.contains("front")) return points;
+  for (const Json& p : result["front"]) {
+    std::vector<double> v;
+    for (auto it = p["objectives"].begin(); it != p["objectives"].end(); ++it) v.push_back(it.value());
+    points.push_back(v);
+  }
+  return points;
+}
+
+// Design components in SI units, in the order of the design object.
+std::vector<double> design_of(const Json& result) {
+  std::vector<double> v;
+  if (!result.contains("best")) return v;
+  for (auto it = result["best"]["design"].begin(); it != result["best"]["design"].end(); ++it) {
+    if (it.value().is_array()) {
+      for (const Json& x : it.value()) v.push_back(x.get<double>());
+    } else {
+      v.push_back(it.value().get<double>());
+    }
+  }
+  return v;
+}
+
+Json errors_against(const Json& run, const Json& reference) {
+  Json e;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  double objective_error = nan, design_distance = nan;
+  if (run.contains("best") && reference.contains("best")) {
+    objective_error = 0.0;
+    for (auto it = reference["best"]["objectives"].begin(); it != reference["best"]["objectives"].end(); ++it) {
+      if (!run["best"]["objectives"].contains(it.key())) continue;
+      objective_error = std::max(objective_error, std::abs(run["best"]["objectives"][it.key()].get<double>() - it.value().get<double>()));
+    }
+    const auto a = design_of(run), b = design_of(reference);
+    if (a.size() == b.size()) {
+      design_distance = 0.0;
+      for (std::size_t i = 0; i < a.size(); ++i) design_distance += (a[i] - b[i]) * (a[i] - b[i]);
+      design_distance = std::sqrt(design_distance);
+    }
+  }
+  e["objective_error"] = std::isnan(objective_error) ? Json(nullptr) : Json(objective_error);
+  e["design_distance"] = std::isnan(design_distance) ? Json(nullptr) : Json(design_distance);
+  const auto rf = front_of(reference);
+  e["igd"] = rf.empty() ? Json(nullptr) : Json(inverted_generational_distance(front_of(run), rf));
+  return e;
+}
+
+std::string csv_cell(const Json& v) {
+  if (v.is_null()) return "";
+  if (v.is_string()) return v.get<std::string>();
+  return v.dump();
+}
+
+void write_plot(const fs::path& dir, std::ostream& log) {
+  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) {
+    log << "sweep: gnuplot not found; no plot written (the CSV has the data)\n";
+    return;
+  }
+  const fs::path script = dir / "sweep.gnuplot";
+  {
+    std::ofstream out(script.string());
+    out << "set datafile separator ','\nset logscale xy\nset xlabel 'wall time [s]'\n"
+           "set ylabel 'max objective error vs reference'\nset grid\nset key off\n";
+    for (const char* term : {"pngcairo size 800,600", "svg size 800,600"}) {
+      const std::string ext = std::string(term).rfind("svg", 0) == 0 ? "svg" : "png";
+      out << "set terminal " << term << "\nset output '" << (dir / ("sweep." + ext)).string() << "'\n"
+          << "plot '" << (dir / "sweep.csv").string()
+          << "' using (column('wall_time_s')):(column('objective_error') > 0 ? column('objective_error') : 1/0) "
+             "with linespoints pt 7, '' using (column('wall_time_s')):(column('objective_error') > 0 ? "
+             "column('objective_error') : 1/0):(column('label')) with labels offset 1,1 font ',8'\n";
+    }
+  }
+  const std::string command = "gnuplot '" + script.string() + "' > /dev/null 2>&1";
+  if (std::system(command.c_str()) != 0) log << "sweep: gnuplot failed; see " << script.string() << "\n";
+}
+
+}  // namespace
+
+Json run_sweep(const Json& problem, const SweepOptions& options, const Registry& registry) {
+  if (options.axes.empty()) throw Error("sweep", "at least one --vary is required");
+  // Every combination, the last axis fastest.
+  std::vector<std::vector<std::string>> combos = {{}};
+  std::vector<Json> combo_values = {Json::object()};
+  for (const SweepAxis& axis : options.axes) {
+    std::vector<std::vector<std::string>> next;
+    std::vector<Json> next_values;
+    for (std::size_t c = 0; c < combos.size(); ++c) {
+      for (const Json& v : axis.values) {
+        auto sets = combos[c];
+        Json values = combo_values[c];
+        for (const std::string& p : axis.paths) {
+          sets.push_back(assignment(p, v));
+          values[p] = v;
+        }
+        next.push_back(sets);
+        next_values.push_back(values);
+      }
+    }
+    combos = std::move(next);
+    combo_values = std::move(next_values);
+  }
+  // Validate every run (and the reference) before any of them starts.
+  auto make_doc = [&](const std::vector<std::string>& sets) {
+    Json doc = problem;
+    for (const std::string& s : sets) apply_override(doc, s);
+    return doc;
+  };
+  for (std::size_t c = 0; c < combos.size(); ++c) {
+    try {
+      load_study(make_doc(combos[c]), registry);
+    } catch (const Error& e) {
+      throw Error("sweep", "run with " + combo_values[c].dump() + ": " + e.what());
+    }
+  }
+  const bool separate_reference = !options.reference.empty();
+  if (separate_reference) load_study(make_doc(options.reference), registry);
+
+  const fs::path out(options.output_directory);
+  fs::create_directories(out);
+  RunOptions run_options;
+  run_options.threads = options.threads;
+  run_options.seed = options.seed;
+  run_options.quiet = options.quiet;
+  run_options.write_samples = false;
+  auto run_one = [&](const std::vector<std::string>& sets, const std::string& name) {
+    Study study = load_study(make_doc(sets), registry);
+    run_options.output_directory = (out / name).string();
+    return run_study(study, run_options);
+  };
+
+  std::vector<RunRecord> runs;
+  for (std::size_t c = 0; c < combos.size(); ++c) {
+    if (!options.quiet) std::cerr << "sweep: run " << (c + 1) << "/" << combos.size() << " " << combo_values[c].dump() << "\n";
+    runs.push_back({combo_values[c], run_one(combos[c], "run-" + std::to_string(c))});
+  }
+  Json reference = separate_reference ? run_one(options.reference, "reference") : runs.back().result;
+
+  Json summary;
+  summary["reference"] = {{"overrides", options.reference.empty() ? Json(combo_values.back()) : Json(options.reference)},
+                          {"wall_time_s", reference["wall_time_s"]},
+                          {"best", reference.contains("best") ? reference["best"] : Json(nullptr)}};
+  summary["hapsyn"] = reference["hapsyn"];
+  summary["machine"] = reference["machine"];
+  summary["seed"] = reference["seed"];
+  summary["problem"] = problem;
+  Json rows = Json::array();
+  std::ostringstream csv;
+  csv.precision(10);
+  std::vector<std::string> objective_names;
+  if (reference.contains("best")) {
+    for (auto it = reference["best"]["objectives"].begin(); it != reference["best"]["objectives"].end(); ++it) {
+      objective_names.push_back(it.key());
+    }
+  }
+  csv << "label";
+  for (const SweepAxis& axis : options.axes) csv << "," << axis.paths[0];
+  csv << ",wall_time_s,designs,samples,status";
+  for (const auto& n : objective_names) csv << "," << n;
+  csv << ",objective_error,design_distance,igd,time_ratio_to_reference\n";
+  const double reference_time = reference["wall_time_s"].get<double>();
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const Json& r = runs[i].result;
+    Json row = {{"values", runs[i].values},
+                {"wall_time_s", r["wall_time_s"]},
+                {"evaluations", r["evaluations"]},
+                {"status", r["status"]},
+                {"errors", errors_against(r, reference)}};
+    if (r.contains("best")) row["objectives"] = r["best"]["objectives"];
+    rows.push_back(row);
+    std::string label;
+    for (const SweepAxis& axis : options.axes) label += (label.empty() ? "" : " ") + csv_cell(runs[i].values[axis.paths[0]]);
+    csv << '"' << label << '"';
+    for (const SweepAxis& axis : options.axes) csv << "," << csv_cell(runs[i].values[axis.paths[0]]);
+    csv << "," << r["wall_time_s"].get<double>() << "," << r["evaluations"]["designs"] << "," << r["evaluations"]["samples"]
+        << "," << r["status"].get<std::string>();
+    for (const auto& n : objective_names) {
+      csv << "," << (r.contains("best") && r["best"]["objectives"].contains(n) ? r["best"]["objectives"][n].dump() : "");
+    }
+    csv << "," << csv_cell(row["errors"]["objective_error"]) << "," << csv_cell(row["errors"]["design_distance"]) << ","
+        << csv_cell(row["errors"]["igd"]) << "," << r["wall_time_s"].get<double>() / reference_time << "\n";
+  }
+  summary["runs"] = rows;
+  write_file_atomically((out / "sweep.csv").string(), csv.str());
+  write_file_atomically((out / "sweep.json").string(), summary.dump(2) + "\n");
+  write_plot(out, std::cerr);
+  summary["output_directory"] = out.string();
+  return summary;
+}
+
+}  // namespace hapsyn
