@@ -220,6 +220,8 @@ const Evaluation& Problem::evaluate(const double* free_design, Workspace& ws, co
   const std::vector<int>& indices = options.subset ? *options.subset : order_;
   for (const int sample : indices) {
     model->solve(samples_->pose(sample), needs_, *ws.scratch, ws.quantities);
+    ws.quantities.sample = sample;
+    ws.quantities.scene = samples_.get();
     ++out.samples_evaluated;
     const bool reachable = ws.quantities.status == SampleStatus::kReachable;
     if (!reachable && any_worst_case_) {

@@ -36,7 +36,8 @@ class Metric {
  public:
   virtual ~Metric() = default;
   /// Computes the local values of one sample into out[0 .. locals().size()).
-  /// For worst-case metrics only reachable samples are passed.
+  /// For worst-case metrics only reachable samples are passed. `q.sample` and `q.scene` give
+  /// the sample's index and scene (for its attributes, see scene_attributes()).
   virtual void local(const SampleQuantities& q, double* out) const = 0;
   /// Quantities needed at each sample (Need flags). Default: the Jacobian.
   virtual Needs needs() const { return kNeedJacobian; }

@@ -7,6 +7,8 @@
 
 namespace hapsyn {
 
+struct SampleSet;
+
 /// Quantities computed at a sample, as bit flags. Pose (the inverse kinematics and its
 /// classification) is always computed; everything else only when some metric asks for it.
 enum Need : std::uint32_t {
@@ -40,6 +42,10 @@ using TaskMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMax
 /// meaningful; the others keep whatever they held.
 struct SampleQuantities {
   SampleStatus status = SampleStatus::kUnreachable;
+  /// Set by the evaluator before the metrics run: the sample's index in `scene`, so a metric can
+  /// read the sample's scene attributes (e.g. the human's M_v). -1 / null outside the evaluator.
+  int sample = -1;
+  const SampleSet* scene = nullptr;
   JointVector q;                  ///< joint angles of the chosen configuration [rad]
   TaskJointMatrix jacobian;       ///< J: task velocity [m/s] per actuator rate [rad/s]
   JointMatrix inertia;            ///< D [kg m^2] in actuated coordinates

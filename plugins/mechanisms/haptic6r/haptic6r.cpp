@@ -1,0 +1,675 @@
+#include "haptic6r.hpp"
+
+#include <hapsyn/error.hpp>
+
+#include <boost/filesystem.hpp>
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+namespace hapsyn::plugins {
+
+namespace {
+
+constexpr const char* kName = "haptic6r";
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+// acos/asin arguments this far past +-1 are rounding at the reach boundary, not a miss.
+constexpr double kBoundaryTolerance = 1e-12;
+
+namespace fs = boost::filesystem;
+
+std::string show(const Json& v) { return v.dump(); }
+
+double wrap(double angle) {  // into [-pi, pi)
+  double r = std::fmod(angle + kPi, 2.0 * kPi);
+  if (r < 0.0) r += 2.0 * kPi;
+  return r - kPi;
+}
+
+Json read_json_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(kName, path + ": cannot be read");
+  try {
+    return Json::parse(in);
+  } catch (const std::exception& e) {
+    throw Error(kName, path + ": not valid JSON (" + e.what() + ")");
+  }
+}
+
+double number_at(const Json& doc, const std::string& file, const std::string& path, const Json& v,
+                 double lower, double upper, bool lower_open = false) {
+  if (!v.is_number()) throw Error(kName, file + ": " + path + " = " + show(v) + ": must be a number");
+  const double x = v.get<double>();
+  if (!std::isfinite(x) || x < lower || (lower_open && x == lower) || x > upper) {
+    throw Error(kName, file + ": " + path + " = " + show(v) + ": must be in " + (lower_open ? "(" : "[") +
+                           std::to_string(lower) + ", " + std::to_string(upper) + "]");
+  }
+  (void)doc;
+  return x;
+}
+
+LinkRef parse_length(const Json& v, const std::string& file, const std::string& path) {
+  LinkRef r;
+  if (v.is_number()) {
+    r.value = v.get<double>();
+    if (!std::isfinite(r.value)) throw Error(kName, file + ": " + path + " = " + show(v) + ": must be finite");
+    return r;
+  }
+  if (v.is_string()) {
+    std::string s = v.get<std::string>();
+    if (!s.empty() && s[0] == '-') {
+      r.factor = -1.0;
+      s = s.substr(1);
+    }
+    if (s.size() == 2 && s[0] == 'l' && s[1] >= '1' && s[1] <= '5') {
+      r.link = s[1] - '1';
+      return r;
+    }
+  }
+  throw Error(kName, file + ": " + path + " = " + show(v) + ": must be a number [m] or a link name l1..l5, optionally negated");
+}
+
+// Double rows of the DH structure the closed-form IK serves.
+bool same_ref(const LinkRef& r, int link, double factor) {
+  if (link < 0) return r.link < 0 && r.value == 0.0;
+  return r.link == link && r.factor == factor;
+}
+
+Eigen::Matrix3d parallel_axis(const Eigen::Vector3d& r) {
+  return r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose();
+}
+
+// Adds a body part (mass m, com c, inertia I about c) to an accumulated body.
+void add_part(Haptic6RBody& body, double m, const Eigen::Vector3d& c, const Eigen::Matrix3d& inertia) {
+  if (m <= 0.0) return;
+  const double total = body.mass + m;
+  const Eigen::Vector3d com = (body.mass * body.com + m * c) / total;
+  body.inertia = body.inertia + body.mass * parallel_axis(body.com - com) + inertia + m * parallel_axis(c - com);
+  body.com = com;
+  body.mass = total;
+}
+
+Eigen::Matrix3d cylinder_inertia(double m, const Eigen::Vector3d& axis, double r_sq_sum_half, double transverse) {
+  // axial m * r_sq_sum_half, transverse `transverse` about the centre.
+  return m * r_sq_sum_half * axis * axis.transpose() + transverse * (Eigen::Matrix3d::Identity() - axis * axis.transpose());
+}
+
+Vector6d degrees_option(const Json& options, const char* key, const Vector6d& fallback) {
+  if (!options.contains(key)) return fallback;
+  const Json& v = options[key];
+  if (!v.is_array() || v.size() != 6) throw Error(kName, std::string("options.") + key + " = " + show(v) + ": must be an array of 6 angles [deg]");
+  Vector6d out;
+  for (int i = 0; i < 6; ++i) {
+    if (!v[static_cast<std::size_t>(i)].is_number() || !std::isfinite(v[static_cast<std::size_t>(i)].get<double>())) {
+      throw Error(kName, std::string("options.") + key + "[" + std::to_string(i) + "] = " + show(v[static_cast<std::size_t>(i)]) + ": must be a finite number [deg]");
+    }
+    out(i) = v[static_cast<std::size_t>(i)].get<double>() * kDeg;
+  }
+  return out;
+}
+
+double positive_option(const Json& options, const char* key, double fallback, bool allow_zero) {
+  if (!options.contains(key)) return fallback;
+  const Json& v = options[key];
+  if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() < 0.0 || (!allow_zero && v.get<double>() == 0.0)) {
+    throw Error(kName, std::string("options.") + key + " = " + show(v) + (allow_zero ? ": must be a finite number >= 0" : ": must be a finite number > 0"));
+  }
+  return v.get<double>();
+}
+
+// Rotation and translation of one DH row.
+inline void dh_transform(double theta, double d, double a, double ca, double sa, Eigen::Matrix3d& rot, Eigen::Vector3d& t) {
+  const double ct = std::cos(theta), st = std::sin(theta);
+  rot << ct, -st * ca, st * sa, st, ct * ca, -ct * sa, 0.0, sa, ca;
+  t << a * ct, a * st, d;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- data files ----
+
+double ActuatorTable::max_velocity(int size, int code) const {
+  return motor_speed[static_cast<std::size_t>(size - 1)] / gear_ratios[static_cast<std::size_t>(code - 1)];
+}
+
+double ActuatorTable::max_torque(int size, int code) const {
+  const std::size_t s = static_cast<std::size_t>(size - 1);
+  return std::min(motor_torque[s] * gear_ratios[static_cast<std::size_t>(code - 1)] * gear_efficiency, gear_torque[s]);
+}
+
+std::string resolve_haptic6r_file(const std::string& option_name, const std::string& value) {
+  const fs::path p(value);
+  if (value.empty()) throw Error(kName, "options." + option_name + " = \"\": must name a file");
+  if (p.is_absolute()) {
+    if (!fs::is_regular_file(p)) throw Error(kName, "options." + option_name + " = " + show(Json(value)) + ": no such file");
+    return p.string();
+  }
+  std::vector<fs::path> candidates{fs::current_path() / p};
+#ifdef HAPSYN_SHARE_DIR
+  candidates.push_back(fs::path(HAPSYN_SHARE_DIR) / p);
+#endif
+#ifdef HAPSYN_INSTALL_SHARE_DIR
+  candidates.push_back(fs::path(HAPSYN_INSTALL_SHARE_DIR) / p);
+#endif
+  std::string tried;
+  for (const fs::path& c : candidates) {
+    if (fs::is_regular_file(c)) return fs::absolute(c).lexically_normal().string();
+    tried += (tried.empty() ? "" : ", ") + c.string();
+  }
+  throw Error(kName, "options." + option_name + " = " + show(Json(value)) + ": no such file (tried " + tried + ")");
+}
+
+Haptic6RDh read_haptic6r_dh(const std::string& path) {
+  const Json doc = read_json_file(path);
+  Haptic6RDh dh;
+  dh.file = path;
+  if (!doc.is_object() || doc.value("format", "") != "hapsyn-haptic6r-dh") {
+    throw Error(kName, path + ": format = " + (doc.is_object() && doc.contains("format") ? show(doc["format"]) : "(missing)") +
+                           ": must be \"hapsyn-haptic6r-dh\"");
+  }
+  if (!doc.contains("dh") || !doc["dh"].is_array() || doc["dh"].size() != 6) {
+    throw Error(kName, path + ": dh = " + (doc.contains("dh") ? show(doc["dh"]) : "(missing)") + ": must be an array of 6 rows");
+  }
+  for (std::size_t i = 0; i < 6; ++i) {
+    const Json& row = doc["dh"][i];
+    const std::string at = "dh[" + std::to_string(i) + "]";
+    for (const char* key : {"theta_offset", "d", "a", "alpha"}) {
+      if (!row.is_object() || !row.contains(key)) throw Error(kName, path + ": " + at + "." + key + ": missing");
+    }
+    Haptic6RDhRow& r = dh.rows[i];
+    r.theta_offset = number_at(doc, path, at + ".theta_offset", row["theta_offset"], -360.0, 360.0) * kDeg;
+    r.alpha = number_at(doc, path, at + ".alpha", row["alpha"], -360.0, 360.0) * kDeg;
+    r.d = parse_length(row["d"], path, at + ".d");
+    r.a = parse_length(row["a"], path, at + ".a");
+  }
+  // The structure the closed-form IK is derived for (DESIGN.md section 4).
+  static const int a_link[6] = {0, 1, -1, 3, -1, -1};
+  static const int d_link[6] = {-1, -1, 2, -1, -1, 4};
+  static const double d_sign[6] = {1, 1, -1, 1, 1, 1};
+  static const double alpha_deg[6] = {0, 0, 90, 0, 90, 0};
+  for (std::size_t i = 0; i < 6; ++i) {
+    const Haptic6RDhRow& r = dh.rows[i];
+    if (!same_ref(r.a, a_link[i], 1.0) || !same_ref(r.d, d_link[i], d_sign[i]) ||
+        std::abs(r.alpha - alpha_deg[i] * kDeg) > 1e-12) {
+      throw Error(kName, path + ": dh[" + std::to_string(i) + "] = " + show(doc["dh"][i]) +
+                             ": the closed-form IK serves a = (l1, l2, 0, l4, 0, 0), d = (0, 0, -l3, 0, 0, l5), "
+                             "alpha = (0, 0, 90, 0, 90, 0) deg; only theta_offset may differ");
+    }
+  }
+  return dh;
+}
+
+ActuatorTable read_actuator_table(const std::string& path) {
+  const Json doc = read_json_file(path);
+  ActuatorTable t;
+  t.file = path;
+  if (!doc.is_object() || doc.value("format", "") != "hapsyn-actuator-table") {
+    throw Error(kName, path + ": format = " + (doc.is_object() && doc.contains("format") ? show(doc["format"]) : "(missing)") +
+                           ": must be \"hapsyn-actuator-table\"");
+  }
+  if (!doc.contains("gear_ratios") || !doc["gear_ratios"].is_array() || doc["gear_ratios"].size() != 6) {
+    throw Error(kName, path + ": gear_ratios = " + (doc.contains("gear_ratios") ? show(doc["gear_ratios"]) : "(missing)") +
+                           ": must be an array of 6 ratios (gear codes 1..6)");
+  }
+  for (std::size_t i = 0; i < 6; ++i) {
+    t.gear_ratios[i] = number_at(doc, path, "gear_ratios[" + std::to_string(i) + "]", doc["gear_ratios"][i], 0.0, 1e6, true);
+  }
+  if (!doc.contains("gear_efficiency")) throw Error(kName, path + ": gear_efficiency: missing");
+  t.gear_efficiency = number_at(doc, path, "gear_efficiency", doc["gear_efficiency"], 0.0, 1.0, true);
+  if (!doc.contains("sizes") || !doc["sizes"].is_array() || doc["sizes"].size() != 3) {
+    throw Error(kName, path + ": sizes = " + (doc.contains("sizes") ? show(doc["sizes"]) : "(missing)") +
+                           ": must be an array of 3 entries (sizes 1..3)");
+  }
+  for (std::size_t i = 0; i < 3; ++i) {
+    const Json& s = doc["sizes"][i];
+    const std::string at = "sizes[" + std::to_string(i) + "]";
+    for (const char* key : {"size", "mass", "motor_speed_rpm", "motor_peak_torque", "gear_peak_torque"}) {
+      if (!s.is_object() || !s.contains(key)) throw Error(kName, path + ": " + at + "." + key + ": missing");
+    }
+    if (!s["size"].is_number_integer() || s["size"].get<int>() != static_cast<int>(i) + 1) {
+      throw Error(kName, path + ": " + at + ".size = " + show(s["size"]) + ": must be " + std::to_string(i + 1) + " (sizes in order)");
+    }
+    t.mass[i] = number_at(doc, path, at + ".mass", s["mass"], 0.0, 1e3);
+    t.motor_speed[i] = number_at(doc, path, at + ".motor_speed_rpm", s["motor_speed_rpm"], 0.0, 1e6, true) * 2.0 * kPi / 60.0;
+    t.motor_torque[i] = number_at(doc, path, at + ".motor_peak_torque", s["motor_peak_torque"], 0.0, 1e6, true);
+    t.gear_torque[i] = number_at(doc, path, at + ".gear_peak_torque", s["gear_peak_torque"], 0.0, 1e6, true);
+  }
+  return t;
+}
+
+Haptic6ROptions Haptic6ROptions::from_json(const Json& options_in) {
+  const Json options = options_in.is_null() ? Json::object() : options_in;
+  if (!options.is_object()) throw Error(kName, "options = " + show(options) + ": must be an object");
+  static const std::vector<std::string> kKeys = {
+      "dh_file", "actuator_file", "selection", "home", "joint_lower", "joint_upper", "singularity_tolerance",
+      "link_density", "tube_outer_diameter", "tube_wall", "ee_mass", "ee_diameter", "ee_length",
+      "motor_mass_factor", "gravity"};
+  for (auto it = options.begin(); it != options.end(); ++it) {
+    if (std::find(kKeys.begin(), kKeys.end(), it.key()) == kKeys.end()) {
+      throw Error(kName, "options." + it.key() + ": unknown option");
+    }
+  }
+  Haptic6ROptions o;
+  const auto string_option = [&](const char* key, const std::string& fallback) {
+    if (!options.contains(key)) return fallback;
+    if (!options[key].is_string()) throw Error(kName, std::string("options.") + key + " = " + show(options[key]) + ": must be a string");
+    return options[key].get<std::string>();
+  };
+  o.dh = read_haptic6r_dh(resolve_haptic6r_file("dh_file", string_option("dh_file", "haptic6r/fennel2022_dh.json")));
+  o.actuators = read_actuator_table(
+      resolve_haptic6r_file("actuator_file", string_option("actuator_file", "haptic6r/actuators_assumed.json")));
+  o.selection = string_option("selection", "closest_to_home");
+  if (o.selection != "closest_to_home" && o.selection != "elbow_left" && o.selection != "elbow_right") {
+    throw Error(kName, "options.selection = " + show(Json(o.selection)) +
+                           ": must be \"closest_to_home\", \"elbow_left\" or \"elbow_right\"");
+  }
+  Vector6d home_deg, lower_deg, upper_deg;
+  home_deg << 0, 90, 0, 90, 90, 0;
+  lower_deg << -180, -180, -180, 0, -180, -180;
+  upper_deg << 180, 180, 180, 180, 180, 180;
+  o.home = degrees_option(options, "home", home_deg * kDeg);
+  o.joint_lower = degrees_option(options, "joint_lower", lower_deg * kDeg);
+  o.joint_upper = degrees_option(options, "joint_upper", upper_deg * kDeg);
+  for (int i = 0; i < 6; ++i) {
+    if (!(o.joint_upper(i) >= o.joint_lower(i)) || o.joint_upper(i) - o.joint_lower(i) > 2.0 * kPi + 1e-12) {
+      throw Error(kName, "options.joint_upper[" + std::to_string(i) + "] = " + std::to_string(o.joint_upper(i) / kDeg) +
+                             ": must be >= joint_lower[" + std::to_string(i) + "] (" + std::to_string(o.joint_lower(i) / kDeg) +
+                             ") and span at most 360 deg");
+    }
+  }
+  o.singularity_tolerance = positive_option(options, "singularity_tolerance", 1e-4, true);
+  if (o.singularity_tolerance >= 1.0) throw Error(kName, "options.singularity_tolerance = " + show(options["singularity_tolerance"]) + ": must be < 1");
+  o.link_density = positive_option(options, "link_density", 4.0, true);
+  o.tube_outer_diameter = positive_option(options, "tube_outer_diameter", 0.1, true);
+  o.tube_wall = positive_option(options, "tube_wall", 0.002, true);
+  if (2.0 * o.tube_wall > o.tube_outer_diameter) {
+    throw Error(kName, "options.tube_wall = " + std::to_string(o.tube_wall) + ": must be <= tube_outer_diameter / 2 (" +
+                           std::to_string(o.tube_outer_diameter / 2) + ")");
+  }
+  o.ee_mass = positive_option(options, "ee_mass", 0.5, true);
+  o.ee_diameter = positive_option(options, "ee_diameter", 0.1, true);
+  o.ee_length = positive_option(options, "ee_length", 0.05, true);
+  o.motor_mass_factor = positive_option(options, "motor_mass_factor", 1.2, true);
+  o.gravity = positive_option(options, "gravity", 9.81, true);
+  return o;
+}
+
+// ---------------------------------------------------------------- model ----
+
+void Haptic6RModel::rebuild(const double* design, const Haptic6ROptions& options) {
+  options_ = &options;
+  selection_ = options.selection == "elbow_left" ? 1 : options.selection == "elbow_right" ? 2 : 0;
+  for (int i = 0; i < 5; ++i) {
+    const double l = design[i];
+    if (!std::isfinite(l) || l <= 0.0) {
+      std::ostringstream m;
+      m << "design l[" << i << "] = " << l << ": must be a finite length > 0 [m]";
+      throw Error(kName, m.str());
+    }
+    l_[static_cast<std::size_t>(i)] = l;
+  }
+  std::array<int, 6> size{}, code{};
+  for (int i = 0; i < 6; ++i) {
+    const double s = design[5 + i], r = design[11 + i];
+    if (!(s >= 0.5 && s < 3.5) || !(r >= 0.5 && r < 6.5)) {
+      std::ostringstream m;
+      m << "design s[" << i << "] = " << s << ", r[" << i << "] = " << r << ": sizes must be in {1, 2, 3}, gear codes in {1..6}";
+      throw Error(kName, m.str());
+    }
+    size[static_cast<std::size_t>(i)] = static_cast<int>(std::lround(s));
+    code[static_cast<std::size_t>(i)] = static_cast<int>(std::lround(r));
+    max_velocity_(i) = options.actuators.max_velocity(size[static_cast<std::size_t>(i)], code[static_cast<std::size_t>(i)]);
+    max_torque_(i) = options.actuators.max_torque(size[static_cast<std::size_t>(i)], code[static_cast<std::size_t>(i)]);
+  }
+  for (std::size_t i = 0; i < 6; ++i) {
+    const Haptic6RDhRow& row = options.dh.rows[i];
+    d_[i] = row.d.eval(l_.data());
+    a_[i] = row.a.eval(l_.data());
+    offset_[i] = row.theta_offset;
+    ca_[i] = std::cos(row.alpha);
+    sa_[i] = std::sin(row.alpha);
+    // Exact zeros for the right angles, so that FK and IK agree to the last bit.
+    if (std::abs(ca_[i]) < 1e-15) ca_[i] = 0.0;
+    if (std::abs(sa_[i]) < 1e-15) sa_[i] = 0.0;
+  }
+  // Mass model, each body in its own DH frame.
+  const double ro = 0.5 * options.tube_outer_diameter, ri = ro - options.tube_wall;
+  const double tube_r2 = ro * ro + ri * ri;
+  for (std::size_t i = 0; i < 6; ++i) {
+    Haptic6RBody& b = bodies_[i];
+    b = Haptic6RBody{};
+    // The previous origin o_{i-1} in frame i is -(a, d sin(alpha), d cos(alpha)).
+    const Eigen::Vector3d prev(-a_[i], -d_[i] * sa_[i], -d_[i] * ca_[i]);
+    const double length = prev.norm();
+    if (length > 0.0 && options.link_density > 0.0) {
+      const double m = options.link_density * length;
+      const Eigen::Vector3d axis = prev / length;
+      add_part(b, m, 0.5 * prev, cylinder_inertia(m, axis, 0.5 * tube_r2, m * (3.0 * tube_r2 + length * length) / 12.0));
+    }
+    if (i < 5) {  // motor i+2 (1-based) sits at this frame's origin, on joint i+2's axis
+      const double m = options.motor_mass_factor * options.actuators.mass[static_cast<std::size_t>(size[i + 1] - 1)];
+      add_part(b, m, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Zero());
+    } else {
+      const double m = options.ee_mass, r = 0.5 * options.ee_diameter, h = options.ee_length;
+      add_part(b, m, Eigen::Vector3d::Zero(),
+               cylinder_inertia(m, Eigen::Vector3d::UnitZ(), 0.5 * r * r, m * (3.0 * r * r + h * h) / 12.0));
+    }
+  }
+}
+
+Eigen::Vector4d Haptic6RModel::dh_row(int i) const {
+  const std::size_t k = static_cast<std::size_t>(i);
+  return Eigen::Vector4d(offset_[k], d_[k], a_[k], std::atan2(sa_[k], ca_[k]));
+}
+
+void Haptic6RModel::frames(const Vector6d& q, std::array<Eigen::Isometry3d, 7>& out) const {
+  out[0].setIdentity();
+  Eigen::Matrix3d rot;
+  Eigen::Vector3d t;
+  for (std::size_t i = 0; i < 6; ++i) {
+    dh_transform(q(static_cast<Eigen::Index>(i)) + offset_[i], d_[i], a_[i], ca_[i], sa_[i], rot, t);
+    out[i + 1].linear() = out[i].linear() * rot;
+    out[i + 1].translation() = out[i].translation() + out[i].linear() * t;
+    out[i + 1].makeAffine();
+  }
+}
+
+Eigen::Isometry3d Haptic6RModel::forward(const Vector6d& q) const {
+  std::array<Eigen::Isometry3d, 7> f;
+  frames(q, f);
+  return f[6];
+}
+
+namespace {
+Matrix6d jacobian_from(const std::array<Eigen::Isometry3d, 7>& f) {
+  Matrix6d j;
+  const Eigen::Vector3d p = f[6].translation();
+  for (int i = 0; i < 6; ++i) {
+    const Eigen::Vector3d z = f[static_cast<std::size_t>(i)].linear().col(2);
+    j.block<3, 1>(0, i) = z;
+    j.block<3, 1>(3, i) = z.cross(p - f[static_cast<std::size_t>(i)].translation());
+  }
+  return j;
+}
+}  // namespace
+
+Matrix6d Haptic6RModel::jacobian(const Vector6d& q) const {
+  std::array<Eigen::Isometry3d, 7> f;
+  frames(q, f);
+  return jacobian_from(f);
+}
+
+namespace {
+// Composite rigid bodies in the base frame: H_ij = z_i . (I_j^C z_j + (c_j^C - o_i) x M_j (z_j x (c_j^C - o_j)))
+// for i <= j, and the holding torque tau_i = z_i . ((c_i^C - o_i) x M_i g e_z).
+void dynamics_from(const std::array<Eigen::Isometry3d, 7>& f, const std::array<Haptic6RBody, 6>& bodies, double g,
+                   Matrix6d* inertia, Vector6d* gravity) {
+  double mass = 0.0;
+  Eigen::Vector3d com = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d rot_inertia = Eigen::Matrix3d::Zero();
+  for (int j = 5; j >= 0; --j) {
+    const std::size_t k = static_cast<std::size_t>(j);
+    const Haptic6RBody& b = bodies[k];
+    const Eigen::Matrix3d& r = f[k + 1].linear();
+    if (b.mass > 0.0) {
+      const Eigen::Vector3d c = f[k + 1] * b.com;
+      const double total = mass + b.mass;
+      const Eigen::Vector3d new_com = (mass * com + b.mass * c) / total;
+      rot_inertia = rot_inertia + mass * parallel_axis(com - new_com) + r * b.inertia * r.transpose() +
+                    b.mass * parallel_axis(c - new_com);
+      com = new_com;
+      mass = total;
+    }
+    const Eigen::Vector3d zj = f[k].linear().col(2);
+    const Eigen::Vector3d oj = f[k].translation();
+    if (inertia) {
+      const Eigen::Vector3d force = mass * zj.cross(com - oj);
+      const Eigen::Vector3d moment = rot_inertia * zj;
+      for (int i = 0; i <= j; ++i) {
+        const std::size_t m = static_cast<std::size_t>(i);
+        const Eigen::Vector3d zi = f[m].linear().col(2);
+        const double h = zi.dot(moment + (com - f[m].translation()).cross(force));
+        (*inertia)(i, j) = h;
+        (*inertia)(j, i) = h;
+      }
+    }
+    if (gravity) (*gravity)(j) = zj.dot((com - oj).cross(Eigen::Vector3d(0.0, 0.0, mass * g)));
+  }
+}
+}  // namespace
+
+void Haptic6RModel::dynamics(const Vector6d& q, Matrix6d* inertia, Vector6d* gravity) const {
+  std::array<Eigen::Isometry3d, 7> f;
+  frames(q, f);
+  dynamics_from(f, bodies_, options_->gravity, inertia, gravity);
+}
+
+void Haptic6RModel::quantities(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const {
+  std::array<Eigen::Isometry3d, 7> f;
+  frames(q, f);
+  if (jacobian) *jacobian = jacobian_from(f);
+  if (inertia || gravity) dynamics_from(f, bodies_, options_->gravity, inertia, gravity);
+}
+
+int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions) const {
+  const double L1 = a_[0], L2 = a_[1], L3 = -d_[2], L4 = a_[3], L5 = d_[5];
+  const Eigen::Matrix3d& rot = target.linear();
+  const Eigen::Vector3d approach = rot.col(2);
+  const Eigen::Vector3d w = target.translation() - L5 * approach;
+  // Axis of joints 4 and 5: horizontal and perpendicular to the roll axis.
+  Eigen::Vector3d hz(-approach.y(), approach.x(), 0.0);
+  double n = hz.norm();
+  if (n < 1e-12) {
+    // Wrist axis vertical: h is free (a singular family); take the one normal to x_E so that
+    // the solution stays finite and deterministic.
+    hz = Eigen::Vector3d(-rot(1, 0), rot(0, 0), 0.0);
+    n = hz.norm();
+    if (n < 1e-12) return 0;  // not a rotation
+  }
+  hz /= n;
+  double s4 = (w.z() + L3) / L4;
+  if (std::abs(s4) > 1.0 + kBoundaryTolerance) return 0;
+  s4 = std::clamp(s4, -1.0, 1.0);
+  const double c4_abs = std::sqrt(std::max(0.0, 1.0 - s4 * s4));
+  int count = 0;
+  for (int hs = 0; hs < 2; ++hs) {
+    const Eigen::Vector3d h = hs == 0 ? hz : Eigen::Vector3d(-hz);
+    const Eigen::Vector3d x3(-h.y(), h.x(), 0.0);  // e_z x h
+    const double yaw = std::atan2(x3.y(), x3.x());
+    for (int b4 = 0; b4 < 2; ++b4) {
+      const double c4 = b4 == 0 ? c4_abs : -c4_abs;
+      const double theta4 = std::atan2(s4, c4);
+      const double ox = w.x() - L4 * c4 * x3.x(), oy = w.y() - L4 * c4 * x3.y();
+      const double r2 = ox * ox + oy * oy;
+      double c2 = (r2 - L1 * L1 - L2 * L2) / (2.0 * L1 * L2);
+      if (std::abs(c2) > 1.0 + kBoundaryTolerance) continue;
+      c2 = std::clamp(c2, -1.0, 1.0);
+      const double s2_abs = std::sqrt(std::max(0.0, 1.0 - c2 * c2));
+      // Rotation of frame 4 (depends on yaw and theta4 only).
+      Eigen::Matrix3d r3, r4;
+      Eigen::Vector3d t;
+      dh_transform(yaw, 0.0, 0.0, ca_[2], sa_[2], r3, t);
+      dh_transform(theta4, 0.0, 0.0, ca_[3], sa_[3], r4, t);
+      const Eigen::Matrix3d r04 = r3 * r4;
+      const Eigen::Vector3d a4 = r04.transpose() * approach;
+      // z_5 in frame 4 is Rz(theta5) (0, -sin alpha5, cos alpha5) = (sin theta5, -cos theta5, 0).
+      const double theta5 = std::atan2(a4.x(), -a4.y());
+      Eigen::Matrix3d r5;
+      dh_transform(theta5, 0.0, 0.0, ca_[4], sa_[4], r5, t);
+      const Eigen::Matrix3d r56 = (r04 * r5).transpose() * rot;
+      const double theta6 = std::atan2(r56(1, 0), r56(0, 0));
+      for (int b2 = 0; b2 < 2; ++b2) {
+        const double s2 = b2 == 0 ? s2_abs : -s2_abs;
+        const double theta2 = std::atan2(s2, c2);
+        const double theta1 = std::atan2(oy, ox) - std::atan2(L2 * s2, L1 + L2 * c2);
+        const double theta3 = yaw - theta1 - theta2;
+        Vector6d& q = solutions[static_cast<std::size_t>(count++)];
+        q << theta1, theta2, theta3, theta4, theta5, theta6;
+        for (int i = 0; i < 6; ++i) q(i) = wrap(q(i) - offset_[static_cast<std::size_t>(i)]);
+      }
+    }
+  }
+  return count;
+}
+
+int Haptic6RModel::select(const std::array<Vector6d, 8>& solutions, int count) const {
+  const Haptic6ROptions& o = *options_;
+  int best = -1;
+  double best_distance = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < count; ++k) {
+    const Vector6d& q = solutions[static_cast<std::size_t>(k)];
+    bool inside = true;
+    for (int i = 0; i < 6 && inside; ++i) {
+      // The representative of q_i in [lower, lower + 2 pi) must not exceed upper (with tolerance).
+      double v = q(i);
+      while (v < o.joint_lower(i) - kHaptic6RAngleTolerance) v += 2.0 * kPi;
+      while (v > o.joint_lower(i) + 2.0 * kPi - kHaptic6RAngleTolerance) v -= 2.0 * kPi;
+      if (v < o.joint_lower(i) - kHaptic6RAngleTolerance) v += 2.0 * kPi;
+      inside = v <= o.joint_upper(i) + kHaptic6RAngleTolerance;
+    }
+    if (!inside) continue;
+    if (selection_ == 1 && q(1) < -kHaptic6RAngleTolerance) continue;
+    if (selection_ == 2 && q(1) > kHaptic6RAngleTolerance) continue;
+    double distance = 0.0;
+    for (int i = 0; i < 6; ++i) {
+      const double e = wrap(q(i) - o.home(i));
+      distance += e * e;
+    }
+    if (distance < best_distance) {
+      best_distance = distance;
+      best = k;
+    }
+  }
+  return best;
+}
+
+namespace {
+// Brings q_i to the representative inside [lower, upper] (select() checked it exists).
+void into_limits(Vector6d& q, const Haptic6ROptions& o) {
+  for (int i = 0; i < 6; ++i) {
+    double v = q(i);
+    while (v < o.joint_lower(i) - kHaptic6RAngleTolerance) v += 2.0 * kPi;
+    while (v > o.joint_upper(i) + kHaptic6RAngleTolerance) v -= 2.0 * kPi;
+    q(i) = std::clamp(v, o.joint_lower(i), o.joint_upper(i));
+  }
+}
+}  // namespace
+
+void Haptic6RModel::solve(const double* pose, Needs needs, MechanismScratch&, SampleQuantities& out) const {
+  out.q.resize(6);
+  Eigen::Quaterniond quat(pose[3], pose[4], pose[5], pose[6]);
+  const double qn = quat.norm();
+  if (!(qn > 1e-9) || !std::isfinite(qn) || !std::isfinite(pose[0] + pose[1] + pose[2])) {
+    out.status = SampleStatus::kUnreachable;
+    out.q.setZero();
+    return;
+  }
+  quat.coeffs() /= qn;
+  Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
+  target.linear() = quat.toRotationMatrix();
+  target.translation() = Eigen::Vector3d(pose[0], pose[1], pose[2]);
+  std::array<Vector6d, 8> solutions;
+  const int count = inverse_kinematics(target, solutions);
+  if (count == 0) {
+    out.status = SampleStatus::kUnreachable;
+    out.q.setZero();
+    return;
+  }
+  const int chosen = select(solutions, count);
+  if (chosen < 0) {
+    out.status = SampleStatus::kInvalid;
+    out.q = solutions[0];
+    return;
+  }
+  Vector6d q = solutions[static_cast<std::size_t>(chosen)];
+  into_limits(q, *options_);
+  out.q = q;
+  const double tol = options_->singularity_tolerance;
+  const Eigen::Vector3d& approach = target.linear().col(2);
+  const double wrist = std::hypot(approach.x(), approach.y());
+  const double sin2 = std::sin(q(1) + offset_[1]);
+  const double cos4 = std::cos(q(3) + offset_[3]);  // l4 vertical when cos(theta4) = 0
+  if (std::abs(sin2) < tol || std::abs(cos4) < tol || wrist < tol) {
+    out.status = SampleStatus::kSingular;
+    return;
+  }
+  out.status = SampleStatus::kReachable;
+  if (needs & (kNeedJacobian | kNeedInertia | kNeedGravity)) {
+    std::array<Eigen::Isometry3d, 7> f;
+    frames(q, f);
+    if (needs & kNeedJacobian) out.jacobian = jacobian_from(f);
+    if (needs & (kNeedInertia | kNeedGravity)) {
+      Matrix6d h;
+      Vector6d g;
+      dynamics_from(f, bodies_, options_->gravity, (needs & kNeedInertia) ? &h : nullptr,
+                    (needs & kNeedGravity) ? &g : nullptr);
+      if (needs & kNeedInertia) out.inertia = h;
+      if (needs & kNeedGravity) out.gravity = g;
+    }
+  }
+  if (needs & kNeedActuatorLimits) {
+    out.max_velocity = max_velocity_;
+    out.max_torque = max_torque_;
+  }
+}
+
+// ---------------------------------------------------------------- plugin ----
+
+namespace {
+struct Haptic6RScratch final : MechanismScratch {
+  Haptic6RModel model;
+};
+}  // namespace
+
+Haptic6R::Haptic6R(const Json& options) : options_(Haptic6ROptions::from_json(options)) {}
+
+std::unique_ptr<const MechanismModel> Haptic6R::build(const double* design) const {
+  auto model = std::make_unique<Haptic6RModel>();
+  model->rebuild(design, options_);
+  return model;
+}
+
+const MechanismModel* Haptic6R::build_in(const double* design, MechanismScratch& scratch) const {
+  auto* s = dynamic_cast<Haptic6RScratch*>(&scratch);
+  if (!s) return nullptr;
+  s->model.rebuild(design, options_);
+  return &s->model;
+}
+
+std::unique_ptr<MechanismScratch> Haptic6R::make_scratch() const { return std::make_unique<Haptic6RScratch>(); }
+
+std::vector<VariableDecl> Haptic6R::variables() const {
+  VariableDecl l{"l", "link lengths l1..l5 (SCARA links, vertical drop, vertical-SCARA link, wrist to end effector)", "m", 5,
+                 false, {0.3, 0.3, 0.3, 0.3, 0.12}, {1.0, 1.0, 1.5, 1.0, 0.3}, {0.001}, {10.0}};
+  VariableDecl s{"s", "joint sizes (1 smallest .. 3 largest), s_i >= s_{i+1}", "", 6, true, {3, 3, 1, 1, 1, 1}, {3}, {1}, {3}};
+  VariableDecl r{"r", "gear codes (index into the actuator table's gear_ratios)", "", 6, true, {1}, {6}, {1}, {6}};
+  return {l, s, r};
+}
+
+std::vector<ConstraintDecl> Haptic6R::constraints() const {
+  std::vector<ConstraintDecl> c;
+  for (int i = 1; i <= 5; ++i) {
+    c.push_back({"s_monotone_" + std::to_string(i),
+                 "s" + std::to_string(i) + " >= s" + std::to_string(i + 1) + ": g = s" + std::to_string(i + 1) + " - s" +
+                     std::to_string(i) + " <= 0"});
+  }
+  return c;
+}
+
+void Haptic6R::evaluate_constraints(const double* design, const SampleSet&, double* g) const {
+  for (int i = 0; i < 5; ++i) g[i] = design[5 + i + 1] - design[5 + i];
+}
+
+void Haptic6R::check_scene(const SampleSet& scene) const {
+  if (scene.dimension() != 7) {
+    throw Error(kName, "scene: samples have " + std::to_string(scene.dimension()) +
+                           " coordinates; haptic6r serves end-effector poses (x, y, z, qw, qx, qy, qz) [m]");
+  }
+}
+
+Needs Haptic6R::provides() const { return kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits; }
+
+}  // namespace hapsyn::plugins

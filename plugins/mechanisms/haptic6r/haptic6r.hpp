@@ -1,0 +1,198 @@
+#pragma once
+/// \file
+/// The SCARA-like serial 6R haptic manipulator of Fennel, Zea, Hanebeck (IEEE ToH 2022) as a
+/// hapsyn mechanism, with the reconstructed DH table of DESIGN.md section 4 read from data.
+///
+/// Conventions:
+/// - Standard DH, T_i = Rz(q_i + theta_offset_i) Tz(d_i) Tx(a_i) Rx(alpha_i); frame 0 = base B
+///   (z up, joint 1 axis), frame 6 = end effector E (z_E = roll axis of joint 6). Structure:
+///   a = (l1, l2, 0, l4, 0, 0), d = (0, 0, -l3, 0, 0, l5), alpha = (0, 0, 90, 0, 90, 0) deg.
+/// - Design vector: l[0..4] = l1..l5 [m], s[0..5] joint sizes (1..3), r[0..5] gear codes (1..6).
+/// - Scene sample: the end-effector target T_E^B as (x, y, z, qw, qx, qy, qz) [m] (human_arm).
+/// - Twists, Jacobian rows and ellipsoid rows are ordered (omega, v); the Jacobian is the
+///   geometric Jacobian of the point E in B [rad/s; m/s per rad/s].
+/// - Inverse kinematics (closed form): the wrist point w = p - l5 z_E lies on axes 4-5's plane;
+///   h = +-(e_z x z_E)/|e_z x z_E| is the axis of joints 4 and 5, theta4 from
+///   sin(theta4) = (w_z + l3) / l4 (two branches), joint 3's axis from w - l4 cos(theta4) (e_z x h),
+///   q1, q2 by the planar 2R law of cosines (two branches), q3 from the yaw of e_z x h, q5, q6
+///   from the remaining rotation: up to 8 solutions, every one returned by inverse_kinematics().
+/// - Selection (option "selection"): among the solutions inside the joint limits (tolerance
+///   kHaptic6RAngleTolerance), "closest_to_home" takes the smallest sum of squared wrapped angle
+///   differences to "home"; "elbow_left" / "elbow_right" first restrict to q2 >= 0 / q2 <= 0;
+///   ties go to the lower solution index (deterministic).
+/// - Classification: no solution -> kUnreachable; solutions but none in the limits (or branch)
+///   -> kInvalid; the chosen one with |sin q2| (SCARA stretched), |sin(q4 + theta_offset4 + 90
+///   deg)| = |cos theta4| (l4 vertical) or |e_z x z_E| (wrist axis vertical) below
+///   singularity_tolerance -> kSingular (q filled, finite); else kReachable.
+/// - Mass model (DESIGN.md section 4): motor i a point mass motor_mass_factor * m(s_i) at the
+///   origin of DH frame i-1 (on joint i's axis, carried by body i-1; motor 1 on the base has no
+///   effect); links l1..l5 tubes of linear density link_density between consecutive DH origins
+///   (l5 from the wrist point to E), outer diameter tube_outer_diameter, wall tube_wall; the end
+///   effector a solid cylinder (ee_mass, ee_diameter, ee_length) centred at E, axis z_E.
+///   Gravity -gravity e_z in B; gravity torque = the joint torque that holds the arm static.
+#include <hapsyn/json.hpp>
+#include <hapsyn/mechanism.hpp>
+
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hapsyn::plugins {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+/// Angle tolerance [rad] of joint-limit comparisons (a wrapped angle one ulp past a limit must
+/// not drop a pose; DESIGN.md section 6).
+constexpr double kHaptic6RAngleTolerance = 1e-9;
+
+/// A DH length: a constant [m] or +-one of the links l1..l5.
+struct LinkRef {
+  int link = -1;        ///< 0..4 for l1..l5, -1 for a constant
+  double factor = 1.0;  ///< +1 or -1
+  double value = 0.0;   ///< the constant [m] when link == -1
+  double eval(const double* l) const { return link < 0 ? value : factor * l[link]; }
+};
+
+/// One DH row as read from the data file.
+struct Haptic6RDhRow {
+  double theta_offset = 0.0;  ///< [rad]
+  double alpha = 0.0;         ///< [rad]
+  LinkRef d, a;
+};
+
+/// The DH table file (share/haptic6r/fennel2022_dh.json).
+struct Haptic6RDh {
+  std::string file;
+  std::array<Haptic6RDhRow, 6> rows;
+};
+
+/// The actuator table file (share/haptic6r/actuators_assumed.json).
+struct ActuatorTable {
+  std::string file;
+  std::array<double, 6> gear_ratios{};   ///< per gear code 1..6 [-]
+  double gear_efficiency = 1.0;          ///< [-]
+  std::array<double, 3> mass{};          ///< per size 1..3 [kg]
+  std::array<double, 3> motor_speed{};   ///< [rad/s]
+  std::array<double, 3> motor_torque{};  ///< motor peak torque [N m]
+  std::array<double, 3> gear_torque{};   ///< gear peak torque [N m]
+  /// qdot_max(s, r) [rad/s] for size 1..3 and code 1..6 (unchecked).
+  double max_velocity(int size, int code) const;
+  /// tau_max(s, r) [N m].
+  double max_torque(int size, int code) const;
+};
+
+/// Reads a DH table file. \throws Error("haptic6r", "<file>: <json path> = <value>: <rule>"),
+/// also when the structure is not the one the closed-form IK serves.
+Haptic6RDh read_haptic6r_dh(const std::string& path);
+/// Reads an actuator table file. \throws Error("haptic6r", "<file>: <json path> = <value>: <rule>").
+ActuatorTable read_actuator_table(const std::string& path);
+/// Resolves a data-file option: absolute, relative to the current directory, or to hapsyn's
+/// share directory (source tree, then install tree). \throws Error naming the option.
+std::string resolve_haptic6r_file(const std::string& option_name, const std::string& value);
+
+/// Options of the mechanism (see schema.json); defaults repeat schema.json's.
+struct Haptic6ROptions {
+  Haptic6RDh dh;
+  ActuatorTable actuators;
+  std::string selection = "closest_to_home";  ///< "closest_to_home", "elbow_left", "elbow_right"
+  Vector6d home;                              ///< [rad]
+  Vector6d joint_lower, joint_upper;          ///< [rad]
+  double singularity_tolerance = 1e-4;        ///< [-]
+  double link_density = 4.0;                  ///< tube linear density [kg/m]
+  double tube_outer_diameter = 0.1;           ///< [m]
+  double tube_wall = 0.002;                   ///< [m]
+  double ee_mass = 0.5;                       ///< [kg]
+  double ee_diameter = 0.1;                   ///< [m]
+  double ee_length = 0.05;                    ///< [m]
+  double motor_mass_factor = 1.2;             ///< mounting structure allowance [-]
+  double gravity = 9.81;                      ///< [m/s^2]
+
+  /// Reads and checks options (missing keys keep the defaults; the data files are read).
+  /// \throws Error("haptic6r: options.<key> = <value>: <rule>").
+  static Haptic6ROptions from_json(const Json& options);
+};
+
+/// One rigid body of the mass model, in its DH frame i (i = 1..6).
+struct Haptic6RBody {
+  double mass = 0.0;                                      ///< [kg]
+  Eigen::Vector3d com = Eigen::Vector3d::Zero();          ///< centre of mass in frame i [m]
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();      ///< about the com, frame i axes [kg m^2]
+};
+
+/// The manipulator for one design. Immutable after rebuild(); solve() is const, thread-safe
+/// and allocation-free.
+class Haptic6RModel final : public MechanismModel {
+ public:
+  Haptic6RModel() = default;
+  /// (Re)builds for a design vector (l[5], s[6], r[6]) without allocating.
+  /// \throws Error for a non-finite or non-positive length, or a size / code out of range.
+  void rebuild(const double* design, const Haptic6ROptions& options);
+
+  void solve(const double* pose, Needs needs, MechanismScratch& scratch,
+             SampleQuantities& out) const override;
+
+  /// Every closed-form IK solution of the target (joint limits ignored), q [rad] wrapped into
+  /// [-pi, pi). \return the count (0..8); solutions[0..count).
+  int inverse_kinematics(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions) const;
+  /// Index into solutions of the one the selection rule picks, -1 when none is admissible.
+  int select(const std::array<Vector6d, 8>& solutions, int count) const;
+  /// Forward kinematics: frames[i] = T_0i (i = 0..6), frames[6] = T_E^B.
+  void frames(const Vector6d& q, std::array<Eigen::Isometry3d, 7>& out) const;
+  Eigen::Isometry3d forward(const Vector6d& q) const;
+  /// Geometric Jacobian of E in B, rows (omega, v).
+  Matrix6d jacobian(const Vector6d& q) const;
+  /// Joint-space inertia H [kg m^2] (composite rigid bodies) and gravity torque [N m]; either
+  /// pointer may be null.
+  void dynamics(const Vector6d& q, Matrix6d* inertia, Vector6d* gravity) const;
+
+  /// Jacobian, inertia and gravity at q from one forward pass (what solve() computes for a
+  /// reachable sample); any pointer may be null.
+  void quantities(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const;
+
+  const std::array<Haptic6RBody, 6>& bodies() const { return bodies_; }
+  const Vector6d& max_velocity() const { return max_velocity_; }  ///< [rad/s]
+  const Vector6d& max_torque() const { return max_torque_; }      ///< [N m]
+  const std::array<double, 5>& links() const { return l_; }       ///< l1..l5 [m]
+  /// DH row i evaluated for this design: (theta_offset [rad], d [m], a [m], alpha [rad]).
+  Eigen::Vector4d dh_row(int i) const;
+  const Haptic6ROptions& options() const { return *options_; }
+
+ private:
+  const Haptic6ROptions* options_ = nullptr;
+  int selection_ = 0;  // 0 closest_to_home, 1 elbow_left, 2 elbow_right
+  std::array<double, 5> l_{};
+  std::array<double, 6> d_{}, a_{}, offset_{}, ca_{}, sa_{};
+  std::array<Haptic6RBody, 6> bodies_;
+  Vector6d max_velocity_ = Vector6d::Zero(), max_torque_ = Vector6d::Zero();
+};
+
+/// The "haptic6r" mechanism plugin.
+class Haptic6R final : public Mechanism {
+ public:
+  explicit Haptic6R(const Json& options);
+
+  std::unique_ptr<const MechanismModel> build(const double* design) const override;
+  const MechanismModel* build_in(const double* design, MechanismScratch& scratch) const override;
+  std::unique_ptr<MechanismScratch> make_scratch() const override;
+  /// l (5, m), s (6, integer sizes 1..3), r (6, integer gear codes 1..6).
+  std::vector<VariableDecl> variables() const override;
+  /// "s_monotone_1".."s_monotone_5": g_i = s_{i+1} - s_i <= 0.
+  std::vector<ConstraintDecl> constraints() const override;
+  void evaluate_constraints(const double* design, const SampleSet& scene, double* g) const override;
+  /// Requires 7 pose coordinates (x, y, z, qw, qx, qy, qz).
+  void check_scene(const SampleSet& scene) const override;
+  /// kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits.
+  Needs provides() const override;
+
+  const Haptic6ROptions& options() const { return options_; }
+
+ private:
+  Haptic6ROptions options_;
+};
+
+}  // namespace hapsyn::plugins

@@ -1,0 +1,451 @@
+// Tests of the haptic6r mechanism: IK/FK round trips, Jacobian vs finite differences, inertia
+// and gravity vs KDL and vs an independent energy computation, extremes, selection, errors.
+#include "haptic6r.hpp"
+
+#include "test_support.hpp"
+
+#include <hapsyn/error.hpp>
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <random>
+
+#ifdef HAPSYN_HAVE_KDL
+#include <kdl/chain.hpp>
+#include <kdl/chaindynparam.hpp>
+#include <kdl/chainjnttojacsolver.hpp>
+#endif
+
+using namespace hapsyn;
+using namespace hapsyn::plugins;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::vector<double> paper_like_design() {
+  // l1..l5 [m], s, r: a plausible design inside the paper's bounds.
+  return {0.45, 0.45, 0.65, 0.55, 0.15, 3, 3, 2, 2, 1, 1, 2, 2, 3, 2, 3, 3};
+}
+
+std::vector<double> random_design(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double lo[5] = {0.3, 0.3, 0.3, 0.3, 0.12}, hi[5] = {1.0, 1.0, 1.5, 1.0, 0.3};
+  std::vector<double> d(17);
+  for (int i = 0; i < 5; ++i) d[static_cast<std::size_t>(i)] = lo[i] + (hi[i] - lo[i]) * u(rng);
+  int s = 3;
+  for (int i = 0; i < 6; ++i) {
+    if (i >= 2) s = std::max(1, s - static_cast<int>(u(rng) * 1.5));
+    d[static_cast<std::size_t>(5 + i)] = s;
+    d[static_cast<std::size_t>(11 + i)] = 1 + static_cast<int>(u(rng) * 6) % 6;
+  }
+  return d;
+}
+
+struct Fixture {
+  Haptic6ROptions options = Haptic6ROptions::from_json(Json::object());
+  Haptic6RModel model;
+  explicit Fixture(const std::vector<double>& design, const Json& json = Json::object()) {
+    options = Haptic6ROptions::from_json(json);
+    model.rebuild(design.data(), options);
+  }
+};
+
+double pose_error(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return (a.translation() - b.translation()).norm() + (a.linear() - b.linear()).norm();
+}
+
+std::array<double, 7> pose_row(const Eigen::Isometry3d& t) {
+  Eigen::Quaterniond q(t.linear());
+  if (q.w() < 0) q.coeffs() *= -1.0;
+  return {t.translation().x(), t.translation().y(), t.translation().z(), q.w(), q.x(), q.y(), q.z()};
+}
+
+Vector6d random_q(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-kPi, kPi), u4(0.05, kPi - 0.05);
+  Vector6d q;
+  q << u(rng), u(rng), u(rng), u4(rng), u(rng), u(rng);
+  return q;
+}
+
+double angle_distance(const Vector6d& a, const Vector6d& b) {
+  double m = 0.0;
+  for (int i = 0; i < 6; ++i) m = std::max(m, std::abs(std::remainder(a(i) - b(i), 2.0 * kPi)));
+  return m;
+}
+
+}  // namespace
+
+TEST(Haptic6R, InverseThenForwardReproducesEveryPoseForRandomConfigurations) {
+  std::mt19937 rng(42);
+  int checked = 0;
+  for (int d = 0; d < 20; ++d) {
+    Fixture f(random_design(rng));
+    for (int k = 0; k < 200; ++k) {
+      const Vector6d q = random_q(rng);
+      const Eigen::Isometry3d target = f.model.forward(q);
+      std::array<Vector6d, 8> solutions;
+      const int count = f.model.inverse_kinematics(target, solutions);
+      ASSERT_GE(count, 1);
+      bool found_original = false;
+      for (int s = 0; s < count; ++s) {
+        const Vector6d& qs = solutions[static_cast<std::size_t>(s)];
+        ASSERT_TRUE(qs.allFinite());
+        EXPECT_LT(pose_error(f.model.forward(qs), target), 1e-9) << "solution " << s << " of " << count;
+        found_original = found_original || angle_distance(qs, q) < 1e-7;
+      }
+      EXPECT_TRUE(found_original) << "the configuration that made the pose is among the solutions";
+      // The wrist point fixes joint 3's axis up to the two values of L4 cos(theta4) (each shared by
+      // the mirror pair (h, theta4), (-h, pi - theta4)), each with two SCARA elbows: 4 or 8.
+      EXPECT_TRUE(count == 4 || count == 8) << count;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 4000);
+}
+
+TEST(Haptic6R, SolveClassifiesAndReproducesThePose) {
+  std::mt19937 rng(7);
+  Fixture f(paper_like_design());
+  auto scratch = std::make_unique<MechanismScratch>();
+  int reachable = 0;
+  for (int k = 0; k < 500; ++k) {
+    const Vector6d q = random_q(rng);
+    const auto row = pose_row(f.model.forward(q));
+    SampleQuantities out;
+    f.model.solve(row.data(), kNeedJacobian, *scratch, out);
+    ASSERT_NE(out.status, SampleStatus::kUnreachable);
+    ASSERT_TRUE(out.q.allFinite());
+    if (out.status != SampleStatus::kReachable) continue;
+    ++reachable;
+    EXPECT_GE(out.q(3), -1e-12);
+    EXPECT_LE(out.q(3), kPi + 1e-12);
+    EXPECT_LT(pose_error(f.model.forward(Vector6d(out.q)), f.model.forward(q)), 1e-9);
+  }
+  EXPECT_GT(reachable, 450);
+}
+
+TEST(Haptic6R, JacobianMatchesFiniteDifferences) {
+  std::mt19937 rng(3);
+  for (int d = 0; d < 5; ++d) {
+    Fixture f(random_design(rng));
+    for (int k = 0; k < 20; ++k) {
+      const Vector6d q = random_q(rng);
+      const Matrix6d j = f.model.jacobian(q);
+      const double h = 1e-6;
+      for (int i = 0; i < 6; ++i) {
+        Vector6d qp = q, qm = q;
+        qp(i) += h;
+        qm(i) -= h;
+        const Eigen::Isometry3d tp = f.model.forward(qp), tm = f.model.forward(qm);
+        const Eigen::Vector3d v = (tp.translation() - tm.translation()) / (2 * h);
+        const Eigen::AngleAxisd w(tp.linear() * tm.linear().transpose());
+        const Eigen::Vector3d omega = w.axis() * w.angle() / (2 * h);
+        EXPECT_LT((j.block<3, 1>(0, i) - omega).norm(), 1e-6) << "omega column " << i;
+        EXPECT_LT((j.block<3, 1>(3, i) - v).norm(), 1e-6) << "v column " << i;
+      }
+    }
+  }
+}
+
+// Kinetic energy 1/2 qdot^T H qdot computed body by body from finite-difference velocities of
+// each body's centre and frame, and the potential energy's gradient: independent of the
+// composite-body algorithm.
+TEST(Haptic6R, InertiaAndGravityMatchIndependentEnergy) {
+  std::mt19937 rng(11);
+  Fixture f(paper_like_design());
+  for (int k = 0; k < 10; ++k) {
+    const Vector6d q = random_q(rng);
+    Matrix6d hm;
+    Vector6d g;
+    f.model.dynamics(q, &hm, &g);
+    const auto potential = [&](const Vector6d& x) {
+      std::array<Eigen::Isometry3d, 7> fr;
+      f.model.frames(x, fr);
+      double e = 0.0;
+      for (std::size_t b = 0; b < 6; ++b) e += f.model.bodies()[b].mass * 9.81 * (fr[b + 1] * f.model.bodies()[b].com).z();
+      return e;
+    };
+    for (int i = 0; i < 6; ++i) {
+      Vector6d qp = q, qm = q;
+      qp(i) += 1e-6;
+      qm(i) -= 1e-6;
+      EXPECT_NEAR(g(i), (potential(qp) - potential(qm)) / 2e-6, 1e-5) << "gravity " << i;
+    }
+    const Vector6d qdot = Vector6d::Random();
+    const double h = 1e-6;
+    std::array<Eigen::Isometry3d, 7> fp, fm;
+    f.model.frames(q + h * qdot, fp);
+    f.model.frames(q - h * qdot, fm);
+    double kinetic = 0.0;
+    for (std::size_t b = 0; b < 6; ++b) {
+      const Haptic6RBody& body = f.model.bodies()[b];
+      const Eigen::Vector3d v = (fp[b + 1] * body.com - fm[b + 1] * body.com) / (2 * h);
+      const Eigen::AngleAxisd w(fp[b + 1].linear() * fm[b + 1].linear().transpose());
+      const Eigen::Vector3d omega = w.axis() * w.angle() / (2 * h);
+      std::array<Eigen::Isometry3d, 7> f0;
+      f.model.frames(q, f0);
+      const Eigen::Matrix3d inertia = f0[b + 1].linear() * body.inertia * f0[b + 1].linear().transpose();
+      kinetic += 0.5 * body.mass * v.squaredNorm() + 0.5 * omega.dot(inertia * omega);
+    }
+    EXPECT_NEAR(0.5 * qdot.dot(hm * qdot), kinetic, 1e-6 * std::max(1.0, kinetic));
+    EXPECT_LT((hm - hm.transpose()).norm(), 1e-12);
+    EXPECT_GT(Eigen::SelfAdjointEigenSolver<Matrix6d>(hm).eigenvalues().minCoeff(), 0.0);
+  }
+}
+
+#ifdef HAPSYN_HAVE_KDL
+TEST(Haptic6R, JacobianInertiaAndGravityMatchKdl) {
+  std::mt19937 rng(5);
+  for (int d = 0; d < 5; ++d) {
+    Fixture f(d == 0 ? paper_like_design() : random_design(rng));
+    KDL::Chain chain;
+    for (int i = 0; i < 6; ++i) {
+      const Eigen::Vector4d row = f.model.dh_row(i);  // offset, d, a, alpha
+      const Haptic6RBody& b = f.model.bodies()[static_cast<std::size_t>(i)];
+      const KDL::RotationalInertia ic(b.inertia(0, 0), b.inertia(1, 1), b.inertia(2, 2), b.inertia(0, 1),
+                                      b.inertia(0, 2), b.inertia(1, 2));
+      chain.addSegment(KDL::Segment(KDL::Joint(KDL::Joint::RotZ), KDL::Frame::DH(row(2), row(3), row(1), 0.0),
+                                    KDL::RigidBodyInertia(b.mass, KDL::Vector(b.com.x(), b.com.y(), b.com.z()), ic)));
+    }
+    KDL::ChainDynParam dyn(chain, KDL::Vector(0, 0, -9.81));
+    KDL::ChainJntToJacSolver jac_solver(chain);
+    for (int k = 0; k < 20; ++k) {
+      const Vector6d q = random_q(rng);
+      KDL::JntArray kq(6);
+      for (int i = 0; i < 6; ++i) kq(static_cast<unsigned>(i)) = q(i) + f.model.dh_row(i)(0);
+      KDL::JntSpaceInertiaMatrix kh(6);
+      KDL::JntArray kg(6);
+      KDL::Jacobian kj(6);
+      ASSERT_EQ(dyn.JntToMass(kq, kh), 0);
+      ASSERT_EQ(dyn.JntToGravity(kq, kg), 0);
+      ASSERT_EQ(jac_solver.JntToJac(kq, kj), 0);
+      Matrix6d hm;
+      Vector6d g;
+      f.model.dynamics(q, &hm, &g);
+      const Matrix6d j = f.model.jacobian(q);
+      for (int r = 0; r < 6; ++r) {
+        EXPECT_NEAR(g(r), kg(static_cast<unsigned>(r)), 1e-9 * std::max(1.0, std::abs(g(r)))) << "gravity " << r;
+        for (int c = 0; c < 6; ++c) {
+          EXPECT_NEAR(hm(r, c), kh(static_cast<unsigned>(r), static_cast<unsigned>(c)), 1e-9) << "H " << r << "," << c;
+          // KDL's Jacobian rows are (v, omega); ours (omega, v).
+          EXPECT_NEAR(j(r, c), kj(static_cast<unsigned>((r + 3) % 6), static_cast<unsigned>(c)), 1e-12) << "J " << r << "," << c;
+        }
+      }
+    }
+  }
+}
+#endif
+
+TEST(Haptic6R, ExtremesAreFiniteOrClassifiedNeverNaN) {
+  auto scratch = std::make_unique<MechanismScratch>();
+  const Needs all = kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits;
+  // Links at their lower and upper bounds.
+  for (const std::vector<double>& design :
+       {std::vector<double>{0.3, 0.3, 0.3, 0.3, 0.12, 3, 3, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1},
+        std::vector<double>{1.0, 1.0, 1.5, 1.0, 0.3, 3, 3, 3, 3, 3, 3, 6, 6, 6, 6, 6, 6}, paper_like_design()}) {
+    Fixture f(design);
+    std::vector<Vector6d> configurations;
+    Vector6d q;
+    q << 0.3, 1.0, -0.5, 0.0, 1.0, 0.2;  // q4 = 0: l4 vertical (down)
+    configurations.push_back(q);
+    q(3) = kPi;  // l4 vertical (up)
+    configurations.push_back(q);
+    q(3) = 1e-9;
+    configurations.push_back(q);
+    q << 0.3, 1.0, -0.5, 1.2, 0.0, 0.2;  // wrist axis vertical: z_5 = -y_4, vertical when q4 = 90 deg
+    q(3) = kPi / 2;
+    configurations.push_back(q);
+    q << 0.3, 0.0, -0.5, 1.2, 1.0, 0.2;  // SCARA stretched: pose on the horizontal reach boundary
+    configurations.push_back(q);
+    q << 0.3, 0.0, -0.5, 0.0, 1.0, 0.2;  // stretched and l4 vertical: a corner of the reach
+    configurations.push_back(q);
+    for (const Vector6d& c : configurations) {
+      const auto row = pose_row(f.model.forward(c));
+      SampleQuantities out;
+      f.model.solve(row.data(), all, *scratch, out);
+      EXPECT_TRUE(out.q.allFinite());
+      EXPECT_NE(out.status, SampleStatus::kReachable) << "q = " << c.transpose();
+      EXPECT_NE(out.status, SampleStatus::kUnreachable) << "a boundary pose is reached (singular), q = " << c.transpose();
+      std::array<Vector6d, 8> sol;
+      const int n = f.model.inverse_kinematics(f.model.forward(c), sol);
+      for (int s = 0; s < n; ++s) EXPECT_TRUE(sol[static_cast<std::size_t>(s)].allFinite());
+    }
+    // Just past the reach: unreachable, never NaN.
+    Vector6d c;
+    c << 0.3, 1.0, -0.5, 0.0, kPi / 2, 0.2;
+    Eigen::Isometry3d t = f.model.forward(c);
+    t.translation().z() -= 1e-6;
+    const auto row = pose_row(t);
+    SampleQuantities out;
+    f.model.solve(row.data(), all, *scratch, out);
+    EXPECT_EQ(out.status, SampleStatus::kUnreachable);
+    EXPECT_TRUE(out.q.allFinite());
+    // Degenerate quaternion.
+    const double zero[7] = {0.1, 0.1, -0.5, 0, 0, 0, 0};
+    f.model.solve(zero, all, *scratch, out);
+    EXPECT_EQ(out.status, SampleStatus::kUnreachable);
+  }
+}
+
+TEST(Haptic6R, SelectionRulesAndJointLimits) {
+  std::mt19937 rng(9);
+  Fixture left(paper_like_design(), Json{{"selection", "elbow_left"}});
+  Fixture right(paper_like_design(), Json{{"selection", "elbow_right"}});
+  Fixture home(paper_like_design(), Json{{"home", {10, -60, 20, 45, 30, 0}}});
+  Fixture narrow(paper_like_design(), Json{{"joint_lower", {-180, -180, -180, 80, -180, -180}},
+                                           {"joint_upper", {180, 180, 180, 100, 180, 180}}});
+  auto scratch = std::make_unique<MechanismScratch>();
+  int invalid = 0;
+  for (int k = 0; k < 200; ++k) {
+    const Vector6d q = random_q(rng);
+    const auto row = pose_row(left.model.forward(q));
+    SampleQuantities a, b, c, n;
+    left.model.solve(row.data(), kNeedPose, *scratch, a);
+    right.model.solve(row.data(), kNeedPose, *scratch, b);
+    home.model.solve(row.data(), kNeedPose, *scratch, c);
+    narrow.model.solve(row.data(), kNeedPose, *scratch, n);
+    if (a.status == SampleStatus::kReachable) {
+      EXPECT_GE(a.q(1), 0.0);
+    }
+    if (b.status == SampleStatus::kReachable) {
+      EXPECT_LE(b.q(1), 0.0);
+    }
+    if (c.status == SampleStatus::kReachable) {
+      // The chosen solution is the admissible one closest to home.
+      std::array<Vector6d, 8> sol;
+      const int count = home.model.inverse_kinematics(home.model.forward(q), sol);
+      const auto dist = [&](const Vector6d& x) {
+        double s = 0;
+        for (int i = 0; i < 6; ++i) s += std::pow(std::remainder(x(i) - home.options.home(i), 2 * kPi), 2);
+        return s;
+      };
+      for (int s = 0; s < count; ++s) {
+        const Vector6d& x = sol[static_cast<std::size_t>(s)];
+        if (x(3) < -1e-9 || x(3) > kPi + 1e-9) continue;
+        EXPECT_LE(dist(Vector6d(c.q)), dist(x) + 1e-12);
+      }
+    }
+    if (n.status == SampleStatus::kInvalid) ++invalid;
+    if (n.status == SampleStatus::kReachable) {
+      EXPECT_GE(n.q(3), 80 * kPi / 180 - 1e-9);
+      EXPECT_LE(n.q(3), 100 * kPi / 180 + 1e-9);
+    }
+  }
+  EXPECT_GT(invalid, 100) << "a narrow q4 range excludes most random poses";
+}
+
+TEST(Haptic6R, ActuatorTableAndOnDemandQuantities) {
+  Fixture f(paper_like_design());
+  const ActuatorTable& t = f.options.actuators;
+  EXPECT_NEAR(t.max_velocity(3, 2), 4000 * 2 * kPi / 60 / 50, 1e-12);
+  EXPECT_NEAR(t.max_torque(3, 2), 1.2 * 50 * 0.8, 1e-12);
+  EXPECT_NEAR(t.max_torque(1, 6), 30.0, 1e-12) << "capped by the gear's peak torque";
+  EXPECT_NEAR(f.model.max_torque()(3), t.max_torque(2, 2), 1e-12);
+  // Motor 5 (size s5 = 1) sits at the origin of frame 4, +20 %, with the l4 tube.
+  EXPECT_NEAR(f.model.bodies()[3].mass, 1.2 * 0.9 + 4.0 * 0.55, 1e-12);
+  EXPECT_NEAR(f.model.bodies()[5].mass, 0.5 + 4.0 * 0.15, 1e-12);
+  // Quantities not asked for are left untouched.
+  auto scratch = std::make_unique<MechanismScratch>();
+  Vector6d q;
+  q << 0.3, 1.0, -0.5, 1.2, 1.0, 0.2;
+  const auto row = pose_row(f.model.forward(q));
+  SampleQuantities out;
+  out.jacobian.setConstant(6, 6, 7.0);
+  out.inertia.setConstant(6, 6, 7.0);
+  out.gravity.setConstant(6, 7.0);
+  out.max_torque.setConstant(6, 7.0);
+  f.model.solve(row.data(), kNeedPose, *scratch, out);
+  ASSERT_EQ(out.status, SampleStatus::kReachable);
+  EXPECT_EQ(out.jacobian(0, 0), 7.0);
+  EXPECT_EQ(out.inertia(0, 0), 7.0);
+  EXPECT_EQ(out.gravity(0), 7.0);
+  EXPECT_EQ(out.max_torque(0), 7.0);
+  f.model.solve(row.data(), kNeedJacobian | kNeedActuatorLimits, *scratch, out);
+  EXPECT_NE(out.jacobian(0, 0), 7.0);
+  EXPECT_EQ(out.inertia(0, 0), 7.0);
+  EXPECT_EQ(out.gravity(0), 7.0);
+  EXPECT_EQ(out.max_torque(3), f.model.max_torque()(3));
+  // Gravity on joint 4 is largest with l4 horizontal (q4 = 90 deg) and tens of N m at most.
+  Vector6d g;
+  q(3) = kPi / 2;
+  f.model.dynamics(q, nullptr, &g);
+  EXPECT_GT(std::abs(g(3)), 5.0);
+  EXPECT_LT(std::abs(g(3)), 60.0);
+  EXPECT_NEAR(g(0), 0.0, 1e-9) << "vertical axes carry no gravity torque";
+}
+
+TEST(Haptic6R, DesignSpaceAndConstraints) {
+  Haptic6R mech(Json::object());
+  const auto vars = mech.variables();
+  ASSERT_EQ(vars.size(), 3u);
+  EXPECT_EQ(vars[0].name, "l");
+  EXPECT_EQ(vars[0].size, 5);
+  EXPECT_EQ(vars[0].default_upper[2], 1.5);
+  EXPECT_TRUE(vars[1].integer);
+  EXPECT_EQ(vars[1].default_lower, (std::vector<double>{3, 3, 1, 1, 1, 1}));
+  EXPECT_TRUE(vars[2].integer);
+  ASSERT_EQ(mech.constraints().size(), 5u);
+  std::vector<double> d = paper_like_design();
+  d[7] = 3;  // s3 = 3 > s2? no: s2 = 3, s3 = 3 fine; s4 = 2 < 3 fine
+  double g[5];
+  SampleSet empty;
+  mech.evaluate_constraints(d.data(), empty, g);
+  for (double v : g) EXPECT_LE(v, 0.0);
+  d[9] = 3;  // s5 = 3 > s4 = 2
+  mech.evaluate_constraints(d.data(), empty, g);
+  EXPECT_EQ(g[3], 1.0);
+  EXPECT_EQ(mech.provides(), kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits);
+  // build_in reuses the scratch.
+  auto scratch = mech.make_scratch();
+  const MechanismModel* m1 = mech.build_in(paper_like_design().data(), *scratch);
+  const MechanismModel* m2 = mech.build_in(paper_like_design().data(), *scratch);
+  EXPECT_NE(m1, nullptr);
+  EXPECT_EQ(m1, m2);
+}
+
+TEST(Haptic6R, ErrorMessagesNameTheOptionValueAndRule) {
+  using test::expect_error;
+  expect_error([] { Haptic6R m(Json{{"bogus", 1}}); }, {"haptic6r", "options.bogus", "unknown option"});
+  expect_error([] { Haptic6R m(Json{{"selection", "nearest"}}); }, {"options.selection", "nearest", "closest_to_home"});
+  expect_error([] { Haptic6R m(Json{{"home", {1, 2}}}); }, {"options.home", "6 angles"});
+  expect_error([] { Haptic6R m(Json{{"joint_lower", {0, 0, 0, 90, 0, 0}}, {"joint_upper", {10, 10, 10, 80, 10, 10}}}); },
+               {"options.joint_upper[3]", "must be >= joint_lower[3]"});
+  expect_error([] { Haptic6R m(Json{{"tube_wall", 0.2}}); }, {"options.tube_wall", "tube_outer_diameter"});
+  expect_error([] { Haptic6R m(Json{{"dh_file", "/nonexistent/dh.json"}}); }, {"options.dh_file", "no such file"});
+  const std::string dir = ::testing::TempDir();
+  {
+    std::ofstream(dir + "/bad_dh.json") << R"({"format": "hapsyn-haptic6r-dh", "dh": [
+      {"theta_offset": 0, "d": 0, "a": "l1", "alpha": 0}, {"theta_offset": 0, "d": 0, "a": "l2", "alpha": 0},
+      {"theta_offset": 0, "d": "l3", "a": 0, "alpha": 90}, {"theta_offset": -90, "d": 0, "a": "l4", "alpha": 0},
+      {"theta_offset": 0, "d": 0, "a": 0, "alpha": 90}, {"theta_offset": 0, "d": "l5", "a": 0, "alpha": 0}]})";
+    expect_error([&] { Haptic6R m(Json{{"dh_file", dir + "/bad_dh.json"}}); },
+                 {"bad_dh.json", "dh[2]", "d = (0, 0, -l3, 0, 0, l5)"});
+    std::ofstream(dir + "/bad_dh2.json") << R"({"format": "hapsyn-haptic6r-dh", "dh": [{"theta_offset": 0, "d": "l9", "a": 0, "alpha": 0}, 1, 2, 3, 4, 5]})";
+    expect_error([&] { Haptic6R m(Json{{"dh_file", dir + "/bad_dh2.json"}}); }, {"bad_dh2.json", "dh[0].d = \"l9\"", "link name"});
+    std::ofstream(dir + "/bad_act.json") << R"({"format": "hapsyn-actuator-table", "gear_ratios": [30, 50, -80, 100, 120, 160],
+      "gear_efficiency": 0.8, "sizes": []})";
+    expect_error([&] { Haptic6R m(Json{{"actuator_file", dir + "/bad_act.json"}}); }, {"bad_act.json", "gear_ratios[2] = -80"});
+  }
+  Haptic6R mech(Json::object());
+  std::vector<double> d = paper_like_design();
+  d[6] = 4;
+  expect_error([&] { mech.build(d.data()); }, {"design s[1] = 4", "sizes must be in {1, 2, 3}"});
+  d = paper_like_design();
+  d[2] = -0.1;
+  expect_error([&] { mech.build(d.data()); }, {"design l[2] = -0.1", "> 0"});
+  SampleSet planar;
+  planar.poses.resize(1, 2);
+  planar.poses.setZero();
+  expect_error([&] { mech.check_scene(planar); }, {"haptic6r", "2 coordinates"});
+}
+
+TEST(Haptic6R, PluginLoadsThroughTheRegistry) {
+  const auto mech = test::registry().create_mechanism("haptic6r", Json::object(), "mechanism");
+  ASSERT_TRUE(mech);
+  EXPECT_EQ(mech->variables().size(), 3u);
+}

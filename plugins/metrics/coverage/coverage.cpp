@@ -1,0 +1,176 @@
+#include "coverage.hpp"
+
+#include <hapsyn/scene.hpp>
+
+#include <hapsyn/error.hpp>
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+
+namespace hapsyn::plugins {
+
+namespace {
+constexpr const char* kName = "coverage";
+
+// min(1, min_i limit_i / (max_j |M_ij| + extra_i)), never NaN: a zero denominator leaves 1, a
+// non-finite one (singular solve) gives 0.
+double ratio_eta(const Coverage::Matrix6& m, const Coverage::Vector6& limit, const Coverage::Vector6* extra) {
+  double eta = 1.0;
+  for (int i = 0; i < 6; ++i) {
+    double need = m.row(i).cwiseAbs().maxCoeff();
+    if (extra) need += std::abs((*extra)(i));
+    if (!std::isfinite(need)) return 0.0;
+    if (need * eta > limit(i)) eta = limit(i) / need;
+  }
+  return eta;
+}
+}  // namespace
+
+Coverage::Coverage(const Json& options_in) {
+  const Json options = options_in.is_null() ? Json::object() : options_in;
+  if (!options.is_object()) throw Error(kName, "options = " + options.dump() + ": must be an object");
+  for (auto it = options.begin(); it != options.end(); ++it) {
+    if (it.key() != "terms" && it.key() != "m_max" && it.key() != "f_max") {
+      throw Error(kName, "options." + it.key() + ": unknown option (terms, m_max, f_max)");
+    }
+  }
+  if (options.contains("terms")) {
+    const Json& t = options["terms"];
+    if (!t.is_array() || t.empty()) {
+      throw Error(kName, "options.terms = " + t.dump() + ": must be a non-empty array of \"pose\", \"velocity\", \"acceleration\", \"force\"");
+    }
+    pose_ = velocity_ = acceleration_ = force_ = false;
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      const std::string name = t[i].is_string() ? t[i].get<std::string>() : "";
+      bool* flag = name == "pose" ? &pose_ : name == "velocity" ? &velocity_ : name == "acceleration" ? &acceleration_
+                                                                     : name == "force"  ? &force_ : nullptr;
+      if (!flag) {
+        throw Error(kName, "options.terms[" + std::to_string(i) + "] = " + t[i].dump() +
+                               ": must be \"pose\", \"velocity\", \"acceleration\" or \"force\"");
+      }
+      if (*flag) throw Error(kName, "options.terms[" + std::to_string(i) + "] = " + t[i].dump() + ": listed twice");
+      *flag = true;
+    }
+  }
+  const auto positive = [&](const char* key, double fallback) {
+    if (!options.contains(key)) return fallback;
+    const Json& v = options[key];
+    if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() <= 0.0) {
+      throw Error(kName, std::string("options.") + key + " = " + v.dump() + ": must be a finite number > 0");
+    }
+    return v.get<double>();
+  };
+  m_max_ = positive("m_max", 10.0);
+  f_max_ = positive("f_max", 50.0);
+}
+
+Needs Coverage::needs() const {
+  Needs n = kNeedPose;
+  if (velocity_) n |= kNeedJacobian | kNeedActuatorLimits;
+  if (acceleration_) n |= kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits;
+  if (force_) n |= kNeedJacobian | kNeedGravity | kNeedActuatorLimits;
+  return n;
+}
+
+std::vector<std::string> Coverage::scene_attributes() const {
+  std::vector<std::string> a;
+  if (velocity_) a.push_back("M_v");
+  if (acceleration_) a.push_back("M_a");
+  return a;
+}
+
+std::vector<LocalValue> Coverage::locals() const {
+  std::vector<LocalValue> l = {{"reach_h", Reduction::kSum, ""}, {"reach_m", Reduction::kSum, ""}};
+  if (velocity_) l.push_back({"eta_v", Reduction::kSum, ""});
+  if (acceleration_) l.push_back({"eta_a", Reduction::kSum, ""});
+  if (force_) l.push_back({"eta_f", Reduction::kSum, ""});
+  return l;
+}
+
+double Coverage::eta_velocity(const Matrix6& jacobian, const Matrix6& m_v, const Vector6& max_velocity) {
+  const Eigen::PartialPivLU<Matrix6> lu(jacobian);
+  const Matrix6 a = lu.solve(m_v);
+  return ratio_eta(a, max_velocity, nullptr);
+}
+
+double Coverage::eta_acceleration(const Matrix6& jacobian, const Matrix6& inertia, const Vector6& gravity,
+                                  const Matrix6& m_a, const Vector6& max_torque) {
+  const Eigen::PartialPivLU<Matrix6> lu(jacobian);
+  const Matrix6 b = inertia * lu.solve(m_a);
+  return ratio_eta(b, max_torque, &gravity);
+}
+
+double Coverage::eta_force(const Matrix6& jacobian, const Vector6& gravity, const Vector6& max_torque, double m_max,
+                           double f_max) {
+  Matrix6 c = jacobian.transpose();
+  c.leftCols<3>() *= m_max;
+  c.rightCols<3>() *= f_max;
+  return ratio_eta(c, max_torque, &gravity);
+}
+
+namespace {
+// The sample's 6x6 row-major scene attribute (M_v or M_a), which the evaluator makes reachable
+// through q.scene / q.sample; requested by scene_attributes() only for the terms that need it.
+const double* attribute_row(const SampleQuantities& q, const char* name, const char* term) {
+  if (!q.scene || q.sample < 0 || q.sample >= q.scene->size()) {
+    throw Error(kName, std::string("the ") + term + " term needs the scene attribute " + name +
+                           " of the current sample, but no sample was given (call through the evaluator)");
+  }
+  const auto it = q.scene->attributes.find(name);
+  if (it == q.scene->attributes.end() || it->second.cols() != 36) {
+    throw Error(kName, std::string("the ") + term + " term needs the scene attribute " + name +
+                           " (36 values per sample); the scene does not provide it");
+  }
+  return it->second.row(q.sample).data();
+}
+}  // namespace
+
+void Coverage::local(const SampleQuantities& q, double* out) const {
+  out[0] = 1.0;
+  const bool reachable = q.status == SampleStatus::kReachable;
+  out[1] = reachable ? 1.0 : 0.0;
+  int k = 2;
+  if (!reachable) {
+    if (velocity_) out[k++] = 0.0;
+    if (acceleration_) out[k++] = 0.0;
+    if (force_) out[k++] = 0.0;
+    return;
+  }
+  if (!(velocity_ || acceleration_ || force_)) return;
+  if (q.jacobian.rows() != 6 || q.jacobian.cols() != 6) {
+    throw Error(kName, "the mechanism's Jacobian is " + std::to_string(q.jacobian.rows()) + "x" +
+                           std::to_string(q.jacobian.cols()) + ": coverage needs a 6x6 (omega, v) Jacobian of a 6-joint arm");
+  }
+  const Matrix6 jac = q.jacobian;
+  const Vector6 gravity = (acceleration_ || force_) ? Vector6(q.gravity) : Vector6::Zero();
+  // One LU of J serves both the velocity and the acceleration term.
+  Eigen::PartialPivLU<Matrix6> lu;
+  if (velocity_ || acceleration_) lu.compute(jac);
+  if (velocity_) {
+    const Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> m_v(attribute_row(q, "M_v", "velocity"));
+    const Matrix6 a = lu.solve(Matrix6(m_v));
+    out[k++] = ratio_eta(a, Vector6(q.max_velocity), nullptr);
+  }
+  if (acceleration_) {
+    const Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> m_a(attribute_row(q, "M_a", "acceleration"));
+    const Matrix6 b = Matrix6(q.inertia) * lu.solve(Matrix6(m_a));
+    out[k++] = ratio_eta(b, Vector6(q.max_torque), &gravity);
+  }
+  if (force_) out[k++] = eta_force(jac, gravity, Vector6(q.max_torque), m_max_, f_max_);
+}
+
+double Coverage::combine(const double* reduced, int) const {
+  const double reach_h = reduced[0], reach_m = reduced[1];
+  double total = 0.0;
+  if (pose_) total += reach_h > 0.0 ? reach_m / reach_h : 0.0;
+  int k = 2;
+  for (const bool term : {velocity_, acceleration_, force_}) {
+    if (!term) continue;
+    total += reach_m > 0.0 ? reduced[k] / reach_m : 0.0;
+    ++k;
+  }
+  return total;
+}
+
+}  // namespace hapsyn::plugins

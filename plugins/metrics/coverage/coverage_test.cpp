@@ -1,0 +1,270 @@
+// Tests of the coverage metric: each eta against a naive implementation of eqs. 13, 16, 18,
+// the denominators of eqs. 11 and 14, needs per term, and that the evaluator computes only what
+// the selected terms need (through a counting mechanism wrapper and the scene's attributes).
+#include "coverage.hpp"
+#include "haptic6r.hpp"
+
+#include "test_support.hpp"
+
+#include <hapsyn/error.hpp>
+#include <hapsyn/problem.hpp>
+#include <hapsyn/study.hpp>
+
+#include <gtest/gtest.h>
+
+#include <Eigen/LU>
+#include <atomic>
+#include <cmath>
+#include <random>
+
+using namespace hapsyn;
+using namespace hapsyn::plugins;
+using Matrix6 = Coverage::Matrix6;
+using Vector6 = Coverage::Vector6;
+
+namespace {
+
+// eqs. 13, 16, 18 written out literally: explicit inverse, every (i, j) ratio.
+double naive_eta(const Matrix6& m, const Vector6& limit, const Vector6& extra) {
+  double eta = 1.0;
+  for (int i = 0; i < 6; ++i) {
+    for (int j = 0; j < 6; ++j) eta = std::min(eta, limit(i) / (std::abs(m(i, j)) + std::abs(extra(i))));
+  }
+  return eta;
+}
+
+Json study(const Json& terms, bool with_terms = true) {
+  Json doc = Json::parse(R"({
+    "name": "coverage-test",
+    "mechanism": {"plugin": "haptic6r"},
+    "scene": {"plugin": "human_arm", "options": {"lattice_step": 0.35, "orientations": 20, "joint3_steps": 5, "cache": false, "threads": 1}},
+    "design": {"l": {"value": [0.45, 0.45, 0.65, 0.55, 0.15]}, "s": {"value": [3, 3, 2, 2, 1, 1]}, "r": {"value": [2, 2, 3, 2, 3, 3]}},
+    "objectives": [{"metric": "coverage"}],
+    "solver": {"plugin": "evaluate"},
+    "seed": 1
+  })");
+  if (with_terms) doc["objectives"][0]["options"] = {{"terms", terms}};
+  return doc;
+}
+
+// Records the union of the Need flags the evaluator passes to solve().
+std::atomic<Needs> g_needs_seen{0};
+
+class CountingModel final : public MechanismModel {
+ public:
+  explicit CountingModel(std::unique_ptr<const MechanismModel> inner) : inner_(std::move(inner)) {}
+  void solve(const double* pose, Needs needs, MechanismScratch& scratch, SampleQuantities& out) const override {
+    g_needs_seen |= needs;
+    inner_->solve(pose, needs, scratch, out);
+  }
+
+ private:
+  std::unique_ptr<const MechanismModel> inner_;
+};
+
+class CountingMechanism final : public Mechanism {
+ public:
+  explicit CountingMechanism(std::shared_ptr<const Mechanism> inner) : inner_(std::move(inner)) {}
+  std::unique_ptr<const MechanismModel> build(const double* design) const override {
+    return std::make_unique<CountingModel>(inner_->build(design));
+  }
+  std::vector<VariableDecl> variables() const override { return inner_->variables(); }
+  std::vector<ConstraintDecl> constraints() const override { return inner_->constraints(); }
+  void evaluate_constraints(const double* design, const SampleSet& scene, double* g) const override {
+    inner_->evaluate_constraints(design, scene, g);
+  }
+  std::unique_ptr<MechanismScratch> make_scratch() const override { return inner_->make_scratch(); }
+  void check_scene(const SampleSet& scene) const override { inner_->check_scene(scene); }
+  Needs provides() const override { return inner_->provides(); }
+
+ private:
+  std::shared_ptr<const Mechanism> inner_;
+};
+
+}  // namespace
+
+TEST(Coverage, EtaMatchesNaiveEquations) {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int k = 0; k < 200; ++k) {
+    Matrix6 j, mv, ma, h;
+    Vector6 qdot, tau, g;
+    for (int r = 0; r < 6; ++r) {
+      for (int c = 0; c < 6; ++c) {
+        j(r, c) = u(rng);
+        mv(r, c) = 3 * u(rng);
+        ma(r, c) = 20 * u(rng);
+        h(r, c) = u(rng);
+      }
+      qdot(r) = 1 + 5 * std::abs(u(rng));
+      tau(r) = 5 + 40 * std::abs(u(rng));
+      g(r) = 10 * u(rng);
+    }
+    j += 3 * Matrix6::Identity();
+    h = h * h.transpose() + Matrix6::Identity();
+    const Matrix6 jinv = j.inverse();
+    EXPECT_NEAR(Coverage::eta_velocity(j, mv, qdot), naive_eta(jinv * mv, qdot, Vector6::Zero()), 1e-12);
+    EXPECT_NEAR(Coverage::eta_acceleration(j, h, g, ma, tau), naive_eta(h * jinv * ma, tau, g), 1e-12);
+    Matrix6 mf = Matrix6::Zero();
+    mf.topLeftCorner<3, 3>() = 10 * Eigen::Matrix3d::Identity();
+    mf.bottomRightCorner<3, 3>() = 50 * Eigen::Matrix3d::Identity();
+    EXPECT_NEAR(Coverage::eta_force(j, g, tau, 10, 50), naive_eta(j.transpose() * mf, tau, g), 1e-12);
+  }
+  // Zero demand leaves 1; a singular Jacobian gives a finite value (0 or a ratio), never NaN.
+  EXPECT_EQ(Coverage::eta_velocity(Matrix6::Identity(), Matrix6::Zero(), Vector6::Ones()), 1.0);
+  const double singular = Coverage::eta_velocity(Matrix6::Zero(), Matrix6::Identity(), Vector6::Ones());
+  EXPECT_TRUE(std::isfinite(singular));
+  EXPECT_GE(singular, 0.0);
+}
+
+TEST(Coverage, LocalValuesOnScenePosesMatchNaiveEquations) {
+  // The human_arm scene's poses with their ellipsoids; the sample and scene given as the evaluator does.
+  auto doc = study(Json::array({"pose", "velocity", "acceleration", "force"}));
+  Study s = load_study(doc, test::registry());
+  const SampleSet& scene = s.problem->samples();
+  ASSERT_TRUE(scene.attributes.count("M_v") && scene.attributes.count("M_a"));
+  Haptic6R mech(Json::object());
+  mech.check_scene(scene);
+  const std::vector<double> design{0.45, 0.45, 0.65, 0.55, 0.15, 3, 3, 2, 2, 1, 1, 2, 2, 3, 2, 3, 3};
+  auto model = mech.build(design.data());
+  auto scratch = mech.make_scratch();
+  const Coverage metric(Json::object());
+  ASSERT_EQ(metric.locals().size(), 5u);
+  int checked = 0;
+  for (int i = 0; i < scene.size() && checked < 20; ++i) {
+    SampleQuantities q;
+    model->solve(scene.pose(i), metric.needs(), *scratch, q);
+    q.sample = i;
+    q.scene = &scene;
+    double out[5];
+    metric.local(q, out);
+    EXPECT_EQ(out[0], 1.0);
+    if (q.status != SampleStatus::kReachable) {
+      EXPECT_EQ(out[1] + out[2] + out[3] + out[4], 0.0);
+      continue;
+    }
+    const Matrix6 mv = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(scene.attributes.at("M_v").row(i).data());
+    const Matrix6 ma = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(scene.attributes.at("M_a").row(i).data());
+    const Matrix6 j = q.jacobian, h = q.inertia;
+    const Vector6 g = q.gravity, qdot = q.max_velocity, tau = q.max_torque;
+    Matrix6 mf = Matrix6::Zero();
+    mf.topLeftCorner<3, 3>() = 10 * Eigen::Matrix3d::Identity();
+    mf.bottomRightCorner<3, 3>() = 50 * Eigen::Matrix3d::Identity();
+    const Matrix6 jinv = j.inverse();
+    EXPECT_NEAR(out[2], naive_eta(jinv * mv, qdot, Vector6::Zero()), 1e-9);
+    EXPECT_NEAR(out[3], naive_eta(h * jinv * ma, tau, g), 1e-9);
+    EXPECT_NEAR(out[4], naive_eta(j.transpose() * mf, tau, g), 1e-9);
+    for (int k = 1; k < 5; ++k) {
+      EXPECT_GE(out[k], 0.0);
+      EXPECT_LE(out[k], 1.0);
+    }
+    ++checked;
+  }
+  EXPECT_EQ(checked, 20);
+}
+
+TEST(Coverage, CombineUsesHumanAndManipulatorReachableCounts) {
+  const Coverage all(Json::object());
+  const double reduced[5] = {200, 50, 25, 10, 50};  // n_h, n_m, sum eta_v, eta_a, eta_f
+  EXPECT_DOUBLE_EQ(all.combine(reduced, 200), 50.0 / 200 + 25.0 / 50 + 10.0 / 50 + 50.0 / 50);
+  const Coverage vel(Json{{"terms", {"velocity"}}});
+  const double r2[3] = {200, 50, 25};
+  EXPECT_DOUBLE_EQ(vel.combine(r2, 200), 0.5);
+  const Coverage pose(Json{{"terms", {"pose"}}});
+  const double r3[2] = {200, 50};
+  EXPECT_DOUBLE_EQ(pose.combine(r3, 200), 0.25);
+  const double none[5] = {200, 0, 0, 0, 0};
+  EXPECT_EQ(all.combine(none, 200), 0.0) << "no reachable pose: every term 0, no NaN";
+  const double ideal[5] = {200, 200, 200, 200, 200};
+  EXPECT_DOUBLE_EQ(all.combine(ideal, 200), 4.0);
+}
+
+TEST(Coverage, NeedsAndSceneAttributesFollowTheTerms) {
+  EXPECT_EQ(Coverage(Json{{"terms", {"pose"}}}).needs(), Needs{kNeedPose});
+  EXPECT_TRUE(Coverage(Json{{"terms", {"pose"}}}).scene_attributes().empty());
+  EXPECT_EQ(Coverage(Json{{"terms", {"velocity"}}}).needs(), Needs{kNeedJacobian | kNeedActuatorLimits});
+  EXPECT_EQ(Coverage(Json{{"terms", {"velocity"}}}).scene_attributes(), std::vector<std::string>{"M_v"});
+  EXPECT_EQ(Coverage(Json{{"terms", {"acceleration"}}}).needs(),
+            Needs{kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits});
+  EXPECT_EQ(Coverage(Json{{"terms", {"acceleration"}}}).scene_attributes(), std::vector<std::string>{"M_a"});
+  EXPECT_EQ(Coverage(Json{{"terms", {"force"}}}).needs(), Needs{kNeedJacobian | kNeedGravity | kNeedActuatorLimits});
+  EXPECT_TRUE(Coverage(Json{{"terms", {"force"}}}).scene_attributes().empty());
+  EXPECT_EQ(Coverage(Json::object()).aggregation(), Aggregation::kAveraging);
+}
+
+TEST(Coverage, EvaluatorComputesOnlyWhatTheTermsNeed) {
+  struct Case {
+    Json terms;
+    Needs expected;
+    bool m_v, m_a;
+  };
+  const std::vector<Case> cases = {
+      {Json::array({"pose"}), kNeedPose, false, false},
+      {Json::array({"pose", "velocity"}), kNeedJacobian | kNeedActuatorLimits, true, false},
+      {Json::array({"force"}), kNeedJacobian | kNeedGravity | kNeedActuatorLimits, false, false},
+      {Json::array({"pose", "velocity", "acceleration", "force"}),
+       kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits, true, true},
+  };
+  std::vector<double> values;
+  for (const Case& c : cases) {
+    Study s = load_study(study(c.terms), test::registry());
+    const Problem& p = *s.problem;
+    EXPECT_EQ(p.samples().attributes.count("M_v") == 1, c.m_v) << c.terms.dump();
+    EXPECT_EQ(p.samples().attributes.count("M_a") == 1, c.m_a) << c.terms.dump();
+    auto mech = std::make_shared<CountingMechanism>(std::make_shared<Haptic6R>(Json::object()));
+    Problem counted("haptic6r", mech, std::make_shared<const SampleSet>(p.samples()), p.metrics(), p.objectives(),
+                    p.design_space());
+    g_needs_seen = 0;
+    const Evaluation e = counted.evaluate_parallel(nullptr, 2);
+    ASSERT_EQ(e.status, EvalStatus::kFeasible);
+    EXPECT_EQ(g_needs_seen.load(), c.expected) << c.terms.dump();
+    values.push_back(e.objectives[0]);
+    // The same value through the study's own (plugin) mechanism.
+    const Evaluation direct = p.evaluate_parallel(nullptr, 1);
+    EXPECT_NEAR(direct.objectives[0], e.objectives[0], 1e-12);
+  }
+  // J_x in [0, 1]; J_x + J_v + J_a + J_f in [0, 4]; J_v in [0, 1] (difference of two studies).
+  EXPECT_GE(values[0], 0.0);
+  EXPECT_LE(values[0], 1.0);
+  EXPECT_GT(values[0], 0.05) << "a plausible design reaches some human poses";
+  EXPECT_GE(values[1] - values[0], 0.0);
+  EXPECT_LE(values[1] - values[0], 1.0);
+  EXPECT_GE(values[3], values[1] - 1e-12);
+  EXPECT_LE(values[3], 4.0);
+}
+
+TEST(Coverage, ReducedCountsMatchTheirDefinitions) {
+  Study s = load_study(study(Json::array({"pose", "velocity"})), test::registry());
+  const Problem& p = *s.problem;
+  auto ws = p.make_workspace();
+  const Evaluation& e = p.evaluate(nullptr, *ws);
+  ASSERT_EQ(e.status, EvalStatus::kFeasible);
+  const std::vector<double>& r = e.reduced[0];
+  EXPECT_EQ(r[0], p.samples().size()) << "n_reach^h: every scene sample is human-reachable";
+  EXPECT_EQ(r[0], p.samples().info.at("n_reach").get<double>()) << "the scene's own n_reach^h";
+  EXPECT_LE(r[1], r[0]);
+  EXPECT_LE(r[2], r[1]) << "sum of eta_v <= n_reach^m";
+  EXPECT_NEAR(e.objectives[0], r[1] / r[0] + r[2] / r[1], 1e-12);
+}
+
+TEST(Coverage, ErrorMessagesNameTheOptionValueAndRule) {
+  using test::expect_error;
+  expect_error([] { Coverage c(Json{{"terms", {"speed"}}}); }, {"coverage", "options.terms[0] = \"speed\"", "\"velocity\""});
+  expect_error([] { Coverage c(Json{{"terms", Json::array()}}); }, {"options.terms", "non-empty"});
+  expect_error([] { Coverage c(Json{{"terms", {"pose", "pose"}}}); }, {"options.terms[1]", "twice"});
+  expect_error([] { Coverage c(Json{{"m_max", 0}}); }, {"options.m_max = 0", "> 0"});
+  expect_error([] { Coverage c(Json{{"bogus", 0}}); }, {"options.bogus", "unknown option"});
+  // A velocity term without a sample (called outside the evaluator), and with a scene lacking M_v.
+  const Coverage c(Json{{"terms", {"velocity"}}});
+  SampleQuantities q;
+  q.status = SampleStatus::kReachable;
+  q.jacobian = Matrix6::Identity();
+  q.max_velocity = Vector6::Ones();
+  double out[3];
+  expect_error([&] { c.local(q, out); }, {"coverage", "M_v", "no sample was given"});
+  SampleSet bare;
+  bare.poses = SampleSet::RowMatrix::Zero(1, 7);
+  q.scene = &bare;
+  q.sample = 0;
+  expect_error([&] { c.local(q, out); }, {"coverage", "M_v", "the scene does not provide it"});
+}
