@@ -8,7 +8,7 @@
 namespace hapsyn::plugins {
 
 /// Largest number of samples the scene builds (memory guard: 16 bytes per sample).
-constexpr long long kPlanarSquareMaxSamples = 10000000;
+constexpr long long kPlanarSquareMaxSamples = 2000000;  // 0.07 mm steps on a 100 mm square
 
 /// A square of side `side` [m] centred at (0, 0), sampled on a regular grid of spacing `step`
 /// [m] including its edges: n = round(side / step) + 1 samples per axis, n^2 in all, in

@@ -110,7 +110,7 @@ TEST(PlanarSquare, RefusesNonPositiveUnknownAndHugeOptions) {
   EXPECT_EQ(error_of(Json{{"step", "fine"}}), "planar_square: options.step = \"fine\": must be a number");
   EXPECT_EQ(error_of(Json{{"stpe", 0.001}}), "planar_square: options.stpe: unknown option (known: side, step)");
   EXPECT_EQ(error_of(Json{{"side", 1.0}, {"step", 1e-4}}),
-            "planar_square: options.step = 0.0001: gives 10001.0 x 10001.0 samples; at most 10000000 are allowed");
+            "planar_square: options.step = 0.0001: gives 10001.0 x 10001.0 samples; at most 2000000 are allowed");
 }
 
 TEST(PlanarSquare, RefusesRequestedAttributes) {
