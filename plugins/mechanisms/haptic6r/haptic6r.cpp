@@ -1,5 +1,7 @@
 #include "haptic6r.hpp"
 
+#include <hapsyn/data_file.hpp>
+
 #include <hapsyn/error.hpp>
 
 #include <boost/filesystem.hpp>
@@ -141,25 +143,7 @@ double ActuatorTable::max_torque(int size, int code) const {
 }
 
 std::string resolve_haptic6r_file(const std::string& option_name, const std::string& value) {
-  const fs::path p(value);
-  if (value.empty()) throw Error(kName, "options." + option_name + " = \"\": must name a file");
-  if (p.is_absolute()) {
-    if (!fs::is_regular_file(p)) throw Error(kName, "options." + option_name + " = " + show(Json(value)) + ": no such file");
-    return p.string();
-  }
-  std::vector<fs::path> candidates{fs::current_path() / p};
-#ifdef HAPSYN_SHARE_DIR
-  candidates.push_back(fs::path(HAPSYN_SHARE_DIR) / p);
-#endif
-#ifdef HAPSYN_INSTALL_SHARE_DIR
-  candidates.push_back(fs::path(HAPSYN_INSTALL_SHARE_DIR) / p);
-#endif
-  std::string tried;
-  for (const fs::path& c : candidates) {
-    if (fs::is_regular_file(c)) return fs::absolute(c).lexically_normal().string();
-    tried += (tried.empty() ? "" : ", ") + c.string();
-  }
-  throw Error(kName, "options." + option_name + " = " + show(Json(value)) + ": no such file (tried " + tried + ")");
+  return find_data_file(kName, option_name, value);
 }
 
 Haptic6RDh read_haptic6r_dh(const std::string& path) {

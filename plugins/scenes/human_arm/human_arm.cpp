@@ -1,5 +1,7 @@
 #include "human_arm.hpp"
 
+#include <hapsyn/data_file.hpp>
+
 #include <hapsyn/error.hpp>
 #include <hapsyn/parallel.hpp>
 
@@ -237,26 +239,8 @@ HumanArmData load_human_arm(const std::string& path) {
 }
 
 std::string resolve_arm_file(const std::string& option) {
-  const std::string name = option.empty() ? "human_arm/fennel2022_right_arm.json" : option;
-  const fs::path p(name);
-  if (p.is_absolute()) {
-    if (!fs::exists(p)) throw Error(kName, "options.arm_file = " + show(option) + ": no such file");
-    return p.string();
-  }
-  std::vector<fs::path> candidates;
-  if (!option.empty()) candidates.push_back(fs::current_path() / p);
-#ifdef HAPSYN_SHARE_DIR
-  candidates.push_back(fs::path(HAPSYN_SHARE_DIR) / p);
-#endif
-#ifdef HAPSYN_INSTALL_SHARE_DIR
-  candidates.push_back(fs::path(HAPSYN_INSTALL_SHARE_DIR) / p);
-#endif
-  std::string tried;
-  for (const fs::path& c : candidates) {
-    if (fs::is_regular_file(c)) return fs::absolute(c).lexically_normal().string();
-    tried += (tried.empty() ? "" : ", ") + c.string();
-  }
-  throw Error(kName, "options.arm_file = " + show(option) + ": no such file (tried " + tried + ")");
+  // An empty option means the shipped right arm.
+  return find_data_file(kName, "arm_file", option.empty() ? "human_arm/fennel2022_right_arm.json" : option);
 }
 
 // ---------------------------------------------------------------- kinematics ----
