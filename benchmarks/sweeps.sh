@@ -19,3 +19,12 @@ cd "$root"
 # Five-bar: culling design grid step with polishing, against the paper-resolution study.
 "$hapsyn" sweep problems/fivebar-gii-culling-paper.json --out "$out/fivebar-design-step-polished" \
   --vary design.l0.step,design.l1.step,design.l2.step,design.r.step=0.02,0.01,0.005,0.002
+
+# Human arm scene knobs, measured on the coverage objectives of the haptic 6R evaluate study
+# (cache off: the run time includes building the scene).
+"$hapsyn" sweep problems/haptic6r-evaluate.json --set scene.options.cache=false --out "$out/human-lattice-step" \
+  --vary scene.options.lattice_step=0.2,0.1,0.05
+"$hapsyn" sweep problems/haptic6r-evaluate.json --set scene.options.cache=false --out "$out/human-orientations" \
+  --vary scene.options.orientations=101,252,505,1010,2020
+"$hapsyn" sweep problems/haptic6r-evaluate.json --set scene.options.cache=false --out "$out/human-joint3-steps" \
+  --vary scene.options.joint3_steps=5,9,17,33,65

@@ -316,18 +316,19 @@ int scene_command(const std::string& file, const std::vector<std::string>& sets,
 
 void print_sweep(const Json& summary, std::ostream& out) {
   out << "sweep: " << summary["runs"].size() << " runs; reference " << summary["reference"]["overrides"].dump()
-      << " (" << format_number(summary["reference"]["wall_time_s"].get<double>()) << " s)\n";
+      << " (" << format_number(summary["reference"]["run_time_s"].get<double>()) << " s)\n";
   std::vector<std::string> keys;
   if (!summary["runs"].empty()) {
     for (auto it = summary["runs"][0]["values"].begin(); it != summary["runs"][0]["values"].end(); ++it) keys.push_back(it.key());
   }
   for (const auto& k : keys) out << std::left << std::setw(std::max<std::size_t>(k.size(), 8) + 2) << k;
-  out << std::setw(12) << "time [s]" << std::setw(14) << "samples" << std::setw(13) << "obj. error" << std::setw(14)
+  out << std::setw(12) << "time [s]" << std::setw(12) << "solve [s]" << std::setw(14) << "samples" << std::setw(13) << "obj. error" << std::setw(14)
       << "design dist." << std::setw(10) << "igd" << "status\n";
   auto cell = [](const Json& v) { return v.is_null() ? std::string("-") : format_number(v.get<double>()); };
   for (const Json& r : summary["runs"]) {
     for (const auto& k : keys) out << std::left << std::setw(std::max<std::size_t>(k.size(), 8) + 2) << r["values"][k].dump();
-    out << std::setw(12) << format_number(r["wall_time_s"].get<double>()) << std::setw(14)
+    out << std::setw(12) << format_number(r["run_time_s"].get<double>()) << std::setw(12)
+        << format_number(r["solve_time_s"].get<double>()) << std::setw(14)
         << r["evaluations"]["samples"].dump() << std::setw(13) << cell(r["errors"]["objective_error"]) << std::setw(14)
         << cell(r["errors"]["design_distance"]) << std::setw(10) << cell(r["errors"]["igd"])
         << r["status"].get<std::string>() << "\n";
