@@ -42,13 +42,7 @@ Json read_json(const fs::path& p) {
   return Json::parse(in);
 }
 
-long count_lines(const fs::path& p) {
-  std::ifstream in(p.string());
-  std::string line;
-  long n = 0;
-  while (std::getline(in, line)) ++n;
-  return n;
-}
+long count_lines(const fs::path& p) { return hapsyn::test::count_lines(p.string()); }
 }  // namespace
 
 TEST(Cli, RunWritesResultJsonAndSamplesCsv) {

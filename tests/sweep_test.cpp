@@ -17,13 +17,7 @@ fs::path fresh(const std::string& name) {
   fs::remove_all(dir);
   return dir;
 }
-long lines(const fs::path& p) {
-  std::ifstream in(p.string());
-  std::string line;
-  long n = 0;
-  while (std::getline(in, line)) ++n;
-  return n;
-}
+long lines(const fs::path& p) { return hapsyn::test::count_lines(p.string()); }
 }  // namespace
 
 TEST(Sweep, AxisSplitsPathsAndValuesOutsideBrackets) {

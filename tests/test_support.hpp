@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <functional>
 #include <string>
 
@@ -25,6 +26,15 @@ inline std::string error_of(const std::function<void()>& f) {
     return e.what();
   }
   return "(no error)";
+}
+
+/// Number of lines of a text file.
+inline long count_lines(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  long n = 0;
+  while (std::getline(in, line)) ++n;
+  return n;
 }
 
 /// Runs fn and expects a hapsyn::Error whose message contains every fragment.

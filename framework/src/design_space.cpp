@@ -1,4 +1,5 @@
 #include <hapsyn/design_space.hpp>
+#include <hapsyn/error.hpp>
 
 #include <algorithm>
 #include <cassert>
@@ -39,6 +40,21 @@ double DesignSpace::grid_value(std::size_t free_k, long long i) const {
   const DesignComponent& c = components_[static_cast<std::size_t>(free_[free_k])];
   // lower + i * step, not repeated addition, so that every grid value is reproducible.
   return std::min(c.upper, c.lower + static_cast<double>(i) * c.step);
+}
+
+long long DesignSpace::check_grid(const std::string& component) const {
+  long double total = 1;
+  for (std::size_t k = 0; k < free_.size(); ++k) {
+    const DesignComponent& c = components_[static_cast<std::size_t>(free_[k])];
+    if (!(c.step > 0.0)) {
+      throw Error(component, "design." + c.variable + " has no step: searching the design grid needs a \"step\" for "
+                             "every free design variable (or a \"value\" to fix it)");
+    }
+    total *= static_cast<long double>(grid_count(k));
+  }
+  // Linear grid indices are long long: refuse what they cannot number.
+  if (total > 9e18L) throw Error(component, "the design grid has more than 9e18 points; use larger steps");
+  return static_cast<long long>(total);
 }
 
 std::vector<long long> DesignSpace::grid_counts() const {

@@ -63,6 +63,11 @@ class DesignSpace {
   long long grid_count(std::size_t free_k) const;
   /// Grid value i of free component k: lower + i*step (clamped to upper).
   double grid_value(std::size_t free_k, long long i) const;
+  /// Checks that every free component has a grid step and that the grid can be indexed, for a
+  /// solver that searches the grid; returns the number of grid designs.
+  /// \param component the solver, for the error ("grid", "culling")
+  /// \throws Error("<component>: design.<var> has no step: ...") or when the grid exceeds 9e18 points.
+  long long check_grid(const std::string& component) const;
   /// Grid counts of every free component (each needs a step).
   std::vector<long long> grid_counts() const;
   /// The free design of grid point `index` in the mixed-radix numbering of `counts` (the last

@@ -465,17 +465,7 @@ void CullingSolver::check(const Problem& problem) const {
                                  ": a weighted sum keeps the per-sample bound only with non-negative weights");
     }
   }
-  const DesignSpace& space = problem.design_space();
-  long double total = 1;
-  for (std::size_t k = 0; k < space.free_size(); ++k) {
-    const DesignComponent& c = space.components()[static_cast<std::size_t>(space.free_indices()[k])];
-    if (!(c.step > 0.0)) {
-      throw Error("culling", "design." + c.variable + " has no step: culling searches the design grid, so every "
-                             "free design variable needs a \"step\" (or a \"value\")");
-    }
-    total *= static_cast<long double>(space.grid_count(k));
-  }
-  if (total > 9e18L) throw Error("culling", "the design grid has more than 9e18 points; use larger steps");
+  problem.design_space().check_grid("culling");
 }
 
 SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& context) const {

@@ -15,19 +15,7 @@ namespace hapsyn::plugins {
 GridSolver::GridSolver(const Json& options)
     : prune_(options.value("prune", true)), progress_interval_(options.value("progress_interval", 2.0)) {}
 
-void GridSolver::check(const Problem& problem) const {
-  const DesignSpace& space = problem.design_space();
-  long double total = 1;
-  for (std::size_t k = 0; k < space.free_size(); ++k) {
-    const DesignComponent& c = space.components()[static_cast<std::size_t>(space.free_indices()[k])];
-    if (!(c.step > 0.0)) {
-      throw Error("grid", "design." + c.variable + " has no step: the grid solver needs a \"step\" for every free "
-                          "design variable (or a \"value\" to fix it)");
-    }
-    total *= static_cast<long double>(space.grid_count(k));
-  }
-  if (total > 9e18L) throw Error("grid", "the design grid has more than 9e18 points; use larger steps");
-}
+void GridSolver::check(const Problem& problem) const { problem.design_space().check_grid("grid"); }
 
 namespace {
 void raise_to(std::atomic<double>& target, double value) {
