@@ -26,11 +26,13 @@ class RecordingReporter : public benchmark::ConsoleReporter {
     for (const Run& r : runs) {
       if (r.run_type != Run::RT_Iteration) continue;
       times[r.benchmark_name()] = r.GetAdjustedRealTime();
+      cpu_times[r.benchmark_name()] = r.GetAdjustedCPUTime();
       for (const auto& [key, counter] : r.counters) counters[r.benchmark_name() + "#" + key] = counter.value;
     }
     ConsoleReporter::ReportRuns(runs);
   }
   std::map<std::string, double> times;
+  std::map<std::string, double> cpu_times;  // differs from real time on a loaded machine
   std::map<std::string, double> counters;
 };
 }  // namespace
@@ -61,7 +63,12 @@ int run_main(int argc, char** argv) {
     const auto b = table.find(c.baseline + suffix);
     if (a == table.end() || b == table.end()) continue;
     std::cout << "ratio " << (c.counter.empty() ? "real time" : c.counter) << ": " << c.baseline << " / " << c.name
-              << " = " << b->second / a->second << "\n";
+              << " = " << b->second / a->second;
+    if (c.counter.empty()) {
+      // Single-threaded pairs: the CPU-time ratio is the one to read when other jobs share the machine.
+      std::cout << " (cpu time: " << reporter.cpu_times.at(c.baseline) / reporter.cpu_times.at(c.name) << ")";
+    }
+    std::cout << "\n";
   }
   benchmark::Shutdown();
   return 0;

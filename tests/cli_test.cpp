@@ -205,8 +205,8 @@ TEST(Cli, SceneBuildsSummarizesAndExportsTheHumanArmScene) {
 TEST(Cli, ScenePlotsReachabilityDensitySlices) {
   const fs::path dir = fresh_dir("scene-plot");
   const Output o = hapsyn_cli("scene " + human_arm_scene_args(dir / "cache") + " --plot " + (dir / "plot").string());
-  EXPECT_TRUE(fs::exists(dir / "plot" / "density.dat"));
-  EXPECT_TRUE(fs::exists(dir / "plot" / "density.gp"));
+  EXPECT_TRUE(fs::exists(dir / "plot" / "density_slices.dat"));
+  EXPECT_TRUE(fs::exists(dir / "plot" / "density_slices.gp"));
   if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
     ASSERT_EQ(o.code, 0) << o.out;
     EXPECT_GT(fs::file_size(dir / "plot" / "density_slices.png"), 1000u);

@@ -103,6 +103,16 @@ TEST(Problem, ExtremeSamplesAreEvaluatedFirst) {
   }
 }
 
+TEST(Problem, AveragingStudiesVisitSamplesInSceneOrder) {
+  hapsyn::Registry registry({HAPSYN_PLUGIN_DIR, HAPSYN_TEST_PLUGIN_DIR});
+  Json doc = fivebar_study();
+  doc["objectives"] = Json::array({{{"metric", "summetric"}}});
+  const hapsyn::Study study = hapsyn::load_study(doc, registry);
+  const auto& order = study.problem->sample_order();
+  ASSERT_EQ(order.size(), static_cast<std::size_t>(study.problem->samples().size()));
+  for (std::size_t k = 0; k < order.size(); ++k) ASSERT_EQ(order[k], static_cast<int>(k)) << "at " << k;
+}
+
 TEST(Problem, DesignFromASolverIsCheckedCentrally) {
   const auto study = study_with({"gii"});
   auto ws = study.problem->make_workspace();

@@ -4,6 +4,7 @@
 // is its "status"), 1 bad input (problem file, options, plugins, output directory), 2 usage
 // error, 3 unexpected internal error.
 #include <hapsyn/error.hpp>
+#include <hapsyn/plot.hpp>
 #include <hapsyn/registry.hpp>
 #include <hapsyn/study.hpp>
 #include <hapsyn/sweep.hpp>
@@ -209,51 +210,21 @@ void plot_density(const hapsyn::SampleSet& set, const std::string& directory) {
     throw hapsyn::Error("scene", "--plot needs a lattice scene (attribute lattice_index and info lattice_per_axis, "
                                  "lattice_step, orientations), e.g. human_arm");
   }
-  const int n = set.info["lattice_per_axis"].get<int>();
-  const double step = set.info["lattice_step"].get<double>();
+  hapsyn::LatticeField density;
+  density.per_axis = set.info["lattice_per_axis"].get<int>();
+  density.step = set.info["lattice_step"].get<double>();
   const double orientations = set.info["orientations"].get<double>();
-  const int half = (n - 1) / 2;
-  std::vector<double> density(static_cast<std::size_t>(n) * n * n, 0.0);
-  for (int i = 0; i < set.size(); ++i) density[static_cast<std::size_t>(index->second(i, 0))] += 1.0 / orientations;
-  std::ostringstream data;
-  data << "# reachability density per lattice point: reachable orientations / " << orientations << "\n"
-       << "# one block per slice x_S = k * step (x_S points down), rows of (y_S, z_S, density)\n";
-  for (int ix = 0; ix < n; ++ix) {
-    data << "# x_S = " << (ix - half) * step << "\n";
-    for (int iy = 0; iy < n; ++iy) {
-      for (int iz = 0; iz < n; ++iz) {
-        data << (iy - half) * step << " " << (iz - half) * step << " "
-             << density[static_cast<std::size_t>(ix) + n * (static_cast<std::size_t>(iy) + n * iz)] << "\n";
-      }
-      data << "\n";
-    }
-    data << "\n";
-  }
-  const int columns = static_cast<int>(std::ceil(std::sqrt(n)));
-  const int rows = (n + columns - 1) / columns;
-  std::ostringstream script;
-  script << "# hapsyn scene --plot: reachability density slices (gnuplot " << "density.gp" << ")\n"
-         << "set terminal pngcairo size " << 320 * columns << "," << 300 * rows << " font ',9'\n"
-         << "set output 'density_slices.png'\n"
-         << "set multiplot layout " << rows << "," << columns
-         << " title 'reachable orientations / " << orientations << " per position; slices by height above the shoulder'\n"
-         << "set cbrange [0:" << std::max(1e-9, *std::max_element(density.begin(), density.end())) << "]\n"
-         << "set palette rgbformulae 33,13,10\nset size ratio -1\n"
-         << "set xlabel 'y_S [m]'\nset ylabel 'z_S [m]'\nunset key\n";
-  for (int ix = 0; ix < n; ++ix) {
-    script << "set title sprintf('height %.2f m', " << -(ix - half) * step << ")\n"
-           << "plot 'density.dat' index " << ix << " using 1:2:3 with image\n";
-  }
-  script << "unset multiplot\n";
+  const std::size_t n = static_cast<std::size_t>(density.per_axis);
+  density.values.assign(n * n * n, 0.0);
+  for (int i = 0; i < set.size(); ++i) density.values[static_cast<std::size_t>(index->second(i, 0))] += 1.0 / orientations;
   fs::create_directories(directory);
-  write_atomically(fs::path(directory) / "density.dat", data.str(), "--plot data");
-  write_atomically(fs::path(directory) / "density.gp", script.str(), "--plot script");
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
-    throw hapsyn::Error("scene", "--plot needs gnuplot, which is not installed (apt-get install gnuplot-nox); " +
-                                     directory + "/density.dat and density.gp were written");
+  const std::string why = hapsyn::plot_lattice_slices(
+      directory, "density_slices", "reachable orientations / " + std::to_string(static_cast<int>(orientations)) +
+                                       " per position; slices by height above the shoulder",
+      density, std::max(1e-9, *std::max_element(density.values.begin(), density.values.end())));
+  if (!why.empty()) {
+    throw hapsyn::Error("scene", "--plot: " + why + "; " + directory + "/density_slices.dat and .gp were written");
   }
-  const std::string command = "cd '" + directory + "' && gnuplot density.gp 2>&1";
-  if (std::system(command.c_str()) != 0) throw hapsyn::Error("scene", "gnuplot failed on " + directory + "/density.gp");
 }
 
 int scene_command(const std::string& file, const std::vector<std::string>& sets, const std::string& csv,

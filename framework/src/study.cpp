@@ -2,6 +2,7 @@
 #include <hapsyn/parallel.hpp>
 #include <hapsyn/schema.hpp>
 #include <hapsyn/study.hpp>
+#include <hapsyn/maps.hpp>
 #include <hapsyn/plugin.hpp>
 
 #include <boost/filesystem.hpp>
@@ -60,7 +61,9 @@ const char* const kProblemSchema = R"json({
         "options": {"type": "object", "description": "Options of the solver plugin", "default": {}}}},
     "output": {"type": "object", "default": {}, "properties": {
         "directory": {"type": "string", "description": "Output directory (default results/<name>)"},
-        "samples_csv": {"type": "boolean", "description": "Write samples.csv for the best design", "default": true}}},
+        "samples_csv": {"type": "boolean", "description": "Write samples.csv for the best design", "default": true},
+        "maps": {"type": "boolean", "description": "Write maps.csv: every objective per workspace position for the best design", "default": true},
+        "plots": {"type": "boolean", "description": "Render the position maps with gnuplot (map_<objective>.png)", "default": false}}},
     "seed": {"type": "integer", "minimum": 0, "description": "Random seed (default: drawn and recorded)"},
     "threads": {"type": "integer", "minimum": 0, "description": "Worker threads (0 = all cores)"}
   },
@@ -389,57 +392,6 @@ Json point_to_json(const Problem& problem, const SolutionPoint& p) {
   return j;
 }
 
-// One row per sample of the given design: the pose, its classification and every metric's
-// local values (what a user plots as the distribution over the workspace).
-std::string samples_csv(const Problem& problem, const Eigen::VectorXd& full) {
-  std::ostringstream csv;
-  csv.precision(10);
-  const SampleSet& samples = problem.samples();
-  csv << "sample";
-  for (int c = 0; c < samples.dimension(); ++c) {
-    csv << "," << (static_cast<std::size_t>(c) < samples.coordinates.size() ? samples.coordinates[static_cast<std::size_t>(c)] : "c" + std::to_string(c));
-  }
-  csv << ",status";
-  for (const MetricEntry& m : problem.metrics()) {
-    for (const LocalValue& l : m.metric->locals()) csv << "," << m.plugin << "." << l.name;
-  }
-  csv << "\n";
-  // Every sample is classified, even past the first unreachable one: evaluate one at a time.
-  std::vector<int> one(1);
-  Eigen::VectorXd free_design(static_cast<Eigen::Index>(problem.dimension()));
-  for (std::size_t k = 0; k < problem.dimension(); ++k) {
-    free_design[static_cast<Eigen::Index>(k)] = full[problem.design_space().free_indices()[k]];
-  }
-  auto ws = problem.make_workspace();
-  for (int i = 0; i < samples.size(); ++i) {
-    std::ostringstream row;
-    row.precision(10);
-    row << i;
-    for (int c = 0; c < samples.dimension(); ++c) row << "," << samples.poses(i, c);
-    bool written = false;
-    SampleCallback record = [&](int, const SampleQuantities& q, const std::vector<std::vector<double>>& locals) {
-      row << "," << to_string(q.status);
-      for (const auto& metric_locals : locals) {
-        for (double v : metric_locals) row << "," << v;
-      }
-      written = true;
-    };
-    EvalOptions options;
-    one[0] = i;
-    options.subset = &one;
-    options.on_sample = &record;
-    const Evaluation& e = problem.evaluate(free_design.data(), *ws, options);
-    if (!written) {
-      row << "," << (e.status == EvalStatus::kSampleFailed ? to_string(e.failed_status) : to_string(e.status));
-      for (const MetricEntry& m : problem.metrics()) {
-        for (std::size_t k = 0; k < m.metric->locals().size(); ++k) row << ",";
-      }
-    }
-    csv << row.str() << "\n";
-  }
-  return csv.str();
-}
-
 }  // namespace
 
 Json run_study(Study& study, const RunOptions& options) {
@@ -505,9 +457,23 @@ Json run_study(Study& study, const RunOptions& options) {
   doc["statistics"] = result.statistics;
   doc["files"] = Json::object();
   const bool want_samples = options.write_samples && resolved["output"].value("samples_csv", true);
-  if (result.best && want_samples) {
-    write_file_atomically((fs::path(out_dir) / "samples.csv").string(), samples_csv(*study.problem, result.best->design));
-    doc["files"]["samples"] = "samples.csv";
+  const bool want_maps = options.write_samples && resolved["output"].value("maps", true);
+  if (result.best && (want_samples || want_maps)) {
+    const SampleRecords records = record_samples(*study.problem, result.best->design);
+    if (want_samples) {
+      write_file_atomically((fs::path(out_dir) / "samples.csv").string(), samples_csv(*study.problem, records));
+      doc["files"]["samples"] = "samples.csv";
+    }
+    if (want_maps) {
+      const PositionMaps maps = position_maps(*study.problem, records);
+      write_file_atomically((fs::path(out_dir) / "maps.csv").string(), maps_csv(maps));
+      doc["files"]["maps"] = "maps.csv";
+      if (resolved["output"].value("plots", false)) {
+        std::string message;
+        doc["files"]["plots"] = plot_maps(maps, out_dir, message);
+        if (!message.empty()) doc["plot_message"] = message;
+      }
+    }
   }
   doc["output_directory"] = out_dir;
   write_file_atomically((fs::path(out_dir) / "result.json").string(), doc.dump(2) + "\n");

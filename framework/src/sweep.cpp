@@ -1,6 +1,7 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/study.hpp>
 #include <hapsyn/sweep.hpp>
+#include <hapsyn/plot.hpp>
 
 #include <boost/filesystem.hpp>
 
@@ -161,7 +162,7 @@ std::string csv_cell(const Json& v) {
 }
 
 void write_plot(const fs::path& dir, std::ostream& log) {
-  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) {
+  if (!gnuplot_available()) {
     log << "sweep: gnuplot not found; no plot written (the CSV has the data)\n";
     return;
   }
@@ -179,8 +180,8 @@ void write_plot(const fs::path& dir, std::ostream& log) {
              "column('objective_error') : 1/0):(column('label')) with labels offset 1,1 font ',8'\n";
     }
   }
-  const std::string command = "gnuplot '" + script.string() + "' > /dev/null 2>&1";
-  if (std::system(command.c_str()) != 0) log << "sweep: gnuplot failed; see " << script.string() << "\n";
+  const std::string why = run_gnuplot(dir.string(), "sweep.gnuplot");
+  if (!why.empty()) log << "sweep: " << why << "\n";
 }
 
 }  // namespace

@@ -99,8 +99,9 @@ class Problem {
   bool worst_case() const { return worst_case_; }
   /// Union of the metrics' needs: what the mechanism computes per sample, and nothing else.
   Needs needs() const { return needs_; }
-  /// Sample order used for full evaluations: the scene's extreme samples first (far from the
-  /// centroid), so infeasible designs and worst cases are met early. Deterministic.
+  /// Sample order used for full evaluations. With a worst-case metric: the scene's extreme
+  /// samples first (far from the centroid), so infeasible designs and worst cases are met early;
+  /// otherwise the scene's own order (cache-friendly; nothing to decide early). Deterministic.
   const std::vector<int>& sample_order() const { return order_; }
 
   /// Per-thread evaluation state (mechanism scratch, accumulators). Not shareable; its

@@ -25,10 +25,19 @@ namespace fs = boost::filesystem;
 
 std::string show(const Json& v) { return v.dump(); }
 
-double wrap(double angle) {  // into [-pi, pi)
-  double r = std::fmod(angle + kPi, 2.0 * kPi);
-  if (r < 0.0) r += 2.0 * kPi;
-  return r - kPi;
+// Into [-pi, pi). IK angles are sums of a few atan2 values (|angle| < 6 pi), so the common
+// case is one comparison; floor() instead of fmod() keeps the per-sample loop cheap.
+inline double wrap(double angle) {
+  if (angle >= -kPi && angle < kPi) return angle;
+  double r = angle - 2.0 * kPi * std::floor((angle + kPi) / (2.0 * kPi));
+  if (r >= kPi) r -= 2.0 * kPi;
+  if (r < -kPi) r += 2.0 * kPi;
+  return r;
+}
+
+// Rotation of one DH row from cos/sin of its angle (no trigonometric call).
+inline void dh_rotation(double ct, double st, double ca, double sa, Eigen::Matrix3d& rot) {
+  rot << ct, -st * ca, st * sa, st, ct * ca, -ct * sa, 0.0, sa, ca;
 }
 
 Json read_json_file(const std::string& path) {
@@ -349,15 +358,91 @@ Eigen::Vector4d Haptic6RModel::dh_row(int i) const {
   return Eigen::Vector4d(offset_[k], d_[k], a_[k], std::atan2(sa_[k], ca_[k]));
 }
 
-void Haptic6RModel::frames(const Vector6d& q, std::array<Eigen::Isometry3d, 7>& out) const {
-  out[0].setIdentity();
+namespace {
+// The chain's DH frames as rotation + origin in B (lighter than Isometry3d in the per-sample
+// path): rot[i], origin[i] of frame i = 0..6.
+struct Chain {
+  std::array<Eigen::Matrix3d, 7> rot;
+  std::array<Eigen::Vector3d, 7> origin;
+};
+}  // namespace
+
+namespace {
+void chain_from(const Vector6d& q, const std::array<double, 6>& offset, const std::array<double, 6>& d,
+                const std::array<double, 6>& a, const std::array<double, 6>& ca, const std::array<double, 6>& sa,
+                Chain& c) {
+  c.rot[0].setIdentity();
+  c.origin[0].setZero();
   Eigen::Matrix3d rot;
   Eigen::Vector3d t;
   for (std::size_t i = 0; i < 6; ++i) {
-    dh_transform(q(static_cast<Eigen::Index>(i)) + offset_[i], d_[i], a_[i], ca_[i], sa_[i], rot, t);
-    out[i + 1].linear() = out[i].linear() * rot;
-    out[i + 1].translation() = out[i].translation() + out[i].linear() * t;
-    out[i + 1].makeAffine();
+    dh_transform(q(static_cast<Eigen::Index>(i)) + offset[i], d[i], a[i], ca[i], sa[i], rot, t);
+    c.rot[i + 1].noalias() = c.rot[i] * rot;
+    c.origin[i + 1].noalias() = c.origin[i] + c.rot[i] * t;
+  }
+}
+
+Matrix6d jacobian_from(const Chain& c) {
+  Matrix6d j;
+  const Eigen::Vector3d& p = c.origin[6];
+  for (std::size_t i = 0; i < 6; ++i) {
+    const Eigen::Vector3d z = c.rot[i].col(2);
+    j.block<3, 1>(0, static_cast<Eigen::Index>(i)) = z;
+    j.block<3, 1>(3, static_cast<Eigen::Index>(i)) = z.cross(p - c.origin[i]);
+  }
+  return j;
+}
+
+// Composite rigid bodies in B, accumulated about the base origin so that adding a body needs no
+// division or centre-of-mass shift: composite j (bodies j..5) has mass M, first moment h = M c
+// and inertia K about the origin. A unit rate of joint j (axis z_j through o_j) gives it the
+// linear momentum P = z_j x (h - M o_j) and the angular momentum about the origin
+// L = K z_j - h x (z_j x o_j); then H_ij = z_i . (L - o_i x P) = z_i . L - (z_i x o_i) . P for
+// i <= j, and the holding torque tau_j = z_j . ((h - M o_j) x g e_z).
+void dynamics_from(const Chain& c, const std::array<Haptic6RBody, 6>& bodies, double g, Matrix6d* inertia,
+                   Vector6d* gravity) {
+  double mass = 0.0;
+  Eigen::Vector3d first_moment = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d origin_inertia = Eigen::Matrix3d::Zero();
+  std::array<Eigen::Vector3d, 6> moment_arm;  // z_i x o_i
+  for (std::size_t i = 0; i < 6; ++i) moment_arm[i] = c.rot[i].col(2).cross(c.origin[i]);
+  for (int j = 5; j >= 0; --j) {
+    const std::size_t k = static_cast<std::size_t>(j);
+    const Haptic6RBody& b = bodies[k];
+    if (b.mass > 0.0) {
+      const Eigen::Matrix3d& r = c.rot[k + 1];
+      const Eigen::Vector3d com = c.origin[k + 1] + r * b.com;
+      const Eigen::Matrix3d rotated = r * b.inertia;
+      origin_inertia.noalias() += rotated * r.transpose();
+      origin_inertia += b.mass * parallel_axis(com);
+      first_moment += b.mass * com;
+      mass += b.mass;
+    }
+    const Eigen::Vector3d zj = c.rot[k].col(2);
+    const Eigen::Vector3d lever = first_moment - mass * c.origin[k];  // M (c - o_j)
+    if (inertia) {
+      const Eigen::Vector3d momentum = zj.cross(lever);
+      const Eigen::Vector3d angular = origin_inertia * zj - first_moment.cross(zj.cross(c.origin[k]));
+      for (int i = 0; i <= j; ++i) {
+        const std::size_t m = static_cast<std::size_t>(i);
+        const double h = c.rot[m].col(2).dot(angular) - moment_arm[m].dot(momentum);
+        (*inertia)(i, j) = h;
+        (*inertia)(j, i) = h;
+      }
+    }
+    // lever x e_z = (lever_y, -lever_x, 0).
+    if (gravity) (*gravity)(j) = g * (zj.x() * lever.y() - zj.y() * lever.x());
+  }
+}
+}  // namespace
+
+void Haptic6RModel::frames(const Vector6d& q, std::array<Eigen::Isometry3d, 7>& out) const {
+  Chain c;
+  chain_from(q, offset_, d_, a_, ca_, sa_, c);
+  for (std::size_t i = 0; i < 7; ++i) {
+    out[i].setIdentity();
+    out[i].linear() = c.rot[i];
+    out[i].translation() = c.origin[i];
   }
 }
 
@@ -367,75 +452,23 @@ Eigen::Isometry3d Haptic6RModel::forward(const Vector6d& q) const {
   return f[6];
 }
 
-namespace {
-Matrix6d jacobian_from(const std::array<Eigen::Isometry3d, 7>& f) {
-  Matrix6d j;
-  const Eigen::Vector3d p = f[6].translation();
-  for (int i = 0; i < 6; ++i) {
-    const Eigen::Vector3d z = f[static_cast<std::size_t>(i)].linear().col(2);
-    j.block<3, 1>(0, i) = z;
-    j.block<3, 1>(3, i) = z.cross(p - f[static_cast<std::size_t>(i)].translation());
-  }
-  return j;
-}
-}  // namespace
-
 Matrix6d Haptic6RModel::jacobian(const Vector6d& q) const {
-  std::array<Eigen::Isometry3d, 7> f;
-  frames(q, f);
-  return jacobian_from(f);
+  Chain c;
+  chain_from(q, offset_, d_, a_, ca_, sa_, c);
+  return jacobian_from(c);
 }
-
-namespace {
-// Composite rigid bodies in the base frame: H_ij = z_i . (I_j^C z_j + (c_j^C - o_i) x M_j (z_j x (c_j^C - o_j)))
-// for i <= j, and the holding torque tau_i = z_i . ((c_i^C - o_i) x M_i g e_z).
-void dynamics_from(const std::array<Eigen::Isometry3d, 7>& f, const std::array<Haptic6RBody, 6>& bodies, double g,
-                   Matrix6d* inertia, Vector6d* gravity) {
-  double mass = 0.0;
-  Eigen::Vector3d com = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d rot_inertia = Eigen::Matrix3d::Zero();
-  for (int j = 5; j >= 0; --j) {
-    const std::size_t k = static_cast<std::size_t>(j);
-    const Haptic6RBody& b = bodies[k];
-    const Eigen::Matrix3d& r = f[k + 1].linear();
-    if (b.mass > 0.0) {
-      const Eigen::Vector3d c = f[k + 1] * b.com;
-      const double total = mass + b.mass;
-      const Eigen::Vector3d new_com = (mass * com + b.mass * c) / total;
-      rot_inertia = rot_inertia + mass * parallel_axis(com - new_com) + r * b.inertia * r.transpose() +
-                    b.mass * parallel_axis(c - new_com);
-      com = new_com;
-      mass = total;
-    }
-    const Eigen::Vector3d zj = f[k].linear().col(2);
-    const Eigen::Vector3d oj = f[k].translation();
-    if (inertia) {
-      const Eigen::Vector3d force = mass * zj.cross(com - oj);
-      const Eigen::Vector3d moment = rot_inertia * zj;
-      for (int i = 0; i <= j; ++i) {
-        const std::size_t m = static_cast<std::size_t>(i);
-        const Eigen::Vector3d zi = f[m].linear().col(2);
-        const double h = zi.dot(moment + (com - f[m].translation()).cross(force));
-        (*inertia)(i, j) = h;
-        (*inertia)(j, i) = h;
-      }
-    }
-    if (gravity) (*gravity)(j) = zj.dot((com - oj).cross(Eigen::Vector3d(0.0, 0.0, mass * g)));
-  }
-}
-}  // namespace
 
 void Haptic6RModel::dynamics(const Vector6d& q, Matrix6d* inertia, Vector6d* gravity) const {
-  std::array<Eigen::Isometry3d, 7> f;
-  frames(q, f);
-  dynamics_from(f, bodies_, options_->gravity, inertia, gravity);
+  Chain c;
+  chain_from(q, offset_, d_, a_, ca_, sa_, c);
+  dynamics_from(c, bodies_, options_->gravity, inertia, gravity);
 }
 
 void Haptic6RModel::quantities(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const {
-  std::array<Eigen::Isometry3d, 7> f;
-  frames(q, f);
-  if (jacobian) *jacobian = jacobian_from(f);
-  if (inertia || gravity) dynamics_from(f, bodies_, options_->gravity, inertia, gravity);
+  Chain c;
+  chain_from(q, offset_, d_, a_, ca_, sa_, c);
+  if (jacobian) *jacobian = jacobian_from(c);
+  if (inertia || gravity) dynamics_from(c, bodies_, options_->gravity, inertia, gravity);
 }
 
 int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions) const {
@@ -458,40 +491,69 @@ int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::arra
   if (std::abs(s4) > 1.0 + kBoundaryTolerance) return 0;
   s4 = std::clamp(s4, -1.0, 1.0);
   const double c4_abs = std::sqrt(std::max(0.0, 1.0 - s4 * s4));
-  int count = 0;
-  for (int hs = 0; hs < 2; ++hs) {
-    const Eigen::Vector3d h = hs == 0 ? hz : Eigen::Vector3d(-hz);
-    const Eigen::Vector3d x3(-h.y(), h.x(), 0.0);  // e_z x h
-    const double yaw = std::atan2(x3.y(), x3.x());
+
+  // The eight branches (h sign, theta4 branch, elbow) share most of their work: flipping h
+  // flips x3 = e_z x h (yaw + pi), and the wrist centre o = w - L4 cos(theta4) x3 depends only
+  // on the product of the two signs, so the planar 2R solve (three atan2) is done for two
+  // points only; rotations are built from the cosines and sines at hand, not from angles.
+  struct Planar {
+    bool valid = false;
+    double c2 = 0.0, theta2 = 0.0, phi = 0.0, beta = 0.0;  // theta1 = phi -+ beta, theta2 = +-theta2
+  };
+  std::array<Planar, 2> planar;
+  for (int k = 0; k < 2; ++k) {
+    const double c4x3 = (k == 0 ? c4_abs : -c4_abs) * L4;  // L4 c4 times the sign of x3
+    const double ox = w.x() + c4x3 * hz.y(), oy = w.y() - c4x3 * hz.x();  // x3 = (-h_y, h_x, 0)
+    double c2 = (ox * ox + oy * oy - L1 * L1 - L2 * L2) / (2.0 * L1 * L2);
+    if (std::abs(c2) > 1.0 + kBoundaryTolerance) continue;
+    c2 = std::clamp(c2, -1.0, 1.0);
+    const double s2_abs = std::sqrt(std::max(0.0, 1.0 - c2 * c2));
+    Planar& p = planar[static_cast<std::size_t>(k)];
+    p.valid = true;
+    p.c2 = c2;
+    p.theta2 = std::atan2(s2_abs, c2);
+    p.phi = std::atan2(oy, ox);
+    p.beta = std::atan2(L2 * s2_abs, L1 + L2 * c2);
+  }
+  const double yaw0 = std::atan2(hz.x(), -hz.y());
+  const double theta4_branch[2] = {std::atan2(s4, c4_abs), std::atan2(s4, -c4_abs)};
+  // Wrist angles for h = +hz. Flipping h and the theta4 branch together turns R_04 into
+  // R_04 Rx(pi) (x3 -> -x3, cos theta4 -> -cos theta4), which maps theta5 -> pi - theta5 and
+  // theta6 -> theta6 + pi: the h = -hz branches reuse these (two atan2 pairs instead of four).
+  double wrist5[2] = {0.0, 0.0}, wrist6[2] = {0.0, 0.0};
+  const Eigen::Vector3d x_e = rot.col(0);
+  {
+    Eigen::Matrix3d r3;
+    dh_rotation(-hz.y(), hz.x(), ca_[2], sa_[2], r3);
     for (int b4 = 0; b4 < 2; ++b4) {
-      const double c4 = b4 == 0 ? c4_abs : -c4_abs;
-      const double theta4 = std::atan2(s4, c4);
-      const double ox = w.x() - L4 * c4 * x3.x(), oy = w.y() - L4 * c4 * x3.y();
-      const double r2 = ox * ox + oy * oy;
-      double c2 = (r2 - L1 * L1 - L2 * L2) / (2.0 * L1 * L2);
-      if (std::abs(c2) > 1.0 + kBoundaryTolerance) continue;
-      c2 = std::clamp(c2, -1.0, 1.0);
-      const double s2_abs = std::sqrt(std::max(0.0, 1.0 - c2 * c2));
-      // Rotation of frame 4 (depends on yaw and theta4 only).
-      Eigen::Matrix3d r3, r4;
-      Eigen::Vector3d t;
-      dh_transform(yaw, 0.0, 0.0, ca_[2], sa_[2], r3, t);
-      dh_transform(theta4, 0.0, 0.0, ca_[3], sa_[3], r4, t);
+      if (!planar[static_cast<std::size_t>(b4)].valid) continue;  // used by (+hz, b4) and (-hz, 1 - b4) only
+      Eigen::Matrix3d r4, r5;
+      dh_rotation(b4 == 0 ? c4_abs : -c4_abs, s4, ca_[3], sa_[3], r4);
       const Eigen::Matrix3d r04 = r3 * r4;
       const Eigen::Vector3d a4 = r04.transpose() * approach;
       // z_5 in frame 4 is Rz(theta5) (0, -sin alpha5, cos alpha5) = (sin theta5, -cos theta5, 0).
-      const double theta5 = std::atan2(a4.x(), -a4.y());
-      Eigen::Matrix3d r5;
-      dh_transform(theta5, 0.0, 0.0, ca_[4], sa_[4], r5, t);
-      const Eigen::Matrix3d r56 = (r04 * r5).transpose() * rot;
-      const double theta6 = std::atan2(r56(1, 0), r56(0, 0));
+      wrist5[b4] = std::atan2(a4.x(), -a4.y());
+      const double n5 = std::hypot(a4.x(), a4.y());  // 1 up to rounding: the approach is normal to h
+      dh_rotation(n5 > 0.0 ? -a4.y() / n5 : 1.0, n5 > 0.0 ? a4.x() / n5 : 0.0, ca_[4], sa_[4], r5);
+      // theta6 from x_E in frame 5: (x_5 . x_E, y_5 . x_E).
+      const Eigen::Vector3d x5 = r04 * r5.col(0), y5 = r04 * r5.col(1);
+      wrist6[b4] = std::atan2(y5.dot(x_e), x5.dot(x_e));
+    }
+  }
+  int count = 0;
+  for (int hs = 0; hs < 2; ++hs) {
+    const double yaw = hs == 0 ? yaw0 : yaw0 + kPi;
+    for (int b4 = 0; b4 < 2; ++b4) {
+      const Planar& p = planar[static_cast<std::size_t>(hs ^ b4)];
+      if (!p.valid) continue;
+      const double theta5 = hs == 0 ? wrist5[b4] : kPi - wrist5[1 - b4];
+      const double theta6 = hs == 0 ? wrist6[b4] : wrist6[1 - b4] + kPi;
       for (int b2 = 0; b2 < 2; ++b2) {
-        const double s2 = b2 == 0 ? s2_abs : -s2_abs;
-        const double theta2 = std::atan2(s2, c2);
-        const double theta1 = std::atan2(oy, ox) - std::atan2(L2 * s2, L1 + L2 * c2);
+        const double theta2 = b2 == 0 ? p.theta2 : -p.theta2;
+        const double theta1 = b2 == 0 ? p.phi - p.beta : p.phi + p.beta;
         const double theta3 = yaw - theta1 - theta2;
         Vector6d& q = solutions[static_cast<std::size_t>(count++)];
-        q << theta1, theta2, theta3, theta4, theta5, theta6;
+        q << theta1, theta2, theta3, theta4_branch[b4], theta5, theta6;
         for (int i = 0; i < 6; ++i) q(i) = wrap(q(i) - offset_[static_cast<std::size_t>(i)]);
       }
     }
@@ -507,6 +569,7 @@ int Haptic6RModel::select(const std::array<Vector6d, 8>& solutions, int count) c
     const Vector6d& q = solutions[static_cast<std::size_t>(k)];
     bool inside = true;
     for (int i = 0; i < 6 && inside; ++i) {
+      if (q(i) >= o.joint_lower(i) && q(i) <= o.joint_upper(i)) continue;  // the common case
       // The representative of q_i in [lower, lower + 2 pi) must not exceed upper (with tolerance).
       double v = q(i);
       while (v < o.joint_lower(i) - kHaptic6RAngleTolerance) v += 2.0 * kPi;
@@ -582,8 +645,8 @@ void Haptic6RModel::solve(const double* pose, Needs needs, MechanismScratch&, Sa
   }
   out.status = SampleStatus::kReachable;
   if (needs & (kNeedJacobian | kNeedInertia | kNeedGravity)) {
-    std::array<Eigen::Isometry3d, 7> f;
-    frames(q, f);
+    Chain f;
+    chain_from(q, offset_, d_, a_, ca_, sa_, f);
     if (needs & kNeedJacobian) out.jacobian = jacobian_from(f);
     if (needs & (kNeedInertia | kNeedGravity)) {
       Matrix6d h;

@@ -4,7 +4,6 @@
 
 #include <hapsyn/error.hpp>
 
-#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 
@@ -15,7 +14,8 @@ constexpr const char* kName = "coverage";
 
 // min(1, min_i limit_i / (max_j |M_ij| + extra_i)), never NaN: a zero denominator leaves 1, a
 // non-finite one (singular solve) gives 0.
-double ratio_eta(const Coverage::Matrix6& m, const Coverage::Vector6& limit, const Coverage::Vector6* extra) {
+template <typename Derived>
+double ratio_eta(const Eigen::MatrixBase<Derived>& m, const Coverage::Vector6& limit, const Coverage::Vector6* extra) {
   double eta = 1.0;
   for (int i = 0; i < 6; ++i) {
     double need = m.row(i).cwiseAbs().maxCoeff();
@@ -89,15 +89,16 @@ std::vector<LocalValue> Coverage::locals() const {
 }
 
 double Coverage::eta_velocity(const Matrix6& jacobian, const Matrix6& m_v, const Vector6& max_velocity) {
-  const Eigen::PartialPivLU<Matrix6> lu(jacobian);
-  const Matrix6 a = lu.solve(m_v);
+  Matrix6 a = m_v;
+  if (!solve_jacobian(jacobian, a)) return 0.0;
   return ratio_eta(a, max_velocity, nullptr);
 }
 
 double Coverage::eta_acceleration(const Matrix6& jacobian, const Matrix6& inertia, const Vector6& gravity,
                                   const Matrix6& m_a, const Vector6& max_torque) {
-  const Eigen::PartialPivLU<Matrix6> lu(jacobian);
-  const Matrix6 b = inertia * lu.solve(m_a);
+  Matrix6 x = m_a;
+  if (!solve_jacobian(jacobian, x)) return 0.0;
+  const Matrix6 b = inertia.lazyProduct(x);
   return ratio_eta(b, max_torque, &gravity);
 }
 
@@ -144,18 +145,20 @@ void Coverage::local(const SampleQuantities& q, double* out) const {
   }
   const Matrix6 jac = q.jacobian;
   const Vector6 gravity = (acceleration_ || force_) ? Vector6(q.gravity) : Vector6::Zero();
-  // One LU of J serves both the velocity and the acceleration term.
-  Eigen::PartialPivLU<Matrix6> lu;
-  if (velocity_ || acceleration_) lu.compute(jac);
-  if (velocity_) {
-    const Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> m_v(attribute_row(q, "M_v", "velocity"));
-    const Matrix6 a = lu.solve(Matrix6(m_v));
-    out[k++] = ratio_eta(a, Vector6(q.max_velocity), nullptr);
-  }
-  if (acceleration_) {
-    const Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> m_a(attribute_row(q, "M_a", "acceleration"));
-    const Matrix6 b = Matrix6(q.inertia) * lu.solve(Matrix6(m_a));
-    out[k++] = ratio_eta(b, Vector6(q.max_torque), &gravity);
+  // One elimination of J serves both the velocity and the acceleration term: [M_v | M_a].
+  if (velocity_ || acceleration_) {
+    using RowMajor6 = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
+    Eigen::Matrix<double, 6, 12> rhs;
+    if (velocity_) rhs.leftCols<6>() = Eigen::Map<const RowMajor6>(attribute_row(q, "M_v", "velocity"));
+    if (acceleration_) rhs.rightCols<6>() = Eigen::Map<const RowMajor6>(attribute_row(q, "M_a", "acceleration"));
+    if (!velocity_) rhs.leftCols<6>().setZero();
+    if (!acceleration_) rhs.rightCols<6>().setZero();
+    const bool solved = solve_jacobian(jac, rhs);  // false: J singular, the terms give 0
+    if (velocity_) out[k++] = solved ? ratio_eta(rhs.leftCols<6>(), Vector6(q.max_velocity), nullptr) : 0.0;
+    if (acceleration_) {
+      const Matrix6 b = Matrix6(q.inertia).lazyProduct(rhs.rightCols<6>());
+      out[k++] = solved ? ratio_eta(b, Vector6(q.max_torque), &gravity) : 0.0;
+    }
   }
   if (force_) out[k++] = eta_force(jac, gravity, Vector6(q.max_torque), m_max_, f_max_);
 }

@@ -1,0 +1,52 @@
+#pragma once
+/// \file
+/// Per-sample records and per-position maps of one design: what a user plots as the
+/// distribution of a metric over the workspace (Fennel 2022, Figure 5; Unal 2008, Figure 2).
+#include <hapsyn/problem.hpp>
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace hapsyn {
+
+/// Every sample of one design, each evaluated on its own so that every one is classified, also
+/// past the first unreachable one (where a worst-case evaluation stops).
+struct SampleRecords {
+  std::vector<std::string> status;  ///< per sample: "reachable", "unreachable", ...
+  std::vector<char> has_locals;     ///< per sample: 1 when the metrics' local values were computed
+  Eigen::MatrixXd locals;           ///< samples x (all metrics' locals, in Metric::locals() order)
+};
+
+/// Evaluates `full_design` (all components) sample by sample. \throws Error as Problem::evaluate.
+SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full_design);
+
+/// samples.csv: sample, the scene coordinates, status, then <metric>.<local> per metric.
+std::string samples_csv(const Problem& problem, const SampleRecords& records);
+
+/// Every objective's value per workspace position: the samples at one position (one lattice
+/// point of a lattice scene such as human_arm, else equal x, y, z coordinates) are reduced as
+/// the metric reduces the whole scene and combined by Metric::combine. For the coverage metric
+/// this is the per-position J_x (reachable share of the human poses there), J_v, J_a, J_f.
+struct PositionMaps {
+  std::vector<std::string> objectives;  ///< column names (the objectives' names)
+  std::vector<Eigen::Vector3d> position;  ///< per position: x, y, z scene coordinates (0 when absent)
+  std::vector<int> samples;               ///< per position: samples there
+  std::vector<int> lattice_index;         ///< per position: lattice point (lattice scenes), else -1
+  Eigen::MatrixXd values;                 ///< positions x objectives; NaN = undefined (a worst-case
+                                          ///< metric met an unreachable sample there)
+  int lattice_per_axis = 0;               ///< > 0 for lattice scenes
+  double lattice_step = 0.0;              ///< [m]
+};
+
+PositionMaps position_maps(const Problem& problem, const SampleRecords& records);
+
+/// maps.csv: position, x, y, z, samples, one column per objective (empty = undefined).
+std::string maps_csv(const PositionMaps& maps);
+
+/// Writes map_<objective>.{dat,gp,png} into `directory` (height slices for lattice scenes,
+/// an x-y scatter otherwise). \return the file names of the plots rendered, and in `message`
+/// why some were not (gnuplot missing or failing; the data and scripts are written regardless).
+std::vector<std::string> plot_maps(const PositionMaps& maps, const std::string& directory, std::string& message);
+
+}  // namespace hapsyn

@@ -1,0 +1,259 @@
+#include <hapsyn/error.hpp>
+#include <hapsyn/maps.hpp>
+#include <hapsyn/plot.hpp>
+#include <hapsyn/study.hpp>
+
+#include <boost/filesystem.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <tuple>
+
+namespace hapsyn {
+
+SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full) {
+  const SampleSet& samples = problem.samples();
+  std::size_t total_locals = 0;
+  for (const MetricEntry& m : problem.metrics()) total_locals += m.metric->locals().size();
+  SampleRecords records;
+  records.status.resize(static_cast<std::size_t>(samples.size()));
+  records.has_locals.assign(static_cast<std::size_t>(samples.size()), 0);
+  records.locals.setZero(samples.size(), static_cast<Eigen::Index>(total_locals));
+  Eigen::VectorXd free_design(static_cast<Eigen::Index>(problem.dimension()));
+  for (std::size_t k = 0; k < problem.dimension(); ++k) {
+    free_design[static_cast<Eigen::Index>(k)] = full[problem.design_space().free_indices()[k]];
+  }
+  auto ws = problem.make_workspace();
+  std::vector<int> one(1);
+  const SampleCallback record = [&](int sample, const SampleQuantities& q, const std::vector<std::vector<double>>& locals) {
+    const std::size_t i = static_cast<std::size_t>(sample);
+    records.status[i] = to_string(q.status);
+    Eigen::Index c = 0;
+    for (const auto& metric_locals : locals) {
+      for (double v : metric_locals) records.locals(sample, c++) = v;
+    }
+    records.has_locals[i] = 1;
+  };
+  EvalOptions options;
+  options.subset = &one;
+  options.on_sample = &record;
+  for (int current = 0; current < samples.size(); ++current) {
+    one[0] = current;
+    const Evaluation& e = problem.evaluate(free_design.data(), *ws, options);
+    const std::size_t i = static_cast<std::size_t>(current);
+    if (!records.has_locals[i]) {
+      records.status[i] = e.status == EvalStatus::kSampleFailed ? to_string(e.failed_status) : to_string(e.status);
+    }
+  }
+  return records;
+}
+
+std::string samples_csv(const Problem& problem, const SampleRecords& records) {
+  std::ostringstream csv;
+  csv.precision(10);
+  const SampleSet& samples = problem.samples();
+  csv << "sample";
+  for (int c = 0; c < samples.dimension(); ++c) {
+    csv << "," << (static_cast<std::size_t>(c) < samples.coordinates.size() ? samples.coordinates[static_cast<std::size_t>(c)] : "c" + std::to_string(c));
+  }
+  csv << ",status";
+  for (const MetricEntry& m : problem.metrics()) {
+    for (const LocalValue& l : m.metric->locals()) csv << "," << m.plugin << "." << l.name;
+  }
+  csv << "\n";
+  for (int i = 0; i < samples.size(); ++i) {
+    csv << i;
+    for (int c = 0; c < samples.dimension(); ++c) csv << "," << samples.poses(i, c);
+    csv << "," << records.status[static_cast<std::size_t>(i)];
+    for (Eigen::Index c = 0; c < records.locals.cols(); ++c) {
+      csv << ",";
+      if (records.has_locals[static_cast<std::size_t>(i)]) csv << records.locals(i, c);
+    }
+    csv << "\n";
+  }
+  return csv.str();
+}
+
+PositionMaps position_maps(const Problem& problem, const SampleRecords& records) {
+  const SampleSet& samples = problem.samples();
+  PositionMaps maps;
+  for (const Objective& o : problem.objectives()) maps.objectives.push_back(o.name);
+
+  // Which coordinates are the position: those named x, y, z.
+  std::array<int, 3> axis{-1, -1, -1};
+  for (std::size_t c = 0; c < samples.coordinates.size(); ++c) {
+    const std::string& name = samples.coordinates[c];
+    if (name == "x") axis[0] = static_cast<int>(c);
+    if (name == "y") axis[1] = static_cast<int>(c);
+    if (name == "z") axis[2] = static_cast<int>(c);
+  }
+  const auto lattice = samples.attributes.find("lattice_index");
+  const bool is_lattice = lattice != samples.attributes.end() && samples.info.contains("lattice_per_axis") &&
+                          samples.info.contains("lattice_step");
+  if (is_lattice) {
+    maps.lattice_per_axis = samples.info["lattice_per_axis"].get<int>();
+    maps.lattice_step = samples.info["lattice_step"].get<double>();
+  }
+
+  // Group samples by position, in order of first appearance (deterministic).
+  std::vector<int> group(static_cast<std::size_t>(samples.size()));
+  std::map<std::tuple<double, double, double>, int> by_position;
+  std::map<long long, int> by_lattice;
+  for (int i = 0; i < samples.size(); ++i) {
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    for (int a = 0; a < 3; ++a) {
+      if (axis[static_cast<std::size_t>(a)] >= 0) p[a] = samples.poses(i, axis[static_cast<std::size_t>(a)]);
+    }
+    int g;
+    if (is_lattice) {
+      const long long key = std::llround(lattice->second(i, 0));
+      const auto [it, inserted] = by_lattice.emplace(key, static_cast<int>(maps.position.size()));
+      g = it->second;
+      if (inserted) maps.lattice_index.push_back(static_cast<int>(key));
+    } else {
+      const auto [it, inserted] = by_position.emplace(std::make_tuple(p[0], p[1], p[2]), static_cast<int>(maps.position.size()));
+      g = it->second;
+      if (inserted) maps.lattice_index.push_back(-1);
+    }
+    if (g == static_cast<int>(maps.position.size())) {
+      maps.position.push_back(p);
+      maps.samples.push_back(0);
+    }
+    group[static_cast<std::size_t>(i)] = g;
+    ++maps.samples[static_cast<std::size_t>(g)];
+  }
+
+  // Per group and metric: reduce the locals as the evaluator does, then combine.
+  const std::size_t groups = maps.position.size();
+  std::vector<int> offset;
+  std::vector<Reduction> reduction;
+  for (const MetricEntry& m : problem.metrics()) {
+    offset.push_back(static_cast<int>(reduction.size()));
+    for (const LocalValue& l : m.metric->locals()) reduction.push_back(l.reduction);
+  }
+  const std::size_t total = reduction.size();
+  std::vector<double> reduced(groups * total);
+  for (std::size_t g = 0; g < groups; ++g) {
+    for (std::size_t k = 0; k < total; ++k) {
+      reduced[g * total + k] = reduction[k] == Reduction::kSum   ? 0.0
+                               : reduction[k] == Reduction::kMin ? std::numeric_limits<double>::infinity()
+                                                                 : -std::numeric_limits<double>::infinity();
+    }
+  }
+  std::vector<char> undefined(groups * problem.metrics().size(), 0);
+  for (int i = 0; i < samples.size(); ++i) {
+    const std::size_t g = static_cast<std::size_t>(group[static_cast<std::size_t>(i)]);
+    if (!records.has_locals[static_cast<std::size_t>(i)]) {
+      for (std::size_t m = 0; m < problem.metrics().size(); ++m) undefined[g * problem.metrics().size() + m] = 1;
+      continue;
+    }
+    for (std::size_t k = 0; k < total; ++k) {
+      double& r = reduced[g * total + k];
+      const double v = records.locals(i, static_cast<Eigen::Index>(k));
+      r = reduction[k] == Reduction::kSum ? r + v : reduction[k] == Reduction::kMin ? std::min(r, v) : std::max(r, v);
+    }
+  }
+  maps.values.resize(static_cast<Eigen::Index>(groups), static_cast<Eigen::Index>(problem.objectives().size()));
+  for (std::size_t g = 0; g < groups; ++g) {
+    for (std::size_t o = 0; o < problem.objectives().size(); ++o) {
+      const std::size_t m = static_cast<std::size_t>(problem.objectives()[o].metric);
+      const bool bad = undefined[g * problem.metrics().size() + m] != 0;
+      maps.values(static_cast<Eigen::Index>(g), static_cast<Eigen::Index>(o)) =
+          bad ? std::numeric_limits<double>::quiet_NaN()
+              : problem.metrics()[m].metric->combine(&reduced[g * total + static_cast<std::size_t>(offset[m])],
+                                                     maps.samples[g]);
+    }
+  }
+  return maps;
+}
+
+std::string maps_csv(const PositionMaps& maps) {
+  std::ostringstream csv;
+  csv.precision(10);
+  csv << "position,x,y,z,samples";
+  if (maps.lattice_per_axis > 0) csv << ",lattice_index";
+  for (const std::string& name : maps.objectives) csv << "," << name;
+  csv << "\n";
+  for (std::size_t g = 0; g < maps.position.size(); ++g) {
+    csv << g << "," << maps.position[g][0] << "," << maps.position[g][1] << "," << maps.position[g][2] << ","
+        << maps.samples[g];
+    if (maps.lattice_per_axis > 0) csv << "," << maps.lattice_index[g];
+    for (Eigen::Index o = 0; o < maps.values.cols(); ++o) {
+      const double v = maps.values(static_cast<Eigen::Index>(g), o);
+      csv << ",";
+      if (std::isfinite(v)) csv << v;
+    }
+    csv << "\n";
+  }
+  return csv.str();
+}
+
+namespace {
+std::string file_safe(const std::string& name) {
+  std::string s = name;
+  for (char& c : s) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-') c = '_';
+  }
+  return s;
+}
+}  // namespace
+
+std::vector<std::string> plot_maps(const PositionMaps& maps, const std::string& directory, std::string& message) {
+  namespace fs = boost::filesystem;
+  std::vector<std::string> plotted;
+  message.clear();
+  for (Eigen::Index o = 0; o < maps.values.cols(); ++o) {
+    const std::string& objective = maps.objectives[static_cast<std::size_t>(o)];
+    const std::string name = "map_" + file_safe(objective);
+    double top = 0.0;
+    for (Eigen::Index g = 0; g < maps.values.rows(); ++g) {
+      if (std::isfinite(maps.values(g, o))) top = std::max(top, maps.values(g, o));
+    }
+    const double colour_max = top <= 1.0 ? 1.0 : top;
+    std::string why;
+    if (maps.lattice_per_axis > 0) {
+      LatticeField field;
+      field.per_axis = maps.lattice_per_axis;
+      field.step = maps.lattice_step;
+      const std::size_t n = static_cast<std::size_t>(maps.lattice_per_axis);
+      field.values.assign(n * n * n, std::numeric_limits<double>::quiet_NaN());
+      for (std::size_t g = 0; g < maps.position.size(); ++g) {
+        const std::size_t index = static_cast<std::size_t>(maps.lattice_index[g]);
+        if (index < field.values.size()) field.values[index] = maps.values(static_cast<Eigen::Index>(g), o);
+      }
+      why = plot_lattice_slices(directory, name, objective + " per position (positions without human poses blank)",
+                                field, colour_max);
+    } else {
+      std::ostringstream data, script;
+      data << "# x y " << objective << "\n";
+      for (std::size_t g = 0; g < maps.position.size(); ++g) {
+        const double v = maps.values(static_cast<Eigen::Index>(g), o);
+        data << maps.position[g][0] << " " << maps.position[g][1] << " ";
+        if (std::isfinite(v)) {
+          data << v << "\n";
+        } else {
+          data << "?\n";
+        }
+      }
+      script << "set terminal pngcairo size 640,560 font ',10'\nset output '" << name << ".png'\n"
+             << "set datafile missing '?'\nset termoption noenhanced\nset size ratio -1\nset palette rgbformulae 33,13,10\n"
+             << "set cbrange [0:" << colour_max << "]\nset xlabel 'x'\nset ylabel 'y'\nunset key\n"
+             << "set title '" << objective << " per position'\n"
+             << "plot '" << name << ".dat' using 1:2:3 with points pt 5 ps 0.6 palette\n";
+      write_file_atomically((fs::path(directory) / (name + ".dat")).string(), data.str());
+      write_file_atomically((fs::path(directory) / (name + ".gp")).string(), script.str());
+      why = run_gnuplot(directory, name + ".gp");
+    }
+    if (why.empty()) {
+      plotted.push_back(name + ".png");
+    } else if (message.empty()) {
+      message = why;
+    }
+  }
+  return plotted;
+}
+
+}  // namespace hapsyn
