@@ -368,18 +368,29 @@ struct Chain {
 }  // namespace
 
 namespace {
-void chain_from(const Vector6d& q, const std::array<double, 6>& offset, const std::array<double, 6>& d,
-                const std::array<double, 6>& a, const std::array<double, 6>& ca, const std::array<double, 6>& sa,
-                Chain& c) {
+void chain_from(const JointTrig& trig, const std::array<double, 6>& d, const std::array<double, 6>& a,
+                const std::array<double, 6>& ca, const std::array<double, 6>& sa, Chain& c) {
   c.rot[0].setIdentity();
   c.origin[0].setZero();
   Eigen::Matrix3d rot;
-  Eigen::Vector3d t;
   for (std::size_t i = 0; i < 6; ++i) {
-    dh_transform(q(static_cast<Eigen::Index>(i)) + offset[i], d[i], a[i], ca[i], sa[i], rot, t);
+    dh_rotation(trig.c[i], trig.s[i], ca[i], sa[i], rot);
+    const Eigen::Vector3d t(a[i] * trig.c[i], a[i] * trig.s[i], d[i]);
     c.rot[i + 1].noalias() = c.rot[i] * rot;
     c.origin[i + 1].noalias() = c.origin[i] + c.rot[i] * t;
   }
+}
+
+void chain_from(const Vector6d& q, const std::array<double, 6>& offset, const std::array<double, 6>& d,
+                const std::array<double, 6>& a, const std::array<double, 6>& ca, const std::array<double, 6>& sa,
+                Chain& c) {
+  JointTrig trig;
+  for (std::size_t i = 0; i < 6; ++i) {
+    const double theta = q(static_cast<Eigen::Index>(i)) + offset[i];
+    trig.c[i] = std::cos(theta);
+    trig.s[i] = std::sin(theta);
+  }
+  chain_from(trig, d, a, ca, sa, c);
 }
 
 Matrix6d jacobian_from(const Chain& c) {
@@ -471,7 +482,8 @@ void Haptic6RModel::quantities(const Vector6d& q, Matrix6d* jacobian, Matrix6d* 
   if (inertia || gravity) dynamics_from(c, bodies_, options_->gravity, inertia, gravity);
 }
 
-int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions) const {
+int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions,
+                                      std::array<JointTrig, 8>* trig) const {
   const double L1 = a_[0], L2 = a_[1], L3 = -d_[2], L4 = a_[3], L5 = d_[5];
   const Eigen::Matrix3d& rot = target.linear();
   const Eigen::Vector3d approach = rot.col(2);
@@ -499,6 +511,7 @@ int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::arra
   struct Planar {
     bool valid = false;
     double c2 = 0.0, theta2 = 0.0, phi = 0.0, beta = 0.0;  // theta1 = phi -+ beta, theta2 = +-theta2
+    double s2 = 0.0, cos_phi = 1.0, sin_phi = 0.0, cos_beta = 1.0, sin_beta = 0.0;
   };
   std::array<Planar, 2> planar;
   for (int k = 0; k < 2; ++k) {
@@ -514,6 +527,18 @@ int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::arra
     p.theta2 = std::atan2(s2_abs, c2);
     p.phi = std::atan2(oy, ox);
     p.beta = std::atan2(L2 * s2_abs, L1 + L2 * c2);
+    if (trig) {  // the same angles as cosines and sines, for the chosen solution's frames
+      p.s2 = s2_abs;
+      const double ro = std::hypot(ox, oy), rb = std::hypot(L1 + L2 * c2, L2 * s2_abs);
+      if (ro > 0.0) {
+        p.cos_phi = ox / ro;
+        p.sin_phi = oy / ro;
+      }
+      if (rb > 0.0) {
+        p.cos_beta = (L1 + L2 * c2) / rb;
+        p.sin_beta = L2 * s2_abs / rb;
+      }
+    }
   }
   const double yaw0 = std::atan2(hz.x(), -hz.y());
   const double theta4_branch[2] = {std::atan2(s4, c4_abs), std::atan2(s4, -c4_abs)};
@@ -521,6 +546,7 @@ int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::arra
   // R_04 Rx(pi) (x3 -> -x3, cos theta4 -> -cos theta4), which maps theta5 -> pi - theta5 and
   // theta6 -> theta6 + pi: the h = -hz branches reuse these (two atan2 pairs instead of four).
   double wrist5[2] = {0.0, 0.0}, wrist6[2] = {0.0, 0.0};
+  double cos5[2] = {1.0, 1.0}, sin5[2] = {0.0, 0.0}, cos6[2] = {1.0, 1.0}, sin6[2] = {0.0, 0.0};
   const Eigen::Vector3d x_e = rot.col(0);
   {
     Eigen::Matrix3d r3;
@@ -534,10 +560,17 @@ int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::arra
       // z_5 in frame 4 is Rz(theta5) (0, -sin alpha5, cos alpha5) = (sin theta5, -cos theta5, 0).
       wrist5[b4] = std::atan2(a4.x(), -a4.y());
       const double n5 = std::hypot(a4.x(), a4.y());  // 1 up to rounding: the approach is normal to h
-      dh_rotation(n5 > 0.0 ? -a4.y() / n5 : 1.0, n5 > 0.0 ? a4.x() / n5 : 0.0, ca_[4], sa_[4], r5);
+      cos5[b4] = n5 > 0.0 ? -a4.y() / n5 : 1.0;
+      sin5[b4] = n5 > 0.0 ? a4.x() / n5 : 0.0;
+      dh_rotation(cos5[b4], sin5[b4], ca_[4], sa_[4], r5);
       // theta6 from x_E in frame 5: (x_5 . x_E, y_5 . x_E).
       const Eigen::Vector3d x5 = r04 * r5.col(0), y5 = r04 * r5.col(1);
       wrist6[b4] = std::atan2(y5.dot(x_e), x5.dot(x_e));
+      const double n6 = std::hypot(y5.dot(x_e), x5.dot(x_e));
+      if (n6 > 0.0) {
+        cos6[b4] = x5.dot(x_e) / n6;
+        sin6[b4] = y5.dot(x_e) / n6;
+      }
     }
   }
   int count = 0;
@@ -555,6 +588,26 @@ int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::arra
         Vector6d& q = solutions[static_cast<std::size_t>(count++)];
         q << theta1, theta2, theta3, theta4_branch[b4], theta5, theta6;
         for (int i = 0; i < 6; ++i) q(i) = wrap(q(i) - offset_[static_cast<std::size_t>(i)]);
+        if (trig) {
+          // cos/sin of the DH angles by angle-sum identities on the vectors they came from.
+          JointTrig& t = (*trig)[static_cast<std::size_t>(count - 1)];
+          const double sb = b2 == 0 ? -p.sin_beta : p.sin_beta;  // theta1 = phi + (-+beta)
+          t.c[0] = p.cos_phi * p.cos_beta - p.sin_phi * sb;
+          t.s[0] = p.sin_phi * p.cos_beta + p.cos_phi * sb;
+          t.c[1] = p.c2;
+          t.s[1] = b2 == 0 ? p.s2 : -p.s2;
+          const double c12 = t.c[0] * t.c[1] - t.s[0] * t.s[1], s12 = t.s[0] * t.c[1] + t.c[0] * t.s[1];
+          const double sign = hs == 0 ? 1.0 : -1.0;
+          const double cy = -sign * hz.y(), sy = sign * hz.x();  // the yaw: x3 = e_z x h
+          t.c[2] = cy * c12 + sy * s12;  // theta3 = yaw - (theta1 + theta2)
+          t.s[2] = sy * c12 - cy * s12;
+          t.c[3] = b4 == 0 ? c4_abs : -c4_abs;
+          t.s[3] = s4;
+          t.c[4] = hs == 0 ? cos5[b4] : -cos5[1 - b4];  // pi - theta5
+          t.s[4] = hs == 0 ? sin5[b4] : sin5[1 - b4];
+          t.c[5] = hs == 0 ? cos6[b4] : -cos6[1 - b4];  // theta6 + pi
+          t.s[5] = hs == 0 ? sin6[b4] : -sin6[1 - b4];
+        }
       }
     }
   }
@@ -619,7 +672,8 @@ void Haptic6RModel::solve(const double* pose, Needs needs, MechanismScratch&, Sa
   target.linear() = quat.toRotationMatrix();
   target.translation() = Eigen::Vector3d(pose[0], pose[1], pose[2]);
   std::array<Vector6d, 8> solutions;
-  const int count = inverse_kinematics(target, solutions);
+  std::array<JointTrig, 8> trig;
+  const int count = inverse_kinematics(target, solutions, &trig);
   if (count == 0) {
     out.status = SampleStatus::kUnreachable;
     out.q.setZero();
@@ -646,7 +700,7 @@ void Haptic6RModel::solve(const double* pose, Needs needs, MechanismScratch&, Sa
   out.status = SampleStatus::kReachable;
   if (needs & (kNeedJacobian | kNeedInertia | kNeedGravity)) {
     Chain f;
-    chain_from(q, offset_, d_, a_, ca_, sa_, f);
+    chain_from(trig[static_cast<std::size_t>(chosen)], d_, a_, ca_, sa_, f);
     if (needs & kNeedJacobian) out.jacobian = jacobian_from(f);
     if (needs & (kNeedInertia | kNeedGravity)) {
       Matrix6d h;

@@ -117,6 +117,11 @@ struct Haptic6ROptions {
   static Haptic6ROptions from_json(const Json& options);
 };
 
+/// cos and sin of the six DH angles theta_i = q_i + theta_offset_i of one configuration.
+struct JointTrig {
+  std::array<double, 6> c{}, s{};
+};
+
 /// One rigid body of the mass model, in its DH frame i (i = 1..6).
 struct Haptic6RBody {
   double mass = 0.0;                                      ///< [kg]
@@ -137,8 +142,10 @@ class Haptic6RModel final : public MechanismModel {
              SampleQuantities& out) const override;
 
   /// Every closed-form IK solution of the target (joint limits ignored), q [rad] wrapped into
-  /// [-pi, pi). \return the count (0..8); solutions[0..count).
-  int inverse_kinematics(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions) const;
+  /// [-pi, pi). \return the count (0..8); solutions[0..count). With `trig`, also each solution's
+  /// DH-angle cosines and sines (from the IK's own vectors: no trigonometric calls).
+  int inverse_kinematics(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions,
+                         std::array<JointTrig, 8>* trig = nullptr) const;
   /// Index into solutions of the one the selection rule picks, -1 when none is admissible.
   int select(const std::array<Vector6d, 8>& solutions, int count) const;
   /// Forward kinematics: frames[i] = T_0i (i = 0..6), frames[6] = T_E^B.

@@ -80,6 +80,26 @@ double angle_distance(const Vector6d& a, const Vector6d& b) {
 
 }  // namespace
 
+TEST(Haptic6R, InverseKinematicsTrigAgreesWithItsAngles) {
+  // solve() builds the chosen configuration's frames from these cosines and sines.
+  std::mt19937 rng(7);
+  for (int d = 0; d < 10; ++d) {
+    Fixture f(random_design(rng));
+    for (int k = 0; k < 200; ++k) {
+      std::array<Vector6d, 8> solutions;
+      std::array<hapsyn::plugins::JointTrig, 8> trig;
+      const int count = f.model.inverse_kinematics(f.model.forward(random_q(rng)), solutions, &trig);
+      for (int s = 0; s < count; ++s) {
+        for (int i = 0; i < 6; ++i) {
+          const double theta = solutions[static_cast<std::size_t>(s)](i) + f.model.dh_row(i)(0);
+          EXPECT_NEAR(trig[static_cast<std::size_t>(s)].c[static_cast<std::size_t>(i)], std::cos(theta), 1e-9) << s << " " << i;
+          EXPECT_NEAR(trig[static_cast<std::size_t>(s)].s[static_cast<std::size_t>(i)], std::sin(theta), 1e-9) << s << " " << i;
+        }
+      }
+    }
+  }
+}
+
 TEST(Haptic6R, InverseThenForwardReproducesEveryPoseForRandomConfigurations) {
   std::mt19937 rng(42);
   int checked = 0;
