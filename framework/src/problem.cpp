@@ -89,6 +89,17 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
   });
 }
 
+std::shared_ptr<const Problem> Problem::with_objectives(std::vector<Objective> objectives) const {
+  return std::make_shared<const Problem>(mechanism_plugin_, mechanism_, samples_, metrics_, std::move(objectives), space_);
+}
+
+std::shared_ptr<const Problem> Problem::with_design_space(DesignSpace space) const {
+  bool same = space.size() == space_.size();
+  for (std::size_t i = 0; same && i < space.size(); ++i) same = space.components()[i].name == space_.components()[i].name;
+  if (!same) throw Error("problem", "with_design_space: the design space must have the same components as the study's");
+  return std::make_shared<const Problem>(mechanism_plugin_, mechanism_, samples_, metrics_, objectives_, std::move(space));
+}
+
 std::unique_ptr<Problem::Workspace> Problem::make_workspace() const {
   auto ws = std::make_unique<Workspace>();
   ws->scratch = mechanism_->make_scratch();

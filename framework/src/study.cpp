@@ -61,6 +61,9 @@ const char* const kProblemSchema = R"json({
     "output": {"type": "object", "default": {}, "properties": {
         "directory": {"type": "string", "description": "Output directory (default results/<name>)"},
         "samples_csv": {"type": "boolean", "description": "Write samples.csv for the best design", "default": true}}},
+    "indicators": {"type": "object", "description": "Front-quality indicators written into result.json", "properties": {
+        "reference_front": {"type": "string", "description": "result.json of a study whose front is the reference (IGD, GD, domination gaps)"},
+        "reference_point": {"type": "array", "items": {"type": "number"}, "description": "Hypervolume reference point, one value per objective (natural units), worse than every front point"}}},
     "seed": {"type": "integer", "minimum": 0, "description": "Random seed (default: drawn and recorded)"},
     "threads": {"type": "integer", "minimum": 0, "description": "Worker threads (0 = all cores)"}
   },
@@ -215,6 +218,48 @@ DesignSpace build_design_space(const Json& design, const std::vector<VariableDec
   return DesignSpace(std::move(components));
 }
 
+// The optional "indicators" section: a reference point with one finite value per objective,
+// and a reference front read from a result.json holding the study's objectives.
+void load_indicators(const Json& resolved, const Problem& problem, Study& study) {
+  if (!resolved.contains("indicators")) return;
+  const Json& section = resolved["indicators"];
+  const std::size_t m = problem.objectives().size();
+  if (section.contains("reference_point")) {
+    const Json& point = section["reference_point"];
+    if (point.size() != m) {
+      throw Error("problem", "indicators.reference_point = " + render_value(point) + ": must have " + std::to_string(m) +
+                                 " values (one per objective)");
+    }
+    for (std::size_t i = 0; i < m; ++i) {
+      const double v = point[i].get<double>();
+      if (!std::isfinite(v)) {
+        throw Error("problem", "indicators.reference_point[" + std::to_string(i) + "] = " + render_value(point[i]) + ": must be finite");
+      }
+      study.reference_point.push_back(v);
+    }
+  }
+  if (section.contains("reference_front")) {
+    const std::string path = section["reference_front"];
+    Json reference;
+    try {
+      reference = read_problem_file(path);
+    } catch (const Error& e) {
+      throw Error("problem", "indicators.reference_front = \"" + path + "\": cannot be read as a result.json (" + e.what() +
+                                 "); run the reference study first");
+    }
+    std::vector<std::string> names;
+    for (const Objective& o : problem.objectives()) names.push_back(o.name);
+    try {
+      study.reference_front = front_of_result(reference, names, path);
+    } catch (const Error& e) {
+      throw Error("problem", std::string("indicators.reference_front: ") + e.what());
+    }
+    if (study.reference_front.empty()) {
+      throw Error("problem", "indicators.reference_front = \"" + path + "\": the front is empty");
+    }
+  }
+}
+
 }  // namespace
 
 Study load_study(const Json& input, const Registry& registry) {
@@ -311,6 +356,9 @@ Study load_study(const Json& input, const Registry& registry) {
   } catch (const Error& e) {
     throw Error("problem", std::string("solver: ") + e.what());
   }
+  study.solver->prepare_sub_solvers(*study.problem, registry);
+  study.registry = &registry;
+  load_indicators(resolved, *study.problem, study);
   if (objs.size() > 1 && !study.solver->pareto()) {
     resolved["aggregation"] = "weighted_sum";
   }
@@ -472,6 +520,7 @@ Json run_study(Study& study, const RunOptions& options) {
   context.seed = seed;
   context.progress = options.quiet ? nullptr : &std::cerr;
   context.output_directory = out_dir;
+  context.registry = study.registry;
 
   const std::string started = iso_time_now();
   const auto t0 = std::chrono::steady_clock::now();
@@ -503,6 +552,21 @@ Json run_study(Study& study, const RunOptions& options) {
     doc["front"] = front;
   }
   doc["statistics"] = result.statistics;
+  if (!result.front.empty() || !study.reference_front.empty() || !study.reference_point.empty()) {
+    IndicatorInputs in;
+    for (const Objective& o : study.problem->objectives()) {
+      in.names.push_back(o.name);
+      in.senses.push_back(o.sense);
+    }
+    for (const SolutionPoint& p : result.front) in.front.push_back(p.objectives);
+    if (result.best) in.best = &result.best->objectives;
+    in.reference_front = study.reference_front;
+    in.reference_point = study.reference_point;
+    Json indicators = front_indicators(in);
+    indicators["evaluations"] = doc["evaluations"];
+    indicators["wall_time_s"] = wall;
+    doc["indicators"] = indicators;
+  }
   doc["files"] = Json::object();
   const bool want_samples = options.write_samples && resolved["output"].value("samples_csv", true);
   if (result.best && want_samples) {

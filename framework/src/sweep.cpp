@@ -81,23 +81,6 @@ SweepAxis parse_sweep_axis(const std::string& spec) {
   return axis;
 }
 
-double inverted_generational_distance(const std::vector<std::vector<double>>& front,
-                                      const std::vector<std::vector<double>>& reference) {
-  if (reference.empty()) return 0.0;
-  if (front.empty()) return std::numeric_limits<double>::infinity();
-  double sum = 0.0;
-  for (const auto& r : reference) {
-    double nearest = std::numeric_limits<double>::infinity();
-    for (const auto& f : front) {
-      double d2 = 0.0;
-      for (std::size_t i = 0; i < r.size() && i < f.size(); ++i) d2 += (r[i] - f[i]) * (r[i] - f[i]);
-      nearest = std::min(nearest, std::sqrt(d2));
-    }
-    sum += nearest;
-  }
-  return sum / static_cast<double>(reference.size());
-}
-
 namespace {
 
 struct RunRecord {

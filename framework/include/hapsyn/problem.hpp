@@ -87,6 +87,16 @@ class Problem {
           std::shared_ptr<const SampleSet> samples, std::vector<MetricEntry> metrics,
           std::vector<Objective> objectives, DesignSpace space);
 
+  /// The same study (mechanism, scene, metrics: shared, not copied) with other objectives,
+  /// e.g. other weights for a weighted sum or one objective for a shadow optimum. Cheap: no
+  /// plugin is created and no sample rebuilt.
+  /// \throws Error as the constructor (an objective naming no metric, a non-finite weight).
+  std::shared_ptr<const Problem> with_objectives(std::vector<Objective> objectives) const;
+  /// The same study over another design space (same components, other bounds/steps/fixed
+  /// values, e.g. one variable fixed for sequential optimization).
+  /// \throws Error when `space` does not have the same components as design_space().
+  std::shared_ptr<const Problem> with_design_space(DesignSpace space) const;
+
   const DesignSpace& design_space() const { return space_; }
   const SampleSet& samples() const { return *samples_; }
   const Mechanism& mechanism() const { return *mechanism_; }
