@@ -76,6 +76,12 @@ struct EvalOptions {
   double prune_below = -std::numeric_limits<double>::infinity();
   /// Called per evaluated sample (sequential evaluation only).
   const SampleCallback* on_sample = nullptr;
+  /// Pareto pruning, worst-case studies with every objective maximized: stop with kPruned as
+  /// soon as the objectives' upper bounds (from the samples seen so far) are dominated by one of
+  /// these points. Flat, objectives().size() natural values per point; the points must be
+  /// mutually non-dominated and sorted by the first objective, descending. Exact: a design that
+  /// is not dominated by any of the points is never pruned.
+  const std::vector<double>* prune_dominated_by = nullptr;
 };
 
 /// The study's problem. Immutable and shared by threads; per-thread state is a Workspace.
@@ -129,6 +135,7 @@ class Problem {
     std::vector<int> argument;        // flat sample index attaining each reduction
     std::vector<double> g;
     std::vector<std::vector<double>> nested_locals;  // for SampleCallback
+    std::vector<double> objective_bound;             // per objective, for Pareto pruning
     Evaluation result;
   };
   std::unique_ptr<Workspace> make_workspace() const;
@@ -151,6 +158,7 @@ class Problem {
 
  private:
   void check_design(const double* free_design) const;
+  bool front_dominates(const std::vector<double>& front, Workspace& workspace) const;
 
   std::string mechanism_plugin_;
   std::shared_ptr<const Mechanism> mechanism_;
