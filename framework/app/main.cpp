@@ -3,7 +3,9 @@
 // Exit codes: 0 the command did its work (for `run`: result.json written; the solver's outcome
 // is its "status"), 1 bad input (problem file, options, plugins, output directory), 2 usage
 // error, 3 unexpected internal error.
+#include <hapsyn/compare.hpp>
 #include <hapsyn/error.hpp>
+#include <hapsyn/plot.hpp>
 #include <hapsyn/registry.hpp>
 #include <hapsyn/study.hpp>
 #include <hapsyn/sweep.hpp>
@@ -248,12 +250,12 @@ void plot_density(const hapsyn::SampleSet& set, const std::string& directory) {
   fs::create_directories(directory);
   write_atomically(fs::path(directory) / "density.dat", data.str(), "--plot data");
   write_atomically(fs::path(directory) / "density.gp", script.str(), "--plot script");
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
+  if (!hapsyn::gnuplot_available()) {
     throw hapsyn::Error("scene", "--plot needs gnuplot, which is not installed (apt-get install gnuplot-nox); " +
                                      directory + "/density.dat and density.gp were written");
   }
-  const std::string command = "cd '" + directory + "' && gnuplot density.gp 2>&1";
-  if (std::system(command.c_str()) != 0) throw hapsyn::Error("scene", "gnuplot failed on " + directory + "/density.gp");
+  const std::string why = hapsyn::run_gnuplot(directory, "density.gp");
+  if (!why.empty()) throw hapsyn::Error("scene", why);
 }
 
 int scene_command(const std::string& file, const std::vector<std::string>& sets, const std::string& csv,
@@ -397,6 +399,15 @@ int main(int argc, char** argv) {
   bool sweep_progress = false;
   sweep_cmd->add_flag("--progress", sweep_progress, "Show each run's progress");
 
+  hapsyn::CompareOptions compare_options;
+  CLI::App* compare_cmd = app.add_subcommand(
+      "compare", "Run several studies on this machine: one table (front quality, evaluations, time) and plots");
+  compare_cmd->add_option("files", compare_options.files, "Problem files (JSON), run in this order")->required();
+  compare_cmd->add_option("--set", compare_options.overrides, "Override a key in every study: path=value");
+  compare_cmd->add_option("--out", compare_options.output_directory, "Output directory (one folder per study)");
+  compare_cmd->add_option("--threads", compare_options.threads, "Worker threads per study")->check(CLI::NonNegativeNumber);
+  compare_cmd->add_option("--seed", seed, "Random seed of every study");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -436,6 +447,11 @@ int main(int argc, char** argv) {
       options.seed = sweep_seed;
       options.quiet = !sweep_progress;
       print_sweep(hapsyn::run_sweep(doc, options, registry), std::cout);
+      return 0;
+    }
+    if (*compare_cmd) {
+      if (compare_cmd->count("--seed") > 0) compare_options.seed = seed;
+      hapsyn::print_compare(hapsyn::run_compare(compare_options, registry), std::cout);
       return 0;
     }
     if (*scene_cmd) {

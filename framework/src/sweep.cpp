@@ -1,4 +1,5 @@
 #include <hapsyn/error.hpp>
+#include <hapsyn/plot.hpp>
 #include <hapsyn/study.hpp>
 #include <hapsyn/sweep.hpp>
 
@@ -144,10 +145,6 @@ std::string csv_cell(const Json& v) {
 }
 
 void write_plot(const fs::path& dir, std::ostream& log) {
-  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) {
-    log << "sweep: gnuplot not found; no plot written (the CSV has the data)\n";
-    return;
-  }
   const fs::path script = dir / "sweep.gnuplot";
   {
     std::ofstream out(script.string());
@@ -155,15 +152,15 @@ void write_plot(const fs::path& dir, std::ostream& log) {
            "set ylabel 'max objective error vs reference'\nset grid\nset key off\n";
     for (const char* term : {"pngcairo size 800,600", "svg size 800,600"}) {
       const std::string ext = std::string(term).rfind("svg", 0) == 0 ? "svg" : "png";
-      out << "set terminal " << term << "\nset output '" << (dir / ("sweep." + ext)).string() << "'\n"
-          << "plot '" << (dir / "sweep.csv").string()
-          << "' using (column('run_time_s')):(column('objective_error') > 0 ? column('objective_error') : 1/0) "
+      out << "set terminal " << term << "\nset output 'sweep." << ext << "'\n"
+          << "plot 'sweep.csv'"
+          << " using (column('run_time_s')):(column('objective_error') > 0 ? column('objective_error') : 1/0) "
              "with linespoints pt 7, '' using (column('run_time_s')):(column('objective_error') > 0 ? "
              "column('objective_error') : 1/0):(column('label')) with labels offset 1,1 font ',8'\n";
     }
   }
-  const std::string command = "gnuplot '" + script.string() + "' > /dev/null 2>&1";
-  if (std::system(command.c_str()) != 0) log << "sweep: gnuplot failed; see " << script.string() << "\n";
+  const std::string why = run_gnuplot(dir.string(), "sweep.gnuplot");
+  if (!why.empty()) log << "sweep: no plot written (the CSV has the data): " << why << "\n";
 }
 
 }  // namespace
