@@ -891,7 +891,7 @@ TEST(FiveBarConformance, BadOptionsAreRefusedWithTheirPathAndRule) {
             "fivebar: options.elbow = \"in\": must be \"out\" (the paper's elbow-out posture)");
   EXPECT_EQ(message(Json{{"rho", "heavy"}}), "fivebar: options.rho = \"heavy\": must be a number");
   EXPECT_EQ(message(Json{{"width", 0.01}}),
-            "fivebar: options.width: unknown option (known: elbow, rho, k, singularity_tolerance)");
+            "fivebar: options.width: unknown option (known: elbow, rho, k, singularity_tolerance, footprint_width, footprint_height)");
 }
 
 TEST(FiveBarConformance, CheckSceneRefusesNonPlanarScenes) {

@@ -72,6 +72,7 @@ NbiSolver::NbiSolver(const Json& o) {
   options_.max_evaluations = o.value("max_evaluations", options_.max_evaluations);
   options_.rounds = o.value("rounds", options_.rounds);
   options_.filter_dominated = o.value("filter_dominated", options_.filter_dominated);
+  options_.design_constraints = o.value("design_constraints", options_.design_constraints);
   if (o.contains("shadow_solver")) options_.shadow_solver = o["shadow_solver"];
 }
 
@@ -190,6 +191,7 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
   settings.max_evaluations = options_.max_evaluations;
   settings.constraint_tolerance = options_.constraint_tolerance;
   settings.rounds = options_.rounds;
+  settings.design_constraints = options_.design_constraints;
   // The epigraph bounds maximized worst-case objectives from below only.
   settings.epigraph = std::all_of(problem.objectives().begin(), problem.objectives().end(),
                                   [](const Objective& o) { return o.sense == Sense::kMaximize; });

@@ -39,6 +39,7 @@ struct NbiOptions {
   int max_evaluations = 200;          ///< SLSQP evaluations per run (plain and epigraph stage each)
   int rounds = 6;                     ///< active-set rounds per subproblem
   bool filter_dominated = true;       ///< drop dominated points from the front
+  bool design_constraints = false;    ///< hand the mechanism's design constraints to SLSQP
   Json shadow_solver = {{"plugin", "culling"}, {"options", Json::object()}};
 };
 

@@ -44,6 +44,44 @@ std::string nlopt_result_name(nlopt::result r) {
   }
 }
 
+// ---- the mechanism's design constraints g(p) <= 0 (both stages) ----
+// Smooth functions of the design (e.g. the five-bar's reach and footprint): handed to SLSQP as
+// inequality constraints with central finite-difference gradients, so that it follows them
+// instead of falling off the cliff of an infeasible design.
+struct DesignConstraints {
+  const Problem* problem = nullptr;
+  std::size_t n = 0;
+  std::vector<double> lower, upper, p, ga, gb;
+};
+
+void design_constraints(unsigned count, double* c, unsigned dim, const double* y, double* grad, void* data) {
+  DesignConstraints& d = *static_cast<DesignConstraints*>(data);
+  d.p.assign(y, y + d.n);
+  for (std::size_t k = 0; k < d.n; ++k) d.p[k] = std::clamp(d.p[k], d.lower[k], d.upper[k]);
+  d.problem->constraints(d.p.data(), c);
+  if (!grad) return;
+  std::fill(grad, grad + static_cast<std::size_t>(count) * dim, 0.0);
+  d.ga.resize(count);
+  d.gb.resize(count);
+  for (std::size_t k = 0; k < d.n; ++k) {
+    const double keep = d.p[k];
+    const double h = 1e-7 * std::max(d.upper[k] - d.lower[k], 1e-9);
+    const double a = std::min(keep + h, d.upper[k]);
+    const double b = std::max(keep - h, d.lower[k]);
+    d.p[k] = a;
+    d.problem->constraints(d.p.data(), d.ga.data());
+    d.p[k] = b;
+    d.problem->constraints(d.p.data(), d.gb.data());
+    d.p[k] = keep;
+    for (unsigned i = 0; i < count; ++i) grad[i * dim + k] = a > b ? (d.ga[i] - d.gb[i]) / (a - b) : 0.0;
+  }
+}
+
+void add_design_constraints(nlopt::opt& opt, DesignConstraints& d, double tolerance) {
+  if (d.problem->constraint_count() == 0) return;
+  opt.add_inequality_mconstraint(design_constraints, &d, std::vector<double>(d.problem->constraint_count(), tolerance));
+}
+
 // ---- epigraph stage ----
 
 struct Epigraph {
@@ -265,6 +303,8 @@ SqpOutcome run_epigraph(const Problem& problem, std::vector<double> x, const std
     opt.set_max_objective(epigraph_objective, &g);
     const std::size_t rows = g.active.size() * L + static_cast<std::size_t>(goal.constraints);
     opt.add_inequality_mconstraint(epigraph_constraints, &g, std::vector<double>(rows, settings.constraint_tolerance));
+    DesignConstraints design{&problem, g.n, lower, upper, {}, {}, {}};
+    if (settings.design_constraints) add_design_constraints(opt, design, settings.constraint_tolerance);
     opt.set_xtol_rel(settings.xtol);
     opt.set_ftol_abs(settings.ftol);
     opt.set_maxeval(settings.max_evaluations);
@@ -380,6 +420,8 @@ SqpOutcome run_plain(const Problem& problem, std::vector<double> x, const std::v
   opt.set_lower_bounds(lower);
   opt.set_upper_bounds(upper);
   opt.set_max_objective(plain_objective, &run);
+  DesignConstraints design{&problem, x.size(), lower, upper, {}, {}, {}};
+  if (settings.design_constraints) add_design_constraints(opt, design, settings.constraint_tolerance);
   opt.set_xtol_rel(settings.xtol);
   opt.set_ftol_abs(settings.ftol);
   opt.set_maxeval(settings.max_evaluations);

@@ -22,6 +22,12 @@
 ///    It stops when the whole workspace agrees with the active set: the point is then a KKT
 ///    point of the epigraph problem over *all* samples, i.e. a local optimum of the goal.
 ///
+/// With `design_constraints`, both stages also pass the mechanism's design constraints
+/// g(p) <= 0 (Problem::constraints) to SLSQP, with finite-difference gradients. Off by default:
+/// an infeasible design is judged infeasible by the evaluation anyway, and on the five-bar the
+/// reach constraint in SLSQP held one NBI point 0.003 below the front; on with a binding
+/// constraint such as the five-bar's footprint, whose cliff the plain stage cannot follow.
+///
 /// Every candidate is evaluated over the whole workspace and judged by goal.merit; the best
 /// fully evaluated feasible point is returned (never worse than the start when it is feasible).
 #include <hapsyn/problem.hpp>
@@ -41,6 +47,7 @@ struct SqpSettings {
   int rounds = 6;                       ///< active-set rounds of the epigraph stage
   bool plain = true;                    ///< run the plain stage first
   bool epigraph = true;                 ///< run the epigraph stage (worst-case problems only)
+  bool design_constraints = false;      ///< pass the mechanism's design constraints to SLSQP
 };
 
 /// What the run maximizes. `objective`/`constraint` see the epigraph variables; `merit` judges a
