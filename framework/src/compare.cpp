@@ -95,11 +95,13 @@ std::string plot_fronts(const fs::path& out, const std::vector<Json>& results, c
     const std::string file = name + "/points.csv";
     std::ofstream(out / file) << points_csv(results[i], names);
     const bool single = !results[i].contains("front");
+    const bool dense = !single && results[i]["front"].size() > 30;  // e.g. an exhaustive front
+    static const char* const kStyles[] = {"pt 7 ps 1.4", "pt 6 ps 1.8", "pt 9 ps 1.4", "pt 4 ps 1.6", "pt 11 ps 1.4"};
     plot << (first ? "" : ", ") << gnuplot_quote(file) << " using 1:2 with points "
-         << (single ? "pt 3 ps 3" : "pt " + std::to_string(7 + 2 * (style % 3)) + " ps 1.2") << " title "
+         << (single ? "pt 3 ps 3" : dense ? "pt 7 ps 0.4" : kStyles[style % 5]) << " title "
          << gnuplot_quote(name + " (" + rows[i]["solver"].get<std::string>() + ")");
     first = false;
-    if (!single) ++style;
+    if (!single && !dense) ++style;
   }
   for (const char* term : {"pngcairo noenhanced size 1000,650", "svg noenhanced size 1000,650"}) {
     const std::string ext = std::string(term).rfind("svg", 0) == 0 ? "svg" : "png";
