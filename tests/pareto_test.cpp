@@ -147,15 +147,24 @@ TEST(Pareto, IndicatorsSectionIsValidatedWithPathValueAndRule) {
   expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); }, {"indicators.reference_point[1]", "must be a number"});
   doc["indicators"] = {{"reference_pont", {0.0, 0.0}}};
   expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); }, {"indicators.reference_pont: unknown key", "reference_point"});
-  doc["indicators"] = {{"reference_front", "/nonexistent/result.json"}};
+  doc["indicators"] = {{"reference_front", write_temp("malformed.json", Json::object()) + ".d"}};
+  boost::filesystem::create_directories(doc["indicators"]["reference_front"].get<std::string>());  // a directory
   expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); },
-               {"indicators.reference_front = \"/nonexistent/result.json\": cannot be read", "run the reference study first"});
+               {"indicators.reference_front = \"", "malformed.json.d\": cannot be read as a result.json"});
   doc["indicators"] = {{"reference_front", write_temp("nofront.json", {{"best", Json::object()}})}};
   expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); }, {"indicators.reference_front:", "has no \"front\" array"});
   doc["indicators"] = {{"reference_front", write_temp("other.json", {{"front", {{{"objectives", {{"gii", 0.5}}}}}}})}};
   expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); }, {"front[0].objectives.gdi: missing"});
   doc["indicators"] = {{"reference_front", write_temp("empty.json", {{"front", Json::array()}})}};
   expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); }, {"the front is empty"});
+}
+
+TEST(Pareto, AReferenceFrontNotWrittenYetIsRecordedNotRefused) {
+  Json doc = pareto_doc();
+  doc["indicators"] = {{"reference_front", "/nonexistent/result.json"}};
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  EXPECT_TRUE(study.reference_front.empty());
+  EXPECT_EQ(study.reference_front_missing, "/nonexistent/result.json");
 }
 
 TEST(Pareto, ReferenceFrontAndPointAreLoaded) {

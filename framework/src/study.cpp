@@ -240,12 +240,17 @@ void load_indicators(const Json& resolved, const Problem& problem, Study& study)
   }
   if (section.contains("reference_front")) {
     const std::string path = section["reference_front"];
+    if (!boost::filesystem::exists(path)) {
+      // Not written yet (a fresh checkout; compare runs the reference study first): the study
+      // is valid, its result.json records why it has no reference indicators.
+      study.reference_front_missing = path;
+      return;
+    }
     Json reference;
     try {
       reference = read_problem_file(path);
     } catch (const Error& e) {
-      throw Error("problem", "indicators.reference_front = \"" + path + "\": cannot be read as a result.json (" + e.what() +
-                                 "); run the reference study first");
+      throw Error("problem", "indicators.reference_front = \"" + path + "\": cannot be read as a result.json (" + e.what() + ")");
     }
     std::vector<std::string> names;
     for (const Objective& o : problem.objectives()) names.push_back(o.name);
@@ -552,7 +557,8 @@ Json run_study(Study& study, const RunOptions& options) {
     doc["front"] = front;
   }
   doc["statistics"] = result.statistics;
-  if (!result.front.empty() || !study.reference_front.empty() || !study.reference_point.empty()) {
+  if (!result.front.empty() || !study.reference_front.empty() || !study.reference_point.empty() ||
+      !study.reference_front_missing.empty()) {
     IndicatorInputs in;
     for (const Objective& o : study.problem->objectives()) {
       in.names.push_back(o.name);
@@ -563,6 +569,10 @@ Json run_study(Study& study, const RunOptions& options) {
     in.reference_front = study.reference_front;
     in.reference_point = study.reference_point;
     Json indicators = front_indicators(in);
+    if (!study.reference_front_missing.empty()) {
+      indicators["reference_front_missing"] = study.reference_front_missing +
+                                              " does not exist: run the reference study first for GD, IGD and domination gaps";
+    }
     indicators["evaluations"] = doc["evaluations"];
     indicators["wall_time_s"] = wall;
     doc["indicators"] = indicators;

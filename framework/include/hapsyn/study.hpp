@@ -40,6 +40,9 @@ struct Study {
   /// a result.json) and the hypervolume reference point (natural units, one per objective).
   std::vector<ObjectivePoint> reference_front;
   ObjectivePoint reference_point;
+  /// The reference front's path when the file does not exist yet (then no reference indicators;
+  /// result.json says why). A file that exists but is not a usable result is an error.
+  std::string reference_front_missing;
 };
 
 /// Validates a problem document completely (framework rules, each plugin's schema, design

@@ -16,7 +16,7 @@ std::shared_ptr<Solver> make_sub_solver(const Registry& registry, const Json& sp
                                " plugin, not a solver plugin");
   }
   const Json options = spec.contains("options") ? spec["options"] : Json::object();
-  std::shared_ptr<Solver> solver = registry.create_solver(name, options, json_path + ".options");
+  std::shared_ptr<Solver> solver = registry.create_solver(name, options, json_path);
   if (solver->pareto()) {
     throw Error(component, json_path + ".plugin = \"" + name +
                                "\": a Pareto solver; the sub-solver must be single-objective (it returns one best design)");
