@@ -93,9 +93,16 @@ TEST(Nbi, FrontIsNonDominatedAndFilteringCanBeSwitchedOff) {
   EXPECT_EQ(hapsyn::non_dominated(kept, {hapsyn::Sense::kMaximize, hapsyn::Sense::kMaximize}).size(), kept.size());
 }
 
-TEST(Nbi, RefusesASingleObjective) {
+TEST(Nbi, RefusesASingleObjectiveAndIntegerVariables) {
   Json doc = hapsyn::test::fivebar_study("nbi");
   expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); }, {"nbi: objectives: 1 objective(s)"});
+  auto problem = hapsyn::test::two_objective_problem();
+  std::vector<hapsyn::DesignComponent> components = problem->design_space().components();
+  components[0].integer = true;
+  components[0].step = 1.0;
+  const auto integer = problem->with_design_space(hapsyn::DesignSpace(components));
+  const hapsyn::plugins::NbiSolver nbi(hapsyn::test::registry().resolve_options("nbi", Json::object(), "solver.options"));
+  expect_error([&] { nbi.check(*integer); }, {"nbi: design.x0 is integer-valued"});
 }
 
 TEST(Nbi, RefusesAnUnknownOrParetoShadowSolver) {

@@ -61,3 +61,10 @@ TEST(Sequential, RefusesWrongObjectivesAndVariables) {
   doc["design"]["r"].erase("step");
   expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); }, {"sequential: design.r has no step"});
 }
+
+TEST(Sequential, WithoutARegistryFailsWithAStatus) {
+  const hapsyn::Study study = hapsyn::load_study(sequential_doc(), hapsyn::test::registry());
+  const auto result = study.solver->solve(*study.problem, hapsyn::SolverContext{});
+  EXPECT_EQ(result.status, hapsyn::SolverStatus::kFailed);
+  EXPECT_NE(result.message.find("needs the plugin registry"), std::string::npos);
+}

@@ -67,3 +67,12 @@ TEST(WeightedSum, SubSolverErrorsNameTheOption) {
   expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); },
                {"solver.options.sub_solver.options.polsh: unknown key", "polish"});
 }
+
+TEST(WeightedSum, WithoutARegistryFailsWithAStatus) {
+  const auto problem = hapsyn::test::two_objective_problem();
+  const hapsyn::plugins::WeightedSumSolver solver(
+      hapsyn::test::registry().resolve_options("weighted_sum", Json::object(), "solver.options"));
+  const auto result = solver.solve(*problem, hapsyn::SolverContext{});
+  EXPECT_EQ(result.status, hapsyn::SolverStatus::kFailed);
+  EXPECT_NE(result.message.find("needs the plugin registry"), std::string::npos);
+}
