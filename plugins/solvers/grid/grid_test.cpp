@@ -1,6 +1,7 @@
 // The grid solver is the oracle of later solvers: check it against a plain loop over the grid.
 #include "grid.hpp"
 
+#include "analytic_problems.hpp"
 #include "test_support.hpp"
 
 #include <hapsyn/pareto.hpp>
@@ -182,4 +183,29 @@ TEST(Grid, ParetoModeNeedsTwoObjectives) {
   doc["solver"]["options"] = {{"pareto", true}};
   hapsyn::test::expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); },
                              {"grid: solver.options.pareto = true: needs two or more objectives (the study has 1)"});
+}
+
+TEST(Grid, ParetoModeHandlesThreeObjectives) {
+  const auto problem = hapsyn::test::three_objective_problem(0.1);
+  const auto counts = problem->design_space().grid_counts();
+  long long total = 1;
+  for (long long c : counts) total *= c;
+  std::vector<hapsyn::ObjectivePoint> all;
+  auto ws = problem->make_workspace();
+  std::vector<double> x(problem->dimension());
+  for (long long i = 0; i < total; ++i) {
+    problem->design_space().grid_point(i, counts, x.data());
+    all.push_back(problem->evaluate(x.data(), *ws).objectives);
+  }
+  const std::vector<hapsyn::Sense> max3(3, hapsyn::Sense::kMaximize);
+  std::set<std::vector<double>> expected;
+  for (std::size_t k : hapsyn::non_dominated(all, max3)) expected.insert(all[k]);
+  const hapsyn::plugins::GridSolver grid(Json{{"prune", true}, {"pareto", true}, {"progress_interval", 1e9}});
+  hapsyn::SolverContext context;
+  context.threads = 2;
+  const auto result = grid.solve(*problem, context);
+  std::set<std::vector<double>> found;
+  for (const auto& p : result.front) found.insert(p.objectives);
+  EXPECT_EQ(found, expected);
+  EXPECT_GT(expected.size(), 50u);  // the sphere octant's grid points (r = 0)
 }
