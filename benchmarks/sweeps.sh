@@ -28,3 +28,15 @@ cd "$root"
   --vary scene.options.orientations=101,252,505,1010,2020
 "$hapsyn" sweep problems/haptic6r-evaluate.json --set scene.options.cache=false --out "$out/human-joint3-steps" \
   --vary scene.options.joint3_steps=5,9,17,33,65
+
+# Five-bar Pareto front (GII vs GDI): NBI constraint tolerance (Unal Figures 4-5) and grid size;
+# each run's front is measured against the last run's (IGD) and the exhaustive reference front
+# named in the problem (result.json "indicators"; run problems/fivebar-pareto-reference.json first).
+"$hapsyn" run problems/fivebar-pareto-reference.json --quiet
+"$hapsyn" sweep problems/fivebar-pareto-nbi.json --out "$out/nbi-tolerance" \
+  --vary solver.options.constraint_tolerance=1e-7,1e-8,1e-9
+"$hapsyn" sweep problems/fivebar-pareto-nbi.json --out "$out/nbi-points" \
+  --vary solver.options.points=5,10,20,40
+# The weighted sum's design grid step (its accuracy knob), for the time comparison.
+"$hapsyn" sweep problems/fivebar-pareto-weighted-sum.json --out "$out/weighted-sum-step" \
+  --vary design.l0.step,design.l1.step,design.l2.step,design.r.step=0.02,0.01,0.005

@@ -68,6 +68,11 @@ void check_scene_builds_deterministically(const hapsyn::PluginRecord& plugin, co
 
 // Statistics minus wall-clock durations (keys containing "seconds"): everything else must repeat.
 Json without_durations(const Json& j) {
+  if (j.is_array()) {
+    Json out = Json::array();
+    for (const Json& e : j) out.push_back(without_durations(e));
+    return out;
+  }
   if (!j.is_object()) return j;
   Json out = Json::object();
   for (auto it = j.begin(); it != j.end(); ++it) {
@@ -84,6 +89,7 @@ Json solve_once(const Json& doc, int threads, bool with_statistics) {
   hapsyn::SolverContext context;
   context.threads = threads;
   context.seed = 7;
+  context.registry = study.registry;  // solvers with sub-solvers (nbi, weighted_sum)
   const hapsyn::SolverResult r = study.solver->solve(*study.problem, context);
   Json j = {{"status", hapsyn::to_string(r.status)}};
   if (with_statistics) {

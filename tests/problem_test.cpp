@@ -131,3 +131,58 @@ TEST(Problem, NanFromAMetricIsAnErrorNamingTheMetricAndSample) {
   expect_error([&] { study.problem->evaluate(kGood.data(), *ws); },
                {"metric 'nanmetric' returned nan", "at sample", "\"l1\":0.2997"});
 }
+
+TEST(Problem, WithObjectivesSharesTheSceneAndChangesTheScore) {
+  hapsyn::Json doc = hapsyn::test::fivebar_study();
+  doc["objectives"] = hapsyn::Json::array({{{"metric", "gii"}}, {{"metric", "gdi"}}});
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  std::vector<hapsyn::Objective> objectives = study.problem->objectives();
+  objectives[1].weight = 0.0;
+  const auto only_gii = study.problem->with_objectives(objectives);
+  EXPECT_EQ(&only_gii->samples(), &study.problem->samples());  // shared, not rebuilt
+  const std::vector<double> x = {0.0, 0.3, 0.3, 0.4};
+  auto a = study.problem->make_workspace();
+  auto b = only_gii->make_workspace();
+  const hapsyn::Evaluation both = study.problem->evaluate(x.data(), *a);
+  const hapsyn::Evaluation one = only_gii->evaluate(x.data(), *b);
+  ASSERT_EQ(both.status, hapsyn::EvalStatus::kFeasible);
+  EXPECT_EQ(one.objectives, both.objectives);
+  EXPECT_DOUBLE_EQ(one.score, both.objectives[0]);
+  EXPECT_DOUBLE_EQ(both.score, both.objectives[0] + both.objectives[1]);
+}
+
+TEST(Problem, WithDesignSpaceRefusesOtherComponents) {
+  const hapsyn::Study study = hapsyn::load_study(hapsyn::test::fivebar_study(), hapsyn::test::registry());
+  std::vector<hapsyn::DesignComponent> components = study.problem->design_space().components();
+  components.pop_back();
+  hapsyn::test::expect_error([&] { study.problem->with_design_space(hapsyn::DesignSpace(components)); },
+                             {"problem: with_design_space: the design space must have the same components"});
+  components = study.problem->design_space().components();
+  components[3].lower = components[3].upper = 0.4;
+  components[3].fixed = true;
+  components[3].step = 0.0;
+  EXPECT_EQ(study.problem->with_design_space(hapsyn::DesignSpace(components))->dimension(), 3u);
+}
+
+TEST(Problem, ParetoPruningNeverCutsADesignTheFrontDoesNotDominate) {
+  hapsyn::Json doc = hapsyn::test::fivebar_study();
+  doc["objectives"] = hapsyn::Json::array({{{"metric", "gii"}}, {{"metric", "gdi"}}});
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  auto ws = study.problem->make_workspace();
+  const std::vector<double> x = {0.0, 0.3, 0.3, 0.4};
+  const hapsyn::Evaluation full = study.problem->evaluate(x.data(), *ws);
+  ASSERT_EQ(full.status, hapsyn::EvalStatus::kFeasible);
+  const double g = full.objectives[0], d = full.objectives[1];
+  hapsyn::EvalOptions options;
+  // A front point equal to the design, or better in one objective only: never pruned.
+  for (const std::vector<double>& front : {std::vector<double>{g, d}, std::vector<double>{g + 0.1, d - 0.1, g - 0.1, d + 0.1}}) {
+    options.prune_dominated_by = &front;
+    EXPECT_EQ(study.problem->evaluate(x.data(), *ws, options).status, hapsyn::EvalStatus::kFeasible);
+  }
+  // Dominated (sorted by the first objective, descending): pruned, early.
+  const std::vector<double> dominating = {g + 0.01, d + 0.01};
+  options.prune_dominated_by = &dominating;
+  const hapsyn::Evaluation& pruned = study.problem->evaluate(x.data(), *ws, options);
+  EXPECT_EQ(pruned.status, hapsyn::EvalStatus::kPruned);
+  EXPECT_LT(pruned.samples_evaluated, full.samples_evaluated);
+}

@@ -3,6 +3,7 @@
 // Exit codes: 0 the command did its work (for `run`: result.json written; the solver's outcome
 // is its "status"), 1 bad input (problem file, options, plugins, output directory), 2 usage
 // error, 3 unexpected internal error.
+#include <hapsyn/compare.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/plot.hpp>
 #include <hapsyn/registry.hpp>
@@ -368,6 +369,15 @@ int main(int argc, char** argv) {
   bool sweep_progress = false;
   sweep_cmd->add_flag("--progress", sweep_progress, "Show each run's progress");
 
+  hapsyn::CompareOptions compare_options;
+  CLI::App* compare_cmd = app.add_subcommand(
+      "compare", "Run several studies on this machine: one table (front quality, evaluations, time) and plots");
+  compare_cmd->add_option("files", compare_options.files, "Problem files (JSON), run in this order")->required();
+  compare_cmd->add_option("--set", compare_options.overrides, "Override a key in every study: path=value");
+  compare_cmd->add_option("--out", compare_options.output_directory, "Output directory (one folder per study)");
+  compare_cmd->add_option("--threads", compare_options.threads, "Worker threads per study")->check(CLI::NonNegativeNumber);
+  compare_cmd->add_option("--seed", seed, "Random seed of every study");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -407,6 +417,11 @@ int main(int argc, char** argv) {
       options.seed = sweep_seed;
       options.quiet = !sweep_progress;
       print_sweep(hapsyn::run_sweep(doc, options, registry), std::cout);
+      return 0;
+    }
+    if (*compare_cmd) {
+      if (compare_cmd->count("--seed") > 0) compare_options.seed = seed;
+      hapsyn::print_compare(hapsyn::run_compare(compare_options, registry), std::cout);
       return 0;
     }
     if (*scene_cmd) {

@@ -93,6 +93,17 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
   });
 }
 
+std::shared_ptr<const Problem> Problem::with_objectives(std::vector<Objective> objectives) const {
+  return std::make_shared<const Problem>(mechanism_plugin_, mechanism_, samples_, metrics_, std::move(objectives), space_);
+}
+
+std::shared_ptr<const Problem> Problem::with_design_space(DesignSpace space) const {
+  bool same = space.size() == space_.size();
+  for (std::size_t i = 0; same && i < space.size(); ++i) same = space.components()[i].name == space_.components()[i].name;
+  if (!same) throw Error("problem", "with_design_space: the design space must have the same components as the study's");
+  return std::make_shared<const Problem>(mechanism_plugin_, mechanism_, samples_, metrics_, objectives_, std::move(space));
+}
+
 std::unique_ptr<Problem::Workspace> Problem::make_workspace() const {
   auto ws = std::make_unique<Workspace>();
   ws->scratch = mechanism_->make_scratch();
@@ -105,6 +116,7 @@ std::unique_ptr<Problem::Workspace> Problem::make_workspace() const {
     ws->nested_locals.emplace_back(static_cast<std::size_t>(local_offset_[m + 1] - local_offset_[m]));
   }
   ws->result.objectives.resize(objectives_.size());
+  ws->objective_bound.resize(objectives_.size());
   ws->result.critical_samples.resize(metrics_.size());
   ws->result.reduced.resize(metrics_.size());
   return ws;
@@ -184,6 +196,40 @@ void reset_accumulators(const std::vector<Reduction>& reductions, std::vector<do
 }
 }  // namespace
 
+bool Problem::front_dominates(const std::vector<double>& front, Workspace& ws) const {
+  // Upper bounds of the objectives from the reductions so far (samples seen: a count is only
+  // needed by sum reductions, which worst-case metrics do not have).
+  const std::size_t m = objectives_.size();
+  double* bound = ws.objective_bound.data();
+  for (std::size_t o = 0; o < m; ++o) {
+    const std::size_t metric = static_cast<std::size_t>(objectives_[o].metric);
+    bound[o] = metrics_[metric].metric->combine(ws.accumulator.data() + local_offset_[metric], 1);
+  }
+  const std::size_t points = front.size() / m;
+  if (m == 2) {
+    // Sorted by the first objective, descending (second ascending): the points with q0 >= b0 are
+    // a prefix, and the last of them has the largest q1.
+    std::size_t lo = 0, hi = points;  // first index with q0 < b0
+    while (lo < hi) {
+      const std::size_t mid = (lo + hi) / 2;
+      if (front[2 * mid] >= bound[0]) lo = mid + 1; else hi = mid;
+    }
+    if (lo == 0) return false;
+    const double q0 = front[2 * (lo - 1)], q1 = front[2 * (lo - 1) + 1];
+    return q1 > bound[1] || (q1 == bound[1] && q0 > bound[0]);
+  }
+  for (std::size_t p = 0; p < points; ++p) {
+    const double* q = front.data() + p * m;
+    bool at_least = true, better = false;
+    for (std::size_t o = 0; o < m && at_least; ++o) {
+      at_least = q[o] >= bound[o];
+      better = better || q[o] > bound[o];
+    }
+    if (at_least && better) return true;
+  }
+  return false;
+}
+
 const Evaluation& Problem::evaluate(const double* free_design, Workspace& ws, const EvalOptions& options) const {
   check_design(free_design);
   Evaluation& out = ws.result;
@@ -221,6 +267,10 @@ const Evaluation& Problem::evaluate(const double* free_design, Workspace& ws, co
                      std::all_of(objectives_.begin(), objectives_.end(), [](const Objective& o) {
                        return o.sense == Sense::kMaximize && o.weight >= 0.0;
                      });
+  const bool all_maximized = std::all_of(objectives_.begin(), objectives_.end(),
+                                         [](const Objective& o) { return o.sense == Sense::kMaximize; });
+  const std::vector<double>* front = options.prune_dominated_by;
+  const bool prune_front = front && !front->empty() && worst_case_ && all_maximized;
   const std::vector<int>& indices = options.subset ? *options.subset : order_;
   for (const int sample : indices) {
     model->solve(samples_->pose(sample), needs_, *ws.scratch, ws.quantities);
@@ -260,6 +310,13 @@ const Evaluation& Problem::evaluate(const double* free_design, Workspace& ws, co
       }
     }
     if (options.on_sample) (*options.on_sample)(sample, ws.quantities, ws.nested_locals);
+    if (prune_front && front_dominates(*front, ws)) {
+      for (std::size_t m = 0; m < metrics_.size(); ++m) {
+        out.critical_samples[m].assign(ws.argument.begin() + local_offset_[m], ws.argument.begin() + local_offset_[m + 1]);
+      }
+      out.status = EvalStatus::kPruned;
+      return out;
+    }
     if (prune) {
       // The metrics over the samples seen so far bound their final values from above.
       double bound = 0.0;

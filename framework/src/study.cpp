@@ -64,6 +64,9 @@ const char* const kProblemSchema = R"json({
         "samples_csv": {"type": "boolean", "description": "Write samples.csv for the best design", "default": true},
         "maps": {"type": "boolean", "description": "Write maps.csv: every objective per workspace position for the best design", "default": true},
         "plots": {"type": "boolean", "description": "Render the position maps with gnuplot (map_<objective>.png)", "default": false}}},
+    "indicators": {"type": "object", "description": "Front-quality indicators written into result.json", "properties": {
+        "reference_front": {"type": "string", "description": "result.json of a study whose front is the reference (IGD, GD, domination gaps)"},
+        "reference_point": {"type": "array", "items": {"type": "number"}, "description": "Hypervolume reference point, one value per objective (natural units), worse than every front point"}}},
     "seed": {"type": "integer", "minimum": 0, "description": "Random seed (default: drawn and recorded)"},
     "threads": {"type": "integer", "minimum": 0, "description": "Worker threads (0 = all cores)"}
   },
@@ -218,6 +221,53 @@ DesignSpace build_design_space(const Json& design, const std::vector<VariableDec
   return DesignSpace(std::move(components));
 }
 
+// The optional "indicators" section: a reference point with one finite value per objective,
+// and a reference front read from a result.json holding the study's objectives.
+void load_indicators(const Json& resolved, const Problem& problem, Study& study) {
+  if (!resolved.contains("indicators")) return;
+  const Json& section = resolved["indicators"];
+  const std::size_t m = problem.objectives().size();
+  if (section.contains("reference_point")) {
+    const Json& point = section["reference_point"];
+    if (point.size() != m) {
+      throw Error("problem", "indicators.reference_point = " + render_value(point) + ": must have " + std::to_string(m) +
+                                 " values (one per objective)");
+    }
+    for (std::size_t i = 0; i < m; ++i) {
+      const double v = point[i].get<double>();
+      if (!std::isfinite(v)) {
+        throw Error("problem", "indicators.reference_point[" + std::to_string(i) + "] = " + render_value(point[i]) + ": must be finite");
+      }
+      study.reference_point.push_back(v);
+    }
+  }
+  if (section.contains("reference_front")) {
+    const std::string path = section["reference_front"];
+    if (!boost::filesystem::exists(path)) {
+      // Not written yet (a fresh checkout; compare runs the reference study first): the study
+      // is valid, its result.json records why it has no reference indicators.
+      study.reference_front_missing = path;
+      return;
+    }
+    Json reference;
+    try {
+      reference = read_problem_file(path);
+    } catch (const Error& e) {
+      throw Error("problem", "indicators.reference_front = \"" + path + "\": cannot be read as a result.json (" + e.what() + ")");
+    }
+    std::vector<std::string> names;
+    for (const Objective& o : problem.objectives()) names.push_back(o.name);
+    try {
+      study.reference_front = front_of_result(reference, names, path);
+    } catch (const Error& e) {
+      throw Error("problem", std::string("indicators.reference_front: ") + e.what());
+    }
+    if (study.reference_front.empty()) {
+      throw Error("problem", "indicators.reference_front = \"" + path + "\": the front is empty");
+    }
+  }
+}
+
 }  // namespace
 
 Study load_study(const Json& input, const Registry& registry) {
@@ -314,6 +364,9 @@ Study load_study(const Json& input, const Registry& registry) {
   } catch (const Error& e) {
     throw Error("problem", std::string("solver: ") + e.what());
   }
+  study.solver->prepare_sub_solvers(*study.problem, registry);
+  study.registry = &registry;
+  load_indicators(resolved, *study.problem, study);
   if (objs.size() > 1 && !study.solver->pareto()) {
     resolved["aggregation"] = "weighted_sum";
   }
@@ -424,6 +477,7 @@ Json run_study(Study& study, const RunOptions& options) {
   context.seed = seed;
   context.progress = options.quiet ? nullptr : &std::cerr;
   context.output_directory = out_dir;
+  context.registry = study.registry;
 
   const std::string started = iso_time_now();
   const auto t0 = std::chrono::steady_clock::now();
@@ -455,6 +509,26 @@ Json run_study(Study& study, const RunOptions& options) {
     doc["front"] = front;
   }
   doc["statistics"] = result.statistics;
+  if (!result.front.empty() || !study.reference_front.empty() || !study.reference_point.empty() ||
+      !study.reference_front_missing.empty()) {
+    IndicatorInputs in;
+    for (const Objective& o : study.problem->objectives()) {
+      in.names.push_back(o.name);
+      in.senses.push_back(o.sense);
+    }
+    for (const SolutionPoint& p : result.front) in.front.push_back(p.objectives);
+    if (result.best) in.best = &result.best->objectives;
+    in.reference_front = study.reference_front;
+    in.reference_point = study.reference_point;
+    Json indicators = front_indicators(in);
+    if (!study.reference_front_missing.empty()) {
+      indicators["reference_front_missing"] = study.reference_front_missing +
+                                              " does not exist: run the reference study first for GD, IGD and domination gaps";
+    }
+    indicators["evaluations"] = doc["evaluations"];
+    indicators["wall_time_s"] = wall;
+    doc["indicators"] = indicators;
+  }
   doc["files"] = Json::object();
   const bool want_samples = options.write_samples && resolved["output"].value("samples_csv", true);
   const bool want_maps = options.write_samples && resolved["output"].value("maps", true);

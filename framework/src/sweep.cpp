@@ -1,7 +1,7 @@
 #include <hapsyn/error.hpp>
+#include <hapsyn/plot.hpp>
 #include <hapsyn/study.hpp>
 #include <hapsyn/sweep.hpp>
-#include <hapsyn/plot.hpp>
 
 #include <boost/filesystem.hpp>
 
@@ -82,23 +82,6 @@ SweepAxis parse_sweep_axis(const std::string& spec) {
   return axis;
 }
 
-double inverted_generational_distance(const std::vector<std::vector<double>>& front,
-                                      const std::vector<std::vector<double>>& reference) {
-  if (reference.empty()) return 0.0;
-  if (front.empty()) return std::numeric_limits<double>::infinity();
-  double sum = 0.0;
-  for (const auto& r : reference) {
-    double nearest = std::numeric_limits<double>::infinity();
-    for (const auto& f : front) {
-      double d2 = 0.0;
-      for (std::size_t i = 0; i < r.size() && i < f.size(); ++i) d2 += (r[i] - f[i]) * (r[i] - f[i]);
-      nearest = std::min(nearest, std::sqrt(d2));
-    }
-    sum += nearest;
-  }
-  return sum / static_cast<double>(reference.size());
-}
-
 namespace {
 
 struct RunRecord {
@@ -162,10 +145,6 @@ std::string csv_cell(const Json& v) {
 }
 
 void write_plot(const fs::path& dir, std::ostream& log) {
-  if (!gnuplot_available()) {
-    log << "sweep: gnuplot not found; no plot written (the CSV has the data)\n";
-    return;
-  }
   const fs::path script = dir / "sweep.gnuplot";
   {
     std::ofstream out(script.string());
@@ -173,15 +152,15 @@ void write_plot(const fs::path& dir, std::ostream& log) {
            "set ylabel 'max objective error vs reference'\nset grid\nset key off\n";
     for (const char* term : {"pngcairo size 800,600", "svg size 800,600"}) {
       const std::string ext = std::string(term).rfind("svg", 0) == 0 ? "svg" : "png";
-      out << "set terminal " << term << "\nset output '" << (dir / ("sweep." + ext)).string() << "'\n"
-          << "plot '" << (dir / "sweep.csv").string()
-          << "' using (column('run_time_s')):(column('objective_error') > 0 ? column('objective_error') : 1/0) "
+      out << "set terminal " << term << "\nset output 'sweep." << ext << "'\n"
+          << "plot 'sweep.csv'"
+          << " using (column('run_time_s')):(column('objective_error') > 0 ? column('objective_error') : 1/0) "
              "with linespoints pt 7, '' using (column('run_time_s')):(column('objective_error') > 0 ? "
              "column('objective_error') : 1/0):(column('label')) with labels offset 1,1 font ',8'\n";
     }
   }
   const std::string why = run_gnuplot(dir.string(), "sweep.gnuplot");
-  if (!why.empty()) log << "sweep: " << why << "\n";
+  if (!why.empty()) log << "sweep: no plot written (the CSV has the data): " << why << "\n";
 }
 
 }  // namespace

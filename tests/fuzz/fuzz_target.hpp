@@ -11,6 +11,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 
 namespace hapsyn::fuzz {
@@ -19,7 +20,10 @@ namespace hapsyn::fuzz {
 inline const Registry& registry() {
   static const std::string dir = [] {
     namespace fs = boost::filesystem;
-    const fs::path d = fs::temp_directory_path() / "hapsyn-fuzz-plugins";
+    // One directory per build tree: several checkouts on one machine must not share links
+    // (a link to another build's plugins loads another plugin ABI).
+    const fs::path d = fs::temp_directory_path() /
+                       ("hapsyn-fuzz-plugins-" + std::to_string(std::hash<std::string>{}(HAPSYN_PLUGIN_DIR)));
     fs::create_directories(d);
     for (const char* name : {"fivebar", "planar_square", "gii", "gdi", "evaluate", "grid", "culling"}) {
       const fs::path target = fs::path(HAPSYN_PLUGIN_DIR) / (std::string("hapsyn-") + name + ".so");

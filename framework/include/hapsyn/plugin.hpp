@@ -18,7 +18,7 @@
 #include <memory>
 
 /// Bumped whenever an interface in framework/include/hapsyn changes incompatibly.
-#define HAPSYN_PLUGIN_API_VERSION 1
+#define HAPSYN_PLUGIN_API_VERSION 2  // 2: Solver::prepare_sub_solvers, SolverContext::registry, EvalOptions::prune_dominated_by
 
 // Tests build a plugin with another version to exercise the registry's check.
 #ifndef HAPSYN_PLUGIN_BUILT_API_VERSION

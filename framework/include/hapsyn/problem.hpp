@@ -76,6 +76,12 @@ struct EvalOptions {
   double prune_below = -std::numeric_limits<double>::infinity();
   /// Called per evaluated sample (sequential evaluation only).
   const SampleCallback* on_sample = nullptr;
+  /// Pareto pruning, worst-case studies with every objective maximized: stop with kPruned as
+  /// soon as the objectives' upper bounds (from the samples seen so far) are dominated by one of
+  /// these points. Flat, objectives().size() natural values per point; the points must be
+  /// mutually non-dominated and sorted by the first objective, descending. Exact: a design that
+  /// is not dominated by any of the points is never pruned.
+  const std::vector<double>* prune_dominated_by = nullptr;
 };
 
 /// The study's problem. Immutable and shared by threads; per-thread state is a Workspace.
@@ -86,6 +92,16 @@ class Problem {
   Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> mechanism,
           std::shared_ptr<const SampleSet> samples, std::vector<MetricEntry> metrics,
           std::vector<Objective> objectives, DesignSpace space);
+
+  /// The same study (mechanism, scene, metrics: shared, not copied) with other objectives,
+  /// e.g. other weights for a weighted sum or one objective for a shadow optimum. Cheap: no
+  /// plugin is created and no sample rebuilt.
+  /// \throws Error as the constructor (an objective naming no metric, a non-finite weight).
+  std::shared_ptr<const Problem> with_objectives(std::vector<Objective> objectives) const;
+  /// The same study over another design space (same components, other bounds/steps/fixed
+  /// values, e.g. one variable fixed for sequential optimization).
+  /// \throws Error when `space` does not have the same components as design_space().
+  std::shared_ptr<const Problem> with_design_space(DesignSpace space) const;
 
   const DesignSpace& design_space() const { return space_; }
   const SampleSet& samples() const { return *samples_; }
@@ -120,6 +136,7 @@ class Problem {
     std::vector<int> argument;        // flat sample index attaining each reduction
     std::vector<double> g;
     std::vector<std::vector<double>> nested_locals;  // for SampleCallback
+    std::vector<double> objective_bound;             // per objective, for Pareto pruning
     Evaluation result;
   };
   std::unique_ptr<Workspace> make_workspace() const;
@@ -142,6 +159,7 @@ class Problem {
 
  private:
   void check_design(const double* free_design) const;
+  bool front_dominates(const std::vector<double>& front, Workspace& workspace) const;
 
   std::string mechanism_plugin_;
   std::shared_ptr<const Mechanism> mechanism_;

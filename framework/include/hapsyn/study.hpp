@@ -2,6 +2,7 @@
 /// \file
 /// Problem files: loading (with clear errors), --set overrides, and running a study.
 #include <hapsyn/json.hpp>
+#include <hapsyn/pareto.hpp>
 #include <hapsyn/problem.hpp>
 #include <hapsyn/registry.hpp>
 #include <hapsyn/solver.hpp>
@@ -34,10 +35,19 @@ struct Study {
   std::string solver_plugin;
   std::vector<PluginRecord> plugins;     ///< every plugin the study uses
   std::string output_directory;          ///< from the file, or --out
+  const Registry* registry = nullptr;    ///< the registry that loaded it (sub-solvers use it)
+  /// From the optional "indicators" section: the reference front (objective points, loaded from
+  /// a result.json) and the hypervolume reference point (natural units, one per objective).
+  std::vector<ObjectivePoint> reference_front;
+  ObjectivePoint reference_point;
+  /// The reference front's path when the file does not exist yet (then no reference indicators;
+  /// result.json says why). A file that exists but is not a usable result is an error.
+  std::string reference_front_missing;
 };
 
 /// Validates a problem document completely (framework rules, each plugin's schema, design
-/// bounds against the mechanism's limits) and builds the scene and problem. Nothing runs.
+/// bounds against the mechanism's limits, the "indicators" section and its reference front
+/// file) and builds the scene and problem. Nothing runs. The registry must outlive the study.
 /// \throws Error naming the JSON path, the value and the rule.
 Study load_study(const Json& problem, const Registry& registry);
 
@@ -51,6 +61,7 @@ struct RunOptions {
 
 /// Runs a loaded study: solves, then writes result.json (atomically) and samples.csv into the
 /// output directory. Returns the result document. The solver's outcome is in "status".
+/// Studies with a front (or a reference front) get "indicators" (see front_indicators).
 Json run_study(Study& study, const RunOptions& options);
 
 /// Writes `content` to `path` atomically (temporary file in the same directory, then rename).

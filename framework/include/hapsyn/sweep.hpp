@@ -3,6 +3,7 @@
 /// Speed against accuracy: run one study across values of some keys and measure each run's
 /// error against a reference run, with its time and evaluation count (`hapsyn sweep`).
 #include <hapsyn/json.hpp>
+#include <hapsyn/pareto.hpp>  // inverted_generational_distance
 #include <hapsyn/registry.hpp>
 
 #include <cstdint>
@@ -38,10 +39,5 @@ struct SweepOptions {
 /// reference (max objective difference, design distance [SI], front IGD for Pareto studies).
 /// \throws Error for a malformed axis or an invalid study (before any run starts).
 Json run_sweep(const Json& problem, const SweepOptions& options, const Registry& registry);
-
-/// Inverted generational distance: mean over the reference points of the distance to the
-/// nearest point of `front` (objective space). Infinity when `front` is empty.
-double inverted_generational_distance(const std::vector<std::vector<double>>& front,
-                                      const std::vector<std::vector<double>>& reference);
 
 }  // namespace hapsyn

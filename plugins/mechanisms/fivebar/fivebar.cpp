@@ -87,8 +87,10 @@ FiveBarOptions FiveBarOptions::from_json(const Json& options) {
   if (!options.is_object()) throw Error(kName, "options = " + options.dump() + ": must be an object");
   for (const auto& item : options.items()) {
     const std::string& key = item.key();
-    if (key != "elbow" && key != "rho" && key != "k" && key != "singularity_tolerance") {
-      throw Error(kName, "options." + key + ": unknown option (known: elbow, rho, k, singularity_tolerance)");
+    if (key != "elbow" && key != "rho" && key != "k" && key != "singularity_tolerance" && key != "footprint_width" &&
+        key != "footprint_height") {
+      throw Error(kName, "options." + key +
+                             ": unknown option (known: elbow, rho, k, singularity_tolerance, footprint_width, footprint_height)");
     }
   }
   if (const auto it = options.find("elbow"); it != options.end()) {
@@ -105,6 +107,12 @@ FiveBarOptions FiveBarOptions::from_json(const Json& options) {
   if (!(o.singularity_tolerance > 0.0 && o.singularity_tolerance <= 1.0)) {
     throw Error(kName, "options.singularity_tolerance = " + show(o.singularity_tolerance) +
                            ": must be > 0 and <= 1");
+  }
+  o.footprint_width = number_option(options, "footprint_width", o.footprint_width);
+  if (!(o.footprint_width >= 0.0)) throw Error(kName, "options.footprint_width = " + show(o.footprint_width) + ": must be >= 0");
+  o.footprint_height = number_option(options, "footprint_height", o.footprint_height);
+  if (!(o.footprint_height >= 0.0)) {
+    throw Error(kName, "options.footprint_height = " + show(o.footprint_height) + ": must be >= 0");
   }
   return o;
 }
@@ -284,9 +292,26 @@ std::vector<VariableDecl> FiveBar::variables() const {
 }
 
 std::vector<ConstraintDecl> FiveBar::constraints() const {
-  return {ConstraintDecl{"reach",
-                         "farthest corner of the scene's bounding box within l1 + l2 of both actuated "
-                         "joints: max_i |corner - A_i|^2 - (l1 + l2)^2 <= 0 [m^2]"}};
+  std::vector<ConstraintDecl> c = {ConstraintDecl{"reach",
+                                                  "farthest corner of the scene's bounding box within l1 + l2 of both actuated "
+                                                  "joints: max_i |corner - A_i|^2 - (l1 + l2)^2 <= 0 [m^2]"}};
+  if (options_.footprint_width > 0.0 || options_.footprint_height > 0.0) {
+    c.push_back(ConstraintDecl{"footprint",
+                               "the box around both actuated joints' circles of radius l1 and the scene fits "
+                               "footprint_width x footprint_height [m]"});
+  }
+  return c;
+}
+
+double FiveBar::footprint_constraint(const FiveBarDesign& design, double xmin, double xmax, double ymin, double ymax,
+                                     double width, double height) {
+  const double h0 = 0.5 * design.l0;
+  const double box_width = std::max(h0 + design.l1, xmax) - std::min(-h0 - design.l1, xmin);
+  const double box_height = std::max(design.l1, ymax + design.r) - std::min(-design.l1, ymin + design.r);
+  double g = -std::numeric_limits<double>::infinity();
+  if (width > 0.0) g = std::max(g, box_width - width);
+  if (height > 0.0) g = std::max(g, box_height - height);
+  return std::isfinite(g) ? g : -1.0;
 }
 
 double FiveBar::reach_constraint(const FiveBarDesign& design, double xmin, double xmax, double ymin,
@@ -306,7 +331,11 @@ void FiveBar::evaluate_constraints(const double* design, const SampleSet& scene,
   const SampleSet::Corner lower = scene.lower_corner();
   const SampleSet::Corner upper = scene.upper_corner();
   const double xmin = lower[0], ymin = lower[1], xmax = upper[0], ymax = upper[1];
-  g[0] = reach_constraint(FiveBarDesign{design[0], design[1], design[2], design[3]}, xmin, xmax, ymin, ymax);
+  const FiveBarDesign d{design[0], design[1], design[2], design[3]};
+  g[0] = reach_constraint(d, xmin, xmax, ymin, ymax);
+  if (options_.footprint_width > 0.0 || options_.footprint_height > 0.0) {
+    g[1] = footprint_constraint(d, xmin, xmax, ymin, ymax, options_.footprint_width, options_.footprint_height);
+  }
 }
 
 void FiveBar::check_scene(const SampleSet& scene) const {

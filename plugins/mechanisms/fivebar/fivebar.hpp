@@ -43,6 +43,11 @@ struct FiveBarOptions {
   double k = 0.005;                     ///< width of every bar [m] (enters the bar inertias)
   double singularity_tolerance = 1e-4;  ///< smallest admissible |sin| of the three
                                         ///< transmission angles [-]
+  /// Footprint limit (Unal 2008, Figure 7) [m]: width (x) and height (y) of the box the
+  /// mechanism must fit in; 0 = no limit. When either is set, a second design constraint
+  /// "footprint" is declared (see FiveBar::footprint_constraint).
+  double footprint_width = 0.0;
+  double footprint_height = 0.0;
 
   /// Reads and checks options (missing keys keep the defaults above).
   /// \throws Error("fivebar: options.<key> = <value>: <rule>") on a wrong type or value.
@@ -109,9 +114,11 @@ class FiveBar final : public Mechanism {
   std::unique_ptr<MechanismScratch> make_scratch() const override;
   /// l0, l1, l2, r [m] with the paper's default bounds and hard limits.
   std::vector<VariableDecl> variables() const override;
-  /// One constraint, "reach" [m^2]: see reach_constraint().
+  /// "reach" [m^2] (see reach_constraint()), and "footprint" [m] when options.footprint_width
+  /// or footprint_height is set (see footprint_constraint()).
   std::vector<ConstraintDecl> constraints() const override;
-  /// g[0] = reach_constraint(design, scene bounding box). O(scene size), no allocation.
+  /// g[0] = reach_constraint(design, scene bounding box); g[1] = footprint_constraint when
+  /// declared. O(1) with the framework's cached scene bounds, no allocation.
   void evaluate_constraints(const double* design, const SampleSet& scene, double* g) const override;
   /// \throws Error unless the scene has samples with exactly two coordinates (x, y) [m].
   void check_scene(const SampleSet& scene) const override;
@@ -124,6 +131,12 @@ class FiveBar final : public Mechanism {
   /// (scene frame): max over both actuated joints of the squared distance to the farthest box
   /// corner, minus (l1 + l2)^2 [m^2]. For a square of side s centred at (0, 0) and r >= 0 this
   /// is (l0/2 + s/2)^2 + (r + s/2)^2 - (l1 + l2)^2.
+  /// Footprint constraint [m]: the box holding both actuated joints' circles of radius l1 (where
+  /// the elbows can be) and the scene's bounding box (where the end effector is) contains the
+  /// whole mechanism in every posture (the distal links join the two); g = the larger excess of
+  /// its width over `width` and of its height over `height` (a zero limit is not checked).
+  static double footprint_constraint(const FiveBarDesign& design, double xmin, double xmax, double ymin, double ymax,
+                                     double width, double height);
   static double reach_constraint(const FiveBarDesign& design, double xmin, double xmax, double ymin,
                                  double ymax);
   /// The design (l0, l1, l2, r) from a design vector (unchecked: FiveBarModel checks it).

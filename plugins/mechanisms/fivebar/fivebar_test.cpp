@@ -891,7 +891,7 @@ TEST(FiveBarConformance, BadOptionsAreRefusedWithTheirPathAndRule) {
             "fivebar: options.elbow = \"in\": must be \"out\" (the paper's elbow-out posture)");
   EXPECT_EQ(message(Json{{"rho", "heavy"}}), "fivebar: options.rho = \"heavy\": must be a number");
   EXPECT_EQ(message(Json{{"width", 0.01}}),
-            "fivebar: options.width: unknown option (known: elbow, rho, k, singularity_tolerance)");
+            "fivebar: options.width: unknown option (known: elbow, rho, k, singularity_tolerance, footprint_width, footprint_height)");
 }
 
 TEST(FiveBarConformance, CheckSceneRefusesNonPlanarScenes) {
@@ -956,3 +956,45 @@ TEST(FiveBarPlugin, LoadedPluginsReproduceTable2) {
 }
 
 }  // namespace
+
+TEST(FiveBar, FootprintConstraintBoundsTheMechanismInEveryPosture) {
+  // Box around the actuated joints' l1 circles and the scene: for the best-GDI design of Table 2
+  // (l0 0.1 mm, l1 89.9 mm, r 123.6 mm) and a 100 mm square: width 2*0.0899 + 0.0001 = 0.1799 m,
+  // height from -0.0899 to r + 0.05 = 0.1736: 0.2635 m.
+  const hapsyn::plugins::FiveBarDesign d{0.0001, 0.0899, 0.1152, 0.1236};
+  EXPECT_NEAR(FiveBar::footprint_constraint(d, -0.05, 0.05, -0.05, 0.05, 0.3, 0.3), 0.2635 - 0.3, 1e-12);
+  EXPECT_NEAR(FiveBar::footprint_constraint(d, -0.05, 0.05, -0.05, 0.05, 0.15, 0.0), 0.1799 - 0.15, 1e-12);
+  // Every elbow and the end effector of every reachable sample lie inside the box.
+  const FiveBarModel model(d, options_with());
+  const SampleSet scene = square(0.1, 0.01);
+  const double box_w = 0.1799, box_lo = -0.0899, box_hi = 0.1736;
+  hapsyn::MechanismScratch scratch;
+  hapsyn::SampleQuantities q;
+  for (int i = 0; i < scene.size(); ++i) {
+    model.solve(scene.pose(i), hapsyn::kNeedPose, scratch, q);
+    if (q.status != hapsyn::SampleStatus::kReachable) continue;
+    const double ex1 = -d.l0 / 2 + d.l1 * std::cos(q.q[0]), ey1 = d.l1 * std::sin(q.q[0]);
+    EXPECT_LE(std::abs(ex1), box_w / 2 + 1e-12);
+    EXPECT_GE(ey1, box_lo - 1e-12);
+    EXPECT_LE(ey1, box_hi + 1e-12);
+  }
+}
+
+TEST(FiveBar, FootprintOptionDeclaresASecondConstraintAndRefusesNegativeLimits) {
+  const FiveBar plain(Json::object());
+  EXPECT_EQ(plain.constraints().size(), 1u);
+  const FiveBar limited(Json{{"footprint_width", 0.3}, {"footprint_height", 0.3}});
+  ASSERT_EQ(limited.constraints().size(), 2u);
+  EXPECT_EQ(limited.constraints()[1].name, "footprint");
+  const SampleSet scene = square(0.1, 0.05);
+  double g[2];
+  const double gii_best[4] = {0.0004, 0.2997, 0.3, 0.4196};
+  limited.evaluate_constraints(gii_best, scene, g);
+  EXPECT_GT(g[1], 0.0);  // l1 = 0.3 m: 0.6 m wide
+  try {
+    FiveBar(Json{{"footprint_width", -0.1}});
+    ADD_FAILURE() << "expected an error";
+  } catch (const hapsyn::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("fivebar: options.footprint_width = -0.1: must be >= 0"), std::string::npos) << e.what();
+  }
+}

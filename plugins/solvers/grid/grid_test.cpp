@@ -1,10 +1,14 @@
 // The grid solver is the oracle of later solvers: check it against a plain loop over the grid.
 #include "grid.hpp"
 
+#include "analytic_problems.hpp"
 #include "test_support.hpp"
+
+#include <hapsyn/pareto.hpp>
 
 #include <cmath>
 #include <random>
+#include <set>
 
 using hapsyn::Json;
 
@@ -127,4 +131,81 @@ TEST(Grid, InfeasibleGridIsAStatusWithAMessage) {
   const auto result = solver.solve(*study.problem, hapsyn::SolverContext{});
   EXPECT_EQ(result.status, hapsyn::SolverStatus::kInfeasible);
   EXPECT_NE(result.message.find("no feasible design"), std::string::npos) << result.message;
+}
+
+TEST(Grid, ParetoModeReturnsTheBruteForceFrontWithAndWithoutPruning) {
+  Json doc = hapsyn::test::fivebar_study("grid");
+  for (const char* v : {"l0", "l1", "l2"}) doc["design"][v]["step"] = 0.025;
+  doc["design"]["r"]["step"] = 0.05;
+  doc["objectives"] = Json::array({{{"metric", "gii"}}, {{"metric", "gdi"}}});
+  doc["solver"]["options"] = {{"pareto", true}, {"progress_interval", 1e9}};
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  const auto& problem = *study.problem;
+  // Brute force: every grid design in full, then the non-dominated set (first of duplicates).
+  const auto counts = problem.design_space().grid_counts();
+  long long total = 1;
+  for (long long c : counts) total *= c;
+  std::vector<hapsyn::ObjectivePoint> all;
+  std::vector<long long> index;
+  auto ws = problem.make_workspace();
+  std::vector<double> x(problem.dimension());
+  for (long long i = 0; i < total; ++i) {
+    problem.design_space().grid_point(i, counts, x.data());
+    const auto& e = problem.evaluate(x.data(), *ws);
+    if (e.status != hapsyn::EvalStatus::kFeasible) continue;
+    all.push_back(e.objectives);
+    index.push_back(i);
+  }
+  const auto keep = hapsyn::non_dominated(all, {hapsyn::Sense::kMaximize, hapsyn::Sense::kMaximize});
+  std::set<std::vector<double>> expected;
+  for (std::size_t k : keep) expected.insert(all[k]);
+  ASSERT_GE(expected.size(), 5u);
+  for (bool prune : {true, false}) {
+    for (int threads : {1, 2}) {
+      const hapsyn::plugins::GridSolver grid(Json{{"prune", prune}, {"pareto", true}, {"progress_interval", 1e9}});
+      hapsyn::SolverContext context;
+      context.threads = threads;
+      const auto result = grid.solve(problem, context);
+      ASSERT_EQ(result.status, hapsyn::SolverStatus::kConverged) << result.message;
+      std::set<std::vector<double>> found;
+      for (const auto& p : result.front) found.insert(p.objectives);
+      EXPECT_EQ(found, expected) << "prune " << prune << ", threads " << threads;
+      EXPECT_EQ(result.front.size(), expected.size());
+      if (prune) {
+        EXPECT_LT(result.sample_evaluations * 3, static_cast<long long>(all.size()) * problem.samples().size());
+      }
+    }
+  }
+}
+
+TEST(Grid, ParetoModeNeedsTwoObjectives) {
+  Json doc = hapsyn::test::fivebar_study("grid");
+  doc["solver"]["options"] = {{"pareto", true}};
+  hapsyn::test::expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); },
+                             {"grid: solver.options.pareto = true: needs two or more objectives (the study has 1)"});
+}
+
+TEST(Grid, ParetoModeHandlesThreeObjectives) {
+  const auto problem = hapsyn::test::three_objective_problem(0.1);
+  const auto counts = problem->design_space().grid_counts();
+  long long total = 1;
+  for (long long c : counts) total *= c;
+  std::vector<hapsyn::ObjectivePoint> all;
+  auto ws = problem->make_workspace();
+  std::vector<double> x(problem->dimension());
+  for (long long i = 0; i < total; ++i) {
+    problem->design_space().grid_point(i, counts, x.data());
+    all.push_back(problem->evaluate(x.data(), *ws).objectives);
+  }
+  const std::vector<hapsyn::Sense> max3(3, hapsyn::Sense::kMaximize);
+  std::set<std::vector<double>> expected;
+  for (std::size_t k : hapsyn::non_dominated(all, max3)) expected.insert(all[k]);
+  const hapsyn::plugins::GridSolver grid(Json{{"prune", true}, {"pareto", true}, {"progress_interval", 1e9}});
+  hapsyn::SolverContext context;
+  context.threads = 2;
+  const auto result = grid.solve(*problem, context);
+  std::set<std::vector<double>> found;
+  for (const auto& p : result.front) found.insert(p.objectives);
+  EXPECT_EQ(found, expected);
+  EXPECT_GT(expected.size(), 50u);  // the sphere octant's grid points (r = 0)
 }

@@ -1,0 +1,41 @@
+#pragma once
+/// \file
+/// Studies side by side (`hapsyn compare`): runs several problem files on the same machine, one
+/// after the other, and tabulates their fronts' quality, evaluations and time; writes
+/// compare.json, compare.csv and gnuplot plots (fronts overlaid, Unal's Figures 3 and 7; local
+/// values over the workspace for studies with one design, Figure 2).
+#include <hapsyn/json.hpp>
+#include <hapsyn/registry.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace hapsyn {
+
+struct CompareOptions {
+  std::vector<std::string> files;      ///< problem files, run in this order
+  std::vector<std::string> overrides;  ///< "path=value", applied to every study
+  std::string output_directory = "results/compare";
+  int threads = 0;
+  std::optional<std::uint64_t> seed;
+  bool plots = true;                   ///< write the gnuplot plots (needs gnuplot)
+};
+
+/// Runs each study into <out>/<study name>/ (a study is validated just before it runs, so a
+/// reference study listed first can produce the reference front later ones name in their
+/// "indicators" section), then writes <out>/compare.json, compare.csv and the plots.
+/// Returns the summary: "rows" (study, file, solver, status, points, hypervolume, spacing,
+/// spacing_relative, generational_distance, inverted_generational_distance, max_domination_gap,
+/// best_dominated, designs, samples, wall_time_s, time_ratio to the first study), "plots",
+/// "machine", "hapsyn".
+/// \throws Error("compare", ...) with no file, or two studies of the same name; a study's own
+///         errors as `hapsyn run` reports them, prefixed with its file.
+Json run_compare(const CompareOptions& options, const Registry& registry);
+
+/// Prints the summary's table.
+void print_compare(const Json& summary, std::ostream& out);
+
+}  // namespace hapsyn

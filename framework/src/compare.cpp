@@ -1,0 +1,271 @@
+#include <hapsyn/compare.hpp>
+#include <hapsyn/error.hpp>
+#include <hapsyn/plot.hpp>
+#include <hapsyn/study.hpp>
+
+#include <boost/filesystem.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <set>
+#include <sstream>
+
+namespace hapsyn {
+
+namespace fs = boost::filesystem;
+
+namespace {
+
+Json indicator(const Json& result, const char* key) {
+  if (!result.contains("indicators") || !result["indicators"].contains(key)) return nullptr;
+  return result["indicators"][key];
+}
+
+double max_of(const Json& per_objective) {
+  if (!per_objective.is_object()) return NAN;
+  double m = 0.0;
+  for (auto it = per_objective.begin(); it != per_objective.end(); ++it) m = std::max(m, it.value().get<double>());
+  return m;
+}
+
+std::vector<std::string> objective_names(const Json& result) {
+  std::vector<std::string> names;
+  for (const Json& o : result["problem"]["objectives"]) names.push_back(o["name"]);
+  return names;
+}
+
+// Objective columns of a result's front (or its single design), one row per point.
+std::string points_csv(const Json& result, const std::vector<std::string>& names) {
+  std::ostringstream csv;
+  csv.precision(12);
+  for (std::size_t i = 0; i < names.size(); ++i) csv << (i ? "," : "") << names[i];
+  csv << "\n";
+  auto row = [&](const Json& point) {
+    for (std::size_t i = 0; i < names.size(); ++i) csv << (i ? "," : "") << point["objectives"][names[i]].get<double>();
+    csv << "\n";
+  };
+  if (result.contains("front")) {
+    for (const Json& p : result["front"]) row(p);
+  } else if (result.contains("best")) {
+    row(result["best"]);
+  }
+  return csv.str();
+}
+
+std::string gnuplot_quote(const std::string& s) {
+  std::string out;
+  for (char c : s) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return "'" + out + "'";
+}
+
+// Fronts overlaid (two objectives): the reference front as a line, each Pareto study's points,
+// each single-design study as a large star (Unal's Figures 3 and 7).
+std::string plot_fronts(const fs::path& out, const std::vector<Json>& results, const Json& rows) {
+  const std::vector<std::string> names = objective_names(results.front());
+  if (names.size() != 2) return "fronts plot: only for two objectives";
+  std::ostringstream script;
+  script << "set datafile separator ','\nset grid\nset key outside right top\n"
+         << "set xlabel " << gnuplot_quote(names[0]) << "\nset ylabel " << gnuplot_quote(names[1]) << "\n";
+  std::string reference_file;
+  for (const Json& r : results) {
+    const Json& section = r["problem"].contains("indicators") ? r["problem"]["indicators"] : Json::object();
+    if (section.contains("reference_front")) {
+      reference_file = section["reference_front"];
+      break;
+    }
+  }
+  std::ostringstream plot;
+  plot << "plot ";
+  bool first = true;
+  if (!reference_file.empty()) {
+    try {
+      const Json reference = read_problem_file(reference_file);
+      Json ref_doc = reference;
+      std::ofstream(out / "reference_front.csv") << points_csv(ref_doc, names);
+      plot << "'reference_front.csv' using 1:2 with linespoints lc rgb 'gray60' pt 1 ps 0.5 title 'reference front (exhaustive)'";
+      first = false;
+    } catch (const Error&) {
+      // No reference line: the other curves still plot.
+    }
+  }
+  int style = 0;
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const std::string name = rows[i]["study"];
+    const std::string file = name + "/points.csv";
+    std::ofstream(out / file) << points_csv(results[i], names);
+    const bool single = !results[i].contains("front");
+    const bool dense = !single && results[i]["front"].size() > 30;  // e.g. an exhaustive front
+    static const char* const kStyles[] = {"pt 7 ps 1.4", "pt 6 ps 1.8", "pt 9 ps 1.4", "pt 4 ps 1.6", "pt 11 ps 1.4"};
+    plot << (first ? "" : ", ") << gnuplot_quote(file) << " using 1:2 with points "
+         << (single ? "pt 3 ps 3" : dense ? "pt 7 ps 0.4" : kStyles[style % 5]) << " title "
+         << gnuplot_quote(name + " (" + rows[i]["solver"].get<std::string>() + ")");
+    first = false;
+    if (!single && !dense) ++style;
+  }
+  for (const char* term : {"pngcairo noenhanced size 1000,650", "svg noenhanced size 1000,650"}) {
+    const std::string ext = std::string(term).rfind("svg", 0) == 0 ? "svg" : "png";
+    script << "set terminal " << term << "\nset output 'fronts." << ext << "'\n" << plot.str() << "\n";
+  }
+  std::ofstream(out / "fronts.gp") << script.str();
+  return run_gnuplot(out.string(), "fronts.gp");
+}
+
+// Local values over the workspace for a study with one design (its samples.csv): one heat map
+// per local value (Unal's Figure 2: singular values of J and M over the workspace).
+std::string plot_samples(const fs::path& dir) {
+  std::ifstream in((dir / "samples.csv").string());
+  std::string header;
+  if (!std::getline(in, header)) return "no samples.csv";
+  std::vector<std::string> columns;
+  std::stringstream split(header);
+  for (std::string c; std::getline(split, c, ',');) columns.push_back(c);
+  std::vector<std::size_t> locals;
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    if (columns[i].find('.') != std::string::npos) locals.push_back(i);
+  }
+  if (columns.size() < 3 || locals.empty()) return "samples.csv has no local values";
+  std::ostringstream script;
+  script << "set datafile separator ','\nset size ratio -1\nset palette rgbformulae 33,13,10\nunset key\n"
+         << "set xlabel " << gnuplot_quote(columns[1]) << "\nset ylabel " << gnuplot_quote(columns[2]) << "\n";
+  for (const char* term : {"pngcairo noenhanced size 1200,420", "svg noenhanced size 1200,420"}) {
+    const std::string ext = std::string(term).rfind("svg", 0) == 0 ? "svg" : "png";
+    script << "set terminal " << term << "\nset output 'local_values." << ext << "'\n"
+           << "set multiplot layout 1," << locals.size() << "\n";
+    for (std::size_t k : locals) {
+      script << "set title " << gnuplot_quote(columns[k]) << "\n"
+             << "plot 'samples.csv' every ::1 using 2:3:" << (k + 1) << " with points pt 5 ps 0.6 palette\n";
+    }
+    script << "unset multiplot\n";
+  }
+  std::ofstream((dir / "local_values.gp").string()) << script.str();
+  return run_gnuplot(dir.string(), "local_values.gp");
+}
+
+std::string cell(const Json& v, int precision = 4) {
+  if (v.is_null()) return "-";
+  if (v.is_boolean()) return v.get<bool>() ? "yes" : "no";
+  if (v.is_number_float()) {
+    const double d = v.get<double>();
+    if (!std::isfinite(d)) return "-";
+    std::ostringstream s;
+    s << std::setprecision(precision) << d;
+    return s.str();
+  }
+  if (v.is_string()) return v.get<std::string>();
+  return v.dump();
+}
+
+}  // namespace
+
+Json run_compare(const CompareOptions& options, const Registry& registry) {
+  if (options.files.empty()) throw Error("compare", "at least one problem file is required");
+  fs::create_directories(options.output_directory);
+  std::vector<Json> results;
+  Json rows = Json::array();
+  std::set<std::string> names;
+  for (const std::string& file : options.files) {
+    Json doc = read_problem_file(file);
+    for (const std::string& s : options.overrides) apply_override(doc, s);
+    const std::string name = doc.value("name", fs::path(file).stem().string());
+    if (!names.insert(name).second) {
+      throw Error("compare", file + ": a study named '" + name + "' is already in this comparison (give each a distinct \"name\")");
+    }
+    Study study;
+    try {
+      study = load_study(doc, registry);
+    } catch (const Error& e) {
+      throw Error("compare", file + ": " + e.what());
+    }
+    RunOptions run;
+    run.output_directory = (fs::path(options.output_directory) / name).string();
+    run.threads = options.threads;
+    run.seed = options.seed;
+    run.quiet = true;
+    const Json result = run_study(study, run);
+    Json row = {{"study", name},
+                {"file", file},
+                {"solver", study.solver_plugin},
+                {"status", result["status"]},
+                {"points", result.contains("front") ? result["front"].size() : (result.contains("best") ? 1 : 0)},
+                {"hypervolume", indicator(result, "hypervolume")},
+                {"spacing", indicator(result, "spacing")},
+                {"spacing_relative", indicator(result, "spacing_relative")},
+                {"generational_distance", indicator(result, "generational_distance")},
+                {"inverted_generational_distance", indicator(result, "inverted_generational_distance")},
+                {"max_domination_gap", indicator(result, "max_domination_gap")},
+                {"best_dominated", indicator(result, "best_dominated")},
+                {"best_domination_gap", indicator(result, "best_domination_gap")},
+                {"designs", result["evaluations"]["designs"]},
+                {"samples", result["evaluations"]["samples"]},
+                {"wall_time_s", result["wall_time_s"]},
+                {"output_directory", run.output_directory}};
+    rows.push_back(row);
+    results.push_back(result);
+  }
+  const double first_time = rows[0]["wall_time_s"].get<double>();
+  for (Json& row : rows) row["time_ratio"] = row["wall_time_s"].get<double>() / first_time;
+
+  const fs::path out(options.output_directory);
+  Json summary = {{"hapsyn", version()}, {"machine", machine_info()}, {"rows", rows}, {"plots", Json::object()}};
+  if (options.plots) {
+    const std::string why = plot_fronts(out, results, rows);
+    summary["plots"]["fronts"] = why.empty() ? Json("fronts.png, fronts.svg") : Json("not written: " + why);
+    for (const Json& row : rows) {
+      const fs::path dir = row["output_directory"].get<std::string>();
+      if (!fs::exists(dir / "samples.csv")) continue;
+      const std::string w = plot_samples(dir);
+      summary["plots"][row["study"].get<std::string>()] =
+          w.empty() ? Json(row["study"].get<std::string>() + "/local_values.png, .svg") : Json("not written: " + w);
+    }
+  }
+  std::ostringstream csv;
+  csv.precision(12);
+  const std::vector<std::string> columns = {"study", "solver", "status", "points", "hypervolume", "spacing",
+                                            "spacing_relative", "generational_distance",
+                                            "inverted_generational_distance", "designs", "samples", "wall_time_s",
+                                            "time_ratio"};
+  for (std::size_t i = 0; i < columns.size(); ++i) csv << (i ? "," : "") << columns[i];
+  csv << ",max_domination_gap,best_dominated\n";
+  for (const Json& row : rows) {
+    for (std::size_t i = 0; i < columns.size(); ++i) {
+      const Json& v = row[columns[i]];
+      csv << (i ? "," : "") << (v.is_null() ? "" : v.is_string() ? v.get<std::string>() : v.dump());
+    }
+    csv << "," << (row["max_domination_gap"].is_null() ? "" : std::to_string(max_of(row["max_domination_gap"])))
+        << "," << (row["best_dominated"].is_null() ? "" : row["best_dominated"].dump()) << "\n";
+  }
+  write_file_atomically((out / "compare.csv").string(), csv.str());
+  summary["output_directory"] = options.output_directory;
+  write_file_atomically((out / "compare.json").string(), summary.dump(2) + "\n");
+  return summary;
+}
+
+void print_compare(const Json& summary, std::ostream& out) {
+  out << std::left << std::setw(30) << "study" << std::setw(14) << "solver" << std::right << std::setw(7) << "points"
+      << std::setw(12) << "hypervolume" << std::setw(10) << "spacing" << std::setw(10) << "sp./mean" << std::setw(10)
+      << "GD" << std::setw(10) << "IGD" << std::setw(10) << "max gap" << std::setw(14) << "samples" << std::setw(10)
+      << "time [s]" << std::setw(8) << "ratio" << "\n";
+  for (const Json& r : summary["rows"]) {
+    Json gap = r["max_domination_gap"];
+    if (gap.is_null() && r["best_domination_gap"].is_object()) gap = r["best_domination_gap"];
+    out << std::left << std::setw(30) << r["study"].get<std::string>() << std::setw(14) << r["solver"].get<std::string>()
+        << std::right << std::setw(7) << cell(r["points"]) << std::setw(12) << cell(r["hypervolume"]) << std::setw(10)
+        << cell(r["spacing"], 3) << std::setw(10) << cell(r["spacing_relative"], 3) << std::setw(10)
+        << cell(r["generational_distance"], 3) << std::setw(10) << cell(r["inverted_generational_distance"], 3)
+        << std::setw(10) << (gap.is_object() ? cell(Json(max_of(gap)), 3) : "-") << std::setw(14) << cell(r["samples"])
+        << std::setw(10) << cell(r["wall_time_s"], 3) << std::setw(8) << cell(r["time_ratio"], 3) << "\n";
+  }
+  for (const Json& r : summary["rows"]) {
+    if (r["best_dominated"].is_boolean()) {
+      out << r["study"].get<std::string>() << ": its design is " << (r["best_dominated"].get<bool>() ? "" : "not ")
+          << "dominated by the reference front; largest gains at no loss: " << r["best_domination_gap"].dump() << "\n";
+    }
+  }
+  for (auto it = summary["plots"].begin(); it != summary["plots"].end(); ++it) {
+    out << "plot " << it.key() << ": " << it.value().get<std::string>() << "\n";
+  }
+  out << "written: " << summary["output_directory"].get<std::string>() << "/compare.csv, compare.json\n";
+}
+
+}  // namespace hapsyn
