@@ -49,6 +49,15 @@ struct SolverContext {
   std::ostream* progress = nullptr; ///< progress lines (stderr), nullptr = quiet
   std::string output_directory;     ///< where the solver may write extra files
   const std::atomic<bool>* stop = nullptr;  ///< set when the user asks to stop (may be null)
+  /// The run's log (run.log in the output directory; null when there is none). Solvers write
+  /// their progress lines here too, also with --quiet.
+  std::ostream* log = nullptr;
+  /// Where a solver that checkpoints writes its checkpoint (a JSON document, written with
+  /// write_file_atomically; it must hold the run's "seed" at the top level); empty = none.
+  std::string checkpoint_file;
+  /// Continue from checkpoint_file when it exists (`hapsyn run --resume`); a solver without
+  /// checkpoints starts over.
+  bool resume = false;
 };
 
 /// Solver plugin.
