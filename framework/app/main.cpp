@@ -67,6 +67,10 @@ void print_summary(const Json& result, std::ostream& out) {
     out << "front: " << result["front"].size() << " non-dominated points\n";
     for (const Json& p : result["front"]) print_point(p, "  ");
   }
+  // A solver's own summary lines (ga: the cluster table of its runs).
+  if (result["statistics"].is_object() && result["statistics"].contains("report")) {
+    for (const Json& line : result["statistics"]["report"]) out << line.get<std::string>() << "\n";
+  }
   out << "evaluations: " << result["evaluations"]["designs"] << " designs, " << result["evaluations"]["samples"]
       << " sample solves; wall time " << format_number(result["wall_time_s"].get<double>()) << " s\n";
   out << "result: " << result["output_directory"].get<std::string>() << "/result.json\n";
