@@ -329,6 +329,38 @@ TEST(GaCli, FinishedStudyIsNotOverwrittenWithoutForce) {
   fs::remove_all(out);
 }
 
+TEST(GaCli, BadCheckpointsAreRefusedWithTheirReason) {
+  const fs::path dir = fresh_dir("badcheckpoint");
+  fs::create_directories(dir / "out");
+  const Json doc = fivebar_ga_study({{"population", 8}, {"generations", 3}, {"checkpoint_every", 1}});
+  const fs::path file = dir / "study.json";
+  std::ofstream(file.string()) << doc.dump(2);
+  const std::string run = "run " + file.string() + " --quiet --threads 1 --out " + (dir / "out").string() + " --resume";
+  const fs::path checkpoint = dir / "out" / "checkpoint.json";
+  std::ofstream(checkpoint.string()) << "{ not json";
+  Output o = hapsyn_cli(run);
+  EXPECT_EQ(o.code, 1);
+  EXPECT_NE(o.out.find("checkpoint.json: cannot be read as a checkpoint"), std::string::npos) << o.out;
+  std::ofstream(checkpoint.string()) << R"({"seed": 5, "solver": "ga", "fingerprint": "0"})";
+  o = hapsyn_cli(run + " --seed 6");
+  EXPECT_EQ(o.code, 1);
+  EXPECT_NE(o.out.find("--seed 6: the checkpoint"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("was written with seed 5"), std::string::npos) << o.out;
+  o = hapsyn_cli(run);
+  EXPECT_EQ(o.code, 1);
+  EXPECT_NE(o.out.find("ga: "), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("written for another study"), std::string::npos) << o.out;
+  EXPECT_FALSE(fs::exists(dir / "out" / "result.json"));
+  // No checkpoint at all: --resume starts from the beginning and says so in the log.
+  fs::remove(checkpoint);
+  o = hapsyn_cli(run);
+  ASSERT_EQ(o.code, 0) << o.out;
+  std::ifstream log((dir / "out" / "run.log").string());
+  const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("no checkpoint to resume from"), std::string::npos) << text;
+  fs::remove_all(dir);
+}
+
 // kill -9 during a checkpointed `hapsyn run`, then --resume: the study finishes with the result
 // of an uninterrupted run with the same seed and threads.
 TEST(GaCli, KilledRunResumesFromItsCheckpointAndMatchesAnUninterruptedRun) {
