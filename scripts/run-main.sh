@@ -10,4 +10,4 @@ cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$build" --target hapsyn_cli hapsyn_plugin_fivebar hapsyn_plugin_planar_square \
   hapsyn_plugin_gii hapsyn_plugin_gdi hapsyn_plugin_grid hapsyn_plugin_evaluate
 cd "$root"
-exec "$build/bin/hapsyn" run problems/fivebar-gii-coarse.json "$@"
+exec "$build/bin/hapsyn" run problems/fivebar-gii-coarse.json --force "$@"

@@ -186,3 +186,31 @@ TEST(Problem, ParetoPruningNeverCutsADesignTheFrontDoesNotDominate) {
   EXPECT_EQ(pruned.status, hapsyn::EvalStatus::kPruned);
   EXPECT_LT(pruned.samples_evaluated, full.samples_evaluated);
 }
+
+// An averaging metric (coverage: sums) split into a fixed number of chunks gives the same bits
+// on any thread count; a subset restricts the evaluation to those samples.
+TEST(Problem, FixedChunksMakeAveragingMetricsIndependentOfTheThreadCount) {
+  Json doc = hapsyn::read_problem_file(std::string(HAPSYN_SOURCE_DIR) + "/plugins/metrics/coverage/conformance.json");
+  doc["design"]["l"] = {{"lower", 0.12}, {"upper", 1.0}};
+  doc["solver"] = {{"plugin", "ga"}};
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  const std::vector<double> x = {0.45, 0.45, 0.65, 0.55, 0.15};
+  hapsyn::Problem::ParallelOptions options;
+  options.chunks = 8;
+  const hapsyn::Evaluation one = study.problem->evaluate_parallel(x.data(), 1, options);
+  ASSERT_EQ(one.status, EvalStatus::kFeasible);
+  for (int threads : {2, 3, 5}) {
+    const hapsyn::Evaluation many = study.problem->evaluate_parallel(x.data(), threads, options);
+    EXPECT_EQ(many.objectives, one.objectives) << threads;  // bit for bit
+    EXPECT_EQ(many.samples_evaluated, study.problem->samples().size());
+  }
+  auto ws = study.problem->make_workspace();
+  EXPECT_NEAR(study.problem->evaluate(x.data(), *ws).objectives[0], one.objectives[0], 1e-12);
+  const std::vector<int> subset = {0, 2, 4, 6, 8};
+  options.subset = &subset;
+  const hapsyn::Evaluation part = study.problem->evaluate_parallel(x.data(), 2, options);
+  EXPECT_EQ(part.samples_evaluated, 5);
+  hapsyn::EvalOptions sequential;
+  sequential.subset = &subset;
+  EXPECT_NEAR(study.problem->evaluate(x.data(), *ws, sequential).objectives[0], part.objectives[0], 1e-12);
+}

@@ -69,6 +69,10 @@ void print_summary(const Json& result, std::ostream& out) {
     out << "front: " << result["front"].size() << " non-dominated points\n";
     for (const Json& p : result["front"]) print_point(p, "  ");
   }
+  // A solver's own summary lines (ga: the cluster table of its runs).
+  if (result["statistics"].is_object() && result["statistics"].contains("report")) {
+    for (const Json& line : result["statistics"]["report"]) out << line.get<std::string>() << "\n";
+  }
   out << "evaluations: " << result["evaluations"]["designs"] << " designs, " << result["evaluations"]["samples"]
       << " sample solves; wall time " << format_number(result["wall_time_s"].get<double>()) << " s\n";
   out << "result: " << result["output_directory"].get<std::string>() << "/result.json\n";
@@ -327,6 +331,9 @@ int main(int argc, char** argv) {
   run->add_option("--threads", threads, "Worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
   CLI::Option* seed_option = run->add_option("--seed", seed, "Random seed (default: from the file, else drawn)");
   run->add_flag("--quiet,-q", quiet, "No progress output");
+  bool resume = false, force = false;
+  run->add_flag("--resume", resume, "Continue from the output directory's checkpoint (solvers that checkpoint: ga)");
+  run->add_flag("--force", force, "Overwrite a finished study (an existing result.json) in the output directory");
 
   CLI::App* validate = app.add_subcommand("validate", "Check a problem file completely without running it");
   validate->add_option("file", file, "Problem file (JSON)")->required();
@@ -393,6 +400,8 @@ int main(int argc, char** argv) {
       options.threads = threads;
       if (*seed_option) options.seed = seed;
       options.quiet = quiet;
+      options.resume = resume;
+      options.force = force;
       const Json result = hapsyn::run_study(study, options);
       print_summary(result, std::cout);
       return 0;

@@ -360,29 +360,31 @@ const Evaluation& Problem::evaluate(const double* free_design, Workspace& ws, co
   return out;
 }
 
-Evaluation Problem::evaluate_parallel(const double* free_design, int threads) const {
+Evaluation Problem::evaluate_parallel(const double* free_design, int threads, const ParallelOptions& options) const {
   check_design(free_design);
-  threads = std::max(1, std::min(threads, samples_->size()));
-  if (threads == 1) {
+  const std::vector<int>& indices = options.subset ? *options.subset : order_;
+  const long long n = static_cast<long long>(indices.size());
+  const int chunk_count = static_cast<int>(std::max(1LL, std::min<long long>(options.chunks > 0 ? options.chunks : threads, n)));
+  threads = std::max(1, std::min(threads, chunk_count));
+  if (chunk_count == 1) {
     auto ws = make_workspace();
-    return evaluate(free_design, *ws);
+    EvalOptions o;
+    o.subset = options.subset;
+    return evaluate(free_design, *ws, o);
   }
-  // Each thread evaluates a contiguous chunk of the sample order; the reductions are merged
-  // with the same tie rule (lower sample index wins) as a sequential run, so the result does
-  // not depend on the thread count.
-  std::vector<std::unique_ptr<Workspace>> spaces(static_cast<std::size_t>(threads));
-  std::vector<std::vector<int>> chunks(static_cast<std::size_t>(threads));
-  const long long n = static_cast<long long>(order_.size());
-  for (int t = 0; t < threads; ++t) {
+  // Each chunk is a contiguous piece of the sample order; the reductions are merged in chunk
+  // order with the same tie rule (lower sample index wins) as a sequential run, so the result
+  // does not depend on the thread count.
+  std::vector<std::unique_ptr<Workspace>> spaces(static_cast<std::size_t>(chunk_count));
+  std::vector<std::vector<int>> chunks(static_cast<std::size_t>(chunk_count));
+  for (int t = 0; t < chunk_count; ++t) {
     spaces[static_cast<std::size_t>(t)] = make_workspace();
-    chunks[static_cast<std::size_t>(t)].assign(order_.begin() + n * t / threads, order_.begin() + n * (t + 1) / threads);
+    chunks[static_cast<std::size_t>(t)].assign(indices.begin() + n * t / chunk_count, indices.begin() + n * (t + 1) / chunk_count);
   }
-  parallel_for(threads, threads, [&](long long b, long long e, int) {
-    for (long long t = b; t < e; ++t) {
-      EvalOptions o;
-      o.subset = &chunks[static_cast<std::size_t>(t)];
-      evaluate(free_design, *spaces[static_cast<std::size_t>(t)], o);
-    }
+  parallel_for_dynamic(chunk_count, threads, 1, [&](long long t, int) {
+    EvalOptions o;
+    o.subset = &chunks[static_cast<std::size_t>(t)];
+    evaluate(free_design, *spaces[static_cast<std::size_t>(t)], o);
   });
   Evaluation merged = spaces[0]->result;
   merged.samples_evaluated = 0;

@@ -20,6 +20,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <random>
 #include <set>
 #include <sstream>
@@ -452,15 +453,50 @@ Json run_study(Study& study, const RunOptions& options) {
   const int threads = options.threads > 0 ? options.threads
                       : resolved.contains("threads") && resolved["threads"].get<int>() > 0 ? resolved["threads"].get<int>()
                                                                                             : hardware_threads();
+  const std::string out_dir = options.output_directory.empty() ? study.output_directory : options.output_directory;
+  const fs::path result_file = fs::path(out_dir) / "result.json";
+  const fs::path checkpoint_file = fs::path(out_dir) / "checkpoint.json";
+
+  // A finished study is never overwritten by accident.
+  if (fs::exists(result_file) && !options.force) {
+    if (options.resume) {
+      throw Error("output", result_file.string() + ": the study in " + out_dir +
+                                " has finished; there is nothing to resume (pass --force to run it again)");
+    }
+    throw Error("output", out_dir + " already holds a finished study (" + result_file.string() +
+                              "); pass --force to overwrite it, or --out for another directory");
+  }
+
   std::uint64_t seed;
+  std::optional<std::uint64_t> checkpoint_seed;
+  if (options.resume && !options.force && fs::exists(checkpoint_file)) {
+    Json checkpoint;
+    try {
+      std::ifstream in(checkpoint_file.string());
+      checkpoint = Json::parse(in);
+    } catch (const std::exception& e) {
+      throw Error("output", checkpoint_file.string() + ": cannot be read as a checkpoint (" + e.what() +
+                                "); delete it, or run without --resume");
+    }
+    if (!checkpoint.is_object() || !checkpoint.contains("seed") || !checkpoint["seed"].is_number_unsigned()) {
+      throw Error("output", checkpoint_file.string() + ": not a checkpoint (no \"seed\"); delete it, or run without --resume");
+    }
+    checkpoint_seed = checkpoint["seed"].get<std::uint64_t>();
+  }
   if (options.seed) {
     seed = *options.seed;
+    if (checkpoint_seed && *checkpoint_seed != seed) {
+      throw Error("output", "--seed " + std::to_string(seed) + ": the checkpoint " + checkpoint_file.string() +
+                                " was written with seed " + std::to_string(*checkpoint_seed) +
+                                "; resume with that seed (or without --seed)");
+    }
+  } else if (checkpoint_seed) {
+    seed = *checkpoint_seed;
   } else if (resolved.contains("seed")) {
     seed = resolved["seed"].get<std::uint64_t>();
   } else {
     seed = std::random_device{}();
   }
-  const std::string out_dir = options.output_directory.empty() ? study.output_directory : options.output_directory;
 
   // Refuse an unusable output directory before any work is done.
   boost::system::error_code ec;
@@ -472,12 +508,20 @@ Json run_study(Study& study, const RunOptions& options) {
     throw Error("output", "the output directory " + out_dir + " is not writable: " + std::strerror(errno));
   }
 
+  std::ofstream log((fs::path(out_dir) / "run.log").string(), options.resume ? std::ios::app : std::ios::trunc);
+  log << "hapsyn " << version() << " " << (options.resume ? "resume" : "run") << " " << resolved["name"].get<std::string>()
+      << " at " << iso_time_now() << ", seed " << seed << ", " << threads << " threads\n";
+  log.flush();
+
   SolverContext context;
   context.threads = threads;
   context.seed = seed;
   context.progress = options.quiet ? nullptr : &std::cerr;
   context.output_directory = out_dir;
   context.registry = study.registry;
+  context.log = log ? &log : nullptr;
+  context.checkpoint_file = checkpoint_file.string();
+  context.resume = options.resume && !options.force;
 
   const std::string started = iso_time_now();
   const auto t0 = std::chrono::steady_clock::now();
@@ -550,7 +594,11 @@ Json run_study(Study& study, const RunOptions& options) {
     }
   }
   doc["output_directory"] = out_dir;
-  write_file_atomically((fs::path(out_dir) / "result.json").string(), doc.dump(2) + "\n");
+  write_file_atomically(result_file.string(), doc.dump(2) + "\n");
+  // The study is finished: its checkpoint has served.
+  boost::system::error_code remove_error;
+  fs::remove(checkpoint_file, remove_error);
+  if (log) log << "finished: status " << doc["status"].get<std::string>() << ", wall time " << wall << " s\n";
   return doc;
 }
 

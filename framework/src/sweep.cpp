@@ -211,6 +211,7 @@ Json run_sweep(const Json& problem, const SweepOptions& options, const Registry&
   run_options.seed = options.seed;
   run_options.quiet = options.quiet;
   run_options.write_samples = false;
+  run_options.force = true;  // the sweep owns its run directories
   // A run's time covers everything a user waits for: validation, the scene (built or read from
   // its cache: scene knobs cost there, not in the solver) and the solve.
   auto run_one = [&](const std::vector<std::string>& sets, const std::string& name) {

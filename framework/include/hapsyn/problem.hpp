@@ -145,8 +145,22 @@ class Problem {
   /// \throws Error on a wrong size, NaN/inf or out-of-bounds component, or NaN from a plugin.
   const Evaluation& evaluate(const double* free_design, Workspace& workspace,
                              const EvalOptions& options = {}) const;
-  /// Same, over all samples split across `threads` threads (deterministic merge).
-  Evaluation evaluate_parallel(const double* free_design, int threads) const;
+  /// How evaluate_parallel splits the work.
+  struct ParallelOptions {
+    /// Contiguous pieces of the sample order, evaluated on the threads and merged in order;
+    /// 0 = one per thread. A fixed count (> 0) makes the result independent of the thread
+    /// count bit for bit, also for averaging (sum-reduced) metrics.
+    int chunks = 0;
+    /// Evaluate only these samples (indices into samples(), in this order); null = all.
+    const std::vector<int>* subset = nullptr;
+  };
+  /// Same, over all samples (or `options.subset`) split into chunks across `threads` threads
+  /// (deterministic merge: the result does not depend on the thread count for a given chunk
+  /// count; worst-case reductions not at all).
+  Evaluation evaluate_parallel(const double* free_design, int threads, const ParallelOptions& options) const;
+  Evaluation evaluate_parallel(const double* free_design, int threads) const {
+    return evaluate_parallel(free_design, threads, ParallelOptions{});
+  }
   /// Evaluates the design constraints into g (size constraint_count()); true when all <= 0.
   bool constraints(const double* free_design, double* g) const;
 

@@ -54,6 +54,15 @@ struct SolverContext {
   /// The plugin registry, for solvers that run a sub-solver (nbi's shadow optima, weighted
   /// sums). Set by run_study; may be null when a solver is called directly.
   const Registry* registry = nullptr;
+  /// The run's log (run.log in the output directory; null when there is none). Solvers write
+  /// their progress lines here too, also with --quiet.
+  std::ostream* log = nullptr;
+  /// Where a solver that checkpoints writes its checkpoint (a JSON document, written with
+  /// write_file_atomically; it must hold the run's "seed" at the top level); empty = none.
+  std::string checkpoint_file;
+  /// Continue from checkpoint_file when it exists (`hapsyn run --resume`); a solver without
+  /// checkpoints starts over.
+  bool resume = false;
 };
 
 /// Solver plugin.

@@ -57,11 +57,21 @@ struct RunOptions {
   std::optional<std::uint64_t> seed;
   bool quiet = false;
   bool write_samples = true;     ///< per-sample CSV of the best design
+  /// Overwrite a finished study (an existing result.json in the output directory).
+  bool force = false;
+  /// Continue from the output directory's checkpoint.json (solvers that checkpoint); the seed
+  /// is the checkpoint's unless given.
+  bool resume = false;
 };
 
 /// Runs a loaded study: solves, then writes result.json (atomically) and samples.csv into the
 /// output directory. Returns the result document. The solver's outcome is in "status".
 /// Studies with a front (or a reference front) get "indicators" (see front_indicators).
+/// Progress lines also go to run.log in the output directory (appended on --resume); the
+/// solver's checkpoint is <output>/checkpoint.json and is removed once result.json is written.
+/// \throws Error("output", ...) when the output directory holds a finished study
+///         (result.json) and `force` is not set, when `resume` finds a finished
+///         study, or when the checkpoint's seed contradicts options.seed.
 Json run_study(Study& study, const RunOptions& options);
 
 /// Writes `content` to `path` atomically (temporary file in the same directory, then rename).

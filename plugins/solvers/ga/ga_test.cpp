@@ -1,0 +1,425 @@
+// The ga solver and the shared pagmo adapter: known optima of small mixed-integer problems with
+// the haptic 6R's constraint structure (s_i >= s_{i+1}), determinism, options errors, runs and
+// clusters, multi-fidelity, and (through the hapsyn program) checkpoints, kill -9 and --resume.
+#include "ga.hpp"
+#include "pagmo_adapter.hpp"
+
+#include "test_support.hpp"
+
+#include <hapsyn/problem.hpp>
+
+#include <boost/filesystem.hpp>
+
+#include <array>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <thread>
+#include <sys/wait.h>
+#include <unistd.h>
+
+using hapsyn::Json;
+namespace fs = boost::filesystem;
+namespace pa = hapsyn::plugins::pagmo_adapter;
+
+namespace {
+
+// A toy mechanism with the haptic 6R's design structure: x (2 reals), s (4 integers in 1..3,
+// constraint s_i >= s_{i+1}), r (2 integers in 1..6). Every sample is reachable and carries
+// the design's value f in q(0):
+//   f = -(x0 - 0.3)^2 - (x1 - 1.2)^2 - sum_i (s_i - t_i)^2 - |r0 - 4| - |r1 - 2|, t = (1, 3, 1, 3).
+// Unconstrained, s = t; under s_i >= s_{i+1} the optimum is s = (2, 2, 2, 2) (isotonic
+// regression of t), so the known optimum is x = (0.3, 1.2), s = (2, 2, 2, 2), r = (4, 2), f = -4.
+class ToyModel : public hapsyn::MechanismModel {
+ public:
+  explicit ToyModel(const double* d) {
+    const double t[4] = {1, 3, 1, 3};
+    value_ = -(d[0] - 0.3) * (d[0] - 0.3) - (d[1] - 1.2) * (d[1] - 1.2) - std::abs(d[6] - 4) - std::abs(d[7] - 2);
+    for (int i = 0; i < 4; ++i) value_ -= (d[2 + i] - t[i]) * (d[2 + i] - t[i]);
+  }
+  void solve(const double*, hapsyn::Needs, hapsyn::MechanismScratch&, hapsyn::SampleQuantities& out) const override {
+    out.status = hapsyn::SampleStatus::kReachable;
+    out.q.resize(1);
+    out.q(0) = value_;
+  }
+
+ private:
+  double value_ = 0.0;
+};
+
+class ToyMechanism : public hapsyn::Mechanism {
+ public:
+  std::unique_ptr<const hapsyn::MechanismModel> build(const double* design) const override {
+    return std::make_unique<ToyModel>(design);
+  }
+  std::vector<hapsyn::VariableDecl> variables() const override {
+    return {{"x", "reals", "m", 2, false, {-1.0}, {2.0}, {-10.0}, {10.0}},
+            {"s", "monotone integers", "", 4, true, {1}, {3}, {1}, {3}},
+            {"r", "integers", "", 2, true, {1}, {6}, {1}, {6}}};
+  }
+  std::vector<hapsyn::ConstraintDecl> constraints() const override {
+    return {{"s1", ""}, {"s2", ""}, {"s3", ""}};
+  }
+  void evaluate_constraints(const double* d, const hapsyn::SampleSet&, double* g) const override {
+    for (int i = 0; i < 3; ++i) g[i] = d[3 + i] - d[2 + i];
+  }
+};
+
+class ValueMetric : public hapsyn::Metric {
+ public:
+  void local(const hapsyn::SampleQuantities& q, double* out) const override { out[0] = q.q(0); }
+};
+
+std::shared_ptr<hapsyn::Problem> toy_problem() {
+  ToyMechanism mechanism;
+  std::vector<hapsyn::DesignComponent> components;
+  for (const hapsyn::VariableDecl& v : mechanism.variables()) {
+    for (int i = 0; i < v.size; ++i) {
+      hapsyn::DesignComponent c;
+      c.name = v.name + "[" + std::to_string(i) + "]";
+      c.variable = v.name;
+      c.index = i;
+      c.integer = v.integer;
+      c.lower = v.default_lower[0];
+      c.upper = v.default_upper[0];
+      c.step = v.integer ? 1.0 : 0.0;
+      components.push_back(c);
+    }
+  }
+  auto samples = std::make_shared<hapsyn::SampleSet>();
+  samples->poses = Eigen::MatrixXd::Zero(8, 1);
+  for (int i = 0; i < 8; ++i) samples->poses(i, 0) = i;
+  samples->coordinates = {"u"};
+  std::vector<hapsyn::MetricEntry> metrics = {{"value", std::make_shared<ValueMetric>()}};
+  std::vector<hapsyn::Objective> objectives = {{"f", 0, hapsyn::Sense::kMaximize, 1.0}};
+  return std::make_shared<hapsyn::Problem>("toy", std::make_shared<ToyMechanism>(), samples, metrics, objectives,
+                                           hapsyn::DesignSpace(components));
+}
+
+// Every option filled from the plugin's schema, with `overrides` applied.
+Json ga_options(const Json& overrides) {
+  return hapsyn::test::registry().resolve_options("ga", overrides, "solver.options");
+}
+
+hapsyn::SolverResult solve_toy(const Json& overrides, int threads = 2, std::uint64_t seed = 11) {
+  const auto problem = toy_problem();
+  hapsyn::plugins::GaSolver solver(ga_options(overrides));
+  solver.check(*problem);
+  hapsyn::SolverContext context;
+  context.threads = threads;
+  context.seed = seed;
+  return solver.solve(*problem, context);
+}
+
+void expect_toy_optimum(const hapsyn::SolverResult& r) {
+  ASSERT_TRUE(r.best.has_value()) << r.message;
+  const Eigen::VectorXd& d = r.best->design;
+  EXPECT_NEAR(d[0], 0.3, 0.03);
+  EXPECT_NEAR(d[1], 1.2, 0.03);
+  for (int i = 2; i < 6; ++i) EXPECT_EQ(d[i], 2.0) << "s[" << i - 2 << "]";
+  EXPECT_EQ(d[6], 4.0);
+  EXPECT_EQ(d[7], 2.0);
+  EXPECT_NEAR(r.best->score, -4.0, 2e-3);
+}
+
+struct Output {
+  int code = -1;
+  std::string out;
+};
+
+Output hapsyn_cli(const std::string& args) {
+  const std::string command = std::string(HAPSYN_BINARY_DIR) + "/bin/hapsyn " + args + " 2>&1";
+  Output o;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  std::array<char, 4096> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) o.out += buffer.data();
+  const int status = ::pclose(pipe);
+  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return o;
+}
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("hapsyn-ga-test-" + name + "-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  return dir;
+}
+
+Json read_json(const fs::path& p) {
+  std::ifstream in(p.string());
+  return Json::parse(in);
+}
+
+// A five-bar GII study for the GA (continuous design, 5 mm workspace).
+Json fivebar_ga_study(const Json& options) {
+  Json doc = hapsyn::test::fivebar_study("ga");
+  for (const char* v : {"l0", "l1", "l2", "r"}) doc["design"][v].erase("step");
+  doc["scene"]["options"]["step"] = 0.005;
+  doc["solver"]["options"] = options;
+  doc["seed"] = 5;
+  return doc;
+}
+
+}  // namespace
+
+TEST(PagmoAdapter, EncodingPutsIntegersLastAndRepairSortsDescending) {
+  const auto problem = toy_problem();
+  const pa::Encoding encoding(*problem, {"s"}, {}, "ga");
+  EXPECT_EQ(encoding.size(), 8u);
+  EXPECT_EQ(encoding.integer_count(), 6u);
+  // pagmo order: x0 x1 | s0..s3 r0 r1 (already reals first); unsorted, non-integral s repaired.
+  const std::vector<double> free = encoding.decode({0.5, 1.0, 1.2, 2.6, 1.0, 3.0, 4.4, 6.0});
+  EXPECT_EQ(free, (std::vector<double>{0.5, 1.0, 3.0, 3.0, 1.0, 1.0, 4.0, 6.0}));
+  std::vector<double> g(3);
+  EXPECT_TRUE(problem->constraints(free.data(), g.data()));
+  const pa::Encoding ascending(*problem, {}, {"s"}, "ga");
+  EXPECT_EQ(ascending.decode({0.5, 1.0, 3, 1, 2, 1, 1, 1})[2], 1.0);
+  EXPECT_EQ(ascending.decode({0.5, 1.0, 3, 1, 2, 1, 1, 1})[5], 3.0);
+}
+
+TEST(PagmoAdapter, InfeasibleDesignsArePenalisedAndFeasibleOnesNegated) {
+  const auto problem = toy_problem();
+  auto evaluator = std::make_shared<pa::Evaluator>(*problem, pa::Encoding(*problem, {}, {}, "ga"), pa::EvaluationSettings{}, false);
+  const auto feasible = evaluator->fitness({0.3, 1.2, 2, 2, 2, 2, 4, 2});
+  EXPECT_DOUBLE_EQ(feasible[0], 4.0);  // -score
+  const auto violated = evaluator->fitness({0.3, 1.2, 1, 3, 1, 3, 4, 2});
+  EXPECT_DOUBLE_EQ(violated[0], pa::kConstraintFitness + 4.0);  // 2 + 2 units of violation
+  // The same phenotype again comes from the cache.
+  const auto again = evaluator->batch_fitness({0.3, 1.2, 2, 2, 2, 2, 4, 2, 0.3, 1.2, 2, 2, 2, 2, 4, 2});
+  EXPECT_EQ(again, (pagmo::vector_double{4.0, 4.0}));
+  EXPECT_EQ(evaluator->design_evaluations(), 2);
+  EXPECT_EQ(evaluator->cache_hits(), 2);
+}
+
+TEST(PagmoAdapter, BatchOverIndividualsAndOverSamplesAgreeWithTheSingleEvaluation) {
+  const auto problem = toy_problem();
+  pagmo::vector_double xs;
+  for (int i = 0; i < 10; ++i) {
+    const double r0 = 1 + i % 6, r1 = 6 - i % 6;
+    const pagmo::vector_double x = {0.1 * i, 0.2 * i, 3, 2, 2, 1, r0, r1};
+    xs.insert(xs.end(), x.begin(), x.end());
+  }
+  pa::EvaluationSettings individuals{3, true, 4}, samples{3, false, 4};
+  pa::Evaluator a(*problem, pa::Encoding(*problem, {}, {}, "ga"), individuals, false);
+  pa::Evaluator b(*problem, pa::Encoding(*problem, {}, {}, "ga"), samples, false);
+  EXPECT_EQ(a.batch_fitness(xs), b.batch_fitness(xs));
+}
+
+TEST(Ga, SgaFindsTheKnownMixedIntegerOptimumWithTheSortRepair) {
+  const auto r = solve_toy({{"algorithm", "sga"}, {"population", 40}, {"generations", 300}, {"stall_generations", 60},
+                            {"sort_descending", {"s"}}});
+  expect_toy_optimum(r);
+  EXPECT_EQ(r.statistics["repair"]["sorted_descending"][0], (Json{"s[0]", "s[1]", "s[2]", "s[3]"}));
+}
+
+TEST(Ga, GacoFindsTheKnownMixedIntegerOptimumWithTheSortRepair) {
+  const auto r = solve_toy({{"algorithm", "gaco"}, {"population", 40}, {"generations", 300}, {"stall_generations", 60},
+                            {"sort_descending", {"s"}}, {"gaco", {{"ker", 20}}}});
+  expect_toy_optimum(r);
+}
+
+TEST(Ga, PenaltiesAloneAlsoReachTheConstrainedOptimum) {
+  const auto r = solve_toy({{"algorithm", "sga"}, {"population", 60}, {"generations", 400}, {"stall_generations", 80}});
+  expect_toy_optimum(r);
+}
+
+TEST(Ga, IdenticalSeedsGiveIdenticalResultsWhateverTheThreadCount) {
+  const Json options = {{"algorithm", "sga"}, {"population", 20}, {"generations", 30}, {"runs", 2}};
+  const auto a = solve_toy(options, 2, 99), b = solve_toy(options, 2, 99), c = solve_toy(options, 1, 99);
+  ASSERT_TRUE(a.best && b.best && c.best);
+  EXPECT_TRUE(a.best->design == b.best->design);
+  EXPECT_EQ(a.statistics["runs"], b.statistics["runs"]);
+  EXPECT_EQ(a.statistics["runs"], c.statistics["runs"]);
+  const auto d = solve_toy(options, 2, 100);
+  EXPECT_NE(a.statistics["runs"], d.statistics["runs"]);
+  const Json gaco = {{"algorithm", "gaco"}, {"population", 20}, {"generations", 30}, {"gaco", {{"ker", 10}}}};
+  EXPECT_EQ(solve_toy(gaco, 2, 5).statistics["runs"], solve_toy(gaco, 1, 5).statistics["runs"]);
+}
+
+TEST(Ga, RunsAreSummarisedAndClustered) {
+  const auto r = solve_toy({{"population", 16}, {"generations", 40}, {"runs", 5}, {"sort_descending", {"s"}}});
+  ASSERT_EQ(r.statistics["runs"].size(), 5u);
+  ASSERT_TRUE(r.statistics.contains("clusters")) << r.statistics.dump();
+  const Json& c = r.statistics["clusters"];
+  EXPECT_EQ(c["variables"], (Json{"x[0]", "x[1]"}));  // the real components by default
+  EXPECT_GE(c["k"].get<int>(), 1);
+  int members = 0;
+  for (const Json& cluster : c["clusters"]) members += cluster["size"].get<int>();
+  EXPECT_EQ(members, 5);
+  EXPECT_FALSE(r.statistics["report"].empty());
+  // The best run is the result.
+  double best = -1e300;
+  for (const Json& run : r.statistics["runs"]) best = std::max(best, run["score"].get<double>());
+  EXPECT_EQ(r.best->score, best);
+}
+
+TEST(Ga, OutcomesAreStatusesNotExceptions) {
+  const auto budget = solve_toy({{"population", 10}, {"generations", 3}, {"stall_generations", 50}});
+  EXPECT_EQ(budget.status, hapsyn::SolverStatus::kBudgetExhausted);
+  EXPECT_NE(budget.message.find("generation limit (3)"), std::string::npos) << budget.message;
+  const auto converged = solve_toy({{"population", 10}, {"generations", 500}, {"stall_generations", 5}});
+  EXPECT_EQ(converged.status, hapsyn::SolverStatus::kConverged) << converged.message;
+
+  const auto problem = toy_problem();
+  hapsyn::plugins::GaSolver solver(ga_options({{"population", 10}}));
+  std::atomic<bool> stop{true};
+  hapsyn::SolverContext context;
+  context.stop = &stop;
+  EXPECT_EQ(solver.solve(*problem, context).status, hapsyn::SolverStatus::kStopped);
+}
+
+TEST(Ga, BadOptionsNameThePathTheValueAndTheRule) {
+  using hapsyn::test::expect_error;
+  expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"algorithm", "gaco"}, {"population", 10}, {"gaco", {{"ker", 30}}}})); },
+               {"ga: options.gaco.ker = 30", "must not exceed options.population (10)"});
+  expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"population", 4}, {"sga", {{"param_s", 5}}}})); },
+               {"ga: options.sga.param_s = 5", "must not exceed options.population (4)"});
+  expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"sga", {{"mutation", "gaussian"}, {"param_m", 5.0}}}})); },
+               {"ga: options.sga.param_m = 5", "[0, 1]"});
+  expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"fidelity", {{"subset_fraction", 0.1}}}})); },
+               {"ga: options.fidelity.subset_fraction = 0.1", "needs options.fidelity.generations >= 1"});
+  expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"fidelity", {{"generations", 4}}}})); },
+               {"ga: options.fidelity.generations = 4", "subset_fraction < 1"});
+  const auto problem = toy_problem();
+  expect_error([&] { hapsyn::plugins::GaSolver(ga_options({{"sort_descending", {"q"}}})).check(*problem); },
+               {"ga: options.sort_descending[0] = \"q\": no such design variable", "x, s, r"});
+  expect_error([&] { hapsyn::plugins::GaSolver(ga_options({{"cluster_variables", {"x", "y"}}})).check(*problem); },
+               {"ga: options.cluster_variables[1] = \"y\": no such design variable"});
+  // Through a problem file: the schema's rules, and a study without free variables.
+  Json doc = hapsyn::test::fivebar_study("ga");
+  doc["solver"]["options"] = {{"algorithm", "de"}};
+  expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); }, {"solver.options.algorithm", "de"});
+  doc = hapsyn::read_problem_file(std::string(HAPSYN_SOURCE_DIR) + "/problems/fivebar-table2-best-gii.json");
+  doc["solver"] = {{"plugin", "ga"}};
+  expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); }, {"ga: no free design variable"});
+}
+
+TEST(Ga, MultiFidelityRanksTheFinalPopulationOnTheFullScene) {
+  const Json doc = fivebar_ga_study({{"population", 16}, {"generations", 12}, {"stall_generations", 50},
+                                     {"fidelity", {{"subset_fraction", 0.1}, {"generations", 6}}}});
+  hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  hapsyn::SolverContext context;
+  context.threads = 2;
+  context.seed = 3;
+  const auto r = study.solver->solve(*study.problem, context);
+  ASSERT_TRUE(r.best.has_value()) << r.message;
+  EXPECT_EQ(r.statistics["fidelity"]["subset_samples"], 45);  // ceil(0.1 * 441)
+  // The reported value is the full scene's.
+  Eigen::VectorXd free(static_cast<Eigen::Index>(study.problem->dimension()));
+  for (std::size_t k = 0; k < study.problem->dimension(); ++k) {
+    free[static_cast<Eigen::Index>(k)] = r.best->design[study.problem->design_space().free_indices()[k]];
+  }
+  const hapsyn::Evaluation full = study.problem->evaluate_parallel(free.data(), 1);
+  ASSERT_EQ(full.status, hapsyn::EvalStatus::kFeasible);
+  EXPECT_DOUBLE_EQ(full.objectives[0], r.best->objectives[0]);
+}
+
+TEST(GaCli, FinishedStudyIsNotOverwrittenWithoutForce) {
+  const fs::path out = fresh_dir("force");
+  const std::string run = "run " + std::string(HAPSYN_SOURCE_DIR) + "/problems/fivebar-table2-best-gii.json --quiet --out " + out.string();
+  ASSERT_EQ(hapsyn_cli(run).code, 0);
+  const Output again = hapsyn_cli(run);
+  EXPECT_EQ(again.code, 1);
+  EXPECT_NE(again.out.find("already holds a finished study"), std::string::npos) << again.out;
+  EXPECT_NE(again.out.find("--force"), std::string::npos) << again.out;
+  const Output resume = hapsyn_cli(run + " --resume");
+  EXPECT_EQ(resume.code, 1);
+  EXPECT_NE(resume.out.find("has finished; there is nothing to resume"), std::string::npos) << resume.out;
+  EXPECT_EQ(hapsyn_cli(run + " --force").code, 0);
+  fs::remove_all(out);
+}
+
+TEST(GaCli, BadCheckpointsAreRefusedWithTheirReason) {
+  const fs::path dir = fresh_dir("badcheckpoint");
+  fs::create_directories(dir / "out");
+  const Json doc = fivebar_ga_study({{"population", 8}, {"generations", 3}, {"checkpoint_every", 1}});
+  const fs::path file = dir / "study.json";
+  std::ofstream(file.string()) << doc.dump(2);
+  const std::string run = "run " + file.string() + " --quiet --threads 1 --out " + (dir / "out").string() + " --resume";
+  const fs::path checkpoint = dir / "out" / "checkpoint.json";
+  std::ofstream(checkpoint.string()) << "{ not json";
+  Output o = hapsyn_cli(run);
+  EXPECT_EQ(o.code, 1);
+  EXPECT_NE(o.out.find("checkpoint.json: cannot be read as a checkpoint"), std::string::npos) << o.out;
+  std::ofstream(checkpoint.string()) << R"({"seed": 5, "solver": "ga", "fingerprint": "0"})";
+  o = hapsyn_cli(run + " --seed 6");
+  EXPECT_EQ(o.code, 1);
+  EXPECT_NE(o.out.find("--seed 6: the checkpoint"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("was written with seed 5"), std::string::npos) << o.out;
+  o = hapsyn_cli(run);
+  EXPECT_EQ(o.code, 1);
+  EXPECT_NE(o.out.find("ga: "), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("written for another study"), std::string::npos) << o.out;
+  EXPECT_FALSE(fs::exists(dir / "out" / "result.json"));
+  // No checkpoint at all: --resume starts from the beginning and says so in the log.
+  fs::remove(checkpoint);
+  o = hapsyn_cli(run);
+  ASSERT_EQ(o.code, 0) << o.out;
+  std::ifstream log((dir / "out" / "run.log").string());
+  const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("no checkpoint to resume from"), std::string::npos) << text;
+  fs::remove_all(dir);
+}
+
+// kill -9 during a checkpointed `hapsyn run`, then --resume: the study finishes with the result
+// of an uninterrupted run with the same seed and threads.
+TEST(GaCli, KilledRunResumesFromItsCheckpointAndMatchesAnUninterruptedRun) {
+  const fs::path dir = fresh_dir("kill");
+  fs::create_directories(dir);
+  Json doc = fivebar_ga_study({{"population", 24}, {"generations", 60}, {"stall_generations", 200}, {"runs", 3},
+                               {"checkpoint_every", 2}, {"parallel_over", "individuals"}});
+  doc["scene"]["options"]["step"] = 0.0025;
+  const fs::path file = dir / "study.json";
+  std::ofstream(file.string()) << doc.dump(2);
+  const std::string common = "run " + file.string() + " --threads 2 --seed 17 --quiet --out ";
+
+  const Output reference = hapsyn_cli(common + (dir / "reference").string());
+  ASSERT_EQ(reference.code, 0) << reference.out;
+
+  const fs::path out = dir / "killed";
+  const fs::path checkpoint = out / "checkpoint.json";
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    const std::string binary = std::string(HAPSYN_BINARY_DIR) + "/bin/hapsyn";
+    const std::string file_arg = file.string(), out_arg = out.string();
+    ::execl(binary.c_str(), binary.c_str(), "run", file_arg.c_str(), "--threads", "2", "--seed", "17", "--quiet", "--out",
+            out_arg.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // Wait for a checkpoint in the middle of the second run, then kill -9.
+  bool mid_run = false;
+  for (int i = 0; i < 3000 && !mid_run; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    if (!fs::exists(checkpoint)) continue;
+    try {
+      const Json c = read_json(checkpoint);
+      mid_run = c["completed_runs"].size() >= 1 && c.contains("current");
+    } catch (const std::exception&) {
+      ADD_FAILURE() << "a checkpoint was read half-written";
+    }
+  }
+  ::kill(child, SIGKILL);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  ASSERT_TRUE(mid_run) << "no mid-run checkpoint appeared";
+  ASSERT_TRUE(WIFSIGNALED(status)) << "the run finished before it was killed";
+  EXPECT_FALSE(fs::exists(out / "result.json"));
+
+  const Output resumed = hapsyn_cli(common + out.string() + " --resume");
+  ASSERT_EQ(resumed.code, 0) << resumed.out;
+  const Json a = read_json(dir / "reference" / "result.json"), b = read_json(out / "result.json");
+  EXPECT_EQ(a["best"], b["best"]);
+  // Every run's optimum and generation count repeat (evaluation counts differ: the resumed
+  // process starts with an empty cache).
+  Json runs_a = a["statistics"]["runs"], runs_b = b["statistics"]["runs"];
+  for (Json* runs : {&runs_a, &runs_b}) {
+    for (Json& run : *runs) run.erase("designs");
+  }
+  EXPECT_EQ(runs_a, runs_b);
+  EXPECT_FALSE(fs::exists(checkpoint)) << "the checkpoint of a finished study is removed";
+  std::ifstream log((out / "run.log").string());
+  const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("ga: resuming from"), std::string::npos);
+  fs::remove_all(dir);
+}

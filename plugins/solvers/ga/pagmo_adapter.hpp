@@ -1,0 +1,207 @@
+#pragma once
+/// \file
+/// The one bridge between hapsyn and pagmo 2.18, shared by the `ga` and `nsga2` solvers
+/// (static library hapsyn_pagmo_adapter). pagmo's type erasure stays behind this header's
+/// implementation and the two solvers; nothing in the framework sees pagmo.
+///
+/// - Encoding: pagmo wants the integer components last (get_nix()); hapsyn's free vector keeps
+///   declaration order. The encoding permutes (reals first, then integers, each in free order),
+///   rounds integer components and applies the constraint repair.
+/// - Repair: the free components of each variable named in `sort_descending` (`sort_ascending`)
+///   are sorted in descending (ascending) order before evaluation: the haptic 6R's
+///   s_i >= s_{i+1} holds for every decoded design (a decoder: the genotype stays unsorted in
+///   the population, the phenotype evaluated and reported is sorted). Fixed components keep
+///   their values; any constraint still violated is penalised.
+/// - Fitness (pagmo minimises): single-objective -score; multi-objective per objective -f for
+///   maximise, f for minimise. Infeasible designs: kSampleFailedFitness when a sample fails
+///   (worst-case metrics), kConstraintFitness + the sum of the violations when a design
+///   constraint fails, in every component: worse than any feasible design with |score| < 1e9.
+/// - Evaluation: batch_fitness (used by pagmo algorithms with a batch evaluator: gaco, nsga2,
+///   and by the solvers for initial populations and re-rankings) runs over individuals on the
+///   threads, one Problem::Workspace per thread, or one design after another each split over
+///   the samples ("samples"); fitness() (sga calls it one design at a time) splits one design
+///   over the samples in a fixed number of chunks. Results never depend on the thread count.
+///   Phenotypes already evaluated at the same fidelity come from a cache.
+#include <hapsyn/json.hpp>
+#include <hapsyn/problem.hpp>
+
+#include <pagmo/algorithm.hpp>
+#include <pagmo/problem.hpp>
+#include <pagmo/types.hpp>
+
+#include <chrono>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace hapsyn::plugins::pagmo_adapter {
+
+/// Fitness component of a design whose evaluation met a failing sample.
+constexpr double kSampleFailedFitness = 1e9;
+/// Fitness component of a design that violates a design constraint (plus the violation).
+constexpr double kConstraintFitness = 2e9;
+
+/// Maps pagmo decision vectors (reals first, integers last) to hapsyn free vectors and back.
+class Encoding {
+ public:
+  /// \param sort_descending, sort_ascending variable names whose free components are sorted
+  /// \param component the solver name, for errors
+  /// \throws Error("<component>: options.sort_descending[i] = \"x\": no such design variable; ...")
+  Encoding(const Problem& problem, const std::vector<std::string>& sort_descending,
+           const std::vector<std::string>& sort_ascending, const std::string& component);
+
+  std::size_t size() const { return to_free_.size(); }
+  /// Number of integer components (the last ones of a pagmo vector).
+  std::size_t integer_count() const { return integer_count_; }
+  /// Bounds in pagmo order.
+  const pagmo::vector_double& lower() const { return lower_; }
+  const pagmo::vector_double& upper() const { return upper_; }
+  /// Free vector (hapsyn order) of a pagmo vector: integers rounded, clamped, repaired.
+  std::vector<double> decode(const pagmo::vector_double& x) const;
+  /// Pagmo vector of a free vector (no repair).
+  pagmo::vector_double encode(const std::vector<double>& free) const;
+  /// Free indices of each sort group (descending groups first), for the README/statistics.
+  Json describe_repair(const Problem& problem) const;
+
+ private:
+  std::vector<int> to_free_;  // pagmo position -> free index
+  std::size_t integer_count_ = 0;
+  pagmo::vector_double lower_, upper_;
+  std::vector<std::vector<int>> descending_, ascending_;  // free indices, in component order
+};
+
+/// How designs are evaluated.
+struct EvaluationSettings {
+  int threads = 1;
+  /// Batches: "individuals" (one design per thread at a time) or "samples" (each design split
+  /// over the samples).
+  bool over_individuals = true;
+  /// Chunks of the sample order when one design is split over the samples (fixed: the result
+  /// does not depend on the thread count).
+  int sample_chunks = 16;
+};
+
+/// A decoded design's outcome, as the cache keeps it.
+struct DesignRecord {
+  pagmo::vector_double fitness;
+  std::vector<double> objectives;  ///< natural values (empty when infeasible)
+  double score = 0.0;              ///< -inf when infeasible
+  bool feasible = false;
+  std::string failure;             ///< why not feasible
+};
+
+/// The shared, mutable evaluation state behind the UDP (pagmo copies UDPs; copies share it).
+/// Not thread-safe itself: pagmo calls it from one thread; it parallelises inside.
+class Evaluator {
+ public:
+  Evaluator(const Problem& problem, Encoding encoding, EvaluationSettings settings, bool multi_objective);
+
+  const Problem& problem() const { return problem_; }
+  const Encoding& encoding() const { return encoding_; }
+  std::size_t objective_count() const { return multi_objective_ ? problem_.objectives().size() : 1; }
+
+  /// Evaluate on this subset of samples from now on (null = the full scene). The cache keeps
+  /// one table per fidelity.
+  void set_subset(const std::vector<int>* subset, int fidelity_level);
+  bool full_fidelity() const { return subset_ == nullptr; }
+
+  /// One design (split over the samples).
+  pagmo::vector_double fitness(const pagmo::vector_double& x);
+  /// Concatenated decision vectors in, concatenated fitness vectors out (over individuals or
+  /// samples, see EvaluationSettings).
+  pagmo::vector_double batch_fitness(const pagmo::vector_double& xs);
+  /// The record of a design at the current fidelity (evaluated when not cached).
+  const DesignRecord& record(const pagmo::vector_double& x);
+
+  long long design_evaluations() const { return designs_; }
+  long long sample_evaluations() const { return samples_; }
+  long long cache_hits() const { return cache_hits_; }
+  /// Adds evaluations done before a resume.
+  void add_counts(long long designs, long long samples) {
+    designs_ += designs;
+    samples_ += samples;
+  }
+
+ private:
+  DesignRecord make_record(const Evaluation& e) const;
+  DesignRecord evaluate_split(const std::vector<double>& free);
+
+  const Problem& problem_;
+  Encoding encoding_;
+  EvaluationSettings settings_;
+  bool multi_objective_;
+  const std::vector<int>* subset_ = nullptr;
+  int fidelity_level_ = 0;
+  std::map<std::pair<int, std::vector<double>>, DesignRecord> cache_;
+  std::vector<std::unique_ptr<Problem::Workspace>> workspaces_;
+  long long designs_ = 0, samples_ = 0, cache_hits_ = 0;
+};
+
+/// The pagmo user-defined problem: a thin, copyable handle on an Evaluator.
+class Udp {
+ public:
+  Udp() = default;
+  explicit Udp(std::shared_ptr<Evaluator> evaluator) : evaluator_(std::move(evaluator)) {}
+  pagmo::vector_double fitness(const pagmo::vector_double& x) const { return evaluator_->fitness(x); }
+  pagmo::vector_double batch_fitness(const pagmo::vector_double& xs) const { return evaluator_->batch_fitness(xs); }
+  std::pair<pagmo::vector_double, pagmo::vector_double> get_bounds() const {
+    return {evaluator_->encoding().lower(), evaluator_->encoding().upper()};
+  }
+  pagmo::vector_double::size_type get_nix() const { return evaluator_->encoding().integer_count(); }
+  pagmo::vector_double::size_type get_nobj() const { return evaluator_->objective_count(); }
+  /// The shared cache and counters are not safe for pagmo's own thread-based evaluators.
+  pagmo::thread_safety get_thread_safety() const { return pagmo::thread_safety::none; }
+  std::string get_name() const { return "hapsyn problem"; }
+
+ private:
+  std::shared_ptr<Evaluator> evaluator_;
+};
+
+/// A pagmo problem around an evaluator.
+pagmo::problem make_problem(const std::shared_ptr<Evaluator>& evaluator);
+
+/// A pagmo population of `size` random individuals (uniform in the bounds, integers uniform),
+/// drawn from `seed` and evaluated in one batch.
+pagmo::population random_population(const pagmo::problem& problem, Evaluator& evaluator, std::size_t size,
+                                    std::uint64_t seed);
+/// A population with the given decision and fitness vectors (nothing evaluated).
+pagmo::population restore_population(const pagmo::problem& problem, const std::vector<pagmo::vector_double>& x,
+                                     const std::vector<pagmo::vector_double>& f);
+/// Re-evaluates every individual of `population` in one batch (after a fidelity switch).
+void reevaluate(pagmo::population& population, Evaluator& evaluator);
+
+/// An algorithm with its state (random engine included) as text (boost text archive), and back.
+std::string save_algorithm(const pagmo::algorithm& algorithm);
+pagmo::algorithm load_algorithm(const std::string& text);
+
+/// splitmix64: independent 64-bit seeds from one (run r of a study: derive_seed(seed, r)).
+std::uint64_t derive_seed(std::uint64_t seed, std::uint64_t index);
+
+/// JSON of a vector of vectors of doubles (exact round trip) and back.
+Json matrix_to_json(const std::vector<pagmo::vector_double>& rows);
+std::vector<pagmo::vector_double> matrix_from_json(const Json& j);
+
+/// "1h02m", "3m05s", "12.3s".
+std::string format_duration(double seconds);
+
+/// Writes a line to the run log always and to the progress stream at most every `interval`
+/// seconds (or when `force`).
+class ProgressReporter {
+ public:
+  ProgressReporter(std::ostream* progress, std::ostream* log, double interval);
+  void line(const std::string& text, bool force = false);
+
+ private:
+  std::ostream* progress_;
+  std::ostream* log_;
+  double interval_;
+  std::chrono::steady_clock::time_point last_;
+  bool first_ = true;
+};
+
+}  // namespace hapsyn::plugins::pagmo_adapter
