@@ -35,6 +35,8 @@ inline double wrap(double angle) {
   return r;
 }
 
+inline double norm2(double x, double y) { return std::sqrt(x * x + y * y); }
+
 // Rotation of one DH row from cos/sin of its angle (no trigonometric call).
 inline void dh_rotation(double ct, double st, double ca, double sa, Eigen::Matrix3d& rot) {
   rot << ct, -st * ca, st * sa, st, ct * ca, -ct * sa, 0.0, sa, ca;
@@ -529,7 +531,8 @@ int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::arra
     p.beta = std::atan2(L2 * s2_abs, L1 + L2 * c2);
     if (trig) {  // the same angles as cosines and sines, for the chosen solution's frames
       p.s2 = s2_abs;
-      const double ro = std::hypot(ox, oy), rb = std::hypot(L1 + L2 * c2, L2 * s2_abs);
+      // Lengths of order 1 m: sqrt(x^2 + y^2) cannot overflow, and is several times cheaper than hypot.
+      const double ro = norm2(ox, oy), rb = norm2(L1 + L2 * c2, L2 * s2_abs);
       if (ro > 0.0) {
         p.cos_phi = ox / ro;
         p.sin_phi = oy / ro;
@@ -559,14 +562,14 @@ int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::arra
       const Eigen::Vector3d a4 = r04.transpose() * approach;
       // z_5 in frame 4 is Rz(theta5) (0, -sin alpha5, cos alpha5) = (sin theta5, -cos theta5, 0).
       wrist5[b4] = std::atan2(a4.x(), -a4.y());
-      const double n5 = std::hypot(a4.x(), a4.y());  // 1 up to rounding: the approach is normal to h
+      const double n5 = norm2(a4.x(), a4.y());  // 1 up to rounding: the approach is normal to h
       cos5[b4] = n5 > 0.0 ? -a4.y() / n5 : 1.0;
       sin5[b4] = n5 > 0.0 ? a4.x() / n5 : 0.0;
       dh_rotation(cos5[b4], sin5[b4], ca_[4], sa_[4], r5);
       // theta6 from x_E in frame 5: (x_5 . x_E, y_5 . x_E).
       const Eigen::Vector3d x5 = r04 * r5.col(0), y5 = r04 * r5.col(1);
       wrist6[b4] = std::atan2(y5.dot(x_e), x5.dot(x_e));
-      const double n6 = std::hypot(y5.dot(x_e), x5.dot(x_e));
+      const double n6 = norm2(y5.dot(x_e), x5.dot(x_e));
       if (n6 > 0.0) {
         cos6[b4] = x5.dot(x_e) / n6;
         sin6[b4] = y5.dot(x_e) / n6;
@@ -690,9 +693,10 @@ void Haptic6RModel::solve(const double* pose, Needs needs, MechanismScratch&, Sa
   out.q = q;
   const double tol = options_->singularity_tolerance;
   const Eigen::Vector3d& approach = target.linear().col(2);
-  const double wrist = std::hypot(approach.x(), approach.y());
-  const double sin2 = std::sin(q(1) + offset_[1]);
-  const double cos4 = std::cos(q(3) + offset_[3]);  // l4 vertical when cos(theta4) = 0
+  const double wrist = norm2(approach.x(), approach.y());
+  const JointTrig& chosen_trig = trig[static_cast<std::size_t>(chosen)];
+  const double sin2 = chosen_trig.s[1];
+  const double cos4 = chosen_trig.c[3];  // l4 vertical when cos(theta4) = 0
   if (std::abs(sin2) < tol || std::abs(cos4) < tol || wrist < tol) {
     out.status = SampleStatus::kSingular;
     return;
