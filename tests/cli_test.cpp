@@ -13,21 +13,8 @@ namespace fs = boost::filesystem;
 using hapsyn::Json;
 
 namespace {
-struct Output {
-  int code = -1;
-  std::string out;  // stdout and stderr together
-};
-
-Output hapsyn_cli(const std::string& args) {
-  const std::string command = std::string(HAPSYN_BINARY_DIR) + "/bin/hapsyn " + args + " 2>&1";
-  Output o;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) o.out += buffer.data();
-  const int status = ::pclose(pipe);
-  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return o;
-}
+using hapsyn::test::hapsyn_cli;
+using hapsyn::test::Output;
 
 std::string problem(const std::string& name) { return std::string(HAPSYN_SOURCE_DIR) + "/problems/" + name; }
 

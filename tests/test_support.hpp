@@ -6,11 +6,33 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cstdio>
 #include <fstream>
 #include <functional>
 #include <string>
 
+#include <sys/wait.h>
+
 namespace hapsyn::test {
+
+/// What `hapsyn ARGS` printed (stdout and stderr together) and its exit code (-1 when killed).
+struct Output {
+  int code = -1;
+  std::string out;
+};
+
+/// Runs the build tree's `hapsyn` with `args` (a shell command line fragment).
+inline Output hapsyn_cli(const std::string& args) {
+  const std::string command = std::string(HAPSYN_BINARY_DIR) + "/bin/hapsyn " + args + " 2>&1";
+  Output o;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  std::array<char, 4096> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) o.out += buffer.data();
+  const int status = ::pclose(pipe);
+  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return o;
+}
 
 /// A registry over the build tree's plugins only (independent of HAPSYN_PLUGIN_PATH).
 inline const Registry& registry() {

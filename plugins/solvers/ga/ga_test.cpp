@@ -123,21 +123,8 @@ void expect_toy_optimum(const hapsyn::SolverResult& r) {
   EXPECT_NEAR(r.best->score, -4.0, 2e-3);
 }
 
-struct Output {
-  int code = -1;
-  std::string out;
-};
-
-Output hapsyn_cli(const std::string& args) {
-  const std::string command = std::string(HAPSYN_BINARY_DIR) + "/bin/hapsyn " + args + " 2>&1";
-  Output o;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) o.out += buffer.data();
-  const int status = ::pclose(pipe);
-  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return o;
-}
+using hapsyn::test::hapsyn_cli;
+using hapsyn::test::Output;
 
 fs::path fresh_dir(const std::string& name) {
   const fs::path dir = fs::temp_directory_path() / ("hapsyn-ga-test-" + name + "-" + std::to_string(::getpid()));
