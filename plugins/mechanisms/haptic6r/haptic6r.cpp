@@ -133,12 +133,6 @@ double positive_option(const Json& options, const char* key, double fallback, bo
   return v.get<double>();
 }
 
-// Rotation and translation of one DH row.
-inline void dh_transform(double theta, double d, double a, double ca, double sa, Eigen::Matrix3d& rot, Eigen::Vector3d& t) {
-  const double ct = std::cos(theta), st = std::sin(theta);
-  rot << ct, -st * ca, st * sa, st, ct * ca, -ct * sa, 0.0, sa, ca;
-  t << a * ct, a * st, d;
-}
 
 }  // namespace
 
