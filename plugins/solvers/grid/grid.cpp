@@ -11,6 +11,7 @@
 #include <iomanip>
 #include <limits>
 #include <mutex>
+#include <ostream>
 
 namespace hapsyn::plugins {
 
@@ -28,6 +29,24 @@ void GridSolver::check(const Problem& problem) const {
 }
 
 namespace {
+// One progress line, "<what>: P% of N designs, <detail>, E s elapsed, ~L s left", at most every
+// `interval` seconds (the caller holds the lock that guards last_report and what detail reads).
+template <typename Detail>
+void report_progress(std::ostream& out, const char* what, long long finished, long long total,
+                     std::chrono::steady_clock::time_point start, std::chrono::steady_clock::time_point& last_report,
+                     double interval, const Detail& detail) {
+  const auto now = std::chrono::steady_clock::now();
+  if (std::chrono::duration<double>(now - last_report).count() < interval) return;
+  last_report = now;
+  const double elapsed = std::chrono::duration<double>(now - start).count();
+  const double fraction = static_cast<double>(finished) / static_cast<double>(total);
+  out << what << ": " << std::fixed << std::setprecision(1) << 100.0 * fraction << "% of " << total << " designs, ";
+  detail(out);
+  out << ", " << std::setprecision(1) << elapsed << " s elapsed, ~" << elapsed * (1 - fraction) / fraction
+      << " s left\n"
+      << std::defaultfloat;
+}
+
 void raise_to(std::atomic<double>& target, double value) {
   double current = target.load(std::memory_order_relaxed);
   while (value > current && !target.compare_exchange_weak(current, value, std::memory_order_relaxed)) {
@@ -89,17 +108,8 @@ SolverResult GridSolver::solve(const Problem& problem, const SolverContext& cont
     const long long finished = done.fetch_add(1, std::memory_order_relaxed) + 1;
     if (context.progress && (finished & 4095) == 0) {
       std::lock_guard<std::mutex> lock(progress_mutex);
-      const auto now = clock::now();
-      if (std::chrono::duration<double>(now - last_report).count() >= progress_interval_) {
-        last_report = now;
-        const double elapsed = std::chrono::duration<double>(now - start).count();
-        const double fraction = static_cast<double>(finished) / static_cast<double>(total);
-        *context.progress << "grid: " << std::fixed << std::setprecision(1) << 100.0 * fraction << "% of " << total
-                          << " designs, best score " << std::setprecision(6) << incumbent.load() << ", "
-                          << std::setprecision(1) << elapsed << " s elapsed, ~" << elapsed * (1 - fraction) / fraction
-                          << " s left\n"
-                          << std::defaultfloat;
-      }
+      report_progress(*context.progress, "grid", finished, total, start, last_report, progress_interval_,
+                      [&](std::ostream& out) { out << "best score " << std::setprecision(6) << incumbent.load(); });
     }
   });
 
@@ -245,16 +255,8 @@ SolverResult GridSolver::solve_front(const Problem& problem, const SolverContext
     const long long finished = done.fetch_add(1, std::memory_order_relaxed) + 1;
     if (context.progress && (finished & 65535) == 0) {
       std::lock_guard<std::mutex> lock(mutex);
-      const auto now = clock::now();
-      if (std::chrono::duration<double>(now - last_report).count() >= progress_interval_) {
-        last_report = now;
-        const double elapsed = std::chrono::duration<double>(now - start).count();
-        const double fraction = static_cast<double>(finished) / static_cast<double>(total);
-        *context.progress << "grid (pareto): " << std::fixed << std::setprecision(1) << 100.0 * fraction << "% of "
-                          << total << " designs, front " << front.size() << " points, " << elapsed << " s elapsed, ~"
-                          << elapsed * (1 - fraction) / fraction << " s left\n"
-                          << std::defaultfloat;
-      }
+      report_progress(*context.progress, "grid (pareto)", finished, total, start, last_report, progress_interval_,
+                      [&](std::ostream& out) { out << "front " << front.size() << " points"; });
     }
   });
 
