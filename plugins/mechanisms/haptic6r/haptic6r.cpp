@@ -3,6 +3,7 @@
 #include <hapsyn/data_file.hpp>
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/fast_math.hpp>
 
 #include <boost/filesystem.hpp>
 #include <algorithm>
@@ -393,8 +394,7 @@ void chain_from(const Vector6d& q, const std::array<double, 6>& offset, const st
   JointTrig trig;
   for (std::size_t i = 0; i < 6; ++i) {
     const double theta = q(static_cast<Eigen::Index>(i)) + offset[i];
-    trig.c[i] = std::cos(theta);
-    trig.s[i] = std::sin(theta);
+    fast::sin_cos(theta, trig.s[i], trig.c[i]);
   }
   chain_from(trig, d, a, ca, sa, c);
 }
@@ -452,8 +452,17 @@ void dynamics_from(const Chain& c, const std::array<Haptic6RBody, 6>& bodies, do
       // K_ab = sum_k A_ak R_bk (only the six distinct entries).
       const Eigen::Matrix3d& in = b.inertia;
       double A[3][3];  // A[r][k]
-      for (int r = 0; r < 3; ++r) {
-        for (int k = 0; k < 3; ++k) A[r][k] = X[r] * in(0, k) + Y[r] * in(1, k) + Z[r] * in(2, k);
+      if (in(0, 1) == 0.0 && in(0, 2) == 0.0 && in(1, 2) == 0.0) {
+        // Principal axes along the frame's (every body of the DESIGN.md model): A = R diag(I).
+        for (int r = 0; r < 3; ++r) {
+          A[r][0] = X[r] * in(0, 0);
+          A[r][1] = Y[r] * in(1, 1);
+          A[r][2] = Z[r] * in(2, 2);
+        }
+      } else {
+        for (int r = 0; r < 3; ++r) {
+          for (int k = 0; k < 3; ++k) A[r][k] = X[r] * in(0, k) + Y[r] * in(1, k) + Z[r] * in(2, k);
+        }
       }
       kxx += A[0][0] * X[0] + A[0][1] * Y[0] + A[0][2] * Z[0];
       kyy += A[1][0] * X[1] + A[1][1] * Y[1] + A[1][2] * Z[1];
@@ -576,9 +585,9 @@ int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::arra
     Planar& p = planar[static_cast<std::size_t>(k)];
     p.valid = true;
     p.c2 = c2;
-    p.theta2 = std::atan2(s2_abs, c2);
-    p.phi = std::atan2(oy, ox);
-    p.beta = std::atan2(L2 * s2_abs, L1 + L2 * c2);
+    p.theta2 = fast::atan2(s2_abs, c2);
+    p.phi = fast::atan2(oy, ox);
+    p.beta = fast::atan2(L2 * s2_abs, L1 + L2 * c2);
     if (trig) {  // the same angles as cosines and sines, for the chosen solution's frames
       p.s2 = s2_abs;
       // Lengths of order 1 m: sqrt(x^2 + y^2) cannot overflow, and is several times cheaper than hypot.
@@ -593,8 +602,8 @@ int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::arra
       }
     }
   }
-  const double yaw0 = std::atan2(hz.x(), -hz.y());
-  const double theta4_branch[2] = {std::atan2(s4, c4_abs), std::atan2(s4, -c4_abs)};
+  const double yaw0 = fast::atan2(hz.x(), -hz.y());
+  const double theta4_branch[2] = {fast::atan2(s4, c4_abs), fast::atan2(s4, -c4_abs)};
   // Wrist angles for h = +hz. Flipping h and the theta4 branch together turns R_04 into
   // R_04 Rx(pi) (x3 -> -x3, cos theta4 -> -cos theta4), which maps theta5 -> pi - theta5 and
   // theta6 -> theta6 + pi: the h = -hz branches reuse these (two atan2 pairs instead of four).
@@ -611,14 +620,14 @@ int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::arra
       const Eigen::Matrix3d r04 = r3 * r4;
       const Eigen::Vector3d a4 = r04.transpose() * approach;
       // z_5 in frame 4 is Rz(theta5) (0, -sin alpha5, cos alpha5) = (sin theta5, -cos theta5, 0).
-      wrist5[b4] = std::atan2(a4.x(), -a4.y());
+      wrist5[b4] = fast::atan2(a4.x(), -a4.y());
       const double n5 = norm2(a4.x(), a4.y());  // 1 up to rounding: the approach is normal to h
       cos5[b4] = n5 > 0.0 ? -a4.y() / n5 : 1.0;
       sin5[b4] = n5 > 0.0 ? a4.x() / n5 : 0.0;
       dh_rotation(cos5[b4], sin5[b4], ca_[4], sa_[4], r5);
       // theta6 from x_E in frame 5: (x_5 . x_E, y_5 . x_E).
       const Eigen::Vector3d x5 = r04 * r5.col(0), y5 = r04 * r5.col(1);
-      wrist6[b4] = std::atan2(y5.dot(x_e), x5.dot(x_e));
+      wrist6[b4] = fast::atan2(y5.dot(x_e), x5.dot(x_e));
       const double n6 = norm2(y5.dot(x_e), x5.dot(x_e));
       if (n6 > 0.0) {
         cos6[b4] = x5.dot(x_e) / n6;
