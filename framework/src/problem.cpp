@@ -59,6 +59,12 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
     const std::vector<LocalValue> locals = metric.locals();
     if (locals.empty()) throw Error("problem", "metric '" + metrics_[m].plugin + "' declares no local values");
     for (const LocalValue& l : locals) local_reduction_.push_back(l.reduction);
+    std::vector<const AttributeMatrix*> attributes;
+    for (const std::string& name : metric.scene_attributes()) {
+      const auto it = samples_->attributes.find(name);
+      attributes.push_back(it == samples_->attributes.end() ? nullptr : &it->second);
+    }
+    metric_attributes_.push_back(std::move(attributes));
   }
   local_offset_.push_back(static_cast<int>(local_reduction_.size()));
   for (const Objective& o : objectives_) {
@@ -287,6 +293,8 @@ const Evaluation& Problem::evaluate(const double* free_design, Workspace& ws, co
     for (std::size_t m = 0; m < metrics_.size(); ++m) {
       const int begin = local_offset_[m];
       const int end = local_offset_[m + 1];
+      ws.quantities.attributes = metric_attributes_[m].data();
+      ws.quantities.attribute_count = static_cast<int>(metric_attributes_[m].size());
       metrics_[m].metric->local(ws.quantities, ws.locals.data() + begin);
       for (int i = begin; i < end; ++i) {
         const double v = ws.locals[static_cast<std::size_t>(i)];

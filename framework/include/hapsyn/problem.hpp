@@ -184,6 +184,7 @@ class Problem {
   std::vector<std::string> constraint_names_;
   std::vector<int> order_;
   std::vector<double> free_lower_, free_upper_;  // bounds widened by a rounding tolerance
+  std::vector<std::vector<const AttributeMatrix*>> metric_attributes_;  // per metric, see SampleQuantities::attributes
   std::vector<int> local_offset_;        // first local of metric m in the flat local array
   std::vector<Reduction> local_reduction_;
   bool worst_case_ = true;

@@ -37,6 +37,8 @@ using JointVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxDof, 1>;
 using TaskJointMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxTask, kMaxDof>;
 using JointMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxDof, kMaxDof>;
 using TaskMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxTask, kMaxTask>;
+/// A per-sample scene attribute: one row per sample (the type of SampleSet::attributes' values).
+using AttributeMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
 /// Everything a mechanism computes at one sample. Only the members requested by Needs are
 /// meaningful; the others keep whatever they held.
@@ -46,6 +48,18 @@ struct SampleQuantities {
   /// read the sample's scene attributes (e.g. the human's M_v). -1 / null outside the evaluator.
   int sample = -1;
   const SampleSet* scene = nullptr;
+  /// Set by the evaluator before each metric's local(): the scene attributes that metric lists
+  /// in scene_attributes(), in that order (an entry is null when the scene lacks it), resolved
+  /// once per study so that the per-sample loop does no lookup by name. Null outside the evaluator.
+  const AttributeMatrix* const* attributes = nullptr;
+  int attribute_count = 0;
+  /// Row of the current sample in the calling metric's k-th scene attribute, or null when the
+  /// evaluator did not resolve it (then look it up by name in scene->attributes).
+  const double* attribute_row(int k) const {
+    if (!attributes || k < 0 || k >= attribute_count || sample < 0) return nullptr;
+    const AttributeMatrix* m = attributes[k];
+    return m && sample < m->rows() ? m->row(sample).data() : nullptr;
+  }
   JointVector q;                  ///< joint angles of the chosen configuration [rad]
   TaskJointMatrix jacobian;       ///< J: task velocity [m/s] per actuator rate [rad/s]
   JointMatrix inertia;            ///< D [kg m^2] in actuated coordinates

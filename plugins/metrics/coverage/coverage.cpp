@@ -113,7 +113,10 @@ double Coverage::eta_force(const Matrix6& jacobian, const Vector6& gravity, cons
 namespace {
 // The sample's 6x6 row-major scene attribute (M_v or M_a), which the evaluator makes reachable
 // through q.scene / q.sample; requested by scene_attributes() only for the terms that need it.
-const double* attribute_row(const SampleQuantities& q, const char* name, const char* term) {
+// `index` is its position in scene_attributes(): the evaluator resolved it already (no lookup by
+// name per sample); other callers (direct use in tests and benchmarks) fall back to the name.
+const double* attribute_row(const SampleQuantities& q, int index, const char* name, const char* term) {
+  if (const double* row = q.attribute_row(index); row && q.attributes[index]->cols() == 36) return row;
   if (!q.scene || q.sample < 0 || q.sample >= q.scene->size()) {
     throw Error(kName, std::string("the ") + term + " term needs the scene attribute " + name +
                            " of the current sample, but no sample was given (call through the evaluator)");
@@ -149,8 +152,8 @@ void Coverage::local(const SampleQuantities& q, double* out) const {
   if (velocity_ || acceleration_) {
     using RowMajor6 = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
     Eigen::Matrix<double, 6, 12> rhs;
-    if (velocity_) rhs.leftCols<6>() = Eigen::Map<const RowMajor6>(attribute_row(q, "M_v", "velocity"));
-    if (acceleration_) rhs.rightCols<6>() = Eigen::Map<const RowMajor6>(attribute_row(q, "M_a", "acceleration"));
+    if (velocity_) rhs.leftCols<6>() = Eigen::Map<const RowMajor6>(attribute_row(q, 0, "M_v", "velocity"));
+    if (acceleration_) rhs.rightCols<6>() = Eigen::Map<const RowMajor6>(attribute_row(q, velocity_ ? 1 : 0, "M_a", "acceleration"));
     if (!velocity_) rhs.leftCols<6>().setZero();
     if (!acceleration_) rhs.rightCols<6>().setZero();
     const bool solved = solve_jacobian(jac, rhs);  // false: J singular, the terms give 0

@@ -268,3 +268,32 @@ TEST(Coverage, ErrorMessagesNameTheOptionValueAndRule) {
   q.sample = 0;
   expect_error([&] { c.local(q, out); }, {"coverage", "M_v", "the scene does not provide it"});
 }
+
+TEST(Coverage, EvaluatorResolvedAttributesGiveTheSameValuesAsLookupByName) {
+  // The evaluator hands each metric its scene attributes by position (no lookup per sample);
+  // with only the acceleration term M_a is attribute 0, with both terms it is attribute 1.
+  for (const Json& terms : {Json::array({"acceleration"}), Json::array({"velocity", "acceleration"}),
+                            Json::array({"velocity"})}) {
+    Study s = load_study(study(terms), test::registry());
+    const SampleSet& scene = s.problem->samples();
+    const Coverage metric(Json{{"terms", terms}});
+    Haptic6R mech(Json::object());
+    const std::vector<double> design{0.45, 0.45, 0.65, 0.55, 0.15, 3, 3, 2, 2, 1, 1, 2, 2, 3, 2, 3, 3};
+    auto model = mech.build(design.data());
+    auto scratch = mech.make_scratch();
+    std::vector<double> sums(metric.locals().size(), 0.0), out(metric.locals().size());
+    for (int i = 0; i < scene.size(); ++i) {
+      SampleQuantities q;
+      model->solve(scene.pose(i), metric.needs(), *scratch, q);
+      q.sample = i;
+      q.scene = &scene;  // no q.attributes: the metric finds M_v / M_a by name
+      metric.local(q, out.data());
+      for (std::size_t k = 0; k < out.size(); ++k) sums[k] += out[k];
+    }
+    const double by_name = metric.combine(sums.data(), scene.size());
+    const Evaluation e = s.problem->evaluate_parallel(nullptr, 1);
+    ASSERT_EQ(e.status, EvalStatus::kFeasible);
+    EXPECT_GT(by_name, 0.3) << terms.dump();
+    EXPECT_NEAR(e.objectives[0], by_name, 1e-12) << terms.dump();
+  }
+}
