@@ -4,6 +4,7 @@
 
 #include <hapsyn/error.hpp>
 #include <hapsyn/fast_math.hpp>
+#include <hapsyn/multiversion.hpp>
 
 #include <boost/filesystem.hpp>
 #include <algorithm>
@@ -366,7 +367,7 @@ struct Chain {
 
 // R_{i+1} = R_i Rz(theta) Rx(alpha) column by column, o_{i+1} = o_i + R_i (a ct, a st, d):
 // 24 multiplications per joint instead of a 3x3 product.
-void chain_from(const JointTrig& trig, const std::array<double, 6>& d, const std::array<double, 6>& a,
+[[gnu::always_inline]] inline void chain_from(const JointTrig& trig, const std::array<double, 6>& d, const std::array<double, 6>& a,
                 const std::array<double, 6>& ca, const std::array<double, 6>& sa, Chain& c) {
   for (int r = 0; r < 3; ++r) {
     c.x[0][r] = r == 0 ? 1.0 : 0.0;
@@ -388,7 +389,7 @@ void chain_from(const JointTrig& trig, const std::array<double, 6>& d, const std
   }
 }
 
-void chain_from(const Vector6d& q, const std::array<double, 6>& offset, const std::array<double, 6>& d,
+[[gnu::always_inline]] inline void chain_from(const Vector6d& q, const std::array<double, 6>& offset, const std::array<double, 6>& d,
                 const std::array<double, 6>& a, const std::array<double, 6>& ca, const std::array<double, 6>& sa,
                 Chain& c) {
   JointTrig trig;
@@ -401,7 +402,7 @@ void chain_from(const Vector6d& q, const std::array<double, 6>& offset, const st
 
 // Geometric Jacobian of E, column i = (z_i, z_i x (p - o_i)), written into `j` (6 x 6).
 template <typename Matrix>
-void jacobian_from(const Chain& c, Matrix& j) {
+[[gnu::always_inline]] inline void jacobian_from(const Chain& c, Matrix& j) {
   const double* p = c.o[6];
   for (int i = 0; i < 6; ++i) {
     const double* z = c.z[i];
@@ -428,7 +429,7 @@ Matrix6d jacobian_from(const Chain& c) {
 // the origin L = K z_j - h x (z_j x o_j); then H_ij = z_i . (L - o_i x P) = z_i . L - (z_i x o_i) . P
 // for i <= j, and the holding torque tau_j = z_j . ((h - M o_j) x g e_z).
 template <typename InertiaMatrix, typename GravityVector>
-void dynamics_from(const Chain& c, const std::array<Haptic6RBody, 6>& bodies, double g, InertiaMatrix* inertia,
+[[gnu::always_inline]] inline void dynamics_from(const Chain& c, const std::array<Haptic6RBody, 6>& bodies, double g, InertiaMatrix* inertia,
                    GravityVector* gravity) {
   double mass = 0.0;
   double h[3] = {0.0, 0.0, 0.0};
@@ -536,6 +537,7 @@ void Haptic6RModel::dynamics(const Vector6d& q, Matrix6d* inertia, Vector6d* gra
   dynamics_from(c, bodies_, options_->gravity, inertia, gravity);
 }
 
+HAPSYN_MULTIVERSION
 void Haptic6RModel::quantities(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const {
   Chain c;
   chain_from(q, offset_, d_, a_, ca_, sa_, c);
@@ -543,6 +545,7 @@ void Haptic6RModel::quantities(const Vector6d& q, Matrix6d* jacobian, Matrix6d* 
   if (inertia || gravity) dynamics_from(c, bodies_, options_->gravity, inertia, gravity);
 }
 
+HAPSYN_MULTIVERSION
 int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions,
                                       std::array<JointTrig, 8>* trig) const {
   const double L1 = a_[0], L2 = a_[1], L3 = -d_[2], L4 = a_[3], L5 = d_[5];
@@ -676,6 +679,7 @@ int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::arra
   return count;
 }
 
+HAPSYN_MULTIVERSION
 int Haptic6RModel::select(const std::array<Vector6d, 8>& solutions, int count) const {
   const Haptic6ROptions& o = *options_;
   int best = -1;
@@ -721,6 +725,11 @@ void into_limits(Vector6d& q, const Haptic6ROptions& o) {
 }  // namespace
 
 void Haptic6RModel::solve(const double* pose, Needs needs, MechanismScratch&, SampleQuantities& out) const {
+  solve_sample(pose, needs, out);
+}
+
+HAPSYN_MULTIVERSION
+void Haptic6RModel::solve_sample(const double* pose, Needs needs, SampleQuantities& out) const {
   out.q.resize(6);
   Eigen::Quaterniond quat(pose[3], pose[4], pose[5], pose[6]);
   const double qn = quat.norm();

@@ -170,6 +170,10 @@ class Haptic6RModel final : public MechanismModel {
   const Haptic6ROptions& options() const { return *options_; }
 
  private:
+  // solve()'s body, compiled for AVX2/FMA and baseline CPUs (GCC cannot multiversion the
+  // virtual solve() itself; see hapsyn/multiversion.hpp).
+  void solve_sample(const double* pose, Needs needs, SampleQuantities& out) const;
+
   const Haptic6ROptions* options_ = nullptr;
   int selection_ = 0;  // 0 closest_to_home, 1 elbow_left, 2 elbow_right
   std::array<double, 5> l_{};

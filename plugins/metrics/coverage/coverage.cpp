@@ -3,6 +3,7 @@
 #include <hapsyn/scene.hpp>
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/multiversion.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -12,10 +13,42 @@ namespace hapsyn::plugins {
 namespace {
 constexpr const char* kName = "coverage";
 
+// Gaussian elimination with partial pivoting on row-major copies (see solve_jacobian).
+template <int Cols>
+[[gnu::always_inline]] inline bool eliminate(const Coverage::Matrix6& jacobian, Eigen::Matrix<double, 6, Cols>& x) {
+  // Row-major working copies: every elimination step is a contiguous row update.
+  Eigen::Matrix<double, 6, 6, Eigen::RowMajor> a = jacobian;
+  Eigen::Matrix<double, 6, Cols, Eigen::RowMajor> b = x;
+  for (int k = 0; k < 6; ++k) {
+    int pivot = k;
+    for (int i = k + 1; i < 6; ++i) {
+      if (std::abs(a(i, k)) > std::abs(a(pivot, k))) pivot = i;
+    }
+    if (a(pivot, k) == 0.0) return false;
+    if (pivot != k) {
+      a.row(k).swap(a.row(pivot));
+      b.row(k).swap(b.row(pivot));
+    }
+    const double inverse_pivot = 1.0 / a(k, k);
+    for (int i = k + 1; i < 6; ++i) {
+      const double factor = a(i, k) * inverse_pivot;
+      if (factor == 0.0) continue;
+      a.row(i) -= factor * a.row(k);
+      b.row(i) -= factor * b.row(k);
+    }
+  }
+  for (int k = 5; k >= 0; --k) {
+    for (int c = k + 1; c < 6; ++c) b.row(k) -= a(k, c) * b.row(c);
+    b.row(k) *= 1.0 / a(k, k);
+  }
+  x = b;
+  return true;
+}
+
 // min(1, min_i limit_i / (max_j |M_ij| + extra_i)), never NaN: a zero denominator leaves 1, a
 // non-finite one (singular solve) gives 0.
 template <typename Derived>
-double ratio_eta(const Eigen::MatrixBase<Derived>& m, const Coverage::Vector6& limit, const Coverage::Vector6* extra) {
+[[gnu::always_inline]] inline double ratio_eta(const Eigen::MatrixBase<Derived>& m, const Coverage::Vector6& limit, const Coverage::Vector6* extra) {
   double eta = 1.0;
   for (int i = 0; i < 6; ++i) {
     double need = m.row(i).cwiseAbs().maxCoeff();
@@ -26,6 +59,12 @@ double ratio_eta(const Eigen::MatrixBase<Derived>& m, const Coverage::Vector6& l
   return eta;
 }
 }  // namespace
+
+HAPSYN_MULTIVERSION
+bool Coverage::solve_jacobian(const Matrix6& jacobian, Eigen::Matrix<double, 6, 6>& x) { return eliminate(jacobian, x); }
+
+HAPSYN_MULTIVERSION
+bool Coverage::solve_jacobian(const Matrix6& jacobian, Eigen::Matrix<double, 6, 12>& x) { return eliminate(jacobian, x); }
 
 Coverage::Coverage(const Json& options_in) {
   const Json options = options_in.is_null() ? Json::object() : options_in;
@@ -130,7 +169,10 @@ const double* attribute_row(const SampleQuantities& q, int index, const char* na
 }
 }  // namespace
 
-void Coverage::local(const SampleQuantities& q, double* out) const {
+void Coverage::local(const SampleQuantities& q, double* out) const { local_sample(q, out); }
+
+HAPSYN_MULTIVERSION
+void Coverage::local_sample(const SampleQuantities& q, double* out) const {
   out[0] = 1.0;
   const bool reachable = q.status == SampleStatus::kReachable;
   out[1] = reachable ? 1.0 : 0.0;
@@ -156,7 +198,7 @@ void Coverage::local(const SampleQuantities& q, double* out) const {
     if (acceleration_) rhs.rightCols<6>() = Eigen::Map<const RowMajor6>(attribute_row(q, velocity_ ? 1 : 0, "M_a", "acceleration"));
     if (!velocity_) rhs.leftCols<6>().setZero();
     if (!acceleration_) rhs.rightCols<6>().setZero();
-    const bool solved = solve_jacobian(jac, rhs);  // false: J singular, the terms give 0
+    const bool solved = eliminate(jac, rhs);  // false: J singular, the terms give 0
     if (velocity_) out[k++] = solved ? ratio_eta(rhs.leftCols<6>(), Vector6(q.max_velocity), nullptr) : 0.0;
     if (acceleration_) {
       const Matrix6 b = Matrix6(q.inertia).lazyProduct(rhs.rightCols<6>());

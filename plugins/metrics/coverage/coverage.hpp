@@ -51,40 +51,13 @@ class Coverage final : public Metric {
   double m_max() const { return m_max_; }
   double f_max() const { return f_max_; }
 
-  /// Solves jacobian * x = x (x holds the right-hand side on entry, 6 x Cols) by Gaussian
+  /// Solves jacobian * x = x (x holds the right-hand side on entry, 6 x 6 or 6 x 12) by Gaussian
   /// elimination with partial pivoting: fixed size, allocation-free, and several times faster at
   /// this size than Eigen's PartialPivLU, which routes multi-column right-hand sides through its
-  /// blocked kernels. \return false when a pivot is zero (J singular); x is then unspecified.
-  template <int Cols>
-  static bool solve_jacobian(const Matrix6& jacobian, Eigen::Matrix<double, 6, Cols>& x) {
-    // Row-major working copies: every elimination step is a contiguous row update.
-    Eigen::Matrix<double, 6, 6, Eigen::RowMajor> a = jacobian;
-    Eigen::Matrix<double, 6, Cols, Eigen::RowMajor> b = x;
-    for (int k = 0; k < 6; ++k) {
-      int pivot = k;
-      for (int i = k + 1; i < 6; ++i) {
-        if (std::abs(a(i, k)) > std::abs(a(pivot, k))) pivot = i;
-      }
-      if (a(pivot, k) == 0.0) return false;
-      if (pivot != k) {
-        a.row(k).swap(a.row(pivot));
-        b.row(k).swap(b.row(pivot));
-      }
-      const double inverse_pivot = 1.0 / a(k, k);
-      for (int i = k + 1; i < 6; ++i) {
-        const double factor = a(i, k) * inverse_pivot;
-        if (factor == 0.0) continue;
-        a.row(i) -= factor * a.row(k);
-        b.row(i) -= factor * b.row(k);
-      }
-    }
-    for (int k = 5; k >= 0; --k) {
-      for (int c = k + 1; c < 6; ++c) b.row(k) -= a(k, c) * b.row(c);
-      b.row(k) *= 1.0 / a(k, k);
-    }
-    x = b;
-    return true;
-  }
+  /// blocked kernels. Compiled for AVX2/FMA and baseline CPUs (hapsyn/multiversion.hpp).
+  /// \return false when a pivot is zero (J singular); x is then unspecified.
+  static bool solve_jacobian(const Matrix6& jacobian, Eigen::Matrix<double, 6, 6>& x);
+  static bool solve_jacobian(const Matrix6& jacobian, Eigen::Matrix<double, 6, 12>& x);
 
   /// eq. 13 with A = J^-1 M_v (one LU of J). Singular J (non-finite A): 0.
   static double eta_velocity(const Matrix6& jacobian, const Matrix6& m_v, const Vector6& max_velocity);
@@ -96,6 +69,9 @@ class Coverage final : public Metric {
                           double f_max);
 
  private:
+  // local()'s body, compiled for AVX2/FMA and baseline CPUs (see hapsyn/multiversion.hpp).
+  void local_sample(const SampleQuantities& q, double* out) const;
+
   bool pose_ = true, velocity_ = true, acceleration_ = true, force_ = true;
   double m_max_ = 10.0, f_max_ = 50.0;
 };

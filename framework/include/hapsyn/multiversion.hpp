@@ -1,0 +1,22 @@
+#pragma once
+/// \file
+/// HAPSYN_MULTIVERSION: put before a hot per-sample function (a free function or a non-virtual
+/// member: GCC cannot multiversion virtual functions, so a virtual override calls a marked
+/// private member). The function is compiled twice, for x86-64-v3 (AVX2 + FMA) and for baseline
+/// x86-64, and the loader picks the version the CPU runs (GCC/Clang target_clones, an ifunc).
+///
+/// Why not -march=native for the whole build: plugins and the framework pass Eigen objects
+/// across library boundaries, and Eigen's alignment (EIGEN_MAX_ALIGN_BYTES) follows the
+/// translation unit's instruction set, so mixing flags between libraries is an ODR hazard; and
+/// a package built with -march=native does not run on an older CPU. A clone changes only the
+/// code generated for that one function (Eigen still sees baseline SSE2 macros), and the
+/// scalar kernels gain most from FMA contraction (see benchmarks/haptic6r_benchmark.cpp).
+///
+/// Results of the two versions may differ in the last bits (fused multiply-add rounding).
+/// Define HAPSYN_NO_MULTIVERSION (CMake option HAPSYN_MULTIVERSION=OFF) for one baseline version.
+#if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__)) && \
+    !defined(HAPSYN_NO_MULTIVERSION)
+#define HAPSYN_MULTIVERSION __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define HAPSYN_MULTIVERSION
+#endif
