@@ -37,7 +37,8 @@ class Metric {
   virtual ~Metric() = default;
   /// Computes the local values of one sample into out[0 .. locals().size()).
   /// For worst-case metrics only reachable samples are passed. `q.sample` and `q.scene` give
-  /// the sample's index and scene (for its attributes, see scene_attributes()).
+  /// the sample's index and scene; `q.attribute_row(k)` is the sample's row of the k-th name in
+  /// scene_attributes(), resolved once per study by the evaluator (no lookup by name per sample).
   virtual void local(const SampleQuantities& q, double* out) const = 0;
   /// Quantities needed at each sample (Need flags). Default: the Jacobian.
   virtual Needs needs() const { return kNeedJacobian; }

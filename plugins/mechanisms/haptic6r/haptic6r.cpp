@@ -724,10 +724,6 @@ void into_limits(Vector6d& q, const Haptic6ROptions& o) {
 }
 }  // namespace
 
-void Haptic6RModel::solve(const double* pose, Needs needs, MechanismScratch&, SampleQuantities& out) const {
-  solve_sample(pose, needs, out);
-}
-
 HAPSYN_MULTIVERSION
 void Haptic6RModel::solve_sample(const double* pose, Needs needs, SampleQuantities& out) const {
   out.q.resize(6);
@@ -789,6 +785,11 @@ void Haptic6RModel::solve_sample(const double* pose, Needs needs, SampleQuantiti
     out.max_velocity = max_velocity_;
     out.max_torque = max_torque_;
   }
+}
+
+// After solve_sample: clang refuses to multiversion a function already called.
+void Haptic6RModel::solve(const double* pose, Needs needs, MechanismScratch&, SampleQuantities& out) const {
+  solve_sample(pose, needs, out);
 }
 
 // ---------------------------------------------------------------- plugin ----

@@ -169,8 +169,6 @@ const double* attribute_row(const SampleQuantities& q, int index, const char* na
 }
 }  // namespace
 
-void Coverage::local(const SampleQuantities& q, double* out) const { local_sample(q, out); }
-
 HAPSYN_MULTIVERSION
 void Coverage::local_sample(const SampleQuantities& q, double* out) const {
   out[0] = 1.0;
@@ -207,6 +205,9 @@ void Coverage::local_sample(const SampleQuantities& q, double* out) const {
   }
   if (force_) out[k++] = eta_force(jac, gravity, Vector6(q.max_torque), m_max_, f_max_);
 }
+
+// After local_sample: clang refuses to multiversion a function already called.
+void Coverage::local(const SampleQuantities& q, double* out) const { local_sample(q, out); }
 
 double Coverage::combine(const double* reduced, int) const {
   const double reach_h = reduced[0], reach_m = reduced[1];
