@@ -1,8 +1,11 @@
 #pragma once
 /// \file
-/// HAPSYN_MULTIVERSION: put before a hot per-sample function (a free function or a non-virtual
-/// member: GCC cannot multiversion virtual functions, so a virtual override calls a marked
-/// private member). The function is compiled twice, for x86-64-v3 (AVX2 + FMA) and for baseline
+/// HAPSYN_MULTIVERSION: put before the definition of a hot per-sample function that only its own
+/// translation unit calls, after nothing in that unit has called it yet (a file-local function
+/// or a private non-virtual member). Public entry points and virtual overrides are plain
+/// functions that call it: GCC cannot multiversion virtual functions, clang exports no plain
+/// symbol for a multiversioned one and refuses to multiversion a function already called.
+/// The function is compiled twice, for x86-64-v3 (AVX2 + FMA) and for baseline
 /// x86-64, and the loader picks the version the CPU runs (GCC/Clang target_clones, an ifunc).
 ///
 /// Why not -march=native for the whole build: plugins and the framework pass Eigen objects

@@ -538,7 +538,7 @@ void Haptic6RModel::dynamics(const Vector6d& q, Matrix6d* inertia, Vector6d* gra
 }
 
 HAPSYN_MULTIVERSION
-void Haptic6RModel::quantities(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const {
+void Haptic6RModel::quantities_impl(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const {
   Chain c;
   chain_from(q, offset_, d_, a_, ca_, sa_, c);
   if (jacobian) *jacobian = jacobian_from(c);
@@ -546,8 +546,8 @@ void Haptic6RModel::quantities(const Vector6d& q, Matrix6d* jacobian, Matrix6d* 
 }
 
 HAPSYN_MULTIVERSION
-int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions,
-                                      std::array<JointTrig, 8>* trig) const {
+int Haptic6RModel::inverse_kinematics_impl(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions,
+                                           std::array<JointTrig, 8>* trig) const {
   const double L1 = a_[0], L2 = a_[1], L3 = -d_[2], L4 = a_[3], L5 = d_[5];
   const Eigen::Matrix3d& rot = target.linear();
   const Eigen::Vector3d approach = rot.col(2);
@@ -679,7 +679,6 @@ int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::arra
   return count;
 }
 
-HAPSYN_MULTIVERSION
 int Haptic6RModel::select(const std::array<Vector6d, 8>& solutions, int count) const {
   const Haptic6ROptions& o = *options_;
   int best = -1;
@@ -740,7 +739,7 @@ void Haptic6RModel::solve_sample(const double* pose, Needs needs, SampleQuantiti
   target.translation() = Eigen::Vector3d(pose[0], pose[1], pose[2]);
   std::array<Vector6d, 8> solutions;
   std::array<JointTrig, 8> trig;
-  const int count = inverse_kinematics(target, solutions, &trig);
+  const int count = inverse_kinematics_impl(target, solutions, &trig);
   if (count == 0) {
     out.status = SampleStatus::kUnreachable;
     out.q.setZero();
@@ -787,7 +786,17 @@ void Haptic6RModel::solve_sample(const double* pose, Needs needs, SampleQuantiti
   }
 }
 
-// After solve_sample: clang refuses to multiversion a function already called.
+// The public entry points call the multiversioned bodies (defined above: clang refuses to
+// multiversion a function already called, and other translation units must see plain symbols).
+int Haptic6RModel::inverse_kinematics(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions,
+                                      std::array<JointTrig, 8>* trig) const {
+  return inverse_kinematics_impl(target, solutions, trig);
+}
+
+void Haptic6RModel::quantities(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const {
+  quantities_impl(q, jacobian, inertia, gravity);
+}
+
 void Haptic6RModel::solve(const double* pose, Needs needs, MechanismScratch&, SampleQuantities& out) const {
   solve_sample(pose, needs, out);
 }

@@ -170,9 +170,13 @@ class Haptic6RModel final : public MechanismModel {
   const Haptic6ROptions& options() const { return *options_; }
 
  private:
-  // solve()'s body, compiled for AVX2/FMA and baseline CPUs (GCC cannot multiversion the
-  // virtual solve() itself; see hapsyn/multiversion.hpp).
+  // The bodies of solve(), inverse_kinematics() and quantities(), compiled for AVX2/FMA and
+  // baseline CPUs (hapsyn/multiversion.hpp: GCC cannot multiversion the virtual solve(), and
+  // clang exports no plain symbol for a multiversioned function).
   void solve_sample(const double* pose, Needs needs, SampleQuantities& out) const;
+  int inverse_kinematics_impl(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions,
+                              std::array<JointTrig, 8>* trig) const;
+  void quantities_impl(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const;
 
   const Haptic6ROptions* options_ = nullptr;
   int selection_ = 0;  // 0 closest_to_home, 1 elbow_left, 2 elbow_right

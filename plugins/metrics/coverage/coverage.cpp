@@ -60,11 +60,19 @@ template <typename Derived>
 }
 }  // namespace
 
+namespace {
+// Multiversioned here, not on the public static members: clang exports no plain symbol for a
+// multiversioned function, which other translation units (tests, benchmarks) call.
 HAPSYN_MULTIVERSION
-bool Coverage::solve_jacobian(const Matrix6& jacobian, Eigen::Matrix<double, 6, 6>& x) { return eliminate(jacobian, x); }
+bool eliminate6(const Coverage::Matrix6& jacobian, Eigen::Matrix<double, 6, 6>& x) { return eliminate(jacobian, x); }
 
 HAPSYN_MULTIVERSION
-bool Coverage::solve_jacobian(const Matrix6& jacobian, Eigen::Matrix<double, 6, 12>& x) { return eliminate(jacobian, x); }
+bool eliminate12(const Coverage::Matrix6& jacobian, Eigen::Matrix<double, 6, 12>& x) { return eliminate(jacobian, x); }
+}  // namespace
+
+bool Coverage::solve_jacobian(const Matrix6& jacobian, Eigen::Matrix<double, 6, 6>& x) { return eliminate6(jacobian, x); }
+
+bool Coverage::solve_jacobian(const Matrix6& jacobian, Eigen::Matrix<double, 6, 12>& x) { return eliminate12(jacobian, x); }
 
 Coverage::Coverage(const Json& options_in) {
   const Json options = options_in.is_null() ? Json::object() : options_in;
