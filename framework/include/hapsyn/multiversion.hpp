@@ -17,8 +17,20 @@
 ///
 /// Results of the two versions may differ in the last bits (fused multiply-add rounding).
 /// Define HAPSYN_NO_MULTIVERSION (CMake option HAPSYN_MULTIVERSION=OFF) for one baseline version.
+///
+/// Sanitizer builds get one version: clang 14 with AddressSanitizer jumps to an unrelocated
+/// address when a shared module calls a multiversioned function with external linkage.
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(undefined_behavior_sanitizer)
+#define HAPSYN_SANITIZED_BUILD 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__)
+#define HAPSYN_SANITIZED_BUILD 1
+#endif
+
 #if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__)) && \
-    !defined(HAPSYN_NO_MULTIVERSION)
+    !defined(HAPSYN_NO_MULTIVERSION) && !defined(HAPSYN_SANITIZED_BUILD)
 #define HAPSYN_MULTIVERSION __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
 #define HAPSYN_MULTIVERSION
