@@ -1,7 +1,6 @@
 #include "fivebar.hpp"
 
 #include <hapsyn/error.hpp>
-#include <hapsyn/fast_math.hpp>
 
 #include <Eigen/Core>
 #include <algorithm>
@@ -66,10 +65,8 @@ LegResult solve_leg(double dx, double dy, double l1, double l2, Leg& leg) {
   leg.uy = c * ey + s * ex;
   leg.wx = dx - l1 * leg.ux;
   leg.wy = dy - l1 * leg.uy;
-  // acos(c) = atan2(s, c) with the s at hand; hapsyn::fast::atan2 inlines (the IK was most of the
-  // culling search's time, see hapsyn/fast_math.hpp).
-  leg.q_act = fast::atan2(dy, dx) + fast::atan2(s, c);
-  double q_free = fast::atan2(leg.wy, leg.wx);
+  leg.q_act = std::atan2(dy, dx) + std::acos(c);
+  double q_free = std::atan2(leg.wy, leg.wx);
   if (q_free < -0.5 * kPi) q_free += 2.0 * kPi;
   leg.q_free = q_free;
   return LegResult::kSolved;
