@@ -65,7 +65,12 @@ void run_terms(benchmark::State& state, const Json& terms) {
   const Haptic6RModel& m = model();
   auto scratch = mechanism().make_scratch();
   SampleQuantities q;
-  q.scene = &s;  // the metric reads the sample's M_v / M_a through these, as under the evaluator
+  // The metric reads the sample's M_v / M_a through these, resolved once as the evaluator does.
+  q.scene = &s;
+  std::vector<const hapsyn::AttributeMatrix*> attributes;
+  for (const std::string& name : metric.scene_attributes()) attributes.push_back(&s.attributes.at(name));
+  q.attributes = attributes.data();
+  q.attribute_count = static_cast<int>(attributes.size());
   std::vector<double> out(metric.locals().size());
   double sum = 0.0;
   for (auto _ : state) {
