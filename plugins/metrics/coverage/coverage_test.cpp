@@ -297,3 +297,50 @@ TEST(Coverage, EvaluatorResolvedAttributesGiveTheSameValuesAsLookupByName) {
     EXPECT_NEAR(e.objectives[0], by_name, 1e-12) << terms.dump();
   }
 }
+
+namespace {
+// Counts the samples whose q.attribute_row(k) is exactly the scene's row of its k-th attribute.
+class AttributeProbe final : public Metric {
+ public:
+  explicit AttributeProbe(std::vector<std::string> names) : names_(std::move(names)) {}
+  void local(const SampleQuantities& q, double* out) const override {
+    bool all = q.attribute_count == static_cast<int>(names_.size());
+    for (int k = 0; all && k < q.attribute_count; ++k) {
+      const auto it = q.scene->attributes.find(names_[static_cast<std::size_t>(k)]);
+      const double* expected = it == q.scene->attributes.end() ? nullptr : it->second.row(q.sample).data();
+      all = q.attribute_row(k) == expected;
+    }
+    out[0] = all ? 1.0 : 0.0;
+  }
+  Needs needs() const override { return kNeedPose; }
+  std::vector<std::string> scene_attributes() const override { return names_; }
+  std::vector<LocalValue> locals() const override { return {{"resolved", Reduction::kSum, ""}}; }
+  double combine(const double* reduced, int) const override { return reduced[0]; }
+  Aggregation aggregation() const override { return Aggregation::kAveraging; }
+
+ private:
+  std::vector<std::string> names_;
+};
+}  // namespace
+
+TEST(Coverage, EvaluatorHandsEachMetricItsAttributeRowsInDeclaredOrder) {
+  Study s = load_study(study(Json::array({"velocity", "acceleration"})), test::registry());
+  auto scene = std::make_shared<SampleSet>(s.problem->samples());
+  auto mech = std::make_shared<Haptic6R>(Json::object());
+  // Two metrics with the attributes in opposite orders: each sees its own order.
+  std::vector<MetricEntry> metrics = {{"probe_va", std::make_shared<AttributeProbe>(std::vector<std::string>{"M_v", "M_a"})},
+                                      {"probe_av", std::make_shared<AttributeProbe>(std::vector<std::string>{"M_a", "M_v"})}};
+  std::vector<Objective> objectives = {{"va", 0, Sense::kMaximize, 1.0}, {"av", 1, Sense::kMaximize, 1.0}};
+  const Problem problem("haptic6r", mech, scene, metrics, objectives, s.problem->design_space());
+  const Evaluation e = problem.evaluate_parallel(nullptr, 1);
+  ASSERT_EQ(e.status, EvalStatus::kFeasible);
+  EXPECT_EQ(e.objectives[0], static_cast<double>(scene->size()));
+  EXPECT_EQ(e.objectives[1], static_cast<double>(scene->size()));
+  // A name the scene lacks resolves to no row (the metric then looks it up and reports it).
+  std::vector<MetricEntry> missing = {{"probe_x", std::make_shared<AttributeProbe>(std::vector<std::string>{"M_x"})}};
+  const Problem without("haptic6r", mech, scene, missing, {{"x", 0, Sense::kMaximize, 1.0}}, s.problem->design_space());
+  EXPECT_EQ(without.evaluate_parallel(nullptr, 1).objectives[0], static_cast<double>(scene->size()));
+  SampleQuantities q;  // outside the evaluator: no rows at all
+  q.sample = 0;
+  EXPECT_EQ(q.attribute_row(0), nullptr);
+}
