@@ -95,11 +95,8 @@ void NbiSolver::check(const Problem& problem) const {
 void NbiSolver::prepare_sub_solvers(const Problem& problem, const Registry& registry) const {
   const auto solver = make_sub_solver(registry, options_.shadow_solver, "nbi", "solver.options.shadow_solver");
   for (std::size_t i = 0; i < problem.objectives().size(); ++i) {
-    try {
-      solver->check(*single_objective_problem(problem, i));
-    } catch (const Error& e) {
-      throw Error("nbi", "solver.options.shadow_solver (objective '" + problem.objectives()[i].name + "'): " + e.what());
-    }
+    check_sub_solver(*solver, *single_objective_problem(problem, i), "nbi",
+                     "solver.options.shadow_solver (objective '" + problem.objectives()[i].name + "')");
   }
 }
 
@@ -110,12 +107,9 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
   const std::size_t m = problem.objectives().size();
   const DesignSpace& space = problem.design_space();
   const std::size_t n = space.free_size();
-  if (!context.registry) {
-    result.status = SolverStatus::kFailed;
-    result.message = "nbi needs the plugin registry in the solver context (for its shadow solver)";
-    return result;
-  }
-  const auto shadow_solver = make_sub_solver(*context.registry, options_.shadow_solver, "nbi", "solver.options.shadow_solver");
+  const auto shadow_solver = sub_solver_for_solve(context, options_.shadow_solver, "nbi", "solver.options.shadow_solver",
+                                                   "shadow solver", result);
+  if (!shadow_solver) return result;
 
   // 1. Shadow optima.
   std::vector<Eigen::VectorXd> shadow_designs;

@@ -42,23 +42,17 @@ void SequentialSolver::prepare_sub_solvers(const Problem& problem, const Registr
   const std::size_t k = free_index(problem);
   const DesignComponent& c =
       problem.design_space().components()[static_cast<std::size_t>(problem.design_space().free_indices()[k])];
-  try {
-    solver->check(*fixed_component_problem(*single_objective_problem(problem, 0), k, c.lower));
-  } catch (const Error& e) {
-    throw Error("sequential", std::string("solver.options.sub_solver: ") + e.what());
-  }
+  check_sub_solver(*solver, *fixed_component_problem(*single_objective_problem(problem, 0), k, c.lower), "sequential",
+                   "solver.options.sub_solver");
 }
 
 SolverResult SequentialSolver::solve(const Problem& problem, const SolverContext& context) const {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
   SolverResult result;
-  if (!context.registry) {
-    result.status = SolverStatus::kFailed;
-    result.message = "sequential needs the plugin registry in the solver context (for its sub-solver)";
-    return result;
-  }
-  const auto solver = make_sub_solver(*context.registry, sub_solver_, "sequential", "solver.options.sub_solver");
+  const auto solver =
+      sub_solver_for_solve(context, sub_solver_, "sequential", "solver.options.sub_solver", "sub-solver", result);
+  if (!solver) return result;
   const std::size_t k = free_index(problem);
   const auto first = single_objective_problem(problem, 0);
   const long long values = problem.design_space().grid_count(k);

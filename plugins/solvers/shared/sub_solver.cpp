@@ -24,6 +24,24 @@ std::shared_ptr<Solver> make_sub_solver(const Registry& registry, const Json& sp
   return solver;
 }
 
+std::shared_ptr<Solver> sub_solver_for_solve(const SolverContext& context, const Json& spec, const std::string& component,
+                                             const std::string& json_path, const std::string& role, SolverResult& result) {
+  if (!context.registry) {
+    result.status = SolverStatus::kFailed;
+    result.message = component + " needs the plugin registry in the solver context (for its " + role + ")";
+    return nullptr;
+  }
+  return make_sub_solver(*context.registry, spec, component, json_path);
+}
+
+void check_sub_solver(const Solver& solver, const Problem& problem, const std::string& component, const std::string& where) {
+  try {
+    solver.check(problem);
+  } catch (const Error& e) {
+    throw Error(component, where + ": " + e.what());
+  }
+}
+
 std::shared_ptr<const Problem> single_objective_problem(const Problem& problem, std::size_t index) {
   Objective o = problem.objectives().at(index);
   o.weight = 1.0;

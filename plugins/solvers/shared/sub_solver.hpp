@@ -19,6 +19,16 @@ namespace hapsyn::plugins {
 std::shared_ptr<Solver> make_sub_solver(const Registry& registry, const Json& spec, const std::string& component,
                                         const std::string& json_path);
 
+/// The sub-solver for one solve() call. Without a registry in the context it returns null and
+/// marks `result` failed: "<component> needs the plugin registry in the solver context (for its
+/// <role>)". \throws as make_sub_solver.
+std::shared_ptr<Solver> sub_solver_for_solve(const SolverContext& context, const Json& spec, const std::string& component,
+                                             const std::string& json_path, const std::string& role, SolverResult& result);
+
+/// Runs the sub-solver's check() on `problem` (from prepare_sub_solvers): its error is rethrown as
+/// Error(component, "<where>: <the sub-solver's message>").
+void check_sub_solver(const Solver& solver, const Problem& problem, const std::string& component, const std::string& where);
+
 /// The problem with only objective `index` (weight 1): a shadow optimum's problem.
 std::shared_ptr<const Problem> single_objective_problem(const Problem& problem, std::size_t index);
 /// The problem with the same objectives and these weights (one per objective, finite).

@@ -49,23 +49,16 @@ void WeightedSumSolver::check(const Problem& problem) const {
 
 void WeightedSumSolver::prepare_sub_solvers(const Problem& problem, const Registry& registry) const {
   const auto solver = make_sub_solver(registry, sub_solver_, "weighted_sum", "solver.options.sub_solver");
-  try {
-    solver->check(problem);
-  } catch (const Error& e) {
-    throw Error("weighted_sum", std::string("solver.options.sub_solver: ") + e.what());
-  }
+  check_sub_solver(*solver, problem, "weighted_sum", "solver.options.sub_solver");
 }
 
 SolverResult WeightedSumSolver::solve(const Problem& problem, const SolverContext& context) const {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
   SolverResult result;
-  if (!context.registry) {
-    result.status = SolverStatus::kFailed;
-    result.message = "weighted_sum needs the plugin registry in the solver context (for its sub-solver)";
-    return result;
-  }
-  const auto solver = make_sub_solver(*context.registry, sub_solver_, "weighted_sum", "solver.options.sub_solver");
+  const auto solver =
+      sub_solver_for_solve(context, sub_solver_, "weighted_sum", "solver.options.sub_solver", "sub-solver", result);
+  if (!solver) return result;
   const std::size_t m = problem.objectives().size();
   std::vector<SolutionPoint> points;
   Json runs = Json::array();
