@@ -7,6 +7,7 @@
 
 #include <iostream>
 #include <map>
+#include <set>
 
 namespace hapsyn::bench {
 
@@ -19,21 +20,28 @@ std::vector<Comparison>& pairs() {
   return p;
 }
 
-// Console output as usual, plus the real time per iteration of every run for the ratios.
+// Console output as usual, plus the real time per iteration of every run for the ratios. With
+// --benchmark_repetitions the median of the repetitions is used (also with
+// --benchmark_report_aggregates_only, which reports no single repetition).
 class RecordingReporter : public benchmark::ConsoleReporter {
  public:
   void ReportRuns(const std::vector<Run>& runs) override {
     for (const Run& r : runs) {
-      if (r.run_type != Run::RT_Iteration) continue;
-      times[r.benchmark_name()] = r.GetAdjustedRealTime();
-      cpu_times[r.benchmark_name()] = r.GetAdjustedCPUTime();
-      for (const auto& [key, counter] : r.counters) counters[r.benchmark_name() + "#" + key] = counter.value;
+      const bool median = r.run_type == Run::RT_Aggregate && r.aggregate_name == "median";
+      if (r.run_type != Run::RT_Iteration && !median) continue;
+      const std::string name = median ? r.run_name.str() : r.benchmark_name();
+      if (!median && medians.count(name)) continue;
+      if (median) medians.insert(name);
+      times[name] = r.GetAdjustedRealTime();
+      cpu_times[name] = r.GetAdjustedCPUTime();
+      for (const auto& [key, counter] : r.counters) counters[name + "#" + key] = counter.value;
     }
     ConsoleReporter::ReportRuns(runs);
   }
   std::map<std::string, double> times;
   std::map<std::string, double> cpu_times;  // differs from real time on a loaded machine
   std::map<std::string, double> counters;
+  std::set<std::string> medians;  // names whose median is recorded (it wins over repetitions)
 };
 }  // namespace
 
