@@ -173,7 +173,7 @@ void FiveBarModel::solve(const double* pose, Needs needs, MechanismScratch& /*sc
   }
 
   // The paper's G: q2 >= 0, q2 <= q1, q3 <= pi, q3 >= q4 (closed inequalities with a small
-  // tolerance, DESIGN.md section 6) and the working mode 0 < q3 - q2 < pi. Together they give
+  // tolerance, docs/design.md section 6) and the working mode 0 < q3 - q2 < pi. Together they give
   // 0 <= q2 < q3 <= pi: the end effector lies above both elbows.
   const double t = kFiveBarAngleTolerance;
   const double mode = q3 - q2;

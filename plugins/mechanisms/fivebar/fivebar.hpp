@@ -3,7 +3,7 @@
 /// The symmetric planar five-bar linkage of Unal, Kiziltas & Patoglu (Haptics Symposium 2008),
 /// elbow-out posture, as a hapsyn mechanism.
 ///
-/// Frames and conventions (DESIGN.md section 3):
+/// Frames and conventions (docs/design.md section 3):
 /// - Design vector (SI metres): l0 (distance between the actuated joints), l1 (actuated links,
 ///   l1 = l4), l2 (free links, l2 = l3), r (placement: the scene's centre lies at (0, r) in the
 ///   mechanism frame).
@@ -63,7 +63,7 @@ struct FiveBarDesign {
 };
 
 /// Tolerance [rad] of the closed inequalities of the validity set G (one-ulp rounding at a
-/// limit must not change a classification; DESIGN.md section 6).
+/// limit must not change a classification; docs/design.md section 6).
 constexpr double kFiveBarAngleTolerance = 1e-9;
 
 /// The five-bar for one design. Immutable; solve() is const, allocation-free and thread-safe

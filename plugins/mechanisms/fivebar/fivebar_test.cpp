@@ -1,5 +1,5 @@
 // Tests of the five-bar mechanism: Unal 2008 Table 2, kinematics and dynamics cross-checks,
-// extremes (DESIGN.md section 6), determinism, options and declarations.
+// extremes (docs/design.md section 6), determinism, options and declarations.
 #include "fivebar.hpp"
 
 #include <gdi.hpp>
@@ -279,7 +279,7 @@ TEST(FiveBarTable2, NearOptimalRidgeDesignScoresAsDesignNotesSay) {
 }
 
 TEST(FiveBarTable2, LiteralPaperWorkspaceOf200MillimetresDoesNotReproduce) {
-  // DESIGN.md section 3: with w = 200 mm the best-GII design scores 0.534 and the best-GDI
+  // docs/design.md section 3: with w = 200 mm the best-GII design scores 0.534 and the best-GDI
   // design cannot reach its workspace (its reach constraint fails).
   const SampleSet scene = square(0.2, 0.002);
   const Indices g = evaluate(FiveBarModel(kBestGii, options_with()), scene);
@@ -462,7 +462,7 @@ TEST(FiveBarKinematics, MirroredSampleGivesTheMirroredConfigurationBitForBit) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Extremes (DESIGN.md section 6).
+// Extremes (docs/design.md section 6).
 
 TEST(FiveBarExtremes, ZeroBaseLengthIsFiniteAndReachesTheSquare) {
   const FiveBarModel model(FiveBarDesign{0.0, 0.3, 0.3, 0.42}, options_with());

@@ -176,7 +176,7 @@ Haptic6RDh read_haptic6r_dh(const std::string& path) {
     r.d = parse_length(row["d"], path, at + ".d");
     r.a = parse_length(row["a"], path, at + ".a");
   }
-  // The structure the closed-form IK is derived for (DESIGN.md section 4).
+  // The structure the closed-form IK is derived for (docs/design.md section 4).
   static const int a_link[6] = {0, 1, -1, 3, -1, -1};
   static const int d_link[6] = {-1, -1, 2, -1, -1, 4};
   static const double d_sign[6] = {1, 1, -1, 1, 1, 1};
@@ -454,7 +454,7 @@ template <typename InertiaMatrix, typename GravityVector>
       const Eigen::Matrix3d& in = b.inertia;
       double A[3][3];  // A[r][k]
       if (in(0, 1) == 0.0 && in(0, 2) == 0.0 && in(1, 2) == 0.0) {
-        // Principal axes along the frame's (every body of the DESIGN.md model): A = R diag(I).
+        // Principal axes along the frame's (every body of the docs/design.md model): A = R diag(I).
         for (int r = 0; r < 3; ++r) {
           A[r][0] = X[r] * in(0, 0);
           A[r][1] = Y[r] * in(1, 1);

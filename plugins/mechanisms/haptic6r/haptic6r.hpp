@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// The SCARA-like serial 6R haptic manipulator of Fennel, Zea, Hanebeck (IEEE ToH 2022) as a
-/// hapsyn mechanism, with the reconstructed DH table of DESIGN.md section 4 read from data.
+/// hapsyn mechanism, with the reconstructed DH table of docs/design.md section 4 read from data.
 ///
 /// Conventions:
 /// - Standard DH, T_i = Rz(q_i + theta_offset_i) Tz(d_i) Tx(a_i) Rx(alpha_i); frame 0 = base B
@@ -24,7 +24,7 @@
 ///   -> kInvalid; the chosen one with |sin q2| (SCARA stretched), |sin(q4 + theta_offset4 + 90
 ///   deg)| = |cos theta4| (l4 vertical) or |e_z x z_E| (wrist axis vertical) below
 ///   singularity_tolerance -> kSingular (q filled, finite); else kReachable.
-/// - Mass model (DESIGN.md section 4): motor i a point mass motor_mass_factor * m(s_i) at the
+/// - Mass model (docs/design.md section 4): motor i a point mass motor_mass_factor * m(s_i) at the
 ///   origin of DH frame i-1 (on joint i's axis, carried by body i-1; motor 1 on the base has no
 ///   effect); links l1..l5 tubes of linear density link_density between consecutive DH origins
 ///   (l5 from the wrist point to E), outer diameter tube_outer_diameter, wall tube_wall; the end
@@ -47,7 +47,7 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 /// Angle tolerance [rad] of joint-limit comparisons (a wrapped angle one ulp past a limit must
-/// not drop a pose; DESIGN.md section 6).
+/// not drop a pose; docs/design.md section 6).
 constexpr double kHaptic6RAngleTolerance = 1e-9;
 
 /// A DH length: a constant [m] or +-one of the links l1..l5.
