@@ -72,7 +72,7 @@ hapsyn::Json culling_options(bool polish) {
 // Same grid (10 mm design, 5 mm workspace): culling (no polish, so the value is the grid's),
 // exhaustive search without pruning (every feasible design searched in full), and with pruning.
 void BM_Compare_Culling(benchmark::State& state) {
-  const hapsyn::plugins::CullingSolver solver(culling_options(false));
+  const hapsyn::plugins::CullingSolver solver(hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(false)));
   run(state, solver, study(state.range(0) ? "gdi" : "gii", 10, 5));
 }
 void BM_Compare_Exhaustive(benchmark::State& state) {
@@ -89,7 +89,7 @@ BENCHMARK(BM_Compare_ExhaustivePruned)->ArgName("gdi")->Arg(0)->Arg(1)->Unit(ben
 
 // The trade: design grid step [mm] against the optimum (grid and polished) and time, 1 mm workspace.
 void BM_Trade_Culling(benchmark::State& state) {
-  const hapsyn::plugins::CullingSolver solver(culling_options(true));
+  const hapsyn::plugins::CullingSolver solver(hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(true)));
   run(state, solver, study(state.range(1) ? "gdi" : "gii", static_cast<int>(state.range(0)), 1));
 }
 void trade_args(benchmark::internal::Benchmark* b) {

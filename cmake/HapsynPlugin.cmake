@@ -1,23 +1,21 @@
-# hapsyn_add_plugin(<name> SOURCES <src>... SCHEMA <schema.json> [LIBRARIES <lib>...]
+# hapsyn_add_plugin(<name> SOURCES <src>... [LIBRARIES <lib>...]
 #                   [OUTPUT_DIRECTORY <dir>] [INSTALL_DESTINATION <dir>] [NO_INSTALL] [DEFINITIONS <def>...])
 #
-# Builds the shared library hapsyn-<name>.so that the hapsyn registry loads by name.
-# The plugin's schema.json is embedded in the library, so a plugin file is self-contained.
+# Builds the shared library hapsyn-<name>.so that the hapsyn registry loads by name (<name> must
+# be the name the plugin registers with HAPSYN_*_PLUGIN). The options schema is derived from the
+# plugin's option declarations in C++ (hapsyn/options.hpp), so a plugin file is self-contained.
 # Works in the hapsyn tree and out of tree after find_package(hapsyn).
-set(_HAPSYN_PLUGIN_CMAKE_DIR ${CMAKE_CURRENT_LIST_DIR})
 function(hapsyn_add_plugin name)
   cmake_parse_arguments(ARG "NO_INSTALL" "SCHEMA;OUTPUT_DIRECTORY;INSTALL_DESTINATION" "SOURCES;LIBRARIES;DEFINITIONS" ${ARGN})
-  if(NOT ARG_SCHEMA)
-    message(FATAL_ERROR "hapsyn_add_plugin(${name}): SCHEMA is required")
+  if(ARG_SCHEMA)
+    message(FATAL_ERROR "hapsyn_add_plugin(${name}): SCHEMA is no longer used (plugin API 3): declare the "
+      "options in C++ with a static declare() function (see hapsyn/options.hpp) and drop schema.json")
   endif()
-  get_filename_component(schema_abs ${ARG_SCHEMA} ABSOLUTE)
-  set(schema_cpp ${CMAKE_CURRENT_BINARY_DIR}/${name}_schema.cpp)
-  add_custom_command(OUTPUT ${schema_cpp}
-    COMMAND ${CMAKE_COMMAND} -DSCHEMA=${schema_abs} -DOUT=${schema_cpp} -P ${_HAPSYN_PLUGIN_CMAKE_DIR}/embed_schema.cmake
-    DEPENDS ${schema_abs} ${_HAPSYN_PLUGIN_CMAKE_DIR}/embed_schema.cmake
-    COMMENT "Embedding ${name} schema")
+  if(NOT ARG_SOURCES)
+    message(FATAL_ERROR "hapsyn_add_plugin(${name}): SOURCES is required")
+  endif()
   set(target hapsyn_plugin_${name})
-  add_library(${target} MODULE ${ARG_SOURCES} ${schema_cpp})
+  add_library(${target} MODULE ${ARG_SOURCES})
   set_target_properties(${target} PROPERTIES OUTPUT_NAME "hapsyn-${name}" PREFIX ""
     CXX_VISIBILITY_PRESET hidden VISIBILITY_INLINES_HIDDEN ON)
   if(TARGET hapsyn::hapsyn)

@@ -3,6 +3,8 @@
 #include <hapsyn/registry.hpp>
 #include <hapsyn/schema.hpp>
 
+#include "serialized_plugins.hpp"
+
 #include <boost/dll/import.hpp>
 #include <boost/dll/runtime_symbol_info.hpp>
 #include <boost/dll/shared_library.hpp>
@@ -108,8 +110,16 @@ const Registry::Loaded& Registry::load(const std::string& path_in) const {
   r.kind = info.kind ? info.kind : "";
   r.version = info.version ? info.version : "";
   r.description = info.description ? info.description : "";
-  r.thread_safety = info.thread_safety ? info.thread_safety : "";
   r.file = path;
+  const std::string safety = info.thread_safety ? info.thread_safety : "";
+  if (safety == to_string(ThreadSafety::kConcurrent)) {
+    r.thread_safety = ThreadSafety::kConcurrent;
+  } else if (safety == to_string(ThreadSafety::kSerialized)) {
+    r.thread_safety = ThreadSafety::kSerialized;
+  } else {
+    throw Error("registry", path + ": plugin '" + r.name + "' declares thread safety '" + safety +
+                                "' (known: concurrent, serialized)");
+  }
   static const std::set<std::string> kinds = {"mechanism", "scene", "metric", "solver"};
   if (!kinds.count(r.kind)) {
     throw Error("registry", path + ": plugin '" + r.name + "' has unknown kind '" + r.kind +
@@ -123,10 +133,10 @@ const Registry::Loaded& Registry::load(const std::string& path_in) const {
   try {
     r.schema = Json::parse(info.schema ? info.schema : "");
   } catch (const Json::parse_error& e) {
-    throw Error("registry", path + ": plugin '" + r.name + "' ships a malformed schema.json: " + e.what());
+    throw Error("registry", path + ": plugin '" + r.name + "' exports a malformed options schema: " + e.what());
   }
   try {
-    check_schema(r.schema, "plugin '" + r.name + "' schema.json");
+    check_schema(r.schema, "plugin '" + r.name + "' options");
   } catch (const Error& e) {
     throw Error("registry", path + ": " + e.what());
   }
@@ -134,8 +144,6 @@ const Registry::Loaded& Registry::load(const std::string& path_in) const {
   slot = std::move(loaded);
   return *slot;
 }
-
-const PluginRecord& Registry::load_file(const std::string& path) const { return load(path).record; }
 
 const PluginRecord& Registry::find(const std::string& name) const {
   for (const std::string& dir : search_path_) {
@@ -184,27 +192,65 @@ Json Registry::resolve_options(const std::string& name, const Json& options, con
   return validate_and_fill(r.schema, options.is_null() ? Json::object() : options, json_path);
 }
 
+void Registry::create_sub_solvers(const Json& schema, const Json& resolved, const std::string& relative,
+                                  PluginArguments& arguments) const {
+  const auto properties = schema.find("properties");
+  if (properties == schema.end()) return;
+  for (auto it = properties->begin(); it != properties->end(); ++it) {
+    const std::string path = relative.empty() ? it.key() : relative + "." + it.key();
+    const Json& value = resolved.at(it.key());
+    if (it->value("plugin_kind", "") == "solver") {
+      arguments.sub_solvers[path] = make_sub_solver(value, arguments.plugin, arguments.json_path + "." + path);
+    } else if (it->value("type", "") == "object") {
+      create_sub_solvers(*it, value, path, arguments);
+    }
+  }
+}
+
+std::shared_ptr<const Solver> Registry::make_sub_solver(const Json& spec, const std::string& component,
+                                                        const std::string& json_path) const {
+  if (!spec.is_object() || !spec.contains("plugin") || !spec["plugin"].is_string()) {
+    throw Error(component, json_path + " = " + render_value(spec) + ": must be {\"plugin\": NAME, \"options\": {...}}");
+  }
+  const std::string name = spec["plugin"];
+  const PluginRecord& record = find(name);
+  if (record.kind != "solver") {
+    throw Error(component, json_path + ".plugin = \"" + name + "\": '" + name + "' is a " + record.kind +
+                               " plugin, not a solver plugin");
+  }
+  const Json options = spec.contains("options") ? spec["options"] : Json::object();
+  std::shared_ptr<Solver> solver = create_solver(name, options, json_path);
+  if (solver->pareto()) {
+    throw Error(component, json_path + ".plugin = \"" + name +
+                               "\": a Pareto solver; the sub-solver must be single-objective (it returns one best design)");
+  }
+  return solver;
+}
+
 template <class T>
 std::shared_ptr<T> Registry::create(const std::string& name, const char* kind, const Json& options,
-                                    const std::string& json_path) const {
+                                    const std::string& json_path, Json* resolved_options) const {
   const PluginRecord& record = find(name);
   if (record.kind != kind) {
     throw Error("problem", json_path + ".plugin = \"" + name + "\": '" + name + "' is a " + record.kind +
                                " plugin, not a " + kind + " plugin");
   }
-  const Json resolved = validate_and_fill(record.schema, options.is_null() ? Json::object() : options,
-                                          json_path + ".options");
+  PluginArguments arguments;
+  arguments.plugin = name;
+  arguments.json_path = json_path + ".options";
+  const Json resolved = validate_and_fill(record.schema, options.is_null() ? Json::object() : options, arguments.json_path);
+  create_sub_solvers(record.schema, resolved, "", arguments);
   const Loaded* loaded = nullptr;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     loaded = loaded_.at(record.file).get();
   }
-  const auto& factory = loaded->library.get_alias<std::unique_ptr<T>(const Json&)>("hapsyn_plugin_create");
+  const auto& factory = loaded->library.get_alias<PluginFactory<T>>("hapsyn_plugin_create");
   std::unique_ptr<T> object;
   try {
-    object = factory(resolved);
+    object = factory(resolved, arguments);
   } catch (const Error& e) {
-    throw Error("problem", json_path + ".options: " + e.what());
+    throw Error("problem", arguments.json_path + ": " + e.what());
   } catch (const std::exception& e) {
     throw Error("registry", "plugin '" + name + "' (" + record.file + ") failed to create its " + kind + ": " + e.what());
   } catch (...) {
@@ -214,26 +260,29 @@ std::shared_ptr<T> Registry::create(const std::string& name, const char* kind, c
   if (!object) {
     throw Error("registry", "plugin '" + name + "' (" + record.file + ") returned no " + kind);
   }
+  if (resolved_options) *resolved_options = resolved;
   // The deleter holds its own reference to the library, so an object never outlives its code.
   boost::dll::shared_library library = loaded->library;
-  return std::shared_ptr<T>(object.release(), [library](T* p) { delete p; });
+  std::shared_ptr<T> shared(object.release(), [library](T* p) { delete p; });
+  if (record.thread_safety == ThreadSafety::kSerialized) return serialized(std::move(shared));
+  return shared;
 }
 
 std::shared_ptr<Mechanism> Registry::create_mechanism(const std::string& name, const Json& options,
-                                                      const std::string& json_path) const {
-  return create<Mechanism>(name, "mechanism", options, json_path);
+                                                      const std::string& json_path, Json* resolved_options) const {
+  return create<Mechanism>(name, "mechanism", options, json_path, resolved_options);
 }
 std::shared_ptr<Scene> Registry::create_scene(const std::string& name, const Json& options,
-                                              const std::string& json_path) const {
-  return create<Scene>(name, "scene", options, json_path);
+                                              const std::string& json_path, Json* resolved_options) const {
+  return create<Scene>(name, "scene", options, json_path, resolved_options);
 }
 std::shared_ptr<Metric> Registry::create_metric(const std::string& name, const Json& options,
-                                                const std::string& json_path) const {
-  return create<Metric>(name, "metric", options, json_path);
+                                                const std::string& json_path, Json* resolved_options) const {
+  return create<Metric>(name, "metric", options, json_path, resolved_options);
 }
 std::shared_ptr<Solver> Registry::create_solver(const std::string& name, const Json& options,
-                                                const std::string& json_path) const {
-  return create<Solver>(name, "solver", options, json_path);
+                                                const std::string& json_path, Json* resolved_options) const {
+  return create<Solver>(name, "solver", options, json_path, resolved_options);
 }
 
 }  // namespace hapsyn

@@ -24,7 +24,7 @@ const std::vector<std::string>& keywords() {
   static const std::vector<std::string> words = {
       "type",  "properties", "required", "additionalProperties", "default",
       "enum",  "minimum",    "maximum",  "exclusiveMinimum",     "exclusiveMaximum",
-      "items", "minItems",   "maxItems", "description",          "unit"};
+      "items", "minItems",   "maxItems", "description",          "unit", "plugin_kind"};
   return words;
 }
 
@@ -294,6 +294,11 @@ class SchemaChecker {
       if (schema.contains(annotation) && !schema[annotation].is_string()) {
         refuse_value(spath, annotation, schema[annotation], "must be a string");
       }
+    }
+    if (const auto it = schema.find("plugin_kind"); it != schema.end()) {
+      // The framework creates plugin-valued options at load; only sub-solvers exist so far.
+      if (*it != "solver" || schema.value("type", "") != "object")
+        refuse_value(spath, "plugin_kind", *it, "must be \"solver\", on an option of type object");
     }
     if (const auto it = schema.find("enum"); it != schema.end()) {
       if (!it->is_array() || it->empty())

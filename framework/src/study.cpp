@@ -292,9 +292,8 @@ Study load_study(const Json& input, const Registry& registry) {
 
   // Mechanism.
   const std::string mechanism_name = resolved["mechanism"]["plugin"];
-  std::shared_ptr<Mechanism> mechanism =
-      registry.create_mechanism(mechanism_name, resolved["mechanism"]["options"], "mechanism");
-  resolved["mechanism"]["options"] = registry.resolve_options(mechanism_name, resolved["mechanism"]["options"], "mechanism.options");
+  std::shared_ptr<Mechanism> mechanism = registry.create_mechanism(
+      mechanism_name, resolved["mechanism"]["options"], "mechanism", &resolved["mechanism"]["options"]);
   note(mechanism_name);
 
   // Design space (before anything expensive: bounds errors are found first).
@@ -317,8 +316,7 @@ Study load_study(const Json& input, const Registry& registry) {
       throw Error("problem", path + ".metric = \"" + metric_name + "\": '" + metric_name + "' is a " + record.kind +
                                  " plugin, not a metric plugin");
     }
-    std::shared_ptr<Metric> metric = registry.create_metric(metric_name, o["options"], path);
-    o["options"] = registry.resolve_options(metric_name, o["options"], path + ".options");
+    std::shared_ptr<Metric> metric = registry.create_metric(metric_name, o["options"], path, &o["options"]);
     note(metric_name);
     if (!o.contains("name")) o["name"] = metric_name;
     const std::string name = o["name"];
@@ -341,14 +339,14 @@ Study load_study(const Json& input, const Registry& registry) {
 
   // Solver (created before the scene is built: its options are checked before any work).
   study.solver_plugin = resolved["solver"]["plugin"];
-  study.solver = registry.create_solver(study.solver_plugin, resolved["solver"]["options"], "solver");
-  resolved["solver"]["options"] = registry.resolve_options(study.solver_plugin, resolved["solver"]["options"], "solver.options");
+  study.solver =
+      registry.create_solver(study.solver_plugin, resolved["solver"]["options"], "solver", &resolved["solver"]["options"]);
   note(study.solver_plugin);
 
   // Scene.
   const std::string scene_name = resolved["scene"]["plugin"];
-  std::shared_ptr<Scene> scene = registry.create_scene(scene_name, resolved["scene"]["options"], "scene");
-  resolved["scene"]["options"] = registry.resolve_options(scene_name, resolved["scene"]["options"], "scene.options");
+  std::shared_ptr<Scene> scene =
+      registry.create_scene(scene_name, resolved["scene"]["options"], "scene", &resolved["scene"]["options"]);
   note(scene_name);
   std::shared_ptr<SampleSet> samples;
   try {
@@ -365,7 +363,6 @@ Study load_study(const Json& input, const Registry& registry) {
   } catch (const Error& e) {
     throw Error("problem", std::string("solver: ") + e.what());
   }
-  study.solver->prepare_sub_solvers(*study.problem, registry);
   study.registry = &registry;
   load_indicators(resolved, *study.problem, study);
   if (objs.size() > 1 && !study.solver->pareto()) {
@@ -518,7 +515,6 @@ Json run_study(Study& study, const RunOptions& options) {
   context.seed = seed;
   context.progress = options.quiet ? nullptr : &std::cerr;
   context.output_directory = out_dir;
-  context.registry = study.registry;
   context.log = log ? &log : nullptr;
   context.checkpoint_file = checkpoint_file.string();
   context.resume = options.resume && !options.force;

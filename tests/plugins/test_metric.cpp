@@ -5,9 +5,25 @@
 #include <stdexcept>
 
 namespace {
+struct TestOptions {
+  double x{};
+  static void declare(hapsyn::OptionDeclarations<TestOptions>& d) {
+#ifdef TEST_PLUGIN_BAD_DECLARATION
+    // A default its own rule refuses: the registry must refuse the plugin when loading it.
+    d.add(&TestOptions::x, "x", -1.0, "a number that must not be negative").minimum(0);
+#else
+    d.add(&TestOptions::x, "x", 0.0, "unused");
+#endif
+  }
+};
+
 class TestMetric : public hapsyn::Metric {
  public:
-  explicit TestMetric(const hapsyn::Json&) {
+  using Options = TestOptions;
+#ifdef TEST_PLUGIN_SERIALIZED
+  static constexpr hapsyn::ThreadSafety thread_safety = hapsyn::ThreadSafety::kSerialized;
+#endif
+  explicit TestMetric(const TestOptions&) {
 #ifdef TEST_PLUGIN_THROWS
     throw std::runtime_error("deliberate failure in the factory");
 #endif

@@ -1,24 +1,38 @@
 #pragma once
 /// \file
-/// What a plugin library exports. A plugin is a shared library hapsyn-<name>.so (built with
-/// the CMake function hapsyn_add_plugin) that registers exactly one class with one of:
+/// What a plugin library exports. A plugin is a shared library hapsyn-<name>.so (built with the
+/// CMake function hapsyn_add_plugin; the file name must equal the registered name) that registers
+/// exactly one class with one of:
 ///
 ///   HAPSYN_MECHANISM_PLUGIN(MyMechanism, "name", "1.0.0", "one-line description")
 ///   HAPSYN_SCENE_PLUGIN(...)   HAPSYN_METRIC_PLUGIN(...)   HAPSYN_SOLVER_PLUGIN(...)
 ///
-/// The class needs a constructor taking `const hapsyn::Json& options`: the options from the
-/// problem file, already validated against the plugin's schema.json with defaults filled in.
+/// The class may declare
+///   - `using Options = MyOptions;` an options struct with a static `declare` function
+///     (hapsyn/options.hpp). The class then needs a constructor taking `const MyOptions&`: the
+///     framework validates the problem file's options against the declarations, fills the
+///     struct (defaults included) and creates declared sub-solvers before the constructor runs.
+///     Without an Options type the plugin has no options and is default-constructed.
+///   - `static constexpr hapsyn::ThreadSafety thread_safety = hapsyn::ThreadSafety::kSerialized;`
+///     when its const methods must not run concurrently (default: kConcurrent).
+/// The constructor may throw hapsyn::Error for option combinations the declarations cannot
+/// express; the message is reported under the options' JSON path.
 #include <hapsyn/json.hpp>
 #include <hapsyn/mechanism.hpp>
 #include <hapsyn/metric.hpp>
+#include <hapsyn/options.hpp>
 #include <hapsyn/scene.hpp>
 #include <hapsyn/solver.hpp>
 
 #include <boost/dll/alias.hpp>
 #include <memory>
+#include <string>
+#include <type_traits>
 
 /// Bumped whenever an interface in framework/include/hapsyn changes incompatibly.
-#define HAPSYN_PLUGIN_API_VERSION 2  // 2: Solver::prepare_sub_solvers, SolverContext::registry, EvalOptions::prune_dominated_by
+/// 3: options declared in C++ (hapsyn/options.hpp), sub-solvers created by the framework,
+///    declared thread safety; Solver::prepare_sub_solvers and SolverContext::registry removed.
+#define HAPSYN_PLUGIN_API_VERSION 3
 
 // Tests build a plugin with another version to exercise the registry's check.
 #ifndef HAPSYN_PLUGIN_BUILT_API_VERSION
@@ -27,39 +41,75 @@
 
 namespace hapsyn {
 
-/// Description every plugin exports under the alias "hapsyn_plugin_info".
+/// Description every plugin exports under the alias "hapsyn_plugin_info". Its layout and the
+/// info function's signature are the same in every API version (api_version first), so the
+/// registry can read the version of any plugin before it trusts anything else of it.
 struct PluginInfo {
   int api_version;
   const char* name;
   const char* kind;  ///< "mechanism", "scene", "metric" or "solver"
   const char* version;
   const char* description;
-  const char* schema;  ///< the plugin's schema.json
-  /// Thread safety the plugin declares, e.g. "const methods are thread-safe".
-  const char* thread_safety;
+  const char* schema;         ///< the options schema derived from the declarations (JSON text)
+  const char* thread_safety;  ///< to_string(ThreadSafety) of the class's declaration
 };
 
-using MechanismFactory = std::unique_ptr<Mechanism>(const Json&);
-using SceneFactory = std::unique_ptr<Scene>(const Json&);
-using MetricFactory = std::unique_ptr<Metric>(const Json&);
-using SolverFactory = std::unique_ptr<Solver>(const Json&);
+/// The factory every plugin exports under the alias "hapsyn_plugin_create".
+/// \param options   the options, validated against PluginInfo::schema, defaults filled
+/// \param arguments the plugin's name and JSON path, and the sub-solvers created at load
+template <class Kind>
+using PluginFactory = std::unique_ptr<Kind>(const Json& options, const PluginArguments& arguments);
 
+namespace detail {
+
+template <class T, class = void>
+struct OptionsOf {
+  using type = NoOptions;
+};
+template <class T>
+struct OptionsOf<T, std::void_t<typename T::Options>> {
+  using type = typename T::Options;
+};
+
+template <class T, class = void>
+struct ThreadSafetyOf : std::integral_constant<ThreadSafety, ThreadSafety::kConcurrent> {};
+template <class T>
+struct ThreadSafetyOf<T, std::void_t<decltype(T::thread_safety)>>
+    : std::integral_constant<ThreadSafety, T::thread_safety> {};
+
+template <class Kind, class Class>
+std::unique_ptr<Kind> create_plugin(const Json& options, const PluginArguments& arguments) {
+  using Options = typename OptionsOf<Class>::type;
+  if constexpr (std::is_constructible_v<Class, const Options&>) {
+    return std::make_unique<Class>(OptionDeclarations<Options>::fill(options, arguments));
+  } else {
+    static_assert(std::is_same_v<Options, NoOptions>,
+                  "a plugin class with an Options type needs a constructor taking const Options&");
+    return std::make_unique<Class>();
+  }
+}
+
+template <class Class>
+PluginInfo plugin_info(const char* name, const char* kind, const char* version, const char* description) {
+  static const std::string schema = options_schema<typename OptionsOf<Class>::type>().dump();
+  return PluginInfo{HAPSYN_PLUGIN_BUILT_API_VERSION, name, kind, version, description, schema.c_str(),
+                    to_string(ThreadSafetyOf<Class>::value)};
+}
+
+}  // namespace detail
 }  // namespace hapsyn
 
-extern const char* const hapsyn_plugin_schema_json;  // generated by hapsyn_add_plugin
-
-#define HAPSYN_DETAIL_PLUGIN(Kind, KindName, Class, Name, Version, Description)               \
-  namespace {                                                                                 \
-  hapsyn::PluginInfo hapsyn_plugin_info_impl() {                                              \
-    return hapsyn::PluginInfo{HAPSYN_PLUGIN_BUILT_API_VERSION, Name, KindName, Version,        \
-                              Description, hapsyn_plugin_schema_json,                          \
-                              "const methods are thread-safe; one instance per study"};        \
-  }                                                                                           \
-  std::unique_ptr<hapsyn::Kind> hapsyn_plugin_create_impl(const hapsyn::Json& options) {     \
-    return std::make_unique<Class>(options);                                                  \
-  }                                                                                           \
-  }                                                                                           \
-  BOOST_DLL_ALIAS(hapsyn_plugin_info_impl, hapsyn_plugin_info)                                \
+#define HAPSYN_DETAIL_PLUGIN(Kind, KindName, Class, Name, Version, Description)                  \
+  namespace {                                                                                    \
+  hapsyn::PluginInfo hapsyn_plugin_info_impl() {                                                 \
+    return hapsyn::detail::plugin_info<Class>(Name, KindName, Version, Description);             \
+  }                                                                                              \
+  std::unique_ptr<hapsyn::Kind> hapsyn_plugin_create_impl(const hapsyn::Json& options,          \
+                                                          const hapsyn::PluginArguments& args) { \
+    return hapsyn::detail::create_plugin<hapsyn::Kind, Class>(options, args);                    \
+  }                                                                                              \
+  }                                                                                              \
+  BOOST_DLL_ALIAS(hapsyn_plugin_info_impl, hapsyn_plugin_info)                                   \
   BOOST_DLL_ALIAS(hapsyn_plugin_create_impl, hapsyn_plugin_create)
 
 #define HAPSYN_MECHANISM_PLUGIN(Class, Name, Version, Description) \

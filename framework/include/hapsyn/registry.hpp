@@ -5,6 +5,7 @@
 #include <hapsyn/json.hpp>
 #include <hapsyn/mechanism.hpp>
 #include <hapsyn/metric.hpp>
+#include <hapsyn/options.hpp>
 #include <hapsyn/scene.hpp>
 #include <hapsyn/solver.hpp>
 
@@ -18,9 +19,10 @@ namespace hapsyn {
 
 /// What the registry knows of a loaded plugin.
 struct PluginRecord {
-  std::string name, kind, version, description, thread_safety;
+  std::string name, kind, version, description;
+  ThreadSafety thread_safety = ThreadSafety::kConcurrent;  ///< as the plugin class declares it
   std::string file;  ///< absolute path of the shared library
-  Json schema;       ///< parsed schema.json
+  Json schema;       ///< the options schema derived from the plugin's declarations
 };
 
 class Registry {
@@ -41,8 +43,6 @@ class Registry {
   /// \throws Error "registry: unknown plugin 'x' (known: a, b, c)"; a version mismatch naming
   ///         the file and both versions; a library that is not a hapsyn plugin; a bad schema.
   const PluginRecord& find(const std::string& name) const;
-  /// Loads a plugin from an explicit file (same checks as find).
-  const PluginRecord& load_file(const std::string& path) const;
   /// Every plugin in the search path (loads them all). Files that fail to load are reported
   /// in `errors` (one message each) instead of throwing.
   std::vector<PluginRecord> list(std::vector<std::string>* errors = nullptr) const;
@@ -53,24 +53,39 @@ class Registry {
   /// \param json_path where the options sit in the problem file, for error messages
   Json resolve_options(const std::string& name, const Json& options, const std::string& json_path) const;
 
-  /// Creates a plugin object of the expected kind. Options are resolved first.
-  /// \throws Error on a kind mismatch ("'gii' is a metric, not a solver"), invalid options, or
-  ///         when the plugin's factory throws (its message is kept).
+  /// Creates a plugin object of the expected kind. The options are validated against the
+  /// plugin's declarations once (defaults filled), its declared sub-solvers are created (each
+  /// checked the same way, recursively; a Pareto sub-solver is refused), and a plugin that
+  /// declares ThreadSafety::kSerialized is wrapped so that its calls never overlap.
+  /// \param json_path where the plugin sits in the problem file, e.g. "solver" (its options are
+  ///        at "<json_path>.options")
+  /// \param resolved_options when not null, receives the validated options with defaults
+  /// \throws Error on a kind mismatch ("'gii' is a metric plugin, not a solver plugin"), invalid
+  ///         options, or when the plugin's factory throws (its message is kept).
   std::shared_ptr<Mechanism> create_mechanism(const std::string& name, const Json& options,
-                                              const std::string& json_path) const;
-  std::shared_ptr<Scene> create_scene(const std::string& name, const Json& options,
-                                      const std::string& json_path) const;
-  std::shared_ptr<Metric> create_metric(const std::string& name, const Json& options,
-                                        const std::string& json_path) const;
-  std::shared_ptr<Solver> create_solver(const std::string& name, const Json& options,
-                                        const std::string& json_path) const;
+                                              const std::string& json_path, Json* resolved_options = nullptr) const;
+  std::shared_ptr<Scene> create_scene(const std::string& name, const Json& options, const std::string& json_path,
+                                      Json* resolved_options = nullptr) const;
+  std::shared_ptr<Metric> create_metric(const std::string& name, const Json& options, const std::string& json_path,
+                                        Json* resolved_options = nullptr) const;
+  std::shared_ptr<Solver> create_solver(const std::string& name, const Json& options, const std::string& json_path,
+                                        Json* resolved_options = nullptr) const;
 
  private:
   struct Loaded;
   const Loaded& load(const std::string& path) const;
   template <class T>
   std::shared_ptr<T> create(const std::string& name, const char* kind, const Json& options,
-                            const std::string& json_path) const;
+                            const std::string& json_path, Json* resolved_options) const;
+  /// Creates the sub-solvers `schema` declares (properties with "plugin_kind": "solver"),
+  /// recursively through option groups, from the resolved options.
+  void create_sub_solvers(const Json& schema, const Json& resolved, const std::string& relative,
+                          PluginArguments& arguments) const;
+  /// Creates one sub-solver from `{"plugin": NAME, "options": {...}}`.
+  /// \throws Error(component, "<json_path> = ...") for a malformed value, a plugin that is not a
+  ///         solver, or a Pareto solver.
+  std::shared_ptr<const Solver> make_sub_solver(const Json& spec, const std::string& component,
+                                                const std::string& json_path) const;
 
   std::vector<std::string> search_path_;
   mutable std::mutex mutex_;

@@ -1,12 +1,14 @@
 #pragma once
 /// \file
-/// Validation of plugin options against a plugin's schema.json.
+/// Validation of plugin options against a plugin's options schema (derived from its option
+/// declarations, hapsyn/options.hpp).
 ///
 /// The supported subset of JSON Schema (draft 7 words): "type" (object, number, integer,
 /// string, boolean, array, or a list of them), "properties", "required",
 /// "additionalProperties" (false is the default here: unknown keys are errors, with the nearest
 /// known name suggested), "default", "enum", "minimum", "maximum", "exclusiveMinimum",
-/// "exclusiveMaximum", "items", "minItems", "maxItems", "description", plus hapsyn's "unit".
+/// "exclusiveMaximum", "items", "minItems", "maxItems", "description", plus hapsyn's "unit" and "plugin_kind" ("solver": the value is
+/// `{"plugin": NAME, "options": {...}}`, a sub-solver the framework creates at load).
 /// Numbers must be finite everywhere.
 #include <hapsyn/json.hpp>
 

@@ -16,8 +16,6 @@
 
 namespace hapsyn {
 
-class Registry;
-
 enum class SolverStatus {
   kConverged,        ///< the solver's optimality/termination criterion was met
   kBudgetExhausted,  ///< evaluation, iteration or time budget spent
@@ -51,9 +49,6 @@ struct SolverContext {
   std::ostream* progress = nullptr; ///< progress lines (stderr), nullptr = quiet
   std::string output_directory;     ///< where the solver may write extra files
   const std::atomic<bool>* stop = nullptr;  ///< set when the user asks to stop (may be null)
-  /// The plugin registry, for solvers that run a sub-solver (nbi's shadow optima, weighted
-  /// sums). Set by run_study; may be null when a solver is called directly.
-  const Registry* registry = nullptr;
   /// The run's log (run.log in the output directory; null when there is none). Solvers write
   /// their progress lines here too, also with --quiet.
   std::ostream* log = nullptr;
@@ -75,11 +70,6 @@ class Solver {
   virtual bool pareto() const { return false; }
   /// Throws hapsyn::Error if the problem is not one this solver handles (called before solve).
   virtual void check(const Problem& problem) const {}
-  /// For solvers that run sub-solvers: creates them from the registry (their options validated
-  /// against their schemas) and checks them against the problem they will see.
-  /// Called by load_study after check(). Default: nothing.
-  /// \throws Error naming the option's JSON path (e.g. "solver.options.sub_solver.plugin").
-  virtual void prepare_sub_solvers(const Problem& problem, const Registry& registry) const {}
 };
 
 }  // namespace hapsyn

@@ -61,16 +61,6 @@ struct Best {
 
 }  // namespace
 
-CullingSolver::CullingSolver(const Json& o) {
-  options_.seed = o.value("seed", options_.seed);
-  options_.polish = o.value("polish", options_.polish);
-  options_.start_points = o.value("start_points", options_.start_points);
-  options_.sqp_xtol = o.value("sqp_xtol", options_.sqp_xtol);
-  options_.sqp_ftol = o.value("sqp_ftol", options_.sqp_ftol);
-  options_.sqp_max_evaluations = o.value("sqp_max_evaluations", options_.sqp_max_evaluations);
-  options_.progress_interval = o.value("progress_interval", options_.progress_interval);
-}
-
 void CullingSolver::check(const Problem& problem) const {
   for (const Objective& o : problem.objectives()) {
     const MetricEntry& m = problem.metrics()[static_cast<std::size_t>(o.metric)];

@@ -14,23 +14,47 @@
 /// Unal's modification: the reference is seeded with a local SQP optimum (NLopt SLSQP, from the
 /// best point of a coarse start grid, snapped to the design grid), and the final grid cell is
 /// polished with SQP. Both can be switched off.
+#include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
 
 namespace hapsyn::plugins {
 
 struct CullingOptions {
-  bool seed = true;                 ///< seed the reference with an SQP local optimum
-  bool polish = true;               ///< polish the grid optimum's cell with SQP
-  int start_points = 5;             ///< points per free variable of the coarse start grid
-  double sqp_xtol = 1e-7;           ///< SLSQP relative tolerance on the design
-  double sqp_ftol = 1e-10;          ///< SLSQP absolute tolerance on the score
-  int sqp_max_evaluations = 400;    ///< SLSQP objective evaluations (each a workspace search)
-  double progress_interval = 2.0;   ///< seconds between progress lines
+  bool seed{};
+  bool polish{};
+  int start_points{};
+  double sqp_xtol{};
+  double sqp_ftol{};
+  int sqp_max_evaluations{};
+  double progress_interval{};
+
+  static void declare(OptionDeclarations<CullingOptions>& d) {
+    d.describe(
+        "Exact culling (branch-and-bound) over the design grid for worst-case metrics and non-negative weighted "
+        "sums of them (Stocco 1998, Unal 2008). Every free design variable needs a step.");
+    d.add(&CullingOptions::seed, "seed", true,
+          "Seed the reference design with an SQP (NLopt SLSQP) local optimum, snapped to the grid");
+    d.add(&CullingOptions::polish, "polish", true,
+          "Polish the grid optimum's cell (+- one step) with SQP; the grid optimum is kept in the statistics");
+    d.add(&CullingOptions::start_points, "start_points", 5,
+          "Points per free variable of the coarse grid the SQP seed starts from")
+        .range(2, 50);
+    d.add(&CullingOptions::sqp_xtol, "sqp_xtol", 1e-7, "SLSQP relative tolerance on the design variables")
+        .greater_than(0);
+    d.add(&CullingOptions::sqp_ftol, "sqp_ftol", 1e-10, "SLSQP absolute tolerance on the score").greater_than(0);
+    d.add(&CullingOptions::sqp_max_evaluations, "sqp_max_evaluations", 400,
+          "SLSQP objective evaluations per run (each one a full workspace search)")
+        .minimum(1);
+    d.add(&CullingOptions::progress_interval, "progress_interval", 2.0, "Seconds between progress lines on stderr")
+        .greater_than(0)
+        .unit("s");
+  }
 };
 
 class CullingSolver : public Solver {
  public:
-  explicit CullingSolver(const Json& options);
+  using Options = CullingOptions;
+  explicit CullingSolver(const CullingOptions& options) : options_(options) {}
   /// \throws Error naming the metric when an objective is not worst-case, is minimized or has a
   ///         negative weight; or when a free design variable has no grid step.
   void check(const Problem& problem) const override;

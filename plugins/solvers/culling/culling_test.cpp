@@ -54,7 +54,7 @@ TEST(Culling, ReturnsTheExhaustiveOptimumOnRandomSubBoxes) {
       const auto exhaustive = solve(grid, *study.problem, 2);
       for (bool seed : {false, true}) {
         for (int threads : {1, 2}) {
-          const hapsyn::plugins::CullingSolver culling(culling_options(seed, false));
+          const hapsyn::plugins::CullingSolver culling(hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(seed, false)));
           const auto culled = solve(culling, *study.problem, threads);
           ASSERT_EQ(culled.status, exhaustive.status) << culled.message << "\n" << doc.dump();
           if (!exhaustive.best) continue;
@@ -79,7 +79,7 @@ TEST(Culling, SearchesFarFewerWorkspacesThanExhaustiveSearch) {
   doc["scene"]["options"]["step"] = 0.01;
   const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
   const hapsyn::plugins::GridSolver grid(Json{{"prune", false}, {"progress_interval", 1e9}});
-  const hapsyn::plugins::CullingSolver culling(culling_options(true, false));
+  const hapsyn::plugins::CullingSolver culling(hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(true, false)));
   const auto exhaustive = solve(grid, *study.problem, 2);
   const auto culled = solve(culling, *study.problem, 2);
   ASSERT_TRUE(culled.best && exhaustive.best);
@@ -93,7 +93,7 @@ TEST(Culling, SearchesFarFewerWorkspacesThanExhaustiveSearch) {
 TEST(Culling, PolishingKeepsTheCellAndNeverLosesValue) {
   Json doc = hapsyn::test::fivebar_study("culling");
   const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
-  const hapsyn::plugins::CullingSolver culling(culling_options(true, true));
+  const hapsyn::plugins::CullingSolver culling(hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(true, true)));
   const auto result = solve(culling, *study.problem, 2);
   ASSERT_TRUE(result.best);
   const Json& grid_optimum = result.statistics["grid_optimum"];
@@ -157,7 +157,7 @@ TEST(Culling, InfeasibleGridIsAStatus) {
   doc["design"]["l1"] = {{"lower", 0.01}, {"upper", 0.02}, {"step", 0.01}};
   doc["design"]["l2"] = {{"lower", 0.01}, {"upper", 0.02}, {"step", 0.01}};
   const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
-  const hapsyn::plugins::CullingSolver culling(culling_options(true, true));
+  const hapsyn::plugins::CullingSolver culling(hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(true, true)));
   const auto result = solve(culling, *study.problem, 2);
   EXPECT_EQ(result.status, hapsyn::SolverStatus::kInfeasible);
   EXPECT_NE(result.message.find("no feasible design"), std::string::npos);

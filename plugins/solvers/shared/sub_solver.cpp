@@ -4,39 +4,22 @@
 
 namespace hapsyn::plugins {
 
-std::shared_ptr<Solver> make_sub_solver(const Registry& registry, const Json& spec, const std::string& component,
-                                        const std::string& json_path) {
-  if (!spec.is_object() || !spec.contains("plugin") || !spec["plugin"].is_string()) {
-    throw Error(component, json_path + " = " + render_value(spec) + ": must be {\"plugin\": NAME, \"options\": {...}}");
-  }
-  const std::string name = spec["plugin"];
-  const PluginRecord& record = registry.find(name);
-  if (record.kind != "solver") {
-    throw Error(component, json_path + ".plugin = \"" + name + "\": '" + name + "' is a " + record.kind +
-                               " plugin, not a solver plugin");
-  }
-  const Json options = spec.contains("options") ? spec["options"] : Json::object();
-  std::shared_ptr<Solver> solver = registry.create_solver(name, options, json_path);
-  if (solver->pareto()) {
-    throw Error(component, json_path + ".plugin = \"" + name +
-                               "\": a Pareto solver; the sub-solver must be single-objective (it returns one best design)");
-  }
-  return solver;
-}
-
-std::shared_ptr<Solver> sub_solver_for_solve(const SolverContext& context, const Json& spec, const std::string& component,
-                                             const std::string& json_path, const std::string& role, SolverResult& result) {
-  if (!context.registry) {
+const Solver* sub_solver_for_solve(const SubSolver& sub_solver, const std::string& component, const std::string& role,
+                                   SolverResult& result) {
+  if (!sub_solver.solver) {
     result.status = SolverStatus::kFailed;
-    result.message = component + " needs the plugin registry in the solver context (for its " + role + ")";
+    result.message = component + " has no " + role +
+                     " (sub-solvers are created when the study is loaded through the registry)";
     return nullptr;
   }
-  return make_sub_solver(*context.registry, spec, component, json_path);
+  return sub_solver.solver.get();
 }
 
-void check_sub_solver(const Solver& solver, const Problem& problem, const std::string& component, const std::string& where) {
+void check_sub_solver(const SubSolver& sub_solver, const Problem& problem, const std::string& component,
+                      const std::string& where) {
+  if (!sub_solver.solver) return;
   try {
-    solver.check(problem);
+    sub_solver.solver->check(problem);
   } catch (const Error& e) {
     throw Error(component, where + ": " + e.what());
   }

@@ -1,0 +1,314 @@
+#pragma once
+/// \file
+/// Plugin options, declared once (in the spirit of OMPL's declareParam and Drake's name-value
+/// visits). A plugin keeps its options in a plain struct with a static `declare` function that
+/// names each member once, with its default, range or choices, unit and description:
+///
+///   struct CullingOptions {
+///     bool seed{};
+///     int start_points{};
+///     double progress_interval{};
+///     static void declare(hapsyn::OptionDeclarations<CullingOptions>& d) {
+///       d.describe("Exact culling over the design grid ...");
+///       d.add(&CullingOptions::seed, "seed", true, "Seed the reference with an SQP optimum");
+///       d.add(&CullingOptions::start_points, "start_points", 5, "Points per free variable").range(2, 50);
+///       d.add(&CullingOptions::progress_interval, "progress_interval", 2.0, "Between progress lines")
+///           .greater_than(0).unit("s");
+///     }
+///   };
+///
+/// From that one declaration the framework derives the plugin's schema (what `hapsyn describe`
+/// prints and what the problem file is validated against, with path, value, rule and
+/// did-you-mean in every message), fills the struct before the plugin's constructor runs, and
+/// creates sub-solvers at load. Member initialisers should be `{}` only: the declared default
+/// is the one default. Every option has a default; a problem file may leave any option out.
+#include <hapsyn/json.hpp>
+
+#include <deque>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+namespace hapsyn {
+
+class Solver;
+
+/// An option whose value names another plugin: `{"plugin": NAME, "options": {...}}`. Declared
+/// with OptionDeclarations::add(SubSolver O::*, ...). The framework creates the sub-solver once,
+/// when the study is loaded (its own options validated, a Pareto solver refused), and hands it
+/// over here; the plugin never touches the registry.
+struct SubSolver {
+  std::string plugin;                    ///< the solver plugin's name, e.g. "culling"
+  Json options = Json::object();         ///< its options as given in the problem file
+  std::string json_path;                 ///< where it sits, e.g. "solver.options.shadow_solver"
+  /// The created solver. Null only when the options were made without a registry
+  /// (make_options / default_options in tests); solvers report that as a failed status.
+  std::shared_ptr<const Solver> solver;
+};
+
+/// What the framework hands a plugin factory besides the resolved options.
+struct PluginArguments {
+  std::string plugin;     ///< the plugin's registered name (used in messages)
+  std::string json_path;  ///< where its options sit, e.g. "solver.options"
+  /// Sub-solvers created at load, by their option path relative to the options ("a" or "a.b").
+  std::map<std::string, std::shared_ptr<const Solver>> sub_solvers;
+};
+
+/// Whether a plugin's const methods may run concurrently (pagmo's thread_safety idea). A plugin
+/// class declares `static constexpr hapsyn::ThreadSafety thread_safety = ...;` when it is not
+/// kConcurrent. The framework acts on it: a kSerialized metric's or mechanism's calls (local(),
+/// build(), a model's solve(), ...) are made under one lock per plugin object, so a plugin that
+/// wraps a non-reentrant library (an interpreter, a global state) stays correct at any thread
+/// count. Scenes and solvers are called from one thread anyway.
+enum class ThreadSafety {
+  kConcurrent,  ///< const methods may run concurrently from several threads (the default)
+  kSerialized,  ///< the framework never calls two methods of one object at the same time
+};
+/// "concurrent" or "serialized".
+const char* to_string(ThreadSafety safety);
+
+namespace detail {
+
+/// One declared option of an options struct O, type-erased for the framework.
+template <class O>
+struct OptionDecl {
+  std::string name;
+  Json schema;  ///< the property's schema fragment
+  /// Copies the validated value into the member. `prefix` is the option path of the enclosing
+  /// group ("" at the top level), used to find sub-solvers.
+  std::function<void(O&, const Json&, const PluginArguments&, const std::string& prefix)> fill;
+};
+
+std::shared_ptr<const Solver> find_sub_solver(const PluginArguments& arguments, const std::string& relative_path);
+
+}  // namespace detail
+
+/// The declarations of one options struct O. Passed to O::declare; each add() returns the
+/// declared option so that its rules can be chained (.range(0, 1).unit("m")).
+template <class O>
+class OptionDeclarations {
+ public:
+  /// Refinements of one declared option. Every rule also becomes part of the schema; the
+  /// declared default must satisfy them (checked when the plugin is loaded).
+  class Option {
+   public:
+    explicit Option(Json& schema) : schema_(&schema) {}
+    /// Inclusive bounds (numbers, integers; for lists of numbers: each element).
+    Option& range(double lower, double upper) { return minimum(lower).maximum(upper); }
+    Option& minimum(double v) { return set(numeric_target(), "minimum", v); }
+    Option& maximum(double v) { return set(numeric_target(), "maximum", v); }
+    /// Exclusive bounds: the value must be > v (greater_than) or < v (less_than).
+    Option& greater_than(double v) { return set(numeric_target(), "exclusiveMinimum", v); }
+    Option& less_than(double v) { return set(numeric_target(), "exclusiveMaximum", v); }
+    /// The unit shown by `hapsyn describe` (e.g. "m", "deg", "s").
+    Option& unit(const std::string& u) { return set(*schema_, "unit", u); }
+    /// Allowed values of a text option (or of each element of a list of texts).
+    Option& one_of(const std::vector<std::string>& values) { return set(element_target(), "enum", Json(values)); }
+    /// Exact length of a list (rows of a matrix option).
+    Option& size(int n) { return min_size(n).max_size(n); }
+    Option& min_size(int n) { return set(*schema_, "minItems", n); }
+    Option& max_size(int n) { return set(*schema_, "maxItems", n); }
+    /// Exact length of each row of a matrix option.
+    Option& row_size(int n) {
+      Json& row = (*schema_)["items"];
+      row["minItems"] = n;
+      row["maxItems"] = n;
+      return *this;
+    }
+
+   private:
+    Option& set(Json& target, const char* word, Json value) {
+      target[word] = std::move(value);
+      return *this;
+    }
+    // Bounds of a list apply to its elements (of a matrix: to the elements of its rows).
+    Json& numeric_target() { return element_target(); }
+    Json& element_target() {
+      Json* s = schema_;
+      while (s->value("type", "") == "array") s = &(*s)["items"];
+      return *s;
+    }
+    Json* schema_;
+  };
+
+  /// The plugin's description (the schema's top-level "description"; `hapsyn describe`).
+  void describe(const std::string& text) { description_ = text; }
+
+  Option& add(bool O::*member, const std::string& name, bool def, const std::string& description) {
+    return plain(member, name, "boolean", Json(def), description);
+  }
+  Option& add(int O::*member, const std::string& name, int def, const std::string& description) {
+    return plain(member, name, "integer", Json(def), description);
+  }
+  Option& add(long long O::*member, const std::string& name, long long def, const std::string& description) {
+    return plain(member, name, "integer", Json(def), description);
+  }
+  Option& add(double O::*member, const std::string& name, double def, const std::string& description) {
+    return plain(member, name, "number", Json(def), description);
+  }
+  Option& add(std::string O::*member, const std::string& name, const std::string& def,
+              const std::string& description) {
+    return plain(member, name, "string", Json(def), description);
+  }
+  Option& add(std::vector<double> O::*member, const std::string& name, const std::vector<double>& def,
+              const std::string& description) {
+    return list(member, name, "number", Json(def), description);
+  }
+  Option& add(std::vector<int> O::*member, const std::string& name, const std::vector<int>& def,
+              const std::string& description) {
+    return list(member, name, "integer", Json(def), description);
+  }
+  Option& add(std::vector<std::string> O::*member, const std::string& name, const std::vector<std::string>& def,
+              const std::string& description) {
+    return list(member, name, "string", Json(def), description);
+  }
+  /// A matrix (a list of rows of numbers), e.g. a rotation as 3 rows of 3.
+  Option& add(std::vector<std::vector<double>> O::*member, const std::string& name,
+              const std::vector<std::vector<double>>& def, const std::string& description) {
+    Option& o = list(member, name, "array", Json(def), description);
+    decls_.back().schema["items"]["items"] = Json{{"type", "number"}};
+    return o;
+  }
+  /// A group of options (a nested object), declared by Group::declare. Its default is the
+  /// defaults of its members; the problem file may give any subset of them.
+  template <class Group>
+  Option& add(Group O::*member, const std::string& name, const std::string& description) {
+    static_assert(!std::is_same_v<Group, SubSolver>, "a sub-solver option needs a default plugin name");
+    Json schema = schema_of_group<Group>();
+    schema["default"] = Json::object();
+    schema["description"] = description;
+    return push(name, std::move(schema),
+                [member, name](O& o, const Json& v, const PluginArguments& a, const std::string& prefix) {
+                  o.*member = OptionDeclarations<Group>::fill(v, a, join(prefix, name));
+                });
+  }
+  /// A sub-solver: `{"plugin": NAME, "options": {...}}`, default `{"plugin": default_plugin,
+  /// "options": {}}`. The framework creates it at load (see SubSolver).
+  Option& add(SubSolver O::*member, const std::string& name, const std::string& default_plugin,
+              const std::string& description) {
+    Json schema{{"type", "object"},
+                {"plugin_kind", "solver"},
+                {"default", {{"plugin", default_plugin}, {"options", Json::object()}}},
+                {"description", description}};
+    return push(name, std::move(schema),
+                [member, name](O& o, const Json& v, const PluginArguments& a, const std::string& prefix) {
+                  SubSolver s;
+                  s.plugin = v.value("plugin", "");
+                  s.options = v.contains("options") ? v["options"] : Json::object();
+                  const std::string relative = join(prefix, name);
+                  s.json_path = a.json_path.empty() ? relative : a.json_path + "." + relative;
+                  s.solver = detail::find_sub_solver(a, relative);
+                  o.*member = std::move(s);
+                });
+  }
+
+  /// The schema of O's declarations: {"type": "object", "description", "properties", ...}.
+  static Json schema() { return schema_of_group<O>(); }
+
+  /// O filled from options already validated against schema() (defaults present).
+  static O fill(const Json& resolved, const PluginArguments& arguments, const std::string& prefix = "") {
+    O out{};
+    for (const auto& d : instance().decls_) {
+      const auto it = resolved.find(d.name);
+      d.fill(out, it != resolved.end() ? *it : d.schema.at("default"), arguments, prefix);
+    }
+    return out;
+  }
+
+ private:
+  using Fill = std::function<void(O&, const Json&, const PluginArguments&, const std::string&)>;
+
+  static const OptionDeclarations& instance() {
+    static const OptionDeclarations declarations = [] {
+      OptionDeclarations d;
+      O::declare(d);
+      return d;
+    }();
+    return declarations;
+  }
+  template <class Group>
+  static Json schema_of_group() {
+    const auto& d = OptionDeclarations<Group>::instance();
+    Json properties = Json::object();
+    for (const auto& decl : d.decls_) properties[decl.name] = decl.schema;
+    Json schema{{"type", "object"}, {"additionalProperties", false}, {"properties", properties}};
+    if (!d.description_.empty()) schema["description"] = d.description_;
+    return schema;
+  }
+  static std::string join(const std::string& prefix, const std::string& name) {
+    return prefix.empty() ? name : prefix + "." + name;
+  }
+  template <class T>
+  Option& plain(T O::*member, const std::string& name, const char* type, Json def, const std::string& description) {
+    Json schema{{"type", type}, {"default", std::move(def)}, {"description", description}};
+    return push(name, std::move(schema), [member](O& o, const Json& v, const PluginArguments&, const std::string&) {
+      o.*member = v.get<T>();
+    });
+  }
+  template <class T>
+  Option& list(T O::*member, const std::string& name, const char* item_type, Json def,
+               const std::string& description) {
+    Json schema{{"type", "array"}, {"items", {{"type", item_type}}}, {"default", std::move(def)},
+                {"description", description}};
+    return push(name, std::move(schema), [member](O& o, const Json& v, const PluginArguments&, const std::string&) {
+      o.*member = v.get<T>();
+    });
+  }
+  Option& push(const std::string& name, Json schema, Fill fill) {
+    decls_.push_back(detail::OptionDecl<O>{name, std::move(schema), std::move(fill)});
+    options_.emplace_back(decls_.back().schema);
+    return options_.back();
+  }
+
+  template <class>
+  friend class OptionDeclarations;
+
+  std::string description_;
+  std::deque<detail::OptionDecl<O>> decls_;  // deque: Option keeps a pointer into each schema
+  std::deque<Option> options_;
+};
+
+/// A plugin without options: `using Options = hapsyn::NoOptions;` (the default when a plugin
+/// class declares no Options type).
+struct NoOptions {
+  static void declare(OptionDeclarations<NoOptions>&) {}
+};
+
+/// The schema of an options struct (what `hapsyn describe` prints and files are checked against).
+template <class O>
+Json options_schema() {
+  return OptionDeclarations<O>::schema();
+}
+
+/// Validates `options` (a problem file's "options" object; null = {}) against O's declarations,
+/// fills the defaults and returns the struct. Sub-solvers stay uncreated (SubSolver::solver is
+/// null): this is for tests and for code that builds a plugin directly, without a registry.
+/// \param json_path where the options sit, for messages (e.g. "solver.options")
+/// \throws Error("problem: <json_path>.<key> = <value>: <rule>")
+template <class O>
+O make_options(const Json& options = Json::object(), const std::string& json_path = "options");
+
+/// O with every declared default.
+template <class O>
+O default_options() {
+  return make_options<O>(Json::object(), "options");
+}
+
+}  // namespace hapsyn
+
+#include <hapsyn/schema.hpp>
+
+namespace hapsyn {
+
+template <class O>
+O make_options(const Json& options, const std::string& json_path) {
+  const Json resolved = validate_and_fill(options_schema<O>(), options.is_null() ? Json::object() : options, json_path);
+  PluginArguments arguments;
+  arguments.json_path = json_path;
+  return OptionDeclarations<O>::fill(resolved, arguments);
+}
+
+}  // namespace hapsyn
