@@ -1,12 +1,11 @@
-// Every plugin found in the build tree: it loads, its schema is complete, it can be created with
-// its defaults, and a study using it gives identical results twice under the same seed.
+// One test row per plugin found in the build tree (TEST_P over the registry, so one bad plugin is
+// one failing row): it loads; its options schema (derived from its declarations) is complete
+// and is what `hapsyn describe --json` prints; it can be created with its defaults; and a study
+// using it gives identical results twice under the same seed, on one and on two threads.
 //
-// The study for a plugin is plugins/<kind>/<name>/conformance.json when the plugin ships one,
-// else the kind's default study below with the plugin substituted. A plugin that fits neither
-// fails here: ship a conformance.json with it. A scene that no existing mechanism can serve
-// (human_arm: 6-D poses) ships plugins/scenes/<name>/conformance_scene.json instead, a
-// scene-only document {"plugin", "options"}: the scene is built twice from it and the two
-// sample sets must agree bit for bit.
+// The study for a plugin is plugins/<kind>/<name>/conformance.json when the plugin ships one
+// (one convention for every kind), else the kind's default study below with the plugin
+// substituted. A plugin that fits neither fails here: ship a conformance.json with it.
 #include "test_support.hpp"
 
 #include <boost/filesystem.hpp>
@@ -46,26 +45,6 @@ Json study_for(const hapsyn::PluginRecord& plugin) {
   return default_study(plugin);
 }
 
-fs::path scene_only_document(const hapsyn::PluginRecord& plugin) {
-  if (plugin.kind != "scene") return {};
-  const fs::path file = fs::path(HAPSYN_SOURCE_DIR) / "plugins" / "scenes" / plugin.name / "conformance_scene.json";
-  return fs::exists(file) ? file : fs::path();
-}
-
-void check_scene_builds_deterministically(const hapsyn::PluginRecord& plugin, const fs::path& file) {
-  const Json doc = hapsyn::read_problem_file(file.string());
-  ASSERT_EQ(doc.value("plugin", ""), plugin.name) << file;
-  const auto scene = hapsyn::test::registry().create_scene(plugin.name, doc.value("options", Json::object()), "scene");
-  const hapsyn::SampleSet first = scene->build({});
-  const hapsyn::SampleSet second = scene->build({});
-  EXPECT_GT(first.size(), 0);
-  EXPECT_FALSE(first.coordinates.empty());
-  EXPECT_EQ(first.coordinates, second.coordinates);
-  EXPECT_TRUE(first.poses.allFinite());
-  EXPECT_TRUE(first.poses == second.poses);
-  EXPECT_TRUE(first.attributes == second.attributes);
-}
-
 // Statistics minus wall-clock durations (keys containing "seconds"): everything else must repeat.
 Json without_durations(const Json& j) {
   if (j.is_array()) {
@@ -89,7 +68,6 @@ Json solve_once(const Json& doc, int threads, bool with_statistics) {
   hapsyn::SolverContext context;
   context.threads = threads;
   context.seed = 7;
-  context.registry = study.registry;  // solvers with sub-solvers (nbi, weighted_sum)
   const hapsyn::SolverResult r = study.solver->solve(*study.problem, context);
   Json j = {{"status", hapsyn::to_string(r.status)}};
   if (with_statistics) {
@@ -119,37 +97,60 @@ void check_schema_is_documented(const Json& schema, const std::string& path) {
 }
 }  // namespace
 
-TEST(Conformance, EveryPluginLoadsValidatesAndEvaluatesDeterministically) {
+std::vector<std::string> plugin_names() { return hapsyn::test::registry().known_names(); }
+
+class Conformance : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(Conformance, LoadsWithACompleteSchema) {
+  const hapsyn::PluginRecord& plugin = hapsyn::test::registry().find(GetParam());
+  EXPECT_EQ(plugin.name, GetParam());
+  EXPECT_TRUE(plugin.schema.contains("description")) << "the declarations have no describe(...) text";
+  check_schema_is_documented(plugin.schema, plugin.name);
+}
+
+TEST_P(Conformance, DescribePrintsTheDeclaredSchema) {
+  const hapsyn::PluginRecord& plugin = hapsyn::test::registry().find(GetParam());
+  const auto json = hapsyn::test::hapsyn_cli("describe " + GetParam() + " --json");
+  ASSERT_EQ(json.code, 0) << json.out;
+  EXPECT_EQ(Json::parse(json.out), plugin.schema);
+  const auto text = hapsyn::test::hapsyn_cli("describe " + GetParam());
+  ASSERT_EQ(text.code, 0) << text.out;
+  for (auto it = plugin.schema["properties"].begin(); it != plugin.schema["properties"].end(); ++it) {
+    EXPECT_NE(text.out.find(it.key()), std::string::npos) << it.key() << " missing from:\n" << text.out;
+    EXPECT_NE(text.out.find(it.value()["default"].dump()), std::string::npos)
+        << it.key() << "'s default missing from:\n" << text.out;
+  }
+}
+
+TEST_P(Conformance, CreatedWithDefaultsAndDeterministic) {
+  const hapsyn::PluginRecord& plugin = hapsyn::test::registry().find(GetParam());
+  const Json doc = study_for(plugin);
+  Json first, second;
+  ASSERT_NO_THROW(first = solve_once(doc, 1, true)) << "no conformance study fits; ship plugins/<kind>/"
+                                                     << plugin.name << "/conformance.json";
+  second = solve_once(doc, 1, true);
+  EXPECT_EQ(first, second);
+  // Two threads: the same result (statistics aside), and the same as on one thread.
+  const Json parallel = solve_once(doc, 2, false);
+  EXPECT_EQ(parallel, solve_once(doc, 2, false));
+  // Across thread counts only the summation order of averaging metrics may differ (last bits).
+  EXPECT_EQ(parallel["status"], first["status"]);
+  EXPECT_EQ(parallel.value("best_design", Json()), first.value("best_design", Json()));
+  if (first.contains("best_objectives")) {
+    for (std::size_t i = 0; i < first["best_objectives"].size(); ++i) {
+      const double a = first["best_objectives"][i], b = parallel["best_objectives"][i];
+      EXPECT_NEAR(a, b, 1e-12 * std::max(1.0, std::abs(a)));
+    }
+  }
+  EXPECT_TRUE(first.contains("best_design") || first.contains("front")) << first.dump();
+}
+
+INSTANTIATE_TEST_SUITE_P(Registry, Conformance, ::testing::ValuesIn(plugin_names()),
+                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+
+TEST(Conformance, RegistryFindsEveryInTreePlugin) {
   std::vector<std::string> errors;
   const auto plugins = hapsyn::test::registry().list(&errors);
   EXPECT_TRUE(errors.empty()) << errors.front();
-  ASSERT_GE(plugins.size(), 6u);
-  for (const auto& plugin : plugins) {
-    SCOPED_TRACE("plugin " + plugin.name);
-    EXPECT_TRUE(plugin.schema.contains("description")) << "schema.json has no top-level description";
-    check_schema_is_documented(plugin.schema, plugin.name);
-    if (const fs::path scene_doc = scene_only_document(plugin); !scene_doc.empty()) {
-      check_scene_builds_deterministically(plugin, scene_doc);
-      continue;
-    }
-    const Json doc = study_for(plugin);
-    Json first, second;
-    ASSERT_NO_THROW(first = solve_once(doc, 1, true)) << "no conformance study fits; ship plugins/<kind>/"
-                                                       << plugin.name << "/conformance.json";
-    second = solve_once(doc, 1, true);
-    EXPECT_EQ(first, second);
-    // Two threads: the same result (statistics aside), and the same as on one thread.
-    const Json parallel = solve_once(doc, 2, false);
-    EXPECT_EQ(parallel, solve_once(doc, 2, false));
-    // Across thread counts only the summation order of averaging metrics may differ (last bits).
-    EXPECT_EQ(parallel["status"], first["status"]);
-    EXPECT_EQ(parallel.value("best_design", Json()), first.value("best_design", Json()));
-    if (first.contains("best_objectives")) {
-      for (std::size_t i = 0; i < first["best_objectives"].size(); ++i) {
-        const double a = first["best_objectives"][i], b = parallel["best_objectives"][i];
-        EXPECT_NEAR(a, b, 1e-12 * std::max(1.0, std::abs(a)));
-      }
-    }
-    EXPECT_TRUE(first.contains("best_design") || first.contains("front")) << first.dump();
-  }
+  EXPECT_GE(plugins.size(), 16u);
 }

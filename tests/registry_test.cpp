@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <thread>
 
 using hapsyn::Json;
 using hapsyn::Registry;
@@ -108,4 +109,83 @@ TEST(Registry, OptionsAreValidatedAndDefaultsFilled) {
   EXPECT_EQ(options.at("prune"), true);
   expect_error([] { hapsyn::test::registry().create_solver("grid", Json{{"prun", false}}, "solver"); },
                {"solver.options.prun", "did you mean 'prune'"});
+}
+
+TEST(Registry, Version2PluginIsRefusedNamingBothVersions) {
+  expect_error([] { broken().find("version2"); },
+               {"hapsyn-version2.so", "plugin API version 2", "this hapsyn has API version 3", "rebuild the plugin"});
+}
+
+TEST(Registry, BadDeclarationNamesTheOptionAndItsRule) {
+  expect_error([] { broken().find("badschema"); }, {"hapsyn-badschema.so", "x", "default", ">= 0"});
+}
+
+TEST(Registry, ResolvedOptionsAreHandedBackOnce) {
+  Json resolved;
+  hapsyn::test::registry().create_solver("grid", Json{{"prune", false}}, "solver", &resolved);
+  EXPECT_EQ(resolved.at("prune"), false);
+  EXPECT_EQ(resolved, hapsyn::test::registry().resolve_options("grid", Json{{"prune", false}}, "solver.options"));
+}
+
+namespace {
+// Calls local() from two threads at once, 20 times each; the test metric reports whether two
+// calls ever overlapped in time (0) or not (1).
+double overlap_probe(const std::shared_ptr<hapsyn::Metric>& metric) {
+  double results[2] = {1.0, 1.0};
+  auto work = [&](int t) {
+    hapsyn::SampleQuantities q;
+    for (int i = 0; i < 20; ++i) metric->local(q, &results[t]);
+  };
+  std::thread a(work, 0), b(work, 1);
+  a.join();
+  b.join();
+  return std::min(results[0], results[1]);
+}
+}  // namespace
+
+TEST(Registry, SerializedPluginIsNeverCalledConcurrently) {
+  EXPECT_EQ(broken().find("serialmetric").thread_safety, hapsyn::ThreadSafety::kSerialized);
+  EXPECT_EQ(overlap_probe(broken().create_metric("serialmetric", Json::object(), "objectives[0]")), 1.0);
+}
+
+TEST(Registry, ConcurrentPluginIsCalledFromSeveralThreadsAtOnce) {
+  // The control: the same probe does see overlapping calls when the plugin allows them.
+  EXPECT_EQ(broken().find("overlapmetric").thread_safety, hapsyn::ThreadSafety::kConcurrent);
+  EXPECT_EQ(overlap_probe(broken().create_metric("overlapmetric", Json::object(), "objectives[0]")), 0.0);
+}
+
+TEST(Registry, DeclaredDefaultsFillTheOptionsStruct) {
+  struct Group {
+    double g{};
+    static void declare(hapsyn::OptionDeclarations<Group>& d) { d.add(&Group::g, "g", 2.5, "a number").unit("m"); }
+  };
+  struct Options {
+    int n{};
+    std::vector<std::string> terms;
+    Group group;
+    static void declare(hapsyn::OptionDeclarations<Options>& d) {
+      d.describe("test options");
+      d.add(&Options::n, "n", 3, "a count").range(1, 5);
+      d.add(&Options::terms, "terms", {"a"}, "choices").one_of({"a", "b"}).min_size(1);
+      d.add(&Options::group, "group", "a group");
+    }
+  };
+  const Options defaults = hapsyn::default_options<Options>();
+  EXPECT_EQ(defaults.n, 3);
+  EXPECT_EQ(defaults.terms, std::vector<std::string>{"a"});
+  EXPECT_EQ(defaults.group.g, 2.5);
+  const Options given = hapsyn::make_options<Options>(Json{{"n", 5}, {"group", {{"g", -1.0}}}});
+  EXPECT_EQ(given.n, 5);
+  EXPECT_EQ(given.group.g, -1.0);
+  const Json schema = hapsyn::options_schema<Options>();
+  EXPECT_EQ(schema["description"], "test options");
+  EXPECT_EQ(schema["properties"]["n"]["maximum"], 5.0);
+  EXPECT_EQ(schema["properties"]["terms"]["items"]["enum"], Json({"a", "b"}));
+  EXPECT_EQ(schema["properties"]["group"]["properties"]["g"]["unit"], "m");
+  expect_error([] { hapsyn::make_options<Options>(Json{{"n", 6}}, "solver.options"); },
+               {"problem: solver.options.n = 6", "<= 5"});
+  expect_error([] { hapsyn::make_options<Options>(Json{{"terms", {"c"}}}, "solver.options"); },
+               {"solver.options.terms[0] = \"c\""});
+  expect_error([] { hapsyn::make_options<Options>(Json{{"group", {{"h", 1}}}}, "solver.options"); },
+               {"solver.options.group.h", "did you mean 'g'"});
 }

@@ -110,7 +110,7 @@ int describe(const std::string& name, const hapsyn::Registry& registry) {
   std::cout << r.name << " (" << r.kind << " plugin, version " << r.version << ")\n"
             << "  " << r.description << "\n"
             << "  file: " << r.file << "\n"
-            << "  thread safety: " << r.thread_safety << "\n";
+            << "  thread safety: " << hapsyn::to_string(r.thread_safety) << "\n";
   if (r.schema.contains("description")) std::cout << "  " << r.schema["description"].get<std::string>() << "\n";
   std::cout << "options:\n";
   if (!r.schema.contains("properties") || r.schema["properties"].empty()) std::cout << "  (none)\n";

@@ -1,8 +1,11 @@
 // A metric used only by the registry and evaluator tests; macros select how it misbehaves.
 #include <hapsyn/plugin.hpp>
 
+#include <atomic>
+#include <chrono>
 #include <limits>
 #include <stdexcept>
+#include <thread>
 
 namespace {
 struct TestOptions {
@@ -33,6 +36,16 @@ class TestMetric : public hapsyn::Metric {
   std::vector<hapsyn::LocalValue> locals() const override { return {{"one", hapsyn::Reduction::kSum, ""}}; }
 #endif
   void local(const hapsyn::SampleQuantities&, double* out) const override {
+#ifdef TEST_PLUGIN_OVERLAP
+    // Reports 0 once two calls of local() have ever overlapped in time, else 1.
+    static std::atomic<int> inside{0};
+    static std::atomic<bool> overlapped{false};
+    if (inside.fetch_add(1) > 0) overlapped = true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    inside.fetch_sub(1);
+    out[0] = overlapped ? 0.0 : 1.0;
+    return;
+#endif
 #ifdef TEST_PLUGIN_NAN
     out[0] = std::numeric_limits<double>::quiet_NaN();
 #else
