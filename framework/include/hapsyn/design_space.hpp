@@ -25,7 +25,8 @@ struct VariableDecl {
   std::vector<double> hard_lower, hard_upper;
 };
 
-/// A design constraint g(p) <= 0 as a mechanism declares it (evaluated by Mechanism::constraints).
+/// A design constraint g(p) <= 0 as a mechanism declares it (Mechanism::constraints), evaluated
+/// by Mechanism::evaluate_constraints.
 struct ConstraintDecl {
   std::string name;
   std::string description;

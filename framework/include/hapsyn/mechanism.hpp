@@ -11,7 +11,9 @@
 
 namespace hapsyn {
 
-/// Per-thread scratch a model may use. Mechanisms that need none use this base as is.
+/// Per-thread scratch a model may use (Pinocchio's Data): made once per thread by
+/// Mechanism::make_scratch, reused for every sample and design that thread evaluates, never
+/// shared between threads. Mechanisms that need none use this base as is.
 class MechanismScratch {
  public:
   virtual ~MechanismScratch() = default;
@@ -21,20 +23,39 @@ class MechanismScratch {
 class MechanismModel {
  public:
   virtual ~MechanismModel() = default;
-  /// Classifies the sample and, when reachable, fills the quantities asked for by `needs`.
-  /// \param pose   one scene sample (SampleSet::pose), in the scene frame
-  /// \param needs  bit set of Need flags
-  /// \param scratch per-thread scratch from Mechanism::make_scratch
-  /// \param out    written; `out.status` always set. Must not allocate.
+  /// Classifies one sample and, when it is reachable, fills the quantities asked for.
+  /// \param pose    one scene sample (SampleSet::pose: SampleSet::dimension() values, in the
+  ///                scene frame and its units, e.g. (x, y) [m] or (x, y, z, qw, qx, qy, qz))
+  /// \param needs   bit set of Need flags: compute these and nothing else (a study computes only
+  ///                what its metrics need); kNeedPose alone means classification only
+  /// \param scratch this thread's scratch from Mechanism::make_scratch
+  /// \param out     `out.status` always set; the quantities in `needs` when kReachable, in the
+  ///                units of SampleQuantities (SI); the others may keep stale values
+  /// Called concurrently for different samples from several threads (each with its own
+  /// scratch), millions of times: must not allocate, lock or throw. A sample at or too near a
+  /// singularity is kSingular, never a NaN: the evaluator refuses NaN/inf quantities.
   virtual void solve(const double* pose, Needs needs, MechanismScratch& scratch,
                      SampleQuantities& out) const = 0;
 };
 
-/// Mechanism plugin. Implementations must be thread-safe for concurrent const calls.
+/// Mechanism plugin: the one pure virtual is build(); everything else has a default.
+///
+/// Life cycle: created once per study (options filled from its declarations, see
+/// hapsyn/options.hpp); variables(), constraints(), provides() are read once at load and
+/// check_scene() runs once after the scene is built; then build() (or build_in()) runs once per
+/// design evaluation and make_scratch() once per worker thread. The const methods are called
+/// concurrently unless the class declares ThreadSafety::kSerialized.
+///
+/// What the framework checks centrally, so a mechanism need not: design values are finite and
+/// within the bounds the problem file gives (which it keeps inside the declared hard limits),
+/// constraints return finite values, every metric's needs are provided.
 class Mechanism {
  public:
   virtual ~Mechanism() = default;
-  /// Builds the model for a full design vector (layout: DesignSpace::components()).
+  /// Builds the model for a full design vector (layout: DesignSpace::components(), i.e. the
+  /// variables() flattened in declaration order, in their units). May allocate (once per
+  /// design). Throws nothing for a design within the bounds: an unusable design is one whose
+  /// constraints fail or whose samples are unreachable.
   virtual std::unique_ptr<const MechanismModel> build(const double* design) const = 0;
   /// Optional fast path: builds the model for `design` inside the per-thread `scratch` and
   /// returns it (valid until the next call with the same scratch), so that a solver visiting
@@ -42,17 +63,19 @@ class Mechanism {
   virtual const MechanismModel* build_in(const double* design, MechanismScratch& scratch) const {
     return nullptr;
   }
-  /// The design variables (defaults and hard limits).
+  /// The design variables (names, units, default bounds, hard limits, integer or not).
   virtual std::vector<VariableDecl> variables() const { return {}; }
   /// Design constraints g(p) <= 0 (may depend on the scene's extent; never on a sample).
   virtual std::vector<ConstraintDecl> constraints() const { return {}; }
-  /// Evaluates the constraints declared by constraints() into g (size constraints().size()).
+  /// Evaluates the constraints declared by constraints() into g (constraints().size() values;
+  /// g <= 0 is satisfied). Called before any sample of the design is solved.
   virtual void evaluate_constraints(const double* design, const SampleSet& scene, double* g) const {}
-  /// Per-thread scratch for MechanismModel::solve.
+  /// Per-thread scratch for MechanismModel::solve (called once per worker thread).
   virtual std::unique_ptr<MechanismScratch> make_scratch() const {
     return std::make_unique<MechanismScratch>();
   }
-  /// Throws hapsyn::Error when the scene's samples are not of a kind this mechanism serves.
+  /// Throws hapsyn::Error when the scene's samples are not of a kind this mechanism serves
+  /// (e.g. 2 coordinates for a planar mechanism). Called once, after the scene is built.
   virtual void check_scene(const SampleSet& scene) const {}
   /// Quantities this mechanism can compute (Need flags); the framework refuses a metric that
   /// needs more. Default: pose and Jacobian.

@@ -31,26 +31,55 @@ enum class Aggregation {
   kAveraging,  ///< sums over samples; unreachable samples are passed to local() too
 };
 
-/// Metric plugin. local() is called concurrently from several threads.
+/// Metric plugin: the one pure virtual is local(); everything else has a default.
+///
+/// Life cycle: created once per study (options filled from its declarations, see
+/// hapsyn/options.hpp); needs(), scene_attributes(), locals() and aggregation() are read ONCE,
+/// when the study is loaded, and must not change afterwards; local() then runs for every
+/// (design, sample) pair, concurrently from several threads unless the class declares
+/// ThreadSafety::kSerialized; combine() runs once per design evaluation, and also on PARTIAL
+/// reductions (a chunk of samples, the samples seen before pruning stops, a culling subset).
+///
+/// What the framework checks centrally, so a metric need not: the mechanism provides every
+/// Need flag in needs() (else the study is refused at load), the scene has the attributes the
+/// metric lists (a missing one gives attribute_row(k) == nullptr), every local value and the
+/// combined value is finite (a NaN or inf is reported as an error naming the plugin, the design
+/// and the sample, never averaged away).
+///
+/// Worst-case monotonicity rule: when every reduction is min or max (aggregation() is
+/// kWorstCase), combine() must be non-decreasing in each min-reduced value and non-increasing
+/// in each max-reduced value. Culling and grid pruning rely on it to bound the full-scene value
+/// from a subset of samples; a combine() that breaks it makes them return wrong optima.
 class Metric {
  public:
   virtual ~Metric() = default;
-  /// Computes the local values of one sample into out[0 .. locals().size()).
-  /// For worst-case metrics only reachable samples are passed. `q.sample` and `q.scene` give
-  /// the sample's index and scene; `q.attribute_row(k)` is the sample's row of the k-th name in
-  /// scene_attributes(), resolved once per study by the evaluator (no lookup by name per sample).
+  /// Computes the local values of one sample.
+  /// \param q   the mechanism's quantities at the sample (only those in needs() are meaningful);
+  ///            `q.sample` / `q.scene` give the sample's index and scene, `q.attribute_row(k)`
+  ///            the sample's row of the k-th name in scene_attributes() (resolved once per
+  ///            study: no lookup by name per sample).
+  /// \param out locals().size() values, written in the order of locals(), in their units.
+  /// Worst-case metrics see only reachable samples; averaging metrics see every sample and read
+  /// q.status. Called concurrently (see the class comment); must not allocate, lock or throw:
+  /// it runs millions of times in the per-sample loop.
   virtual void local(const SampleQuantities& q, double* out) const = 0;
-  /// Quantities needed at each sample (Need flags). Default: the Jacobian.
+  /// Quantities needed at each sample (Need flags); the mechanism computes nothing else.
+  /// Default: the Jacobian.
   virtual Needs needs() const { return kNeedJacobian; }
-  /// Scene attributes needed (e.g. "human_velocity_axes"). Default: none.
+  /// Scene attributes needed (e.g. "human_velocity_axes"); the scene builds only those some
+  /// metric asks for. Default: none.
   virtual std::vector<std::string> scene_attributes() const { return {}; }
-  /// Declared local values. Default: one value named after nothing, reduced by min.
+  /// Declared local values, with their reductions and units (column names of samples.csv).
+  /// Default: one value "value", reduced by min.
   virtual std::vector<LocalValue> locals() const { return {LocalValue{"value", Reduction::kMin, ""}}; }
-  /// Combines the reduced local values (same order as locals()) into the metric's value.
-  /// \param reduced  one reduced value per local
-  /// \param samples  number of samples in the reduction (for averages)
+  /// Combines the reduced local values into the metric's value.
+  /// \param reduced  locals().size() reduced values, in the order of locals()
+  /// \param samples  how many samples the reduction covered (for averages; > 0 except on an
+  ///                 empty subset)
+  /// Also called on partial reductions (see the class comment): must return a finite value for
+  /// any finite input, and obey the worst-case monotonicity rule. Default: reduced[0].
   virtual double combine(const double* reduced, int samples) const { return reduced[0]; }
-  /// Worst-case when every reduction is min or max (the default rule); see the file comment.
+  /// kWorstCase when every reduction is min or max (the default rule), else kAveraging.
   virtual Aggregation aggregation() const;
 };
 

@@ -4,8 +4,10 @@
 /// constraints, objectives, and design evaluation (full or on a subset of samples).
 ///
 /// This is also where the framework checks plugin input and output once, centrally: a solver
-/// passing a design of the wrong size, with NaN/inf or outside the bounds, and a metric or
-/// mechanism returning NaN/inf, raise hapsyn::Error naming the plugin, the design and the sample.
+/// passing a design component that is NaN/inf or outside the bounds, a mechanism returning a
+/// NaN/inf constraint, and a metric returning a NaN/inf local or combined value raise
+/// hapsyn::Error naming the plugin, the design and the sample. A free design is passed as a raw
+/// pointer to dimension() values: its size cannot be checked here and is the caller's contract.
 #include <hapsyn/design_space.hpp>
 #include <hapsyn/mechanism.hpp>
 #include <hapsyn/metric.hpp>
@@ -68,7 +70,9 @@ using SampleCallback =
     std::function<void(int sample, const SampleQuantities& q, const std::vector<std::vector<double>>& locals)>;
 
 struct EvalOptions {
-  /// Evaluate only these samples (indices into samples()); empty = all, in priority order.
+  /// Null: every sample, in sample_order(). Otherwise exactly these samples (indices into
+  /// samples()), in this order; an empty list evaluates no sample (the reductions keep their
+  /// identity values and combine() sees samples = 0).
   const std::vector<int>* subset = nullptr;
   /// Worst-case studies only: stop with kPruned as soon as the score's upper bound (computed
   /// from the samples seen so far) is strictly below this value. Exact: a design whose score
@@ -141,8 +145,9 @@ class Problem {
   };
   std::unique_ptr<Workspace> make_workspace() const;
 
-  /// Evaluates a design given as the free vector (size dimension()).
-  /// \throws Error on a wrong size, NaN/inf or out-of-bounds component, or NaN from a plugin.
+  /// Evaluates a design given as the free vector (dimension() values; not checkable through
+  /// the pointer). Not thread-safe for one workspace: one workspace per thread.
+  /// \throws Error on a NaN/inf or out-of-bounds component, or a NaN/inf from a plugin.
   const Evaluation& evaluate(const double* free_design, Workspace& workspace,
                              const EvalOptions& options = {}) const;
   /// How evaluate_parallel splits the work.

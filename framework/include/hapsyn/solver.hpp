@@ -60,15 +60,34 @@ struct SolverContext {
   bool resume = false;
 };
 
-/// Solver plugin.
+/// Solver plugin: the one pure virtual is solve(); everything else has a default.
+///
+/// Life cycle: created once per study (options filled from its declarations, sub-solvers
+/// created by the framework: see hapsyn/options.hpp, SubSolver); pareto() is read at load;
+/// check() runs once at load, after the problem is built and before anything runs; solve() runs
+/// once per run, from one thread (it may start `context.threads` workers of its own and call
+/// Problem::evaluate / evaluate_parallel from them: the problem is thread-safe, one
+/// Problem::Workspace per thread).
+///
+/// What the framework checks centrally, so a solver need not: the problem's designs are
+/// validated on every evaluation (finite, within bounds), plugin outputs are checked for NaN/inf,
+/// options are validated. The solver reports its outcome as a status and a message in the
+/// SolverResult; it throws hapsyn::Error only for bad input (a problem it cannot handle, found in
+/// check()), and never for an optimizer outcome.
 class Solver {
  public:
   virtual ~Solver() = default;
-  /// Solves the problem. Never throws for an optimizer outcome.
+  /// Solves the problem. Returns kConverged, kBudgetExhausted, kInfeasible, kStopped (when
+  /// *context.stop became true: return the best found so far promptly) or kFailed with a message
+  /// saying why. best (single-objective) or front (pareto()) holds full design vectors with
+  /// their natural objective values. Never throws for an optimizer outcome.
   virtual SolverResult solve(const Problem& problem, const SolverContext& context) const = 0;
   /// True for Pareto solvers (several objectives give a front instead of a weighted sum).
   virtual bool pareto() const { return false; }
-  /// Throws hapsyn::Error if the problem is not one this solver handles (called before solve).
+  /// Throws hapsyn::Error if the problem is not one this solver handles (e.g. a non-worst-case
+  /// metric for culling, a free variable without a grid step), and checks its sub-solvers
+  /// against the problems they will see (check_sub_solver in plugins/solvers/shared). Called
+  /// once at load, before solve(); the message is reported as "problem: solver: <message>".
   virtual void check(const Problem& problem) const {}
 };
 
