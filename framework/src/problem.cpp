@@ -236,6 +236,95 @@ bool Problem::front_dominates(const std::vector<double>& front, Workspace& ws) c
   return false;
 }
 
+// evaluate() in named steps. Each returns early the way evaluate() does; the per-sample steps are
+// in this file so that the compiler can inline them into the sample loop.
+
+bool Problem::constraints_hold(Workspace& ws, Evaluation& out) const {
+  if (constraint_names_.empty()) return true;
+  mechanism_->evaluate_constraints(ws.full.data(), *samples_, ws.g.data());
+  for (std::size_t i = 0; i < constraint_names_.size(); ++i) {
+    if (std::isnan(ws.g[i])) {
+      throw Error("problem", "mechanism '" + mechanism_plugin_ + "' returned constraint '" + constraint_names_[i] +
+                                 "' = nan for design " + format_design(*this, ws.full));
+    }
+    if (ws.g[i] > 0.0) {
+      out.status = EvalStatus::kConstraintViolated;
+      out.failed_constraint = static_cast<int>(i);
+      return false;
+    }
+  }
+  return true;
+}
+
+void Problem::accumulate_locals(int sample, Workspace& ws, bool keep_locals) const {
+  for (std::size_t m = 0; m < metrics_.size(); ++m) {
+    const int begin = local_offset_[m];
+    const int end = local_offset_[m + 1];
+    ws.quantities.attributes = metric_attributes_[m].data();
+    ws.quantities.attribute_count = static_cast<int>(metric_attributes_[m].size());
+    metrics_[m].metric->local(ws.quantities, ws.locals.data() + begin);
+    for (int i = begin; i < end; ++i) {
+      const double v = ws.locals[static_cast<std::size_t>(i)];
+      if (!std::isfinite(v)) {
+        std::ostringstream where;
+        where << "metric '" << metrics_[m].plugin << "' returned " << v << " for local value " << (i - begin)
+              << " at sample " << sample << " (" << to_string(ws.quantities.status) << ") of design "
+              << format_design(*this, ws.full);
+        throw Error("problem", where.str());
+      }
+      const std::size_t ui = static_cast<std::size_t>(i);
+      if (local_reduction_[ui] == Reduction::kSum) {
+        ws.accumulator[ui] += v;
+      } else if (better(local_reduction_[ui], v, sample, ws.accumulator[ui], ws.argument[ui])) {
+        ws.accumulator[ui] = v;
+        ws.argument[ui] = sample;
+      }
+    }
+    if (keep_locals) std::copy(ws.locals.begin() + begin, ws.locals.begin() + end, ws.nested_locals[m].begin());
+  }
+}
+
+double Problem::score_bound(const Workspace& ws, long long samples) const {
+  // The metrics over the samples seen so far bound their final values from above.
+  double bound = 0.0;
+  for (std::size_t o = 0; o < objectives_.size(); ++o) {
+    const std::size_t m = static_cast<std::size_t>(objectives_[o].metric);
+    bound += objectives_[o].weight *
+             metrics_[m].metric->combine(ws.accumulator.data() + local_offset_[m], static_cast<int>(samples));
+  }
+  return bound;
+}
+
+void Problem::mark_pruned(const Workspace& ws, Evaluation& out) const {
+  // The samples attaining the reductions so far are what made the bound fall: culling collects
+  // them as critical samples.
+  for (std::size_t m = 0; m < metrics_.size(); ++m) {
+    out.critical_samples[m].assign(ws.argument.begin() + local_offset_[m], ws.argument.begin() + local_offset_[m + 1]);
+  }
+  out.status = EvalStatus::kPruned;
+}
+
+void Problem::combine_objectives(const Workspace& ws, Evaluation& out) const {
+  for (std::size_t m = 0; m < metrics_.size(); ++m) {
+    const int begin = local_offset_[m];
+    const int end = local_offset_[m + 1];
+    out.reduced[m].assign(ws.accumulator.begin() + begin, ws.accumulator.begin() + end);
+    out.critical_samples[m].assign(ws.argument.begin() + begin, ws.argument.begin() + end);
+  }
+  for (std::size_t o = 0; o < objectives_.size(); ++o) {
+    const std::size_t m = static_cast<std::size_t>(objectives_[o].metric);
+    const double value = metrics_[m].metric->combine(out.reduced[m].data(), static_cast<int>(out.samples_evaluated));
+    if (!std::isfinite(value)) {
+      std::ostringstream where;
+      where << "metric '" << metrics_[m].plugin << "' combined its local values into " << value << " for design "
+            << format_design(*this, ws.full);
+      throw Error("problem", where.str());
+    }
+    out.objectives[o] = value;
+  }
+  out.score = score(out.objectives);
+}
+
 const Evaluation& Problem::evaluate(const double* free_design, Workspace& ws, const EvalOptions& options) const {
   check_design(free_design);
   Evaluation& out = ws.result;
@@ -247,20 +336,7 @@ const Evaluation& Problem::evaluate(const double* free_design, Workspace& ws, co
   out.score = -std::numeric_limits<double>::infinity();
 
   space_.expand(free_design, ws.full.data());
-  if (!constraint_names_.empty()) {
-    mechanism_->evaluate_constraints(ws.full.data(), *samples_, ws.g.data());
-    for (std::size_t i = 0; i < constraint_names_.size(); ++i) {
-      if (std::isnan(ws.g[i])) {
-        throw Error("problem", "mechanism '" + mechanism_plugin_ + "' returned constraint '" + constraint_names_[i] +
-                                   "' = nan for design " + format_design(*this, ws.full));
-      }
-      if (ws.g[i] > 0.0) {
-        out.status = EvalStatus::kConstraintViolated;
-        out.failed_constraint = static_cast<int>(i);
-        return out;
-      }
-    }
-  }
+  if (!constraints_hold(ws, out)) return out;
 
   std::unique_ptr<const MechanismModel> owned;
   const MechanismModel* model = mechanism_->build_in(ws.full.data(), *ws.scratch);
@@ -283,88 +359,21 @@ const Evaluation& Problem::evaluate(const double* free_design, Workspace& ws, co
     ws.quantities.sample = sample;
     ws.quantities.scene = samples_.get();
     ++out.samples_evaluated;
-    const bool reachable = ws.quantities.status == SampleStatus::kReachable;
-    if (!reachable && any_worst_case_) {
+    if (ws.quantities.status != SampleStatus::kReachable && any_worst_case_) {
       out.status = EvalStatus::kSampleFailed;
       out.failed_sample = sample;
       out.failed_status = ws.quantities.status;
       return out;
     }
-    for (std::size_t m = 0; m < metrics_.size(); ++m) {
-      const int begin = local_offset_[m];
-      const int end = local_offset_[m + 1];
-      ws.quantities.attributes = metric_attributes_[m].data();
-      ws.quantities.attribute_count = static_cast<int>(metric_attributes_[m].size());
-      metrics_[m].metric->local(ws.quantities, ws.locals.data() + begin);
-      for (int i = begin; i < end; ++i) {
-        const double v = ws.locals[static_cast<std::size_t>(i)];
-        if (!std::isfinite(v)) {
-          std::ostringstream where;
-          where << "metric '" << metrics_[m].plugin << "' returned " << v << " for local value " << (i - begin)
-                << " at sample " << sample << " (" << to_string(ws.quantities.status) << ") of design "
-                << format_design(*this, ws.full);
-          throw Error("problem", where.str());
-        }
-        const std::size_t ui = static_cast<std::size_t>(i);
-        if (local_reduction_[ui] == Reduction::kSum) {
-          ws.accumulator[ui] += v;
-        } else if (better(local_reduction_[ui], v, sample, ws.accumulator[ui], ws.argument[ui])) {
-          ws.accumulator[ui] = v;
-          ws.argument[ui] = sample;
-        }
-      }
-      if (options.on_sample) {
-        std::copy(ws.locals.begin() + begin, ws.locals.begin() + end, ws.nested_locals[m].begin());
-      }
-    }
+    accumulate_locals(sample, ws, options.on_sample != nullptr);
     if (options.on_sample) (*options.on_sample)(sample, ws.quantities, ws.nested_locals);
-    if (prune_front && front_dominates(*front, ws)) {
-      for (std::size_t m = 0; m < metrics_.size(); ++m) {
-        out.critical_samples[m].assign(ws.argument.begin() + local_offset_[m], ws.argument.begin() + local_offset_[m + 1]);
-      }
-      out.status = EvalStatus::kPruned;
+    if ((prune_front && front_dominates(*front, ws)) ||
+        (prune && score_bound(ws, out.samples_evaluated) < options.prune_below)) {
+      mark_pruned(ws, out);
       return out;
     }
-    if (prune) {
-      // The metrics over the samples seen so far bound their final values from above.
-      double bound = 0.0;
-      for (std::size_t o = 0; o < objectives_.size(); ++o) {
-        const int m = objectives_[o].metric;
-        bound += objectives_[o].weight *
-                 metrics_[static_cast<std::size_t>(m)].metric->combine(
-                     ws.accumulator.data() + local_offset_[static_cast<std::size_t>(m)],
-                     static_cast<int>(out.samples_evaluated));
-      }
-      if (bound < options.prune_below) {
-        // The samples attaining the reductions so far are what made the bound fall: culling
-        // collects them as critical samples.
-        for (std::size_t m = 0; m < metrics_.size(); ++m) {
-          out.critical_samples[m].assign(ws.argument.begin() + local_offset_[m], ws.argument.begin() + local_offset_[m + 1]);
-        }
-        out.status = EvalStatus::kPruned;
-        return out;
-      }
-    }
   }
-
-  for (std::size_t m = 0; m < metrics_.size(); ++m) {
-    const int begin = local_offset_[m];
-    const int end = local_offset_[m + 1];
-    out.reduced[m].assign(ws.accumulator.begin() + begin, ws.accumulator.begin() + end);
-    out.critical_samples[m].assign(ws.argument.begin() + begin, ws.argument.begin() + end);
-  }
-  for (std::size_t o = 0; o < objectives_.size(); ++o) {
-    const std::size_t m = static_cast<std::size_t>(objectives_[o].metric);
-    const double value = metrics_[m].metric->combine(out.reduced[m].data(), static_cast<int>(out.samples_evaluated));
-    if (!std::isfinite(value)) {
-      std::ostringstream where;
-      where << "metric '" << metrics_[m].plugin << "' combined its local values into " << value << " for design "
-            << format_design(*this, ws.full);
-      throw Error("problem", where.str());
-    }
-    out.objectives[o] = value;
-  }
-  out.score = score(out.objectives);
+  combine_objectives(ws, out);
   return out;
 }
 

@@ -178,6 +178,12 @@ class Problem {
 
  private:
   void check_design(const double* free_design) const;
+  // The steps of evaluate().
+  bool constraints_hold(Workspace& ws, Evaluation& out) const;
+  void accumulate_locals(int sample, Workspace& ws, bool keep_locals) const;
+  double score_bound(const Workspace& ws, long long samples) const;
+  void mark_pruned(const Workspace& ws, Evaluation& out) const;
+  void combine_objectives(const Workspace& ws, Evaluation& out) const;
   bool front_dominates(const std::vector<double>& front, Workspace& workspace) const;
 
   std::string mechanism_plugin_;
