@@ -179,7 +179,7 @@ TEST(Registry, DeclaredDefaultsFillTheOptionsStruct) {
   EXPECT_EQ(given.group.g, -1.0);
   const Json schema = hapsyn::options_schema<Options>();
   EXPECT_EQ(schema["description"], "test options");
-  EXPECT_EQ(schema["properties"]["n"]["maximum"], 5.0);
+  EXPECT_EQ(schema["properties"]["n"]["maximum"], 5);
   EXPECT_EQ(schema["properties"]["terms"]["items"]["enum"], Json({"a", "b"}));
   EXPECT_EQ(schema["properties"]["group"]["properties"]["g"]["unit"], "m");
   expect_error([] { hapsyn::make_options<Options>(Json{{"n", 6}}, "solver.options"); },
@@ -188,4 +188,21 @@ TEST(Registry, DeclaredDefaultsFillTheOptionsStruct) {
                {"solver.options.terms[0] = \"c\""});
   expect_error([] { hapsyn::make_options<Options>(Json{{"group", {{"h", 1}}}}, "solver.options"); },
                {"solver.options.group.h", "did you mean 'g'"});
+}
+
+TEST(Registry, OptionsRoundTripThroughJson) {
+  struct Local {
+    int n{};
+    std::vector<std::vector<double>> rotation;
+    static void declare(hapsyn::OptionDeclarations<Local>& d) {
+      d.add(&Local::n, "n", 4, "a count").minimum(2);
+      d.add(&Local::rotation, "rotation", {{1, 0}, {0, 1}}, "rows").size(2).row_size(2);
+    }
+  };
+  const Local l = hapsyn::make_options<Local>(Json{{"n", 7}});
+  EXPECT_EQ(hapsyn::options_to_json(l), Json({{"n", 7}, {"rotation", {{1.0, 0.0}, {0.0, 1.0}}}}));
+  // Whole-number bounds read as integers in messages and schemas.
+  EXPECT_EQ(hapsyn::options_schema<Local>()["properties"]["n"]["minimum"].dump(), "2");
+  expect_error([] { hapsyn::make_options<Local>(Json{{"n", 1}}); }, {"options.n = 1: must be >= 2"});
+  expect_error([] { hapsyn::make_options<Local>(Json{{"rotation", {{1, 0}, {0}}}}); }, {"options.rotation[1]"});
 }

@@ -24,6 +24,7 @@
 /// is the one default. Every option has a default; a problem file may leave any option out.
 #include <hapsyn/json.hpp>
 
+#include <cmath>
 #include <deque>
 #include <functional>
 #include <map>
@@ -80,6 +81,8 @@ struct OptionDecl {
   /// Copies the validated value into the member. `prefix` is the option path of the enclosing
   /// group ("" at the top level), used to find sub-solvers.
   std::function<void(O&, const Json&, const PluginArguments&, const std::string& prefix)> fill;
+  /// The member's value as JSON (the inverse of fill; a sub-solver as {"plugin", "options"}).
+  std::function<Json(const O&)> to_json;
 };
 
 std::shared_ptr<const Solver> find_sub_solver(const PluginArguments& arguments, const std::string& relative_path);
@@ -123,6 +126,11 @@ class OptionDeclarations {
     Option& set(Json& target, const char* word, Json value) {
       target[word] = std::move(value);
       return *this;
+    }
+    // A whole-number bound is stored as an integer, so that messages read ">= 2", not ">= 2.0".
+    Option& set(Json& target, const char* word, double value) {
+      const bool whole = std::abs(value) < 1e15 && value == static_cast<double>(static_cast<long long>(value));
+      return set(target, word, whole ? Json(static_cast<long long>(value)) : Json(value));
     }
     // Bounds of a list apply to its elements (of a matrix: to the elements of its rows).
     Json& numeric_target() { return element_target(); }
@@ -180,10 +188,12 @@ class OptionDeclarations {
     Json schema = schema_of_group<Group>();
     schema["default"] = Json::object();
     schema["description"] = description;
-    return push(name, std::move(schema),
-                [member, name](O& o, const Json& v, const PluginArguments& a, const std::string& prefix) {
-                  o.*member = OptionDeclarations<Group>::fill(v, a, join(prefix, name));
-                });
+    return push(
+        name, std::move(schema),
+        [member, name](O& o, const Json& v, const PluginArguments& a, const std::string& prefix) {
+          o.*member = OptionDeclarations<Group>::fill(v, a, join(prefix, name));
+        },
+        [member](const O& o) { return OptionDeclarations<Group>::to_json(o.*member); });
   }
   /// A sub-solver: `{"plugin": NAME, "options": {...}}`, default `{"plugin": default_plugin,
   /// "options": {}}`. The framework creates it at load (see SubSolver).
@@ -193,20 +203,31 @@ class OptionDeclarations {
                 {"plugin_kind", "solver"},
                 {"default", {{"plugin", default_plugin}, {"options", Json::object()}}},
                 {"description", description}};
-    return push(name, std::move(schema),
-                [member, name](O& o, const Json& v, const PluginArguments& a, const std::string& prefix) {
-                  SubSolver s;
-                  s.plugin = v.value("plugin", "");
-                  s.options = v.contains("options") ? v["options"] : Json::object();
-                  const std::string relative = join(prefix, name);
-                  s.json_path = a.json_path.empty() ? relative : a.json_path + "." + relative;
-                  s.solver = detail::find_sub_solver(a, relative);
-                  o.*member = std::move(s);
-                });
+    return push(
+        name, std::move(schema),
+        [member, name](O& o, const Json& v, const PluginArguments& a, const std::string& prefix) {
+          SubSolver s;
+          s.plugin = v.value("plugin", "");
+          s.options = v.contains("options") ? v["options"] : Json::object();
+          const std::string relative = join(prefix, name);
+          s.json_path = a.json_path.empty() ? relative : a.json_path + "." + relative;
+          s.solver = detail::find_sub_solver(a, relative);
+          o.*member = std::move(s);
+        },
+        [member](const O& o) { return Json{{"plugin", (o.*member).plugin}, {"options", (o.*member).options}}; });
   }
 
   /// The schema of O's declarations: {"type": "object", "description", "properties", ...}.
   static Json schema() { return schema_of_group<O>(); }
+
+  /// The values of `options` as a JSON object, one key per declared option (nested groups as
+  /// objects): what a problem file would give to reproduce them (e.g. for a checkpoint's
+  /// fingerprint or a log).
+  static Json to_json(const O& options) {
+    Json out = Json::object();
+    for (const auto& d : instance().decls_) out[d.name] = d.to_json(options);
+    return out;
+  }
 
   /// O filled from options already validated against schema() (defaults present).
   static O fill(const Json& resolved, const PluginArguments& arguments, const std::string& prefix = "") {
@@ -244,21 +265,23 @@ class OptionDeclarations {
   template <class T>
   Option& plain(T O::*member, const std::string& name, const char* type, Json def, const std::string& description) {
     Json schema{{"type", type}, {"default", std::move(def)}, {"description", description}};
-    return push(name, std::move(schema), [member](O& o, const Json& v, const PluginArguments&, const std::string&) {
-      o.*member = v.get<T>();
-    });
+    return push(
+        name, std::move(schema),
+        [member](O& o, const Json& v, const PluginArguments&, const std::string&) { o.*member = v.get<T>(); },
+        [member](const O& o) { return Json(o.*member); });
   }
   template <class T>
   Option& list(T O::*member, const std::string& name, const char* item_type, Json def,
                const std::string& description) {
     Json schema{{"type", "array"}, {"items", {{"type", item_type}}}, {"default", std::move(def)},
                 {"description", description}};
-    return push(name, std::move(schema), [member](O& o, const Json& v, const PluginArguments&, const std::string&) {
-      o.*member = v.get<T>();
-    });
+    return push(
+        name, std::move(schema),
+        [member](O& o, const Json& v, const PluginArguments&, const std::string&) { o.*member = v.get<T>(); },
+        [member](const O& o) { return Json(o.*member); });
   }
-  Option& push(const std::string& name, Json schema, Fill fill) {
-    decls_.push_back(detail::OptionDecl<O>{name, std::move(schema), std::move(fill)});
+  Option& push(const std::string& name, Json schema, Fill fill, std::function<Json(const O&)> to_json) {
+    decls_.push_back(detail::OptionDecl<O>{name, std::move(schema), std::move(fill), std::move(to_json)});
     options_.emplace_back(decls_.back().schema);
     return options_.back();
   }
@@ -290,6 +313,12 @@ Json options_schema() {
 /// \throws Error("problem: <json_path>.<key> = <value>: <rule>")
 template <class O>
 O make_options(const Json& options = Json::object(), const std::string& json_path = "options");
+
+/// The values of an options struct as JSON (see OptionDeclarations::to_json).
+template <class O>
+Json options_to_json(const O& options) {
+  return OptionDeclarations<O>::to_json(options);
+}
 
 /// O with every declared default.
 template <class O>
