@@ -1,8 +1,8 @@
 #include "ga.hpp"
 
-#include "pagmo_adapter.hpp"
+#include "shared/pagmo_adapter.hpp"
 
-#include <hapsyn/cluster.hpp>
+#include "cluster.hpp"
 #include <hapsyn/error.hpp>
 #include <hapsyn/study.hpp>
 

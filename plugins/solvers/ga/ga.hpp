@@ -2,7 +2,7 @@
 /// \file
 /// Solver `ga`: pagmo 2.18's mixed-integer evolutionary algorithms (sga, gaco) on the study's
 /// score (a metric or a weighted sum, maximised), as Fennel et al. (2022) size the haptic 6R
-/// with a mixed-integer GA. Through the shared pagmo adapter (pagmo_adapter.hpp): integer
+/// with a mixed-integer GA. Through the shared pagmo adapter (shared/pagmo_adapter.hpp): integer
 /// components last, constraint repair by sorting, penalties, parallel evaluation, a cache.
 ///
 /// - Runs: `runs` independent runs (seeds derived from the study seed); the best over the runs

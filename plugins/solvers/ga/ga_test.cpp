@@ -2,7 +2,7 @@
 // the haptic 6R's constraint structure (s_i >= s_{i+1}), determinism, options errors, runs and
 // clusters, multi-fidelity, and (through the hapsyn program) checkpoints, kill -9 and --resume.
 #include "ga.hpp"
-#include "pagmo_adapter.hpp"
+#include "shared/pagmo_adapter.hpp"
 
 #include "test_support.hpp"
 

@@ -1,6 +1,6 @@
 #include "nsga2.hpp"
 
-#include "pagmo_adapter.hpp"
+#include "shared/pagmo_adapter.hpp"
 
 #include <hapsyn/error.hpp>
 

@@ -2,7 +2,7 @@
 /// \file
 /// Solver `nsga2`: pagmo 2.18's NSGA-II (mixed integer through pagmo's integer part) for Pareto
 /// studies: every objective of the study is one objective of the front (maximised or minimised
-/// by its sense). Through the shared pagmo adapter of the `ga` solver (pagmo_adapter.hpp):
+/// by its sense). Through the pagmo adapter it shares with `ga` (shared/pagmo_adapter.hpp):
 /// integer components last, the sort repair, penalties for infeasible designs (dominated by
 /// every feasible one), batches evaluated over the threads (one design per thread, or each
 /// design split over the samples), a cache of evaluated designs.
