@@ -1,10 +1,10 @@
 #include "ga.hpp"
 
-#include "pagmo_adapter.hpp"
+#include "ga_checkpoint.hpp"
+#include "ga_summary.hpp"
+#include "shared/pagmo_adapter.hpp"
 
-#include <hapsyn/cluster.hpp>
 #include <hapsyn/error.hpp>
-#include <hapsyn/study.hpp>
 
 #include <pagmo/algorithms/gaco.hpp>
 #include <pagmo/algorithms/sga.hpp>
@@ -17,9 +17,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <fstream>
-#include <iomanip>
-#include <limits>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -27,6 +25,7 @@
 namespace hapsyn::plugins {
 
 namespace pa = pagmo_adapter;
+using ga::with_digits;
 
 namespace {
 
@@ -34,46 +33,18 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-std::string fixed(double v, int digits = 6) {
-  std::ostringstream s;
-  s << std::setprecision(digits) << v;
-  return s.str();
-}
-
 pagmo::algorithm make_algorithm(const GaOptions& o, std::uint64_t seed) {
   const unsigned s = static_cast<unsigned>(seed ^ (seed >> 32));
   if (o.algorithm == "gaco") {
-    pagmo::gaco gaco(1u, static_cast<unsigned>(o.ker), o.q, o.oracle, o.acc, static_cast<unsigned>(o.threshold),
-                     static_cast<unsigned>(o.n_gen_mark), 100000u, 100000u, o.focus, true, s);
+    const GaGacoOptions& g = o.gaco;
+    pagmo::gaco gaco(1u, static_cast<unsigned>(g.ker), g.q, g.oracle, g.acc, static_cast<unsigned>(g.threshold),
+                     static_cast<unsigned>(g.n_gen_mark), 100000u, 100000u, g.focus, true, s);
     gaco.set_bfe(pagmo::bfe{pagmo::member_bfe{}});
     return pagmo::algorithm{gaco};
   }
-  return pagmo::algorithm{pagmo::sga(1u, o.crossover_probability, o.eta_c, o.mutation_probability, o.param_m,
-                                     static_cast<unsigned>(o.param_s), o.crossover, o.mutation, o.selection, s)};
-}
-
-// FNV-1a: a stable fingerprint of the study a checkpoint belongs to.
-std::string fingerprint(const std::string& text) {
-  std::uint64_t h = 1469598103934665603ULL;
-  for (unsigned char c : text) {
-    h ^= c;
-    h *= 1099511628211ULL;
-  }
-  std::ostringstream s;
-  s << std::hex << h;
-  return s.str();
-}
-
-std::string study_fingerprint(const Problem& problem, const Json& options) {
-  std::ostringstream s;
-  s.precision(17);
-  s << options.dump() << "|" << problem.samples().size() << "|";
-  for (int k : problem.design_space().free_indices()) {
-    const DesignComponent& c = problem.design_space().components()[static_cast<std::size_t>(k)];
-    s << c.name << ":" << c.lower << ":" << c.upper << ":" << c.integer << ";";
-  }
-  for (const Objective& o : problem.objectives()) s << o.name << ":" << o.weight << ":" << (o.sense == Sense::kMaximize) << ";";
-  return fingerprint(s.str());
+  const GaSgaOptions& g = o.sga;
+  return pagmo::algorithm{pagmo::sga(1u, g.crossover_probability, g.eta_c, g.mutation_probability, g.param_m,
+                                     static_cast<unsigned>(g.param_s), g.crossover, g.mutation, g.selection, s)};
 }
 
 // A deterministic, stratified subset: m samples evenly spaced in sample index order (the scene's
@@ -96,74 +67,320 @@ long long best_feasible(const pagmo::population& population) {
   return best;
 }
 
-struct RunState {
-  int run = 0;
-  int generation = 0;
-  int stall = 0;
-  bool switched = false;         // on the full scene (or never on a subset)
-  double best_score = -std::numeric_limits<double>::infinity();
-  pagmo::vector_double best_x;   // best full-fidelity individual seen in this run
-  long long designs_before = 0;  // study evaluations when the run started
-  double seconds_before = 0.0;   // run time before a resume
+// One call of GaSolver::solve: the runs one after the other, with their checkpoints and
+// progress lines, then the summary. Holds what the steps share. The evaluator keeps a pointer
+// to subset_, so a search is neither copied nor moved.
+class GaSearch {
+ public:
+  GaSearch(const GaOptions& options, const Problem& problem, const SolverContext& context);
+  GaSearch(const GaSearch&) = delete;
+  GaSearch& operator=(const GaSearch&) = delete;
+
+  /// With SolverContext::resume: the finished runs, counters and the run in progress from the
+  /// checkpoint file (or a log line that there is none). \throws Error for a bad checkpoint
+  void resume_from_checkpoint();
+  /// Runs the runs not finished yet, until the stop flag is set.
+  void run_remaining();
+  /// The result over the finished runs (ga_summary.hpp).
+  SolverResult summary();
+
+ private:
+  // A run in progress.
+  struct Run {
+    ga::RunState state;
+    pagmo::algorithm algorithm;
+    pagmo::population population;
+    Clock::time_point clock;
+    std::string status = "budget_exhausted";
+  };
+
+  void start_run(Run& run, std::uint64_t seed);
+  void evolve(Run& run);
+  bool note_best(ga::RunState& state, const pagmo::population& population) const;
+  void switch_to_full(Run& run);
+  void report_generation(const Run& run);
+  void finish_run(const Run& run, std::uint64_t seed);
+  void write_checkpoint(const Run* run) const;
+
+  const GaOptions& options_;
+  const Problem& problem_;
+  const SolverContext& context_;
+  const Clock::time_point start_;
+  std::shared_ptr<pa::Evaluator> evaluator_;
+  pagmo::problem pagmo_problem_;
+  const bool multi_fidelity_;
+  const std::vector<int> subset_;  // the multi-fidelity subset (empty without one)
+  pa::ProgressReporter reporter_;
+  const std::string fingerprint_;
+
+  Json runs_ = Json::array();  // records of the finished runs
+  std::vector<double> run_seconds_;
+  long long designs_before_resume_ = 0, samples_before_resume_ = 0;
+  double seconds_before_resume_ = 0.0;
+  std::optional<Json> resumed_;  // the checkpoint's run in progress, until it is restored
+  bool stopped_ = false;
+  int total_generations_done_ = 0;
+  Clock::time_point solve_clock_;
 };
+
+pa::EvaluationSettings evaluation_settings(const GaOptions& options, int threads) {
+  pa::EvaluationSettings settings;
+  settings.threads = threads;
+  settings.over_individuals = options.parallel_over == "individuals";
+  settings.sample_chunks = options.sample_chunks;
+  return settings;
+}
+
+GaSearch::GaSearch(const GaOptions& options, const Problem& problem, const SolverContext& context)
+    : options_(options),
+      problem_(problem),
+      context_(context),
+      start_(Clock::now()),
+      evaluator_(std::make_shared<pa::Evaluator>(
+          problem, pa::Encoding(problem, options.sort_descending, options.sort_ascending, "ga"),
+          evaluation_settings(options, context.threads), false)),
+      pagmo_problem_(pa::make_problem(evaluator_)),
+      multi_fidelity_(options.fidelity.generations > 0),
+      subset_(multi_fidelity_ ? stratified_subset(problem.samples().size(), options.fidelity.subset_fraction)
+                              : std::vector<int>{}),
+      reporter_(context.progress, context.log, options.progress_interval),
+      fingerprint_(ga::study_fingerprint(problem, options)) {}
+
+void GaSearch::resume_from_checkpoint() {
+  if (!context_.resume) return;
+  if (context_.checkpoint_file.empty() || !boost::filesystem::exists(context_.checkpoint_file)) {
+    reporter_.line("ga: no checkpoint to resume from; starting from the beginning", true);
+    return;
+  }
+  ga::Checkpoint checkpoint = ga::read_checkpoint(context_.checkpoint_file, fingerprint_);
+  runs_ = std::move(checkpoint.completed_runs);
+  run_seconds_ = std::move(checkpoint.run_seconds);
+  designs_before_resume_ = checkpoint.designs;
+  samples_before_resume_ = checkpoint.samples;
+  seconds_before_resume_ = checkpoint.elapsed_seconds;
+  evaluator_->add_counts(designs_before_resume_, samples_before_resume_);
+  resumed_ = std::move(checkpoint.current);
+  reporter_.line("ga: resuming from " + context_.checkpoint_file + ": " + std::to_string(runs_.size()) + " run(s) finished" +
+                     (resumed_ ? ", run " + std::to_string(resumed_->at("run").get<int>() + 1) + " at generation " +
+                                     std::to_string(resumed_->at("generation").get<int>())
+                               : std::string()),
+                 true);
+}
+
+void GaSearch::run_remaining() {
+  solve_clock_ = Clock::now();
+  for (int r = static_cast<int>(runs_.size()); r < options_.runs && !stopped_; ++r) {
+    const std::uint64_t run_seed = pa::derive_seed(context_.seed, static_cast<std::uint64_t>(r));
+    Run run;
+    run.state.run = r;
+    run.clock = Clock::now();
+    start_run(run, run_seed);
+    evolve(run);
+    if (!run.state.switched) switch_to_full(run);  // the final ranking on the full scene
+    if (stopped_ && run.state.best_x.empty()) break;
+    finish_run(run, run_seed);
+  }
+}
+
+// A fresh run (random population from the run's seed), or the checkpoint's run in progress.
+void GaSearch::start_run(Run& run, std::uint64_t seed) {
+  ga::RunState& state = run.state;
+  if (resumed_ && resumed_->at("run").get<int>() == state.run) {
+    ga::restore_run(*resumed_, pagmo_problem_, state, run.algorithm, run.population);
+    const bool on_subset = multi_fidelity_ && !state.switched;
+    evaluator_->set_subset(on_subset ? &subset_ : nullptr, on_subset ? 1 : 0);
+    resumed_.reset();
+  } else {
+    state.switched = !multi_fidelity_;
+    state.designs_before = evaluator_->design_evaluations();
+    evaluator_->set_subset(multi_fidelity_ ? &subset_ : nullptr, multi_fidelity_ ? 1 : 0);
+    run.algorithm = make_algorithm(options_, seed);
+    run.population =
+        pa::random_population(pagmo_problem_, *evaluator_, static_cast<std::size_t>(options_.population), seed);
+  }
+  if (state.switched && state.generation == 0) note_best(state, run.population);
+}
+
+// Generations until the limit, convergence or the stop flag; checkpoints on the way.
+void GaSearch::evolve(Run& run) {
+  ga::RunState& state = run.state;
+  while (state.generation < options_.generations) {
+    if (context_.stop && context_.stop->load()) {
+      stopped_ = true;
+      run.status = "stopped";
+      return;
+    }
+    if (!state.switched && state.generation >= options_.fidelity.generations) switch_to_full(run);
+    run.population = run.algorithm.evolve(run.population);
+    ++state.generation;
+    ++total_generations_done_;
+    if (state.switched) {
+      state.stall = note_best(state, run.population) ? 0 : state.stall + 1;
+    }
+    report_generation(run);
+    if (state.switched && state.stall >= options_.stall_generations) {
+      run.status = "converged";
+      return;
+    }
+    if (options_.checkpoint_every > 0 && state.generation % options_.checkpoint_every == 0 &&
+        state.generation < options_.generations) {
+      write_checkpoint(&run);
+    }
+  }
+}
+
+// The population's best at full fidelity becomes the run's best when better; true when it
+// improved by more than ftol (a smaller improvement is kept but counts as stalling).
+bool GaSearch::note_best(ga::RunState& state, const pagmo::population& population) const {
+  const long long b = best_feasible(population);
+  if (b < 0) return false;
+  const double score = -population.get_f()[static_cast<std::size_t>(b)][0];
+  if (state.best_x.empty() || score > state.best_score + options_.ftol) {
+    state.best_score = score;
+    state.best_x = population.get_x()[static_cast<std::size_t>(b)];
+    return true;
+  }
+  if (score > state.best_score) {
+    state.best_score = score;
+    state.best_x = population.get_x()[static_cast<std::size_t>(b)];
+  }
+  return false;
+}
+
+// The multi-fidelity switch: the population re-evaluated on the full scene.
+void GaSearch::switch_to_full(Run& run) {
+  ga::RunState& state = run.state;
+  const long long b = best_feasible(run.population);
+  const double subset_best = b >= 0 ? -run.population.get_f()[static_cast<std::size_t>(b)][0] : -INFINITY;
+  evaluator_->set_subset(nullptr, 0);
+  pa::reevaluate(run.population, *evaluator_);
+  state.switched = true;
+  state.stall = 0;
+  note_best(state, run.population);
+  reporter_.line("ga: run " + std::to_string(state.run + 1) + " generation " + std::to_string(state.generation) +
+                     ": fidelity switch, population re-evaluated on the full scene (best " + with_digits(subset_best) +
+                     " on the subset, " + with_digits(state.best_score) + " on the full scene)",
+                 true);
+}
+
+// The progress line of a generation: best and mean of the feasible individuals at the current
+// fidelity, speed, stall count, time.
+void GaSearch::report_generation(const Run& run) {
+  const ga::RunState& state = run.state;
+  double best = -INFINITY, mean = 0.0;
+  int feasible = 0;
+  for (const auto& f : run.population.get_f()) {
+    if (f[0] >= pa::kSampleFailedFitness) continue;
+    best = std::max(best, -f[0]);
+    mean += -f[0];
+    ++feasible;
+  }
+  const int generations = options_.generations;
+  const double elapsed = seconds_since(solve_clock_);
+  const double per_generation = elapsed / std::max(1, total_generations_done_);
+  const double left =
+      per_generation * ((generations - state.generation) + static_cast<double>(options_.runs - state.run - 1) * generations);
+  const double designs_per_second =
+      (evaluator_->design_evaluations() - designs_before_resume_) / std::max(1e-9, seconds_since(start_));
+  std::ostringstream line;
+  line << "ga: run " << (state.run + 1) << "/" << options_.runs << " gen " << state.generation << "/" << generations
+       << (state.switched ? "" : " (subset)") << " best " << with_digits(best) << " mean "
+       << (feasible ? with_digits(mean / feasible) : std::string("-")) << " feasible " << feasible << "/"
+       << run.population.size() << " | " << with_digits(designs_per_second, 4) << " designs/s | stall " << state.stall
+       << "/" << options_.stall_generations << " | elapsed "
+       << pa::format_duration(seconds_before_resume_ + seconds_since(start_)) << ", left <= " << pa::format_duration(left);
+  reporter_.line(line.str());
+}
+
+// The run's record (statistics.runs), its time, its log line, and a checkpoint between runs.
+void GaSearch::finish_run(const Run& run, std::uint64_t seed) {
+  const ga::RunState& state = run.state;
+  Json record;
+  record["run"] = state.run;
+  record["seed"] = seed;
+  record["generations"] = state.generation;
+  record["designs"] = evaluator_->design_evaluations() - state.designs_before;
+  if (state.best_x.empty()) {
+    record["status"] = "infeasible";
+  } else {
+    const pa::DesignRecord& best = evaluator_->record(state.best_x);
+    const std::vector<double> free = evaluator_->encoding().decode(state.best_x);
+    const Eigen::VectorXd full = problem_.full_design(free.data());
+    record["status"] = run.status;
+    record["x"] = state.best_x;
+    record["free"] = free;
+    record["design"] = problem_.design_to_json(full);
+    record["score"] = best.score;
+    Json objectives = Json::object();
+    for (std::size_t i = 0; i < problem_.objectives().size(); ++i) objectives[problem_.objectives()[i].name] = best.objectives[i];
+    record["objectives"] = objectives;
+  }
+  runs_.push_back(record);
+  run_seconds_.push_back(state.seconds_before + seconds_since(run.clock));
+  reporter_.line("ga: run " + std::to_string(state.run + 1) + "/" + std::to_string(options_.runs) + " " +
+                     record["status"].get<std::string>() + " after " + std::to_string(state.generation) +
+                     " generations, " + std::to_string(record["designs"].get<long long>()) + " designs, " +
+                     pa::format_duration(run_seconds_.back()) +
+                     (record.contains("score") ? ": score " + with_digits(record["score"].get<double>(), 8) : std::string()),
+                 true);
+  if (!stopped_) write_checkpoint(nullptr);
+}
+
+// The checkpoint file: the finished runs and counters, and `run` when one is in progress.
+void GaSearch::write_checkpoint(const Run* run) const {
+  if (context_.checkpoint_file.empty()) return;
+  ga::Checkpoint checkpoint;
+  checkpoint.completed_runs = runs_;
+  checkpoint.run_seconds = run_seconds_;
+  checkpoint.designs = evaluator_->design_evaluations();
+  checkpoint.samples = evaluator_->sample_evaluations();
+  checkpoint.elapsed_seconds = seconds_before_resume_ + seconds_since(start_);
+  if (run) {
+    ga::RunState saved = run->state;
+    saved.seconds_before += seconds_since(run->clock);
+    checkpoint.current = ga::run_to_json(saved, run->algorithm, run->population);
+  }
+  ga::write_checkpoint(context_.checkpoint_file, context_.seed, fingerprint_, checkpoint);
+}
+
+SolverResult GaSearch::summary() {
+  ga::SolveFigures figures;
+  figures.stopped = stopped_;
+  figures.solve_seconds = seconds_before_resume_ + seconds_since(start_);
+  figures.design_evaluations = evaluator_->design_evaluations();
+  figures.sample_evaluations = evaluator_->sample_evaluations();
+  figures.cache_hits = evaluator_->cache_hits();
+  figures.repair = evaluator_->encoding().describe_repair(problem_);
+  figures.subset_samples = subset_.size();
+  return ga::summarise_runs(problem_, options_, runs_, run_seconds_, figures, context_.seed, reporter_);
+}
 
 }  // namespace
 
-GaSolver::GaSolver(const Json& options) : raw_options_(options) {
-  GaOptions& o = options_;
-  o.algorithm = options.at("algorithm");
-  o.population = options.at("population");
-  o.generations = options.at("generations");
-  o.stall_generations = options.at("stall_generations");
-  o.ftol = options.at("ftol");
-  o.runs = options.at("runs");
-  o.checkpoint_every = options.at("checkpoint_every");
-  o.parallel_over = options.at("parallel_over");
-  o.sample_chunks = options.at("sample_chunks");
-  o.sort_descending = options.at("sort_descending").get<std::vector<std::string>>();
-  o.sort_ascending = options.at("sort_ascending").get<std::vector<std::string>>();
-  o.subset_fraction = options.at("fidelity").at("subset_fraction");
-  o.fidelity_generations = options.at("fidelity").at("generations");
-  o.max_clusters = options.at("max_clusters");
-  o.cluster_variables = options.at("cluster_variables").get<std::vector<std::string>>();
-  o.progress_interval = options.at("progress_interval");
-  const Json& sga = options.at("sga");
-  o.crossover_probability = sga.at("crossover_probability");
-  o.crossover = sga.at("crossover");
-  o.eta_c = sga.at("eta_c");
-  o.mutation_probability = sga.at("mutation_probability");
-  o.mutation = sga.at("mutation");
-  o.param_m = sga.at("param_m");
-  o.selection = sga.at("selection");
-  o.param_s = sga.at("param_s");
-  const Json& gaco = options.at("gaco");
-  o.ker = gaco.at("ker");
-  o.q = gaco.at("q");
-  o.oracle = gaco.at("oracle");
-  o.acc = gaco.at("acc");
-  o.threshold = gaco.at("threshold");
-  o.n_gen_mark = gaco.at("n_gen_mark");
-  o.focus = gaco.at("focus");
-
-  if (o.algorithm == "gaco" && o.ker > o.population) {
-    throw Error("ga", "options.gaco.ker = " + std::to_string(o.ker) + ": must not exceed options.population (" +
+GaSolver::GaSolver(const GaOptions& options) : options_(options) {
+  const GaOptions& o = options_;
+  if (o.algorithm == "gaco" && o.gaco.ker > o.population) {
+    throw Error("ga", "options.gaco.ker = " + std::to_string(o.gaco.ker) + ": must not exceed options.population (" +
                           std::to_string(o.population) + "): gaco fills its solution archive from the population");
   }
-  if (o.algorithm == "sga" && o.selection == "tournament" && o.param_s > o.population) {
-    throw Error("ga", "options.sga.param_s = " + std::to_string(o.param_s) + ": the tournament size must not exceed options.population (" +
-                          std::to_string(o.population) + ")");
+  if (o.algorithm == "sga" && o.sga.selection == "tournament" && o.sga.param_s > o.population) {
+    throw Error("ga", "options.sga.param_s = " + std::to_string(o.sga.param_s) +
+                          ": the tournament size must not exceed options.population (" + std::to_string(o.population) +
+                          ")");
   }
-  if (o.mutation == "polynomial" ? (o.param_m < 1.0 || o.param_m > 100.0) : (o.param_m < 0.0 || o.param_m > 1.0)) {
-    throw Error("ga", "options.sga.param_m = " + fixed(o.param_m) + ": must lie in " +
-                          (o.mutation == "polynomial" ? "[1, 100] (distribution index of polynomial mutation)"
-                                                      : "[0, 1] (width of " + o.mutation + " mutation)"));
+  const std::string& mutation = o.sga.mutation;
+  const double param_m = o.sga.param_m;
+  if (mutation == "polynomial" ? (param_m < 1.0 || param_m > 100.0) : (param_m < 0.0 || param_m > 1.0)) {
+    throw Error("ga", "options.sga.param_m = " + with_digits(param_m) + ": must lie in " +
+                          (mutation == "polynomial" ? "[1, 100] (distribution index of polynomial mutation)"
+                                                    : "[0, 1] (width of " + mutation + " mutation)"));
   }
-  if (o.subset_fraction < 1.0 && o.fidelity_generations == 0) {
-    throw Error("ga", "options.fidelity.subset_fraction = " + fixed(o.subset_fraction) +
+  if (o.fidelity.subset_fraction < 1.0 && o.fidelity.generations == 0) {
+    throw Error("ga", "options.fidelity.subset_fraction = " + with_digits(o.fidelity.subset_fraction) +
                           ": needs options.fidelity.generations >= 1 (the generations evaluated on the subset)");
   }
-  if (o.fidelity_generations > 0 && o.subset_fraction >= 1.0) {
-    throw Error("ga", "options.fidelity.generations = " + std::to_string(o.fidelity_generations) +
+  if (o.fidelity.generations > 0 && o.fidelity.subset_fraction >= 1.0) {
+    throw Error("ga", "options.fidelity.generations = " + std::to_string(o.fidelity.generations) +
                           ": needs options.fidelity.subset_fraction < 1 (the share of the samples evaluated early)");
   }
   try {
@@ -189,391 +406,10 @@ void GaSolver::check(const Problem& problem) const {
 }
 
 SolverResult GaSolver::solve(const Problem& problem, const SolverContext& context) const {
-  const GaOptions& o = options_;
-  const auto start = Clock::now();
-  SolverResult result;
-  pa::EvaluationSettings settings;
-  settings.threads = context.threads;
-  settings.over_individuals = o.parallel_over == "individuals";
-  settings.sample_chunks = o.sample_chunks;
-  auto evaluator = std::make_shared<pa::Evaluator>(
-      problem, pa::Encoding(problem, o.sort_descending, o.sort_ascending, "ga"), settings, false);
-  const pagmo::problem prob = pa::make_problem(evaluator);
-  const bool multi_fidelity = o.fidelity_generations > 0;
-  const std::vector<int> subset = multi_fidelity ? stratified_subset(problem.samples().size(), o.subset_fraction)
-                                                 : std::vector<int>{};
-  pa::ProgressReporter reporter(context.progress, context.log, o.progress_interval);
-  const std::string fp = study_fingerprint(problem, raw_options_);
-
-  // Finished runs (JSON records), and the state of a run in progress from a checkpoint.
-  Json runs = Json::array();
-  std::vector<double> run_seconds;
-  long long designs_before_resume = 0, samples_before_resume = 0;
-  double seconds_before_resume = 0.0;
-  std::optional<Json> resumed;
-  if (context.resume && !context.checkpoint_file.empty() && boost::filesystem::exists(context.checkpoint_file)) {
-    std::ifstream in(context.checkpoint_file);
-    Json checkpoint;
-    try {
-      checkpoint = Json::parse(in);
-    } catch (const std::exception& e) {
-      throw Error("ga", context.checkpoint_file + ": cannot be read as a checkpoint (" + e.what() + ")");
-    }
-    if (checkpoint.value("solver", "") != "ga" || checkpoint.value("fingerprint", "") != fp) {
-      throw Error("ga", context.checkpoint_file + ": written for another study (solver '" + checkpoint.value("solver", "?") +
-                            "', fingerprint " + checkpoint.value("fingerprint", "?") + ", this study " + fp +
-                            "); delete it or run without --resume");
-    }
-    runs = checkpoint.at("completed_runs");
-    run_seconds = checkpoint.at("run_seconds").get<std::vector<double>>();
-    designs_before_resume = checkpoint.at("evaluations").at("designs");
-    samples_before_resume = checkpoint.at("evaluations").at("samples");
-    seconds_before_resume = checkpoint.at("elapsed_seconds");
-    evaluator->add_counts(designs_before_resume, samples_before_resume);
-    if (checkpoint.contains("current")) resumed = checkpoint.at("current");
-    reporter.line("ga: resuming from " + context.checkpoint_file + ": " + std::to_string(runs.size()) + " run(s) finished" +
-                      (resumed ? ", run " + std::to_string(resumed->at("run").get<int>() + 1) + " at generation " +
-                                     std::to_string(resumed->at("generation").get<int>())
-                               : std::string()),
-                  true);
-  } else if (context.resume) {
-    reporter.line("ga: no checkpoint to resume from; starting from the beginning", true);
-  }
-
-  auto write_checkpoint = [&](const RunState* state, const pagmo::algorithm* algorithm, const pagmo::population* population) {
-    if (context.checkpoint_file.empty()) return;
-    Json c;
-    c["seed"] = context.seed;
-    c["solver"] = "ga";
-    c["fingerprint"] = fp;
-    c["completed_runs"] = runs;
-    c["run_seconds"] = run_seconds;
-    c["evaluations"] = {{"designs", evaluator->design_evaluations()}, {"samples", evaluator->sample_evaluations()}};
-    c["elapsed_seconds"] = seconds_before_resume + seconds_since(start);
-    if (state) {
-      Json cur;
-      cur["run"] = state->run;
-      cur["generation"] = state->generation;
-      cur["stall"] = state->stall;
-      cur["switched"] = state->switched;
-      cur["best_score"] = state->best_x.empty() ? Json(nullptr) : Json(state->best_score);
-      cur["best_x"] = state->best_x;
-      cur["designs_before"] = state->designs_before;
-      cur["run_seconds"] = state->seconds_before;
-      cur["algorithm"] = pa::save_algorithm(*algorithm);
-      cur["population_seed"] = population->get_seed();
-      cur["x"] = pa::matrix_to_json(population->get_x());
-      cur["f"] = pa::matrix_to_json(population->get_f());
-      c["current"] = cur;
-    }
-    write_file_atomically(context.checkpoint_file, c.dump() + "\n");
-  };
-
-  bool stopped = false;
-  int total_generations_done = 0;
-  const auto solve_clock = Clock::now();
-  for (int r = static_cast<int>(runs.size()); r < o.runs && !stopped; ++r) {
-    const std::uint64_t run_seed = pa::derive_seed(context.seed, static_cast<std::uint64_t>(r));
-    RunState state;
-    state.run = r;
-    pagmo::algorithm algorithm;
-    pagmo::population population;
-    const auto run_clock = Clock::now();
-    if (resumed && resumed->at("run").get<int>() == r) {
-      const Json& cur = *resumed;
-      state.generation = cur.at("generation");
-      state.stall = cur.at("stall");
-      state.switched = cur.at("switched");
-      state.best_x = cur.at("best_x").get<pagmo::vector_double>();
-      if (!state.best_x.empty()) state.best_score = cur.at("best_score");
-      state.designs_before = cur.at("designs_before");
-      state.seconds_before = cur.at("run_seconds");
-      algorithm = pa::load_algorithm(cur.at("algorithm").get<std::string>());
-      evaluator->set_subset(multi_fidelity && !state.switched ? &subset : nullptr, multi_fidelity && !state.switched ? 1 : 0);
-      pagmo::population restored(prob, 0u, cur.at("population_seed").get<unsigned>());
-      const auto xs = pa::matrix_from_json(cur.at("x"));
-      const auto fs = pa::matrix_from_json(cur.at("f"));
-      for (std::size_t i = 0; i < xs.size(); ++i) restored.push_back(xs[i], fs[i]);
-      population = restored;
-      resumed.reset();
-    } else {
-      state.switched = !multi_fidelity;
-      state.designs_before = evaluator->design_evaluations();
-      evaluator->set_subset(multi_fidelity ? &subset : nullptr, multi_fidelity ? 1 : 0);
-      algorithm = make_algorithm(o, run_seed);
-      population = pa::random_population(prob, *evaluator, static_cast<std::size_t>(o.population), run_seed);
-    }
-
-    // Best of the population at full fidelity: the run's best so far.
-    auto note_best = [&](const pagmo::population& pop) {
-      const long long b = best_feasible(pop);
-      if (b < 0) return false;
-      const double score = -pop.get_f()[static_cast<std::size_t>(b)][0];
-      if (state.best_x.empty() || score > state.best_score + o.ftol) {
-        state.best_score = score;
-        state.best_x = pop.get_x()[static_cast<std::size_t>(b)];
-        return true;
-      }
-      if (score > state.best_score) {  // a smaller improvement: kept, but counts as stalling
-        state.best_score = score;
-        state.best_x = pop.get_x()[static_cast<std::size_t>(b)];
-      }
-      return false;
-    };
-    auto switch_to_full = [&](pagmo::population& pop) {
-      const long long b = best_feasible(pop);
-      const double subset_best = b >= 0 ? -pop.get_f()[static_cast<std::size_t>(b)][0] : -INFINITY;
-      evaluator->set_subset(nullptr, 0);
-      pa::reevaluate(pop, *evaluator);
-      state.switched = true;
-      state.stall = 0;
-      note_best(pop);
-      reporter.line("ga: run " + std::to_string(r + 1) + " generation " + std::to_string(state.generation) +
-                        ": fidelity switch, population re-evaluated on the full scene (best " + fixed(subset_best) +
-                        " on the subset, " + fixed(state.best_score) + " on the full scene)",
-                    true);
-    };
-    if (state.switched && state.generation == 0) note_best(population);
-
-    std::string run_status = "budget_exhausted";
-    while (state.generation < o.generations) {
-      if (context.stop && context.stop->load()) {
-        stopped = true;
-        run_status = "stopped";
-        break;
-      }
-      if (!state.switched && state.generation >= o.fidelity_generations) switch_to_full(population);
-      population = algorithm.evolve(population);
-      ++state.generation;
-      ++total_generations_done;
-      if (state.switched) {
-        state.stall = note_best(population) ? 0 : state.stall + 1;
-      }
-      // Progress: best and mean of the feasible individuals at the current fidelity.
-      double best = -INFINITY, mean = 0.0;
-      int feasible = 0;
-      for (const auto& f : population.get_f()) {
-        if (f[0] >= pa::kSampleFailedFitness) continue;
-        best = std::max(best, -f[0]);
-        mean += -f[0];
-        ++feasible;
-      }
-      const double elapsed = seconds_since(solve_clock);
-      const double per_generation = elapsed / std::max(1, total_generations_done);
-      const double left = per_generation * ((o.generations - state.generation) +
-                                            static_cast<double>(o.runs - r - 1) * o.generations);
-      std::ostringstream line;
-      line << "ga: run " << (r + 1) << "/" << o.runs << " gen " << state.generation << "/" << o.generations
-           << (state.switched ? "" : " (subset)") << " best " << fixed(best) << " mean "
-           << (feasible ? fixed(mean / feasible) : std::string("-")) << " feasible " << feasible << "/"
-           << population.size() << " | " << fixed((evaluator->design_evaluations() - designs_before_resume) / std::max(1e-9, seconds_since(start)), 4)
-           << " designs/s | stall " << state.stall << "/" << o.stall_generations << " | elapsed "
-           << pa::format_duration(seconds_before_resume + seconds_since(start)) << ", left <= " << pa::format_duration(left);
-      reporter.line(line.str());
-      if (state.switched && state.stall >= o.stall_generations) {
-        run_status = "converged";
-        break;
-      }
-      if (o.checkpoint_every > 0 && state.generation % o.checkpoint_every == 0 && state.generation < o.generations) {
-        RunState saved = state;
-        saved.seconds_before += seconds_since(run_clock);
-        write_checkpoint(&saved, &algorithm, &population);
-      }
-    }
-    if (!state.switched) switch_to_full(population);  // the final ranking on the full scene
-    if (stopped && state.best_x.empty()) break;
-
-    Json record;
-    record["run"] = r;
-    record["seed"] = run_seed;
-    record["generations"] = state.generation;
-    record["designs"] = evaluator->design_evaluations() - state.designs_before;
-    if (state.best_x.empty()) {
-      record["status"] = "infeasible";
-    } else {
-      const pa::DesignRecord& best = evaluator->record(state.best_x);
-      const std::vector<double> free = evaluator->encoding().decode(state.best_x);
-      const Eigen::VectorXd full = problem.full_design(free.data());
-      record["status"] = run_status;
-      record["x"] = state.best_x;
-      record["free"] = free;
-      record["design"] = problem.design_to_json(full);
-      record["score"] = best.score;
-      Json objectives = Json::object();
-      for (std::size_t i = 0; i < problem.objectives().size(); ++i) objectives[problem.objectives()[i].name] = best.objectives[i];
-      record["objectives"] = objectives;
-    }
-    runs.push_back(record);
-    run_seconds.push_back(state.seconds_before + seconds_since(run_clock));
-    reporter.line("ga: run " + std::to_string(r + 1) + "/" + std::to_string(o.runs) + " " + record["status"].get<std::string>() +
-                      " after " + std::to_string(state.generation) + " generations, " + std::to_string(record["designs"].get<long long>()) +
-                      " designs, " + pa::format_duration(run_seconds.back()) +
-                      (record.contains("score") ? ": score " + fixed(record["score"].get<double>(), 8) : std::string()),
-                  true);
-    if (!stopped) write_checkpoint(nullptr, nullptr, nullptr);
-  }
-
-  // The best run, and the summary over the runs.
-  result.design_evaluations = evaluator->design_evaluations();
-  result.sample_evaluations = evaluator->sample_evaluations();
-  int best_run = -1, converged = 0, budget = 0;
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    const std::string s = runs[i]["status"];
-    converged += s == "converged";
-    budget += s == "budget_exhausted";
-    if (!runs[i].contains("score")) continue;
-    if (best_run < 0 || runs[i]["score"].get<double>() > runs[static_cast<std::size_t>(best_run)]["score"].get<double>()) {
-      best_run = static_cast<int>(i);
-    }
-  }
-  Json statistics;
-  statistics["algorithm"] = o.algorithm;
-  statistics["runs"] = runs;
-  statistics["run_seconds"] = run_seconds;
-  statistics["solve_seconds"] = seconds_before_resume + seconds_since(start);
-  statistics["cache_hits"] = evaluator->cache_hits();
-  statistics["repair"] = evaluator->encoding().describe_repair(problem);
-  statistics["evaluation"] = {{"parallel_over", o.parallel_over}, {"sample_chunks", o.sample_chunks}};
-  if (multi_fidelity) {
-    statistics["fidelity"] = {{"subset_fraction", o.subset_fraction},
-                              {"subset_samples", subset.size()},
-                              {"generations", o.fidelity_generations}};
-  }
-  std::vector<std::string> report;
-  if (best_run >= 0) {
-    const Json& b = runs[static_cast<std::size_t>(best_run)];
-    const std::vector<double> free = b["free"].get<std::vector<double>>();
-    std::vector<double> objectives;
-    for (const Objective& obj : problem.objectives()) objectives.push_back(b["objectives"][obj.name]);
-    result.best = SolutionPoint{problem.full_design(free.data()), objectives, b["score"].get<double>()};
-    statistics["best_run"] = best_run;
-    // Score spread over the runs.
-    double lo = INFINITY, hi = -INFINITY;
-    for (const Json& run : runs) {
-      if (!run.contains("score")) continue;
-      lo = std::min(lo, run["score"].get<double>());
-      hi = std::max(hi, run["score"].get<double>());
-    }
-    statistics["score_range"] = {lo, hi};
-  }
-
-  // Cluster analysis of the runs' optima (Fennel 2022, section VII, Table III).
-  std::vector<std::size_t> feasible_runs;
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    if (runs[i].contains("score")) feasible_runs.push_back(i);
-  }
-  if (feasible_runs.size() >= 3) {
-    std::vector<int> columns;  // free indices clustered
-    std::vector<std::string> names;
-    const DesignSpace& space = problem.design_space();
-    for (std::size_t k = 0; k < space.free_size(); ++k) {
-      const DesignComponent& c = space.components()[static_cast<std::size_t>(space.free_indices()[k])];
-      const bool chosen = o.cluster_variables.empty()
-                              ? !c.integer
-                              : std::find(o.cluster_variables.begin(), o.cluster_variables.end(), c.variable) != o.cluster_variables.end();
-      if (chosen) {
-        columns.push_back(static_cast<int>(k));
-        names.push_back(c.name);
-      }
-    }
-    if (!columns.empty()) {
-      Eigen::MatrixXd points(static_cast<Eigen::Index>(feasible_runs.size()), static_cast<Eigen::Index>(columns.size()));
-      for (std::size_t i = 0; i < feasible_runs.size(); ++i) {
-        const auto free = runs[feasible_runs[i]]["free"].get<std::vector<double>>();
-        for (std::size_t j = 0; j < columns.size(); ++j) {
-          points(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = free[static_cast<std::size_t>(columns[j])];
-        }
-      }
-      const ClusterAnalysis a = cluster_by_silhouette(points, o.max_clusters, context.seed);
-      Json clusters;
-      clusters["variables"] = names;
-      clusters["k"] = a.best.k;
-      clusters["silhouette"] = a.silhouette;
-      Json silhouettes = Json::object();
-      for (std::size_t i = 0; i < a.silhouettes.size(); ++i) silhouettes[std::to_string(i + 2)] = a.silhouettes[i];
-      clusters["silhouettes"] = silhouettes;
-      clusters["intra_deviation"] = a.intra_deviation;
-      clusters["inter_deviation"] = a.inter_deviation;
-      Json table = Json::array();
-      std::ostringstream head;
-      head << "cluster  runs  score(mean)  score(best)  intra";
-      for (const std::string& n : names) head << "  " << std::setw(8) << n;
-      for (const Objective& obj : problem.objectives()) head << "  " << std::setw(8) << obj.name;
-      report.push_back("clusters of the " + std::to_string(feasible_runs.size()) + " run optima over (" +
-                       [&] { std::string s; for (const auto& n : names) s += (s.empty() ? "" : ", ") + n; return s; }() +
-                       "): k = " + std::to_string(a.best.k) + " by average silhouette " + fixed(a.silhouette, 3) +
-                       "; intra-cluster deviation " + fixed(a.intra_deviation, 4) + ", inter-cluster deviation " +
-                       fixed(a.inter_deviation, 4) + " (design units)");
-      report.push_back(head.str());
-      for (int c = 0; c < a.best.k; ++c) {
-        Json entry;
-        Json members = Json::array();
-        double score_sum = 0.0, score_best = -INFINITY;
-        int best_member = -1;
-        std::vector<double> objective_sum(problem.objectives().size(), 0.0);
-        for (std::size_t i = 0; i < feasible_runs.size(); ++i) {
-          if (a.best.labels[i] != c) continue;
-          const Json& run = runs[feasible_runs[i]];
-          members.push_back(run["run"]);
-          const double s = run["score"];
-          score_sum += s;
-          if (s > score_best) {
-            score_best = s;
-            best_member = run["run"];
-          }
-          for (std::size_t q = 0; q < problem.objectives().size(); ++q) {
-            objective_sum[q] += run["objectives"][problem.objectives()[q].name].get<double>();
-          }
-        }
-        const int size = a.sizes[static_cast<std::size_t>(c)];
-        Json centroid = Json::object();
-        for (std::size_t j = 0; j < names.size(); ++j) centroid[names[j]] = a.best.centroids(c, static_cast<Eigen::Index>(j));
-        Json mean_objectives = Json::object();
-        for (std::size_t q = 0; q < problem.objectives().size(); ++q) mean_objectives[problem.objectives()[q].name] = objective_sum[q] / size;
-        entry["size"] = size;
-        entry["runs"] = members;
-        entry["centroid"] = centroid;
-        entry["intra_distance"] = a.cluster_intra_distance[static_cast<std::size_t>(c)];
-        entry["mean_objectives"] = mean_objectives;
-        entry["mean_score"] = score_sum / size;
-        entry["best_score"] = score_best;
-        entry["best_run"] = best_member;
-        entry["best_design"] = runs[static_cast<std::size_t>(best_member)]["design"];
-        table.push_back(entry);
-        std::ostringstream row;
-        row << std::setw(7) << (c + 1) << "  " << std::setw(4) << size << "  " << std::setw(11) << fixed(score_sum / size, 6)
-            << "  " << std::setw(11) << fixed(score_best, 6) << "  " << std::setw(5) << fixed(a.cluster_intra_distance[static_cast<std::size_t>(c)], 3);
-        for (std::size_t j = 0; j < names.size(); ++j) row << "  " << std::setw(8) << fixed(a.best.centroids(c, static_cast<Eigen::Index>(j)), 4);
-        for (std::size_t q = 0; q < problem.objectives().size(); ++q) row << "  " << std::setw(8) << fixed(objective_sum[q] / size, 4);
-        report.push_back(row.str());
-      }
-      clusters["clusters"] = table;
-      statistics["clusters"] = clusters;
-    }
-  }
-  statistics["report"] = report;
-  for (const std::string& line : report) reporter.line(line, true);
-
-  std::ostringstream message;
-  message << runs.size() << " run(s) of " << o.algorithm << ", population " << o.population;
-  if (stopped) {
-    result.status = SolverStatus::kStopped;
-    message << ": stopped on request";
-  } else if (best_run < 0) {
-    result.status = SolverStatus::kInfeasible;
-    message << ": no feasible design found";
-  } else if (budget > 0) {
-    result.status = SolverStatus::kBudgetExhausted;
-    message << ": " << budget << " run(s) reached the generation limit (" << o.generations << ") before stalling for "
-            << o.stall_generations << " generations, " << converged << " converged";
-  } else {
-    result.status = SolverStatus::kConverged;
-    message << ": every run converged (no improvement > " << o.ftol << " for " << o.stall_generations << " generations)";
-  }
-  if (best_run >= 0) message << "; best score " << fixed(runs[static_cast<std::size_t>(best_run)]["score"].get<double>(), 8) << " (run " << best_run + 1 << ")";
-  result.message = message.str();
-  result.statistics = statistics;
-  return result;
+  GaSearch search(options_, problem, context);
+  search.resume_from_checkpoint();
+  search.run_remaining();
+  return search.summary();
 }
 
 }  // namespace hapsyn::plugins

@@ -2,7 +2,8 @@
 // the haptic 6R's constraint structure (s_i >= s_{i+1}), determinism, options errors, runs and
 // clusters, multi-fidelity, and (through the hapsyn program) checkpoints, kill -9 and --resume.
 #include "ga.hpp"
-#include "pagmo_adapter.hpp"
+#include "ga_checkpoint.hpp"
+#include "shared/pagmo_adapter.hpp"
 
 #include "test_support.hpp"
 
@@ -15,6 +16,7 @@
 #include <csignal>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <thread>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -97,9 +99,9 @@ std::shared_ptr<hapsyn::Problem> toy_problem() {
                                            hapsyn::DesignSpace(components));
 }
 
-// Every option filled from the plugin's schema, with `overrides` applied.
-Json ga_options(const Json& overrides) {
-  return hapsyn::test::registry().resolve_options("ga", overrides, "solver.options");
+// Every option at its declared default, with `overrides` applied.
+hapsyn::plugins::GaOptions ga_options(const Json& overrides) {
+  return hapsyn::make_options<hapsyn::plugins::GaOptions>(overrides, "solver.options");
 }
 
 hapsyn::SolverResult solve_toy(const Json& overrides, int threads = 2, std::uint64_t seed = 11) {
@@ -299,6 +301,52 @@ TEST(Ga, MultiFidelityRanksTheFinalPopulationOnTheFullScene) {
   const hapsyn::Evaluation full = study.problem->evaluate_parallel(free.data(), 1);
   ASSERT_EQ(full.status, hapsyn::EvalStatus::kFeasible);
   EXPECT_DOUBLE_EQ(full.objectives[0], r.best->objectives[0]);
+}
+
+// Another valid value of a declared option (its schema property): another choice, another
+// list, or a number moved within its bounds.
+Json other_value(const Json& property) {
+  const Json& def = property["default"];
+  if (property.contains("enum")) {
+    for (const Json& choice : property["enum"]) {
+      if (choice != def) return choice;
+    }
+  }
+  if (property["type"] == "array") return Json{"x"};
+  if (property["type"] == "integer") return def.get<int>() + 1;
+  double v = def.get<double>() + 0.5;
+  if (property.contains("maximum") && v > property["maximum"].get<double>()) {
+    const double maximum = property["maximum"];
+    v = maximum != def.get<double>() ? maximum : maximum / 2;
+  }
+  return v;
+}
+
+// The checkpoint's study fingerprint covers every declared option: another value of any one
+// of them gives another fingerprint, so a checkpoint is never resumed under other options.
+TEST(Ga, CheckpointFingerprintChangesWithEveryOption) {
+  const auto problem = toy_problem();
+  const std::string reference = hapsyn::plugins::ga::study_fingerprint(*problem, ga_options({}));
+  int options_changed = 0;
+  std::function<void(const Json&, const std::vector<std::string>&)> visit = [&](const Json& schema,
+                                                                                 const std::vector<std::string>& path) {
+    for (const auto& [name, property] : schema["properties"].items()) {
+      std::vector<std::string> at = path;
+      at.push_back(name);
+      if (property["type"] == "object") {
+        visit(property, at);
+        continue;
+      }
+      Json overrides = Json::object();
+      Json* target = &overrides;
+      for (std::size_t i = 0; i + 1 < at.size(); ++i) target = &(*target)[at[i]];
+      (*target)[at.back()] = other_value(property);
+      EXPECT_NE(hapsyn::plugins::ga::study_fingerprint(*problem, ga_options(overrides)), reference) << overrides.dump();
+      ++options_changed;
+    }
+  };
+  visit(hapsyn::options_schema<hapsyn::plugins::GaOptions>(), {});
+  EXPECT_EQ(options_changed, 31);
 }
 
 TEST(GaCli, FinishedStudyIsNotOverwrittenWithoutForce) {

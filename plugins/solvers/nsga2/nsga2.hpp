@@ -2,7 +2,7 @@
 /// \file
 /// Solver `nsga2`: pagmo 2.18's NSGA-II (mixed integer through pagmo's integer part) for Pareto
 /// studies: every objective of the study is one objective of the front (maximised or minimised
-/// by its sense). Through the shared pagmo adapter of the `ga` solver (pagmo_adapter.hpp):
+/// by its sense). Through the pagmo adapter it shares with `ga` (shared/pagmo_adapter.hpp):
 /// integer components last, the sort repair, penalties for infeasible designs (dominated by
 /// every feasible one), batches evaluated over the threads (one design per thread, or each
 /// design split over the samples), a cache of evaluated designs.
@@ -10,6 +10,7 @@
 /// The result's front is the non-dominated set of the feasible designs of the final
 /// population (duplicates removed), sorted by the first objective. Runs the given number of
 /// generations (status budget_exhausted; stopped on request). No checkpoints.
+#include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
 
 #include <string>
@@ -17,24 +18,55 @@
 
 namespace hapsyn::plugins {
 
-/// Options of `nsga2` (schema.json: the same names, defaults, ranges).
+/// Options of `nsga2`.
 struct Nsga2Options {
-  int population = 40;          ///< multiple of 4, >= 8 (pagmo's rule)
-  int generations = 50;
-  double cr = 0.95;             ///< crossover probability
-  double eta_c = 10.0;          ///< sbx distribution index
-  double m = 0.01;              ///< mutation probability per component
-  double eta_m = 50.0;          ///< polynomial mutation distribution index
-  std::string parallel_over = "individuals";
-  int sample_chunks = 16;
-  std::vector<std::string> sort_descending, sort_ascending;
-  double progress_interval = 2.0;
+  int population{};  ///< a multiple of 4 (pagmo's rule; checked by the constructor)
+  int generations{};
+  double cr{};     ///< crossover probability
+  double eta_c{};  ///< sbx distribution index
+  double m{};      ///< mutation probability per component
+  double eta_m{};  ///< polynomial mutation distribution index
+  std::string parallel_over;  ///< "individuals" or "samples"
+  int sample_chunks{};
+  std::vector<std::string> sort_descending;
+  std::vector<std::string> sort_ascending;
+  double progress_interval{};  ///< [s]
+
+  static void declare(OptionDeclarations<Nsga2Options>& d) {
+    d.describe(
+        "Pareto front of the study's objectives with pagmo 2.18's NSGA-II (mixed integer through pagmo's integer "
+        "part; sort repair and penalties as in ga; batches over the threads). Runs the given generations; the front "
+        "is the non-dominated feasible designs of the final population.");
+    d.add(&Nsga2Options::population, "population", 40, "Individuals per generation (a multiple of 4)")
+        .range(8, 100000);
+    d.add(&Nsga2Options::generations, "generations", 50, "Generations (status budget_exhausted when done)")
+        .range(1, 1000000);
+    d.add(&Nsga2Options::cr, "cr", 0.95, "Crossover probability (sbx)").minimum(0).less_than(1);
+    d.add(&Nsga2Options::eta_c, "eta_c", 10.0, "Distribution index of the sbx crossover").range(1, 100);
+    d.add(&Nsga2Options::m, "m", 0.01, "Mutation probability per component").range(0, 1);
+    d.add(&Nsga2Options::eta_m, "eta_m", 50.0, "Distribution index of the polynomial mutation").range(1, 100);
+    d.add(&Nsga2Options::parallel_over, "parallel_over", "individuals",
+          "How a batch uses the threads: one design per thread, or each design split over the samples")
+        .one_of({"individuals", "samples"});
+    d.add(&Nsga2Options::sample_chunks, "sample_chunks", 16,
+          "Fixed number of sample chunks when a design is split over the samples")
+        .range(1, 4096);
+    d.add(&Nsga2Options::sort_descending, "sort_descending", {},
+          "Repair: design variables whose free components are sorted in descending order before evaluation");
+    d.add(&Nsga2Options::sort_ascending, "sort_ascending", {},
+          "Repair: design variables whose free components are sorted in ascending order before evaluation");
+    d.add(&Nsga2Options::progress_interval, "progress_interval", 2.0,
+          "Seconds between progress lines on stderr (run.log gets every generation)")
+        .greater_than(0)
+        .unit("s");
+  }
 };
 
 class Nsga2Solver : public Solver {
  public:
+  using Options = Nsga2Options;
   /// \throws Error("nsga2: options.population = 10: must be a multiple of 4 ...") and pagmo's refusals.
-  explicit Nsga2Solver(const Json& options);
+  explicit Nsga2Solver(const Nsga2Options& options);
   bool pareto() const override { return true; }
   /// \throws Error with fewer than two objectives or no free design variable, or an unknown
   ///         repair variable.

@@ -1,5 +1,5 @@
-// k-means + average silhouette (hapsyn/cluster.hpp) on synthetic clustered data.
-#include <hapsyn/cluster.hpp>
+// k-means + average silhouette (cluster.hpp of the ga solver) on synthetic clustered data.
+#include "cluster.hpp"
 
 #include <gtest/gtest.h>
 
@@ -35,7 +35,7 @@ Eigen::MatrixXd three_centres() {
 TEST(Cluster, SilhouettePicksTheThreeSyntheticClusters) {
   std::vector<int> truth;
   const Eigen::MatrixXd points = blobs(three_centres(), 10, 0.004, 3, &truth);
-  const hapsyn::ClusterAnalysis a = hapsyn::cluster_by_silhouette(points, 6, 1);
+  const hapsyn::plugins::ClusterAnalysis a = hapsyn::plugins::cluster_by_silhouette(points, 6, 1);
   ASSERT_EQ(a.best.k, 3);
   EXPECT_EQ(a.silhouettes.size(), 5u);  // k = 2..6
   EXPECT_GT(a.silhouette, 0.7);
@@ -58,15 +58,15 @@ TEST(Cluster, SilhouettePicksTheThreeSyntheticClusters) {
 TEST(Cluster, TwoWellSeparatedClustersBeatThree) {
   Eigen::MatrixXd centres(2, 2);
   centres << 0.0, 0.0, 1.0, 1.0;
-  const hapsyn::ClusterAnalysis a = hapsyn::cluster_by_silhouette(blobs(centres, 15, 0.02, 5), 5, 2);
+  const hapsyn::plugins::ClusterAnalysis a = hapsyn::plugins::cluster_by_silhouette(blobs(centres, 15, 0.02, 5), 5, 2);
   EXPECT_EQ(a.best.k, 2);
   EXPECT_GT(a.silhouettes[0], a.silhouettes[1]);
 }
 
 TEST(Cluster, KMeansIsDeterministicUnderASeedAndLabelsByFirstAppearance) {
   const Eigen::MatrixXd points = blobs(three_centres(), 8, 0.01, 9);
-  const hapsyn::KMeansResult a = hapsyn::kmeans(points, 3, 42);
-  const hapsyn::KMeansResult b = hapsyn::kmeans(points, 3, 42);
+  const hapsyn::plugins::KMeansResult a = hapsyn::plugins::kmeans(points, 3, 42);
+  const hapsyn::plugins::KMeansResult b = hapsyn::plugins::kmeans(points, 3, 42);
   EXPECT_EQ(a.labels, b.labels);
   EXPECT_TRUE(a.centroids == b.centroids);
   EXPECT_EQ(a.labels[0], 0);
@@ -76,15 +76,15 @@ TEST(Cluster, KMeansIsDeterministicUnderASeedAndLabelsByFirstAppearance) {
 TEST(Cluster, SilhouetteOfAPerfectAndOfAWrongLabelling) {
   Eigen::MatrixXd points(4, 1);
   points << 0.0, 0.1, 10.0, 10.1;
-  EXPECT_NEAR(hapsyn::average_silhouette(points, {0, 0, 1, 1}, 2), 1.0 - 0.1 / 10.0, 1e-3);
-  EXPECT_LT(hapsyn::average_silhouette(points, {0, 1, 0, 1}, 2), 0.0);
-  EXPECT_EQ(hapsyn::average_silhouette(points, {0, 0, 0, 0}, 1), 0.0);
+  EXPECT_NEAR(hapsyn::plugins::average_silhouette(points, {0, 0, 1, 1}, 2), 1.0 - 0.1 / 10.0, 1e-3);
+  EXPECT_LT(hapsyn::plugins::average_silhouette(points, {0, 1, 0, 1}, 2), 0.0);
+  EXPECT_EQ(hapsyn::plugins::average_silhouette(points, {0, 0, 0, 0}, 1), 0.0);
 }
 
 TEST(Cluster, FewerThanThreePointsMakeOneCluster) {
   Eigen::MatrixXd points(2, 3);
   points << 0, 0, 0, 1, 1, 1;
-  const hapsyn::ClusterAnalysis a = hapsyn::cluster_by_silhouette(points, 5, 1);
+  const hapsyn::plugins::ClusterAnalysis a = hapsyn::plugins::cluster_by_silhouette(points, 5, 1);
   EXPECT_EQ(a.best.k, 1);
   EXPECT_TRUE(a.silhouettes.empty());
   EXPECT_NEAR(a.intra_deviation, std::sqrt(3.0) / 2, 1e-12);

@@ -162,14 +162,16 @@ DesignRecord Evaluator::evaluate_split(const std::vector<double>& free) {
   ++designs_;
   samples_ += e.samples_evaluated;
   DesignRecord r = make_record(e);
-  if (e.status == EvalStatus::kConstraintViolated) {
-    std::vector<double> g(problem_.constraint_count());
-    problem_.constraints(free.data(), g.data());
-    double violation = 0.0;
-    for (double v : g) violation += std::max(0.0, v);
-    for (double& f : r.fitness) f += violation;
-  }
+  if (e.status == EvalStatus::kConstraintViolated) add_violation(free, r);
   return r;
+}
+
+void Evaluator::add_violation(const std::vector<double>& free, DesignRecord& record) const {
+  std::vector<double> g(problem_.constraint_count());
+  problem_.constraints(free.data(), g.data());
+  double violation = 0.0;
+  for (double v : g) violation += std::max(0.0, v);
+  for (double& f : record.fitness) f += violation;
 }
 
 const DesignRecord& Evaluator::record(const pagmo::vector_double& x) {
@@ -216,13 +218,7 @@ pagmo::vector_double Evaluator::batch_fitness(const pagmo::vector_double& xs) {
     for (std::size_t i = 0; i < todo.size(); ++i) {
       ++designs_;
       samples_ += samples[i];
-      if (constraint_failed[i]) {
-        std::vector<double> g(problem_.constraint_count());
-        problem_.constraints(todo[i].data(), g.data());
-        double violation = 0.0;
-        for (double v : g) violation += std::max(0.0, v);
-        for (double& f : records[i].fitness) f += violation;
-      }
+      if (constraint_failed[i]) add_violation(todo[i], records[i]);
     }
   } else {
     for (std::size_t i = 0; i < todo.size(); ++i) records[i] = evaluate_split(todo[i]);

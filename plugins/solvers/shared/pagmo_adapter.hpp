@@ -1,8 +1,9 @@
 #pragma once
 /// \file
 /// The one bridge between hapsyn and pagmo 2.18, shared by the `ga` and `nsga2` solvers
-/// (static library hapsyn_pagmo_adapter). pagmo's type erasure stays behind this header's
-/// implementation and the two solvers; nothing in the framework sees pagmo.
+/// (static library hapsyn_pagmo_adapter; solvers include it as "shared/pagmo_adapter.hpp").
+/// pagmo's type erasure stays behind this header's implementation and the two solvers; of the
+/// framework, only the hypervolume of pareto.cpp uses pagmo.
 ///
 /// - Encoding: pagmo wants the integer components last (get_nix()); hapsyn's free vector keeps
 ///   declaration order. The encoding permutes (reals first, then integers, each in free order),
@@ -130,6 +131,9 @@ class Evaluator {
  private:
   DesignRecord make_record(const Evaluation& e) const;
   DesignRecord evaluate_split(const std::vector<double>& free);
+  // Adds the design's constraint violation (the sum of its positive constraint values) to
+  // every fitness component of a constraint-violating design's record.
+  void add_violation(const std::vector<double>& free, DesignRecord& record) const;
 
   const Problem& problem_;
   Encoding encoding_;

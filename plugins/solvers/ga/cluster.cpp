@@ -1,4 +1,4 @@
-#include <hapsyn/cluster.hpp>
+#include "cluster.hpp"
 
 #include <algorithm>
 #include <cassert>
@@ -6,7 +6,7 @@
 #include <limits>
 #include <random>
 
-namespace hapsyn {
+namespace hapsyn::plugins {
 
 namespace {
 
@@ -170,4 +170,4 @@ ClusterAnalysis cluster_by_silhouette(const Eigen::MatrixXd& points, int max_k, 
   return out;
 }
 
-}  // namespace hapsyn
+}  // namespace hapsyn::plugins

@@ -10,7 +10,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace hapsyn {
+namespace hapsyn::plugins {
 
 /// One k-means clustering.
 struct KMeansResult {
@@ -52,4 +52,4 @@ struct ClusterAnalysis {
 /// average silhouette (ties: the smaller k). With fewer than 3 points, or max_k < 2, one cluster.
 ClusterAnalysis cluster_by_silhouette(const Eigen::MatrixXd& points, int max_k, std::uint64_t seed);
 
-}  // namespace hapsyn
+}  // namespace hapsyn::plugins
