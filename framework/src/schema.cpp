@@ -80,8 +80,9 @@ std::optional<double> number_keyword(const Json& schema, const char* keyword) {
 
 std::optional<std::size_t> count_keyword(const Json& schema, const char* keyword) {
   const auto it = schema.find(keyword);
-  if (it == schema.end() || !it->is_number_unsigned()) return std::nullopt;
-  return it->get<std::size_t>();
+  // Any non-negative integer counts, signed or unsigned (a schema built in C++ may hold either).
+  if (it == schema.end() || !it->is_number_integer() || it->get<std::int64_t>() < 0) return std::nullopt;
+  return static_cast<std::size_t>(it->get<std::int64_t>());
 }
 
 bool non_finite(const Json& value) {
@@ -424,7 +425,7 @@ class SchemaChecker {
     for (const char* word : {"minItems", "maxItems"}) {
       const auto it = schema.find(word);
       if (it == schema.end()) continue;
-      if (!it->is_number_unsigned())
+      if (!it->is_number_integer() || it->get<std::int64_t>() < 0)
         refuse_value(spath, word, *it, "must be a non-negative integer");
     }
     const auto low = count_keyword(schema, "minItems");

@@ -25,6 +25,7 @@
 #include <hapsyn/json.hpp>
 
 #include <cmath>
+#include <cstdint>
 #include <deque>
 #include <functional>
 #include <map>
@@ -112,17 +113,19 @@ class OptionDeclarations {
     Option& one_of(const std::vector<std::string>& values) { return set(element_target(), "enum", Json(values)); }
     /// Exact length of a list (rows of a matrix option).
     Option& size(int n) { return min_size(n).max_size(n); }
-    Option& min_size(int n) { return set(*schema_, "minItems", n); }
-    Option& max_size(int n) { return set(*schema_, "maxItems", n); }
+    Option& min_size(int n) { return set(*schema_, "minItems", count(n)); }
+    Option& max_size(int n) { return set(*schema_, "maxItems", count(n)); }
     /// Exact length of each row of a matrix option.
     Option& row_size(int n) {
       Json& row = (*schema_)["items"];
-      row["minItems"] = n;
-      row["maxItems"] = n;
+      row["minItems"] = count(n);
+      row["maxItems"] = count(n);
       return *this;
     }
 
    private:
+    // Item counts are unsigned JSON numbers, as a parsed schema has them.
+    static Json count(int n) { return Json(static_cast<std::uint64_t>(n < 0 ? 0 : n)); }
     Option& set(Json& target, const char* word, Json value) {
       target[word] = std::move(value);
       return *this;
