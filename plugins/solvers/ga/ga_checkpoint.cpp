@@ -3,6 +3,7 @@
 #include "shared/pagmo_adapter.hpp"
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/options.hpp>
 #include <hapsyn/study.hpp>
 
 #include <fstream>
@@ -13,58 +14,6 @@ namespace hapsyn::plugins::ga {
 namespace pa = pagmo_adapter;
 
 namespace {
-
-template <class T>
-struct Identity {
-  using type = T;
-};
-
-// Every option of an options struct as JSON, in the problem file's shape (groups nested, every
-// option present). It walks the struct's declare() like the framework's declarations do, so an
-// option added there is part of the fingerprint without being listed again.
-template <class O>
-class OptionValues {
- public:
-  // An option's rules are the framework's business: here each one is accepted and ignored.
-  struct Rules {
-    Rules& range(double, double) { return *this; }
-    Rules& minimum(double) { return *this; }
-    Rules& maximum(double) { return *this; }
-    Rules& greater_than(double) { return *this; }
-    Rules& less_than(double) { return *this; }
-    Rules& unit(const std::string&) { return *this; }
-    Rules& one_of(const std::vector<std::string>&) { return *this; }
-  };
-
-  explicit OptionValues(const O& options) : options_(options) {}
-
-  void describe(const std::string&) {}
-  // The declared default is not deduced from (it may be "{}" or a string literal).
-  template <class T>
-  Rules add(T O::*member, const std::string& name, const typename Identity<T>::type&, const std::string&) {
-    values_[name] = options_.*member;
-    return {};
-  }
-  template <class Group>
-  Rules add(Group O::*member, const std::string& name, const std::string&) {
-    OptionValues<Group> group(options_.*member);
-    Group::declare(group);
-    values_[name] = group.values();
-    return {};
-  }
-
-  const Json& values() const { return values_; }
-
- private:
-  const O& options_;
-  Json values_ = Json::object();
-};
-
-Json option_values(const GaOptions& options) {
-  OptionValues<GaOptions> values(options);
-  GaOptions::declare(values);
-  return values.values();
-}
 
 // FNV-1a: a stable hash of the study text.
 std::string fnv1a(const std::string& text) {
@@ -83,7 +32,7 @@ std::string fnv1a(const std::string& text) {
 std::string study_fingerprint(const Problem& problem, const GaOptions& options) {
   std::ostringstream s;
   s.precision(17);
-  s << option_values(options).dump() << "|" << problem.samples().size() << "|";
+  s << options_to_json(options).dump() << "|" << problem.samples().size() << "|";
   for (int k : problem.design_space().free_indices()) {
     const DesignComponent& c = problem.design_space().components()[static_cast<std::size_t>(k)];
     s << c.name << ":" << c.lower << ":" << c.upper << ":" << c.integer << ";";

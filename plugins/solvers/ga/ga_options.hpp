@@ -2,11 +2,8 @@
 /// \file
 /// Options of the `ga` solver, declared once (hapsyn/options.hpp): names, defaults, ranges,
 /// choices and descriptions live only here. `hapsyn describe ga` prints them.
-///
-/// The declare() functions are templates over the declarations object: the framework calls
-/// them with its OptionDeclarations (schema, validation, filling), and the checkpoint code
-/// walks the same declarations to write the options into the study's fingerprint
-/// (ga_checkpoint.cpp), so no option is listed a second time.
+/// The checkpoint's study fingerprint takes the values through hapsyn::options_to_json, from the
+/// same declarations, so no option is listed a second time.
 #include <hapsyn/options.hpp>
 
 #include <string>
@@ -19,8 +16,7 @@ struct GaFidelityOptions {
   double subset_fraction{};  ///< share of the samples evaluated early, in (0, 1]
   int generations{};         ///< generations of each run on the subset (0 = none)
 
-  template <class Declarations>
-  static void declare(Declarations& d) {
+  static void declare(OptionDeclarations<GaFidelityOptions>& d) {
     d.add(&GaFidelityOptions::subset_fraction, "subset_fraction", 1.0,
           "Share of the samples evaluated early (every k-th in sample index order)")
         .greater_than(0)
@@ -43,8 +39,7 @@ struct GaSgaOptions {
   std::string selection;  ///< "tournament" or "truncated"
   int param_s{};
 
-  template <class Declarations>
-  static void declare(Declarations& d) {
+  static void declare(OptionDeclarations<GaSgaOptions>& d) {
     d.add(&GaSgaOptions::crossover_probability, "crossover_probability", 0.9, "Crossover probability").range(0, 1);
     d.add(&GaSgaOptions::crossover, "crossover", "sbx", "Crossover operator")
         .one_of({"exponential", "binomial", "single", "sbx"});
@@ -72,8 +67,7 @@ struct GaGacoOptions {
   int n_gen_mark{};
   double focus{};
 
-  template <class Declarations>
-  static void declare(Declarations& d) {
+  static void declare(OptionDeclarations<GaGacoOptions>& d) {
     d.add(&GaGacoOptions::ker, "ker", 20, "Solution archive (kernel) size; at most the population").minimum(1);
     d.add(&GaGacoOptions::q, "q", 1.0, "Convergence speed parameter").minimum(0);
     d.add(&GaGacoOptions::oracle, "oracle", 0.0, "Oracle parameter of the penalty method");
@@ -104,8 +98,7 @@ struct GaOptions {
   GaSgaOptions sga;
   GaGacoOptions gaco;
 
-  template <class Declarations>
-  static void declare(Declarations& d) {
+  static void declare(OptionDeclarations<GaOptions>& d) {
     d.describe(
         "Mixed-integer evolutionary search with pagmo 2.18 (sga or gaco) maximizing the study's score (one metric or a "
         "weighted sum). Integer design variables are pagmo's integer part; constraints by a sort repair "
