@@ -89,7 +89,6 @@ Json solve_once(const Json& doc, int threads, bool with_statistics) {
   hapsyn::SolverContext context;
   context.threads = threads;
   context.seed = 7;
-  context.registry = study.registry;  // solvers with sub-solvers (nbi, weighted_sum)
   const hapsyn::SolverResult r = study.solver->solve(*study.problem, context);
   Json j = {{"status", hapsyn::to_string(r.status)}};
   if (with_statistics) {

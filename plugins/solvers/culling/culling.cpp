@@ -1,6 +1,6 @@
 #include "culling.hpp"
 
-#include "../shared/minmax_sqp.hpp"
+#include "shared/minmax_sqp.hpp"
 
 #include <hapsyn/error.hpp>
 #include <hapsyn/parallel.hpp>
