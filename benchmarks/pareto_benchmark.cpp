@@ -39,7 +39,6 @@ hapsyn::Study& study(const std::string& name) {
 void run(benchmark::State& state, const hapsyn::Solver& solver, const hapsyn::Problem& problem) {
   hapsyn::SolverContext context;
   context.threads = 2;
-  context.registry = &registry();
   hapsyn::SolverResult result;
   for (auto _ : state) {
     result = solver.solve(problem, context);

@@ -10,6 +10,11 @@ using hapsyn::Json;
 using hapsyn::test::expect_error;
 
 namespace {
+// A grid solver with these options (the rest default).
+hapsyn::plugins::GridSolver grid_solver(const Json& options) {
+  return hapsyn::plugins::GridSolver(hapsyn::make_options<hapsyn::plugins::GridOptions>(options));
+}
+
 hapsyn::SolverResult solve(const hapsyn::Solver& solver, const hapsyn::Problem& problem, int threads) {
   hapsyn::SolverContext context;
   context.threads = threads;
@@ -50,7 +55,7 @@ TEST(Culling, ReturnsTheExhaustiveOptimumOnRandomSubBoxes) {
     for (const Json& objectives : objective_sets) {
       doc["objectives"] = objectives;
       const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
-      const hapsyn::plugins::GridSolver grid(Json{{"prune", false}, {"progress_interval", 1e9}});
+      const hapsyn::plugins::GridSolver grid = grid_solver(Json{{"prune", false}, {"progress_interval", 1e9}});
       const auto exhaustive = solve(grid, *study.problem, 2);
       for (bool seed : {false, true}) {
         for (int threads : {1, 2}) {
@@ -78,7 +83,7 @@ TEST(Culling, SearchesFarFewerWorkspacesThanExhaustiveSearch) {
   doc["design"]["r"]["step"] = 0.05;
   doc["scene"]["options"]["step"] = 0.01;
   const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
-  const hapsyn::plugins::GridSolver grid(Json{{"prune", false}, {"progress_interval", 1e9}});
+  const hapsyn::plugins::GridSolver grid = grid_solver(Json{{"prune", false}, {"progress_interval", 1e9}});
   const hapsyn::plugins::CullingSolver culling(hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(true, false)));
   const auto exhaustive = solve(grid, *study.problem, 2);
   const auto culled = solve(culling, *study.problem, 2);

@@ -6,8 +6,6 @@
 
 namespace hapsyn::plugins {
 
-EvaluateSolver::EvaluateSolver(const Json&) {}
-
 void EvaluateSolver::check(const Problem& problem) const {
   if (problem.dimension() != 0) {
     const auto& c = problem.design_space().components()[static_cast<std::size_t>(problem.design_space().free_indices()[0])];

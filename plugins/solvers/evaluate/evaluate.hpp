@@ -2,13 +2,23 @@
 /// \file
 /// Solver `evaluate`: evaluates the one fixed design of a study (every design variable given a
 /// "value"), over all samples, on the threads given.
+#include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
 
 namespace hapsyn::plugins {
 
+/// No options; declared for the plugin's description (`hapsyn describe evaluate`).
+struct EvaluateOptions {
+  static void declare(OptionDeclarations<EvaluateOptions>& d) {
+    d.describe("Evaluates one fixed design over the whole scene. Every design variable must have a \"value\". "
+               "No options.");
+  }
+};
+
 class EvaluateSolver : public Solver {
  public:
-  explicit EvaluateSolver(const Json& options);
+  using Options = EvaluateOptions;
+  explicit EvaluateSolver(const EvaluateOptions&) {}
   /// \throws Error when a design variable is not fixed (names it).
   void check(const Problem& problem) const override;
   /// Status kConverged with `best` for a feasible design; kInfeasible with the failing

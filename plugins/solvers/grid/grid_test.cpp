@@ -13,6 +13,11 @@
 using hapsyn::Json;
 
 namespace {
+// A grid solver with these options (the rest default).
+hapsyn::plugins::GridSolver grid_solver(const Json& options) {
+  return hapsyn::plugins::GridSolver(hapsyn::make_options<hapsyn::plugins::GridOptions>(options));
+}
+
 struct Brute {
   double score = -INFINITY;
   Eigen::VectorXd design;
@@ -78,7 +83,7 @@ TEST(Grid, MatchesBruteForceOnRandomSubBoxesForGiiGdiAndWeightedSum) {
       const Brute brute = brute_force(*study.problem);
       for (bool prune : {true, false}) {
         for (int threads : {1, 2}) {
-          hapsyn::plugins::GridSolver solver(Json{{"prune", prune}, {"progress_interval", 2.0}});
+          hapsyn::plugins::GridSolver solver = grid_solver(Json{{"prune", prune}, {"progress_interval", 2.0}});
           hapsyn::SolverContext context;
           context.threads = threads;
           const hapsyn::SolverResult result = solver.solve(*study.problem, context);
@@ -110,7 +115,7 @@ TEST(Grid, MatchesBruteForceOnRandomSubBoxesForGiiGdiAndWeightedSum) {
 
 TEST(Grid, StatusCountsAddUpToTheGridSize) {
   const hapsyn::Study study = hapsyn::load_study(hapsyn::test::fivebar_study(), hapsyn::test::registry());
-  hapsyn::plugins::GridSolver solver(Json{{"prune", true}, {"progress_interval", 2.0}});
+  hapsyn::plugins::GridSolver solver = grid_solver(Json{{"prune", true}, {"progress_interval", 2.0}});
   hapsyn::SolverContext context;
   context.threads = 2;
   const auto result = solver.solve(*study.problem, context);
@@ -127,7 +132,7 @@ TEST(Grid, InfeasibleGridIsAStatusWithAMessage) {
   doc["design"]["l1"] = {{"lower", 0.01}, {"upper", 0.02}, {"step", 0.01}};
   doc["design"]["l2"] = {{"lower", 0.01}, {"upper", 0.02}, {"step", 0.01}};
   const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
-  hapsyn::plugins::GridSolver solver(Json{{"prune", true}, {"progress_interval", 2.0}});
+  hapsyn::plugins::GridSolver solver = grid_solver(Json{{"prune", true}, {"progress_interval", 2.0}});
   const auto result = solver.solve(*study.problem, hapsyn::SolverContext{});
   EXPECT_EQ(result.status, hapsyn::SolverStatus::kInfeasible);
   EXPECT_NE(result.message.find("no feasible design"), std::string::npos) << result.message;
@@ -162,7 +167,7 @@ TEST(Grid, ParetoModeReturnsTheBruteForceFrontWithAndWithoutPruning) {
   ASSERT_GE(expected.size(), 5u);
   for (bool prune : {true, false}) {
     for (int threads : {1, 2}) {
-      const hapsyn::plugins::GridSolver grid(Json{{"prune", prune}, {"pareto", true}, {"progress_interval", 1e9}});
+      const hapsyn::plugins::GridSolver grid = grid_solver(Json{{"prune", prune}, {"pareto", true}, {"progress_interval", 1e9}});
       hapsyn::SolverContext context;
       context.threads = threads;
       const auto result = grid.solve(problem, context);
@@ -200,7 +205,7 @@ TEST(Grid, ParetoModeHandlesThreeObjectives) {
   const std::vector<hapsyn::Sense> max3(3, hapsyn::Sense::kMaximize);
   std::set<std::vector<double>> expected;
   for (std::size_t k : hapsyn::non_dominated(all, max3)) expected.insert(all[k]);
-  const hapsyn::plugins::GridSolver grid(Json{{"prune", true}, {"pareto", true}, {"progress_interval", 1e9}});
+  const hapsyn::plugins::GridSolver grid = grid_solver(Json{{"prune", true}, {"pareto", true}, {"progress_interval", 1e9}});
   hapsyn::SolverContext context;
   context.threads = 2;
   const auto result = grid.solve(*problem, context);

@@ -27,31 +27,61 @@
 /// a full workspace search agrees: the point is then a KKT point of the subproblem over all
 /// samples. A local optimizer can stop on a dominated point (a non-convex front, a local
 /// optimum); the final filter removes those, and the result records each subproblem's outcome.
+#include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
 
 namespace hapsyn::plugins {
 
 struct NbiOptions {
-  int points = 10;                    ///< grid points per simplex edge (shadow points included)
-  double constraint_tolerance = 1e-8; ///< SLSQP constraint tolerance (locals' and normalized units)
-  double xtol = 1e-7;                 ///< SLSQP relative tolerance on the variables
-  double ftol = 1e-10;                ///< SLSQP absolute tolerance on t
-  int max_evaluations = 200;          ///< SLSQP evaluations per run (plain and epigraph stage each)
-  int rounds = 6;                     ///< active-set rounds per subproblem
-  bool filter_dominated = true;       ///< drop dominated points from the front
-  bool design_constraints = false;    ///< hand the mechanism's design constraints to SLSQP
-  Json shadow_solver = {{"plugin", "culling"}, {"options", Json::object()}};
+  int points{};
+  double constraint_tolerance{};
+  double xtol{};
+  double ftol{};
+  int max_evaluations{};
+  int rounds{};
+  bool design_constraints{};
+  bool filter_dominated{};
+  SubSolver shadow_solver;
+
+  static void declare(OptionDeclarations<NbiOptions>& d) {
+    d.describe(
+        "Normal Boundary Intersection (Das & Dennis 1998): shadow optima by a sub-solver, payoff matrix, a simplex "
+        "grid of CHIM points, one SLSQP subproblem per point (epigraph form for worst-case metrics), warm-started "
+        "from its neighbour; dominated points filtered. Continuous design variables only.");
+    d.add(&NbiOptions::points, "points", 10,
+          "Grid points per edge of the simplex, shadow points included (2 objectives: the number of front points)")
+        .range(2, 1000);
+    d.add(&NbiOptions::constraint_tolerance, "constraint_tolerance", 1e-8,
+          "SLSQP constraint tolerance of each subproblem (normalized objectives, locals' units)")
+        .greater_than(0);
+    d.add(&NbiOptions::xtol, "xtol", 1e-7, "SLSQP relative tolerance on the design variables").greater_than(0);
+    d.add(&NbiOptions::ftol, "ftol", 1e-10, "SLSQP absolute tolerance on t (normalized objective units)")
+        .greater_than(0);
+    d.add(&NbiOptions::max_evaluations, "max_evaluations", 200, "SLSQP evaluations per run of each subproblem stage")
+        .minimum(1);
+    d.add(&NbiOptions::rounds, "rounds", 6,
+          "Active-set rounds per subproblem (each ends with a full workspace search)")
+        .minimum(1);
+    d.add(&NbiOptions::design_constraints, "design_constraints", false,
+          "Hand the mechanism's design constraints g(p) <= 0 to SLSQP (finite-difference gradients); switch on when "
+          "one binds the front, e.g. the five-bar's footprint");
+    d.add(&NbiOptions::filter_dominated, "filter_dominated", true, "Drop dominated points from the front");
+    d.add(&NbiOptions::shadow_solver, "shadow_solver", "culling",
+          "Single-objective solver for the shadow (individual) optima: {\"plugin\", \"options\"}");
+  }
 };
 
 class NbiSolver : public Solver {
  public:
-  explicit NbiSolver(const Json& options);
+  using Options = NbiOptions;
+  explicit NbiSolver(const NbiOptions& options) : options_(options) {}
   bool pareto() const override { return true; }
-  /// \throws Error("nbi", ...) with fewer than two objectives, or an integer free variable.
+  /// \throws Error("nbi", ...) with fewer than two objectives, an integer free variable, no free
+  ///         variable or a simplex grid too large; or when the shadow solver refuses one of the
+  ///         single-objective problems ("<shadow_solver's path> (objective '<name>'): <its message>").
   void check(const Problem& problem) const override;
-  /// Creates the shadow solver and checks it on each single-objective problem.
-  /// \throws Error naming solver.options.shadow_solver.
-  void prepare_sub_solvers(const Problem& problem, const Registry& registry) const override;
+  /// The front (kConverged); kInfeasible (or kStopped) when a shadow optimum is not found;
+  /// kFailed without a shadow solver (options made without a registry).
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
 
  private:

@@ -15,13 +15,11 @@ using hapsyn::test::expect_error;
 namespace {
 hapsyn::SolverResult solve_nbi(const hapsyn::Problem& problem, Json options) {
   options["shadow_solver"] = {{"plugin", "culling"}, {"options", {{"start_points", 3}, {"progress_interval", 1e9}}}};
-  const hapsyn::plugins::NbiSolver nbi(hapsyn::test::registry().resolve_options("nbi", options, "solver.options"));
-  nbi.check(problem);
-  nbi.prepare_sub_solvers(problem, hapsyn::test::registry());
+  const auto nbi = hapsyn::test::registry().create_solver("nbi", options, "solver");  // creates the shadow solver
+  nbi->check(problem);
   hapsyn::SolverContext context;
   context.threads = 2;
-  context.registry = &hapsyn::test::registry();
-  return nbi.solve(problem, context);
+  return nbi->solve(problem, context);
 }
 }  // namespace
 
@@ -101,7 +99,7 @@ TEST(Nbi, RefusesASingleObjectiveAndIntegerVariables) {
   components[0].integer = true;
   components[0].step = 1.0;
   const auto integer = problem->with_design_space(hapsyn::DesignSpace(components));
-  const hapsyn::plugins::NbiSolver nbi(hapsyn::test::registry().resolve_options("nbi", Json::object(), "solver.options"));
+  const hapsyn::plugins::NbiSolver nbi(hapsyn::default_options<hapsyn::plugins::NbiOptions>());
   expect_error([&] { nbi.check(*integer); }, {"nbi: design.x0 is integer-valued"});
 }
 
@@ -130,11 +128,12 @@ TEST(Nbi, ShadowSolverThatRefusesTheProblemIsReportedAtLoad) {
 }
 
 TEST(Nbi, WithoutARegistryFailsWithAStatus) {
+  // Options made without a registry: the shadow solver is never created.
   const auto problem = hapsyn::test::two_objective_problem();
-  const hapsyn::plugins::NbiSolver nbi(hapsyn::test::registry().resolve_options("nbi", Json::object(), "solver.options"));
+  const hapsyn::plugins::NbiSolver nbi(hapsyn::default_options<hapsyn::plugins::NbiOptions>());
   const auto result = nbi.solve(*problem, hapsyn::SolverContext{});
   EXPECT_EQ(result.status, hapsyn::SolverStatus::kFailed);
-  EXPECT_NE(result.message.find("needs the plugin registry"), std::string::npos);
+  EXPECT_NE(result.message.find("nbi has no shadow solver"), std::string::npos) << result.message;
 }
 
 TEST(Nbi, FiveBarFrontIsNotDominatedByExhaustiveSearch) {
@@ -150,7 +149,6 @@ TEST(Nbi, FiveBarFrontIsNotDominatedByExhaustiveSearch) {
   hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
   hapsyn::SolverContext context;
   context.threads = 2;
-  context.registry = &hapsyn::test::registry();
   const auto nbi = study.solver->solve(*study.problem, context);
   ASSERT_EQ(nbi.status, hapsyn::SolverStatus::kConverged) << nbi.message;
   ASSERT_GE(nbi.front.size(), 5u);

@@ -1,6 +1,6 @@
 #include "sequential.hpp"
 
-#include "../shared/sub_solver.hpp"
+#include "shared/sub_solver.hpp"
 
 #include <hapsyn/error.hpp>
 
@@ -9,18 +9,14 @@
 
 namespace hapsyn::plugins {
 
-SequentialSolver::SequentialSolver(const Json& o)
-    : variable_(o.value("variable", std::string("r"))),
-      sub_solver_(o.value("sub_solver", Json{{"plugin", "culling"}, {"options", Json::object()}})) {}
-
 std::size_t SequentialSolver::free_index(const Problem& problem) const {
   const DesignSpace& space = problem.design_space();
   for (std::size_t k = 0; k < space.free_size(); ++k) {
-    if (space.components()[static_cast<std::size_t>(space.free_indices()[k])].name == variable_) return k;
+    if (space.components()[static_cast<std::size_t>(space.free_indices()[k])].name == options_.variable) return k;
   }
   std::string free;
   for (int i : space.free_indices()) free += (free.empty() ? "" : ", ") + space.components()[static_cast<std::size_t>(i)].name;
-  throw Error("sequential", "solver.options.variable = \"" + variable_ + "\": not a free design variable (free: " +
+  throw Error("sequential", "solver.options.variable = \"" + options_.variable + "\": not a free design variable (free: " +
                                 (free.empty() ? std::string("none") : free) + ")");
 }
 
@@ -35,23 +31,16 @@ void SequentialSolver::check(const Problem& problem) const {
   if (!(c.step > 0.0)) {
     throw Error("sequential", "design." + c.name + " has no step: the independent variable is searched value by value");
   }
-}
-
-void SequentialSolver::prepare_sub_solvers(const Problem& problem, const Registry& registry) const {
-  const auto solver = make_sub_solver(registry, sub_solver_, "sequential", "solver.options.sub_solver");
-  const std::size_t k = free_index(problem);
-  const DesignComponent& c =
-      problem.design_space().components()[static_cast<std::size_t>(problem.design_space().free_indices()[k])];
-  check_sub_solver(*solver, *fixed_component_problem(*single_objective_problem(problem, 0), k, c.lower), "sequential",
-                   "solver.options.sub_solver");
+  // The sub-solver sees the first objective with the variable fixed (here at its first value).
+  check_sub_solver(options_.sub_solver, *fixed_component_problem(*single_objective_problem(problem, 0), k, c.lower),
+                   "sequential", options_.sub_solver.json_path);
 }
 
 SolverResult SequentialSolver::solve(const Problem& problem, const SolverContext& context) const {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
   SolverResult result;
-  const auto solver =
-      sub_solver_for_solve(context, sub_solver_, "sequential", "solver.options.sub_solver", "sub-solver", result);
+  const Solver* solver = sub_solver_for_solve(options_.sub_solver, "sequential", "sub-solver", result);
   if (!solver) return result;
   const std::size_t k = free_index(problem);
   const auto first = single_objective_problem(problem, 0);
@@ -86,20 +75,20 @@ SolverResult SequentialSolver::solve(const Problem& problem, const SolverContext
     }
     per_value.push_back(record);
   }
-  result.statistics = {{"variable", variable_},
+  result.statistics = {{"variable", options_.variable},
                        {"per_value", per_value},
-                       {"sub_solver", sub_solver_},
+                       {"sub_solver", sub_solver_json(options_.sub_solver)},
                        {"seconds", std::chrono::duration<double>(Clock::now() - t_start).count()}};
   if (!chosen) {
     result.status = stopped ? SolverStatus::kStopped : SolverStatus::kInfeasible;
-    result.message = "no value of " + variable_ + " gave a feasible design";
+    result.message = "no value of " + options_.variable + " gave a feasible design";
     return result;
   }
   result.best = chosen;
   result.status = stopped ? SolverStatus::kStopped : SolverStatus::kConverged;
   std::ostringstream message;
   message << "sequential: best " << problem.objectives()[0].name << " for each of " << per_value.size()
-          << " values of " << variable_ << ", then the best " << problem.objectives()[1].name << " among them";
+          << " values of " << options_.variable << ", then the best " << problem.objectives()[1].name << " among them";
   result.message = message.str();
   return result;
 }

@@ -7,26 +7,46 @@
 /// second objective. The result is that one design (`best`); every per-value design is in the
 /// statistics (Figure 6). Against a reference front (the problem's "indicators" section)
 /// result.json reports whether the design is dominated and by how much in each objective.
+#include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
+
+#include <string>
 
 namespace hapsyn::plugins {
 
+struct SequentialOptions {
+  std::string variable;
+  SubSolver sub_solver;
+
+  static void declare(OptionDeclarations<SequentialOptions>& d) {
+    d.describe(
+        "Sequential optimization (Unal 2008, Figures 6-7): for each grid value of one design variable, the best "
+        "design for the first objective (sub-solver); among those, the best for the second objective. Exactly two "
+        "objectives.");
+    d.add(&SequentialOptions::variable, "variable", "r",
+          "The independent design variable (a free component with a grid step), e.g. the five-bar's r");
+    d.add(&SequentialOptions::sub_solver, "sub_solver", "culling",
+          "Single-objective solver of the first objective per value: {\"plugin\", \"options\"}");
+  }
+};
+
 class SequentialSolver : public Solver {
  public:
-  explicit SequentialSolver(const Json& options);
+  using Options = SequentialOptions;
+  explicit SequentialSolver(const SequentialOptions& options) : options_(options) {}
   /// Two objectives make a comparison with fronts, not a weighted sum.
   bool pareto() const override { return true; }
   /// \throws Error("sequential", ...) unless there are exactly two objectives and `variable` is a
-  ///         free design component with a grid step.
+  ///         free design component with a grid step; or when the sub-solver refuses the first
+  ///         objective's problem with the variable fixed ("<sub_solver's path>: <its message>").
   void check(const Problem& problem) const override;
-  /// \throws Error naming solver.options.sub_solver.
-  void prepare_sub_solvers(const Problem& problem, const Registry& registry) const override;
+  /// The chosen design (kConverged); kInfeasible when no value gave a feasible design; kFailed
+  /// without a sub-solver (options made without a registry).
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
 
  private:
   std::size_t free_index(const Problem& problem) const;
-  std::string variable_;
-  Json sub_solver_;
+  SequentialOptions options_;
 };
 
 }  // namespace hapsyn::plugins

@@ -2,6 +2,7 @@
 // value), and its error paths.
 #include "sequential.hpp"
 
+#include "analytic_problems.hpp"
 #include "test_support.hpp"
 
 using hapsyn::Json;
@@ -20,7 +21,6 @@ TEST(Sequential, PicksTheBestSecondObjectiveAmongTheFirstObjectiveOptimaPerValue
   const hapsyn::Study study = hapsyn::load_study(sequential_doc(), hapsyn::test::registry());
   hapsyn::SolverContext context;
   context.threads = 2;
-  context.registry = &hapsyn::test::registry();
   const auto result = study.solver->solve(*study.problem, context);
   ASSERT_EQ(result.status, hapsyn::SolverStatus::kConverged) << result.message;
   ASSERT_TRUE(result.best);
@@ -63,8 +63,11 @@ TEST(Sequential, RefusesWrongObjectivesAndVariables) {
 }
 
 TEST(Sequential, WithoutARegistryFailsWithAStatus) {
-  const hapsyn::Study study = hapsyn::load_study(sequential_doc(), hapsyn::test::registry());
-  const auto result = study.solver->solve(*study.problem, hapsyn::SolverContext{});
+  // Options made without a registry: the sub-solver is never created.
+  const auto problem = hapsyn::test::two_objective_problem();
+  const hapsyn::plugins::SequentialSolver solver(
+      hapsyn::make_options<hapsyn::plugins::SequentialOptions>(Json{{"variable", "x1"}}));
+  const auto result = solver.solve(*problem, hapsyn::SolverContext{});
   EXPECT_EQ(result.status, hapsyn::SolverStatus::kFailed);
-  EXPECT_NE(result.message.find("needs the plugin registry"), std::string::npos);
+  EXPECT_NE(result.message.find("sequential has no sub-solver"), std::string::npos) << result.message;
 }

@@ -252,6 +252,88 @@ std::vector<int> near_critical(const Problem& problem, const std::vector<LocalIn
   return chosen;
 }
 
+// z's start for one round: each local's reduction over the active samples (g.values holds the
+// locals of the round's start design), then the goal's extra variables from z.
+void start_epigraph_variables(const Epigraph& g, const MinMaxGoal& goal, std::vector<double>& y) {
+  const std::size_t L = g.locals.size();
+  for (std::size_t l = 0; l < L; ++l) {
+    double v = g.locals[l].reduction == Reduction::kMin ? kInf : -kInf;
+    for (std::size_t s = 0; s < g.active.size(); ++s) {
+      v = g.locals[l].reduction == Reduction::kMin ? std::min(v, g.values[s * L + l]) : std::max(v, g.values[s * L + l]);
+    }
+    y[g.n + l] = v;
+  }
+  if (goal.extra > 0) goal.initial_extra(y.data() + g.n, y.data() + g.n + L);
+}
+
+// One SLSQP run over y = (p, z, e) with the active set in g; y becomes SLSQP's final iterate and
+// g.best_y the best iterate that met every constraint. Returns NLopt's outcome.
+std::string run_epigraph_slsqp(Epigraph& g, const MinMaxGoal& goal, const SqpSettings& settings,
+                               std::vector<double>& y) {
+  const unsigned dim = static_cast<unsigned>(y.size());
+  std::vector<double> lo(dim, -HUGE_VAL), hi(dim, HUGE_VAL);
+  std::copy(g.lower.begin(), g.lower.end(), lo.begin());
+  std::copy(g.upper.begin(), g.upper.end(), hi.begin());
+  nlopt::opt opt(nlopt::LD_SLSQP, dim);
+  opt.set_lower_bounds(lo);
+  opt.set_upper_bounds(hi);
+  opt.set_max_objective(epigraph_objective, &g);
+  const std::size_t rows = g.active.size() * g.locals.size() + static_cast<std::size_t>(goal.constraints);
+  opt.add_inequality_mconstraint(epigraph_constraints, &g, std::vector<double>(rows, settings.constraint_tolerance));
+  DesignConstraints design{g.problem, g.n, g.lower, g.upper, {}, {}, {}};
+  if (settings.design_constraints) add_design_constraints(opt, design, settings.constraint_tolerance);
+  opt.set_xtol_rel(settings.xtol);
+  opt.set_ftol_abs(settings.ftol);
+  opt.set_maxeval(settings.max_evaluations);
+  double f = 0.0;
+  g.best_y.clear();
+  g.best_objective = -kInf;
+  try {
+    return nlopt_result_name(opt.optimize(y, f));
+  } catch (const std::exception& e) {
+    // Round-off and similar NLopt stops are outcomes, not errors: the best point seen stands.
+    return std::string("stopped: ") + e.what();
+  }
+}
+
+// Candidates of a round: SLSQP's final iterate y and the best iterate that met every constraint;
+// each is searched over the whole workspace, which is what decides. The best feasible one
+// becomes `current` (and `out`'s point when it beats it); samples critical at any of them join
+// `active` (`grew` says whether one did). Returns false when no candidate is feasible.
+bool adopt_best_candidate(const Epigraph& g, const MinMaxGoal& goal, const std::vector<double>& y,
+                          Problem::Workspace& workspace, std::set<int>& active, std::vector<double>& current,
+                          bool& grew, SqpOutcome& out) {
+  std::vector<std::vector<double>> candidates = {y};
+  if (!g.best_y.empty() && g.best_y != y) candidates.push_back(g.best_y);
+  grew = false;
+  std::vector<double> p(g.n);
+  bool any_feasible = false;
+  double p_merit = -kInf;
+  for (const auto& cand : candidates) {
+    std::vector<double> q(cand.begin(), cand.begin() + static_cast<std::ptrdiff_t>(g.n));
+    for (std::size_t k = 0; k < g.n; ++k) q[k] = std::clamp(q[k], g.lower[k], g.upper[k]);
+    const Evaluation& e = g.problem->evaluate(q.data(), workspace);
+    ++out.evaluations;
+    out.samples += e.samples_evaluated;
+    if (e.status != EvalStatus::kFeasible) continue;
+    for (const auto& list : e.critical_samples) {
+      for (int s : list) grew = active.insert(s).second || grew;
+    }
+    const double merit = goal.merit(e);
+    if (!any_feasible || merit > p_merit) {
+      p = q;
+      p_merit = merit;
+    }
+    any_feasible = true;
+    if (merit > out.merit) {
+      out.merit = merit;
+      out.x = q;
+    }
+  }
+  if (any_feasible) current = p;
+  return any_feasible;
+}
+
 SqpOutcome run_epigraph(const Problem& problem, std::vector<double> x, const std::vector<double>& lower,
                         const std::vector<double>& upper, const SqpSettings& settings, const MinMaxGoal& goal) {
   const auto t0 = Clock::now();
@@ -279,78 +361,19 @@ SqpOutcome run_epigraph(const Problem& problem, std::vector<double> x, const std
   std::set<int> active;
   for (int s : near_critical(problem, g.locals, x.data(), *workspace, 0.02, 8, out.samples)) active.insert(s);
   std::vector<double> current = x;
-  const std::size_t L = g.locals.size();
-  const std::size_t E = static_cast<std::size_t>(goal.extra);
+  const std::size_t dim = g.n + g.zsize() + static_cast<std::size_t>(goal.extra);
   for (int round = 0; round < settings.rounds; ++round) {
     g.active.assign(active.begin(), active.end());
-    const unsigned dim = static_cast<unsigned>(g.n + L + E);
-    std::vector<double> y(dim), lo(dim, -HUGE_VAL), hi(dim, HUGE_VAL);
+    std::vector<double> y(dim);
     std::copy(current.begin(), current.end(), y.begin());
-    std::copy(lower.begin(), lower.end(), lo.begin());
-    std::copy(upper.begin(), upper.end(), hi.begin());
     if (!g.locals_at(current.data())) break;
-    for (std::size_t l = 0; l < L; ++l) {  // z starts at the reductions over the active set
-      double v = g.locals[l].reduction == Reduction::kMin ? kInf : -kInf;
-      for (std::size_t s = 0; s < g.active.size(); ++s) {
-        v = g.locals[l].reduction == Reduction::kMin ? std::min(v, g.values[s * L + l]) : std::max(v, g.values[s * L + l]);
-      }
-      y[g.n + l] = v;
-    }
-    if (E > 0) goal.initial_extra(y.data() + g.n, y.data() + g.n + L);
-    nlopt::opt opt(nlopt::LD_SLSQP, dim);
-    opt.set_lower_bounds(lo);
-    opt.set_upper_bounds(hi);
-    opt.set_max_objective(epigraph_objective, &g);
-    const std::size_t rows = g.active.size() * L + static_cast<std::size_t>(goal.constraints);
-    opt.add_inequality_mconstraint(epigraph_constraints, &g, std::vector<double>(rows, settings.constraint_tolerance));
-    DesignConstraints design{&problem, g.n, lower, upper, {}, {}, {}};
-    if (settings.design_constraints) add_design_constraints(opt, design, settings.constraint_tolerance);
-    opt.set_xtol_rel(settings.xtol);
-    opt.set_ftol_abs(settings.ftol);
-    opt.set_maxeval(settings.max_evaluations);
-    double f = 0.0;
-    g.best_y.clear();
-    g.best_objective = -kInf;
-    try {
-      out.status = nlopt_result_name(opt.optimize(y, f));
-    } catch (const std::exception& e) {
-      // Round-off and similar NLopt stops are outcomes, not errors: the best point seen stands.
-      out.status = std::string("stopped: ") + e.what();
-    }
+    start_epigraph_variables(g, goal, y);
+    out.status = run_epigraph_slsqp(g, goal, settings, y);
     ++out.rounds;
-    // Candidates: SLSQP's final iterate and the best iterate that met every constraint; each is
-    // searched over the whole workspace, which is what decides.
-    std::vector<std::vector<double>> candidates = {y};
-    if (!g.best_y.empty() && g.best_y != y) candidates.push_back(g.best_y);
     bool grew = false;
-    std::vector<double> p(g.n);
-    bool any_feasible = false;
-    double p_merit = -kInf;
-    for (const auto& cand : candidates) {
-      std::vector<double> q(cand.begin(), cand.begin() + static_cast<std::ptrdiff_t>(g.n));
-      for (std::size_t k = 0; k < g.n; ++k) q[k] = std::clamp(q[k], lower[k], upper[k]);
-      const Evaluation& e = problem.evaluate(q.data(), *workspace);
-      ++out.evaluations;
-      out.samples += e.samples_evaluated;
-      if (e.status != EvalStatus::kFeasible) continue;
-      for (const auto& list : e.critical_samples) {
-        for (int s : list) grew = active.insert(s).second || grew;
-      }
-      const double merit = goal.merit(e);
-      if (!any_feasible || merit > p_merit) {
-        p = q;
-        p_merit = merit;
-      }
-      any_feasible = true;
-      if (merit > out.merit) {
-        out.merit = merit;
-        out.x = q;
-      }
-    }
-    if (!any_feasible) break;
-    current = p;
+    if (!adopt_best_candidate(g, goal, y, *workspace, active, current, grew, out)) break;
     if (!grew) break;  // the full workspace agrees with the active set: converged
-    for (int s : near_critical(problem, g.locals, p.data(), *workspace, 0.02, 8, out.samples)) active.insert(s);
+    for (int s : near_critical(problem, g.locals, current.data(), *workspace, 0.02, 8, out.samples)) active.insert(s);
   }
   out.evaluations += g.evaluations;
   out.samples += g.samples;

@@ -25,6 +25,10 @@ void check_sub_solver(const SubSolver& sub_solver, const Problem& problem, const
   }
 }
 
+Json sub_solver_json(const SubSolver& sub_solver) {
+  return {{"plugin", sub_solver.plugin}, {"options", sub_solver.options}};
+}
+
 std::shared_ptr<const Problem> single_objective_problem(const Problem& problem, std::size_t index) {
   Objective o = problem.objectives().at(index);
   o.weight = 1.0;

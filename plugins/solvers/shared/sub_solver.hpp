@@ -2,7 +2,8 @@
 /// \file
 /// Running a solver inside a solver (nbi's shadow optima, weighted_sum's weights, sequential's
 /// per-value optima): checking the sub-solver the framework created from a
-/// `{"plugin", "options"}` option (hapsyn::SubSolver), and making the problems it solves. Shared by the solver plugins; not a plugin itself.
+/// `{"plugin", "options"}` option (hapsyn::SubSolver), and making the problems it solves.
+/// Shared by the solver plugins; not a plugin itself.
 #include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
 
@@ -24,6 +25,9 @@ const Solver* sub_solver_for_solve(const SubSolver& sub_solver, const std::strin
 /// sub-solver was not created (see sub_solver_for_solve).
 void check_sub_solver(const SubSolver& sub_solver, const Problem& problem, const std::string& component,
                       const std::string& where);
+
+/// The option as the problem file gives it, `{"plugin": NAME, "options": {...}}` (for statistics).
+Json sub_solver_json(const SubSolver& sub_solver);
 
 /// The problem with only objective `index` (weight 1): a shadow optimum's problem.
 std::shared_ptr<const Problem> single_objective_problem(const Problem& problem, std::size_t index);

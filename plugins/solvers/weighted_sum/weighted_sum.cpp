@@ -1,6 +1,6 @@
 #include "weighted_sum.hpp"
 
-#include "../shared/sub_solver.hpp"
+#include "shared/sub_solver.hpp"
 
 #include <hapsyn/error.hpp>
 #include <hapsyn/pareto.hpp>
@@ -12,52 +12,44 @@
 
 namespace hapsyn::plugins {
 
-WeightedSumSolver::WeightedSumSolver(const Json& o)
-    : weights_(o.value("weights", Json::array())),
-      count_(o.value("count", 10)),
-      sub_solver_(o.value("sub_solver", Json{{"plugin", "culling"}, {"options", Json::object()}})) {}
-
 std::vector<std::vector<double>> WeightedSumSolver::weight_vectors(std::size_t objectives) const {
-  if (weights_.empty()) return simplex_grid(static_cast<int>(objectives), count_ - 1);
-  std::vector<std::vector<double>> out;
-  for (const Json& w : weights_) out.push_back(w.get<std::vector<double>>());
-  return out;
+  if (options_.weights.empty()) return simplex_grid(static_cast<int>(objectives), options_.count - 1);
+  return options_.weights;
 }
 
 void WeightedSumSolver::check(const Problem& problem) const {
   const std::size_t m = problem.objectives().size();
   if (m < 2) throw Error("weighted_sum", "objectives: " + std::to_string(m) + " objective(s); a Pareto study needs at least 2");
-  for (std::size_t k = 0; k < weights_.size(); ++k) {
+  for (std::size_t k = 0; k < options_.weights.size(); ++k) {
+    const std::vector<double>& weights = options_.weights[k];
     const std::string path = "solver.options.weights[" + std::to_string(k) + "]";
-    if (weights_[k].size() != m) {
-      throw Error("weighted_sum", path + " = " + render_value(weights_[k]) + ": must have " + std::to_string(m) +
+    if (weights.size() != m) {
+      throw Error("weighted_sum", path + " = " + render_value(Json(weights)) + ": must have " + std::to_string(m) +
                                       " weights (one per objective)");
     }
     double sum = 0.0;
     for (std::size_t i = 0; i < m; ++i) {
-      const double w = weights_[k][i];
+      const double w = weights[i];
       if (!std::isfinite(w) || w < 0.0) {
-        throw Error("weighted_sum", path + "[" + std::to_string(i) + "] = " + render_value(weights_[k][i]) +
+        throw Error("weighted_sum", path + "[" + std::to_string(i) + "] = " + render_value(Json(w)) +
                                         ": must be finite and >= 0");
       }
       sum += w;
     }
-    if (!(sum > 0.0)) throw Error("weighted_sum", path + " = " + render_value(weights_[k]) + ": the weights must not all be 0");
+    if (!(sum > 0.0)) throw Error("weighted_sum", path + " = " + render_value(Json(weights)) + ": the weights must not all be 0");
   }
-  weight_vectors(m);  // the simplex grid's size check
-}
-
-void WeightedSumSolver::prepare_sub_solvers(const Problem& problem, const Registry& registry) const {
-  const auto solver = make_sub_solver(registry, sub_solver_, "weighted_sum", "solver.options.sub_solver");
-  check_sub_solver(*solver, problem, "weighted_sum", "solver.options.sub_solver");
+  // The simplex grid's size check, then the sub-solver on every problem it will be given.
+  for (const std::vector<double>& w : weight_vectors(m)) {
+    check_sub_solver(options_.sub_solver, *reweighted_problem(problem, w), "weighted_sum",
+                     options_.sub_solver.json_path);
+  }
 }
 
 SolverResult WeightedSumSolver::solve(const Problem& problem, const SolverContext& context) const {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
   SolverResult result;
-  const auto solver =
-      sub_solver_for_solve(context, sub_solver_, "weighted_sum", "solver.options.sub_solver", "sub-solver", result);
+  const Solver* solver = sub_solver_for_solve(options_.sub_solver, "weighted_sum", "sub-solver", result);
   if (!solver) return result;
   const std::size_t m = problem.objectives().size();
   std::vector<SolutionPoint> points;
@@ -92,7 +84,7 @@ SolverResult WeightedSumSolver::solve(const Problem& problem, const SolverContex
     return (senses[0] == Sense::kMaximize ? 1.0 : -1.0) * (a.objectives[0] - b.objectives[0]) > 0;
   });
   result.statistics = {{"runs", runs}, {"designs_found", points.size()}, {"distinct_non_dominated", keep.size()},
-                       {"sub_solver", sub_solver_},
+                       {"sub_solver", sub_solver_json(options_.sub_solver)},
                        {"seconds", std::chrono::duration<double>(Clock::now() - t_start).count()}};
   std::ostringstream message;
   message << "weighted sums: " << runs.size() << " weight vectors gave " << keep.size()

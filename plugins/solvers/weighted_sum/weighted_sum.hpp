@@ -6,28 +6,51 @@
 /// designs found are evaluated on every objective and the non-dominated ones form the front.
 /// Weighted sums cannot reach the non-convex parts of a front, and equally spaced weights give
 /// unequally spaced points (they clump): the statistics keep every weight's design to show it.
+#include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
+
+#include <vector>
 
 namespace hapsyn::plugins {
 
+struct WeightedSumOptions {
+  int count{};
+  std::vector<std::vector<double>> weights;
+  SubSolver sub_solver;
+
+  static void declare(OptionDeclarations<WeightedSumOptions>& d) {
+    d.describe(
+        "Weighted-sum (aggregated index) Pareto study: one single-objective sub-solver run per weight vector; the "
+        "non-dominated designs form the front (Unal 2008, Figure 3).");
+    d.add(&WeightedSumOptions::count, "count", 10,
+          "Weight vectors per edge of the simplex when `weights` is empty (2 objectives: lambda = 0, 1/(count-1), "
+          "..., 1)")
+        .range(2, 1000);
+    d.add(&WeightedSumOptions::weights, "weights", {},
+          "Explicit weight vectors, one weight per objective each (overrides count)");
+    d.add(&WeightedSumOptions::sub_solver, "sub_solver", "culling",
+          "Single-objective solver of each weighted sum: {\"plugin\", \"options\"}");
+  }
+};
+
 class WeightedSumSolver : public Solver {
  public:
-  explicit WeightedSumSolver(const Json& options);
+  using Options = WeightedSumOptions;
+  explicit WeightedSumSolver(const WeightedSumOptions& options) : options_(options) {}
   bool pareto() const override { return true; }
   /// \throws Error("weighted_sum", ...) with fewer than two objectives, or when a weight vector
-  ///         has the wrong length, a negative or non-finite entry, or sums to zero.
+  ///         has the wrong length, a negative or non-finite entry, or sums to zero; or when the
+  ///         sub-solver refuses a reweighted problem ("<sub_solver's path>: <its message>").
   void check(const Problem& problem) const override;
-  /// \throws Error naming solver.options.sub_solver (unknown plugin, bad options, refused problem).
-  void prepare_sub_solvers(const Problem& problem, const Registry& registry) const override;
+  /// The front (kConverged); kInfeasible when no weight found a feasible design; kFailed
+  /// without a sub-solver (options made without a registry).
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
   /// The weight vectors the options give for `objectives` objectives: `weights` when given,
   /// else the simplex grid with `count` points per edge.
   std::vector<std::vector<double>> weight_vectors(std::size_t objectives) const;
 
  private:
-  Json weights_;   // array of arrays, or empty
-  int count_ = 10;
-  Json sub_solver_;
+  WeightedSumOptions options_;
 };
 
 }  // namespace hapsyn::plugins

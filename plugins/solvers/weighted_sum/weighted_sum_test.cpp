@@ -11,14 +11,12 @@ using hapsyn::test::expect_error;
 namespace {
 hapsyn::SolverResult solve_weighted(const hapsyn::Problem& problem, Json options) {
   options["sub_solver"] = {{"plugin", "grid"}, {"options", {{"progress_interval", 1e9}}}};
-  const hapsyn::plugins::WeightedSumSolver solver(
-      hapsyn::test::registry().resolve_options("weighted_sum", options, "solver.options"));
-  solver.check(problem);
-  solver.prepare_sub_solvers(problem, hapsyn::test::registry());
+  // The registry creates the sub-solver.
+  const auto solver = hapsyn::test::registry().create_solver("weighted_sum", options, "solver");
+  solver->check(problem);
   hapsyn::SolverContext context;
   context.threads = 2;
-  context.registry = &hapsyn::test::registry();
-  return solver.solve(problem, context);
+  return solver->solve(problem, context);
 }
 }  // namespace
 
@@ -69,10 +67,10 @@ TEST(WeightedSum, SubSolverErrorsNameTheOption) {
 }
 
 TEST(WeightedSum, WithoutARegistryFailsWithAStatus) {
+  // Options made without a registry: the sub-solver is never created.
   const auto problem = hapsyn::test::two_objective_problem();
-  const hapsyn::plugins::WeightedSumSolver solver(
-      hapsyn::test::registry().resolve_options("weighted_sum", Json::object(), "solver.options"));
+  const hapsyn::plugins::WeightedSumSolver solver(hapsyn::default_options<hapsyn::plugins::WeightedSumOptions>());
   const auto result = solver.solve(*problem, hapsyn::SolverContext{});
   EXPECT_EQ(result.status, hapsyn::SolverStatus::kFailed);
-  EXPECT_NE(result.message.find("needs the plugin registry"), std::string::npos);
+  EXPECT_NE(result.message.find("weighted_sum has no sub-solver"), std::string::npos) << result.message;
 }
