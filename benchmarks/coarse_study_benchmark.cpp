@@ -23,7 +23,8 @@ hapsyn::Study& coarse_study() {
 void BM_CoarseGridStudy(benchmark::State& state) {
   const hapsyn::Study& study = coarse_study();
   const bool prune = state.range(0) != 0;
-  hapsyn::plugins::GridSolver solver(hapsyn::Json{{"prune", prune}, {"progress_interval", 1e9}});
+  hapsyn::plugins::GridSolver solver(
+      hapsyn::make_options<hapsyn::plugins::GridOptions>(hapsyn::Json{{"prune", prune}, {"progress_interval", 1e9}}));
   hapsyn::SolverContext context;
   context.threads = static_cast<int>(state.range(1));
   hapsyn::SolverResult result;
