@@ -76,11 +76,13 @@ void BM_Compare_Culling(benchmark::State& state) {
   run(state, solver, study(state.range(0) ? "gdi" : "gii", 10, 5));
 }
 void BM_Compare_Exhaustive(benchmark::State& state) {
-  const hapsyn::plugins::GridSolver solver({{"prune", false}, {"progress_interval", 1e9}});
+  const hapsyn::plugins::GridSolver solver(
+      hapsyn::make_options<hapsyn::plugins::GridOptions>(hapsyn::Json{{"prune", false}, {"progress_interval", 1e9}}));
   run(state, solver, study(state.range(0) ? "gdi" : "gii", 10, 5));
 }
 void BM_Compare_ExhaustivePruned(benchmark::State& state) {
-  const hapsyn::plugins::GridSolver solver({{"prune", true}, {"progress_interval", 1e9}});
+  const hapsyn::plugins::GridSolver solver(
+      hapsyn::make_options<hapsyn::plugins::GridOptions>(hapsyn::Json{{"prune", true}, {"progress_interval", 1e9}}));
   run(state, solver, study(state.range(0) ? "gdi" : "gii", 10, 5));
 }
 BENCHMARK(BM_Compare_Culling)->ArgName("gdi")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
