@@ -67,8 +67,8 @@ void BM_FiveBarIkJacobianInertiaMass(benchmark::State& state) { solve_all(state,
 void BM_FiveBarGiiAndGdiFullEvaluation(benchmark::State& state) {
   const SampleSet& set = scene();
   const FiveBarModel& m = model();
-  const Gii gii(Json::object());
-  const Gdi gdi(Json::object());
+  const Gii gii;
+  const Gdi gdi;
   hapsyn::MechanismScratch scratch;
   SampleQuantities q;
   for (auto _ : state) {
@@ -100,7 +100,7 @@ std::vector<SampleQuantities> solved_samples() {
 
 void BM_GiiLocal(benchmark::State& state) {
   const std::vector<SampleQuantities> samples = solved_samples();
-  const Gii gii(Json::object());
+  const Gii gii;
   for (auto _ : state) {
     for (const SampleQuantities& q : samples) {
       double local[2];
@@ -113,7 +113,7 @@ void BM_GiiLocal(benchmark::State& state) {
 
 void BM_GdiLocal(benchmark::State& state) {
   const std::vector<SampleQuantities> samples = solved_samples();
-  const Gdi gdi(Json::object());
+  const Gdi gdi;
   for (auto _ : state) {
     for (const SampleQuantities& q : samples) {
       double local = 0.0;
