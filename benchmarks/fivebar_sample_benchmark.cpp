@@ -35,7 +35,8 @@ const SampleSet& scene() {
 }
 
 const FiveBarModel& model() {
-  static const FiveBarModel m(FiveBarDesign{0.0004, 0.2997, 0.3000, 0.4196}, FiveBarOptions{});
+  static const FiveBarModel m(FiveBarDesign{0.0004, 0.2997, 0.3000, 0.4196},
+                              hapsyn::default_options<FiveBarOptions>());
   return m;
 }
 
@@ -125,7 +126,7 @@ void BM_GdiLocal(benchmark::State& state) {
 }
 
 void BM_FiveBarReachConstraint(benchmark::State& state) {
-  const FiveBar mechanism(Json::object());
+  const FiveBar mechanism(hapsyn::default_options<FiveBarOptions>());
   const double design[4] = {0.0004, 0.2997, 0.3000, 0.4196};
   double g = 0.0;
   for (auto _ : state) {

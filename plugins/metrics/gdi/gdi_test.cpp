@@ -86,7 +86,7 @@ TEST(Gdi, TwoSampleSceneTakesTheHeaviestSample) {
 
 TEST(Gdi, FiveBarSampleMatchesTheSvdOfItsEffectiveMass) {
   using namespace hapsyn::plugins;
-  const FiveBarModel model(FiveBarDesign{0.0001, 0.0899, 0.1152, 0.1236}, FiveBarOptions{});
+  const FiveBarModel model(FiveBarDesign{0.0001, 0.0899, 0.1152, 0.1236}, hapsyn::default_options<FiveBarOptions>());
   hapsyn::MechanismScratch scratch;
   SampleQuantities q;
   const double pose[2] = {0.05, 0.05};

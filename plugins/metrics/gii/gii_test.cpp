@@ -139,7 +139,7 @@ TEST(Gii, TwoSampleSceneCombinesTheWorstCasesOfDifferentSamples) {
 
 TEST(Gii, FiveBarSampleMatchesTheSvdOfItsJacobian) {
   using namespace hapsyn::plugins;
-  const FiveBarModel model(FiveBarDesign{0.0004, 0.2997, 0.3, 0.4196}, FiveBarOptions{});
+  const FiveBarModel model(FiveBarDesign{0.0004, 0.2997, 0.3, 0.4196}, hapsyn::default_options<FiveBarOptions>());
   hapsyn::MechanismScratch scratch;
   SampleQuantities q;
   const double pose[2] = {0.05, -0.05};
