@@ -60,7 +60,7 @@ const Haptic6RModel& model() {
 }
 
 void run_terms(benchmark::State& state, const Json& terms) {
-  const Coverage metric(Json{{"terms", terms}});
+  const Coverage metric(hapsyn::make_options<CoverageOptions>(Json{{"terms", terms}}));
   const SampleSet& s = scene();
   const Haptic6RModel& m = model();
   auto scratch = mechanism().make_scratch();
