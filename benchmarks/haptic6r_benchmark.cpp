@@ -47,7 +47,7 @@ const SampleSet& scene() {
 
 const Haptic6R& mechanism() {
   static const Haptic6R m = [] {
-    Haptic6R h(Json::object());
+    Haptic6R h(hapsyn::default_options<Haptic6ROptions>());
     h.check_scene(scene());
     return h;
   }();

@@ -127,7 +127,7 @@ TEST(Coverage, LocalValuesOnScenePosesMatchNaiveEquations) {
   Study s = load_study(doc, test::registry());
   const SampleSet& scene = s.problem->samples();
   ASSERT_TRUE(scene.attributes.count("M_v") && scene.attributes.count("M_a"));
-  Haptic6R mech(Json::object());
+  const Haptic6R mech(default_options<Haptic6ROptions>());
   mech.check_scene(scene);
   const std::vector<double> design{0.45, 0.45, 0.65, 0.55, 0.15, 3, 3, 2, 2, 1, 1, 2, 2, 3, 2, 3, 3};
   auto model = mech.build(design.data());
@@ -215,7 +215,7 @@ TEST(Coverage, EvaluatorComputesOnlyWhatTheTermsNeed) {
     const Problem& p = *s.problem;
     EXPECT_EQ(p.samples().attributes.count("M_v") == 1, c.m_v) << c.terms.dump();
     EXPECT_EQ(p.samples().attributes.count("M_a") == 1, c.m_a) << c.terms.dump();
-    auto mech = std::make_shared<CountingMechanism>(std::make_shared<Haptic6R>(Json::object()));
+    auto mech = std::make_shared<CountingMechanism>(std::make_shared<Haptic6R>(default_options<Haptic6ROptions>()));
     Problem counted("haptic6r", mech, std::make_shared<const SampleSet>(p.samples()), p.metrics(), p.objectives(),
                     p.design_space());
     g_needs_seen = 0;
@@ -284,7 +284,7 @@ TEST(Coverage, EvaluatorResolvedAttributesGiveTheSameValuesAsLookupByName) {
     Study s = load_study(study(terms), test::registry());
     const SampleSet& scene = s.problem->samples();
     const Coverage metric = coverage(Json{{"terms", terms}});
-    Haptic6R mech(Json::object());
+    const Haptic6R mech(default_options<Haptic6ROptions>());
     const std::vector<double> design{0.45, 0.45, 0.65, 0.55, 0.15, 3, 3, 2, 2, 1, 1, 2, 2, 3, 2, 3, 3};
     auto model = mech.build(design.data());
     auto scratch = mech.make_scratch();
@@ -333,7 +333,7 @@ class AttributeProbe final : public Metric {
 TEST(Coverage, EvaluatorHandsEachMetricItsAttributeRowsInDeclaredOrder) {
   Study s = load_study(study(Json::array({"velocity", "acceleration"})), test::registry());
   auto scene = std::make_shared<SampleSet>(s.problem->samples());
-  auto mech = std::make_shared<Haptic6R>(Json::object());
+  auto mech = std::make_shared<Haptic6R>(default_options<Haptic6ROptions>());
   // Two metrics with the attributes in opposite orders: each sees its own order.
   std::vector<MetricEntry> metrics = {{"probe_va", std::make_shared<AttributeProbe>(std::vector<std::string>{"M_v", "M_a"})},
                                       {"probe_av", std::make_shared<AttributeProbe>(std::vector<std::string>{"M_a", "M_v"})}};
