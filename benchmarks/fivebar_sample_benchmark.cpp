@@ -35,7 +35,8 @@ const SampleSet& scene() {
 }
 
 const FiveBarModel& model() {
-  static const FiveBarModel m(FiveBarDesign{0.0004, 0.2997, 0.3000, 0.4196}, FiveBarOptions{});
+  static const FiveBarModel m(FiveBarDesign{0.0004, 0.2997, 0.3000, 0.4196},
+                              hapsyn::default_options<FiveBarOptions>());
   return m;
 }
 
@@ -67,8 +68,8 @@ void BM_FiveBarIkJacobianInertiaMass(benchmark::State& state) { solve_all(state,
 void BM_FiveBarGiiAndGdiFullEvaluation(benchmark::State& state) {
   const SampleSet& set = scene();
   const FiveBarModel& m = model();
-  const Gii gii(Json::object());
-  const Gdi gdi(Json::object());
+  const Gii gii;
+  const Gdi gdi;
   hapsyn::MechanismScratch scratch;
   SampleQuantities q;
   for (auto _ : state) {
@@ -100,7 +101,7 @@ std::vector<SampleQuantities> solved_samples() {
 
 void BM_GiiLocal(benchmark::State& state) {
   const std::vector<SampleQuantities> samples = solved_samples();
-  const Gii gii(Json::object());
+  const Gii gii;
   for (auto _ : state) {
     for (const SampleQuantities& q : samples) {
       double local[2];
@@ -113,7 +114,7 @@ void BM_GiiLocal(benchmark::State& state) {
 
 void BM_GdiLocal(benchmark::State& state) {
   const std::vector<SampleQuantities> samples = solved_samples();
-  const Gdi gdi(Json::object());
+  const Gdi gdi;
   for (auto _ : state) {
     for (const SampleQuantities& q : samples) {
       double local = 0.0;
@@ -125,7 +126,7 @@ void BM_GdiLocal(benchmark::State& state) {
 }
 
 void BM_FiveBarReachConstraint(benchmark::State& state) {
-  const FiveBar mechanism(Json::object());
+  const FiveBar mechanism(hapsyn::default_options<FiveBarOptions>());
   const double design[4] = {0.0004, 0.2997, 0.3000, 0.4196};
   double g = 0.0;
   for (auto _ : state) {

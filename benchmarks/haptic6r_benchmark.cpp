@@ -47,7 +47,7 @@ const SampleSet& scene() {
 
 const Haptic6R& mechanism() {
   static const Haptic6R m = [] {
-    Haptic6R h(Json::object());
+    Haptic6R h(hapsyn::default_options<Haptic6ROptions>());
     h.check_scene(scene());
     return h;
   }();
@@ -60,7 +60,7 @@ const Haptic6RModel& model() {
 }
 
 void run_terms(benchmark::State& state, const Json& terms) {
-  const Coverage metric(Json{{"terms", terms}});
+  const Coverage metric(hapsyn::make_options<CoverageOptions>(Json{{"terms", terms}}));
   const SampleSet& s = scene();
   const Haptic6RModel& m = model();
   auto scratch = mechanism().make_scratch();

@@ -17,19 +17,6 @@ constexpr const char* kName = "fivebar";
 
 std::string show(double value) { return Json(value).dump(); }
 
-double number_option(const Json& options, const char* key, double fallback) {
-  const auto it = options.find(key);
-  if (it == options.end()) return fallback;
-  if (!it->is_number()) {
-    throw Error(kName, std::string("options.") + key + " = " + it->dump() + ": must be a number");
-  }
-  const double value = it->get<double>();
-  if (!std::isfinite(value)) {
-    throw Error(kName, std::string("options.") + key + " = " + show(value) + ": must be finite");
-  }
-  return value;
-}
-
 /// One leg solved in its own frame: the left leg in the mechanism frame, the right leg in the
 /// frame mirrored about x = 0 (so both legs run the same code and the model is exactly
 /// mirror-symmetric).
@@ -80,42 +67,6 @@ void check_length(const char* name, double value, bool allow_zero) {
 }
 
 }  // namespace
-
-FiveBarOptions FiveBarOptions::from_json(const Json& options) {
-  FiveBarOptions o;
-  if (options.is_null()) return o;
-  if (!options.is_object()) throw Error(kName, "options = " + options.dump() + ": must be an object");
-  for (const auto& item : options.items()) {
-    const std::string& key = item.key();
-    if (key != "elbow" && key != "rho" && key != "k" && key != "singularity_tolerance" && key != "footprint_width" &&
-        key != "footprint_height") {
-      throw Error(kName, "options." + key +
-                             ": unknown option (known: elbow, rho, k, singularity_tolerance, footprint_width, footprint_height)");
-    }
-  }
-  if (const auto it = options.find("elbow"); it != options.end()) {
-    if (!it->is_string() || it->get<std::string>() != "out") {
-      throw Error(kName, "options.elbow = " + it->dump() + ": must be \"out\" (the paper's elbow-out posture)");
-    }
-    o.elbow = it->get<std::string>();
-  }
-  o.rho = number_option(options, "rho", o.rho);
-  if (!(o.rho > 0.0)) throw Error(kName, "options.rho = " + show(o.rho) + ": must be > 0");
-  o.k = number_option(options, "k", o.k);
-  if (!(o.k >= 0.0)) throw Error(kName, "options.k = " + show(o.k) + ": must be >= 0");
-  o.singularity_tolerance = number_option(options, "singularity_tolerance", o.singularity_tolerance);
-  if (!(o.singularity_tolerance > 0.0 && o.singularity_tolerance <= 1.0)) {
-    throw Error(kName, "options.singularity_tolerance = " + show(o.singularity_tolerance) +
-                           ": must be > 0 and <= 1");
-  }
-  o.footprint_width = number_option(options, "footprint_width", o.footprint_width);
-  if (!(o.footprint_width >= 0.0)) throw Error(kName, "options.footprint_width = " + show(o.footprint_width) + ": must be >= 0");
-  o.footprint_height = number_option(options, "footprint_height", o.footprint_height);
-  if (!(o.footprint_height >= 0.0)) {
-    throw Error(kName, "options.footprint_height = " + show(o.footprint_height) + ": must be >= 0");
-  }
-  return o;
-}
 
 FiveBarModel::FiveBarModel(const FiveBarDesign& design, const FiveBarOptions& options)
     : design_(design), options_(options) {
@@ -241,8 +192,6 @@ bool FiveBarModel::forward(double q1, double q4, double* xy) const {
   xy[1] = 0.5 * (b1y + b2y) + h * ex / d - design_.r;
   return true;
 }
-
-FiveBar::FiveBar(const Json& options) : options_(FiveBarOptions::from_json(options)) {}
 
 FiveBarDesign FiveBar::design_from(const double* design) {
   // Validated once, by the FiveBarModel constructor every caller passes it to (culling builds

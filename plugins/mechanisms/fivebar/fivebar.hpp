@@ -25,8 +25,8 @@
 /// - J maps (q1dot, q4dot) [rad/s] to (xdot, ydot) [m/s]; D is the joint-space inertia in
 ///   (q1, q4) [kg m^2] of four uniform bars of width k and linear density rho; the effective
 ///   mass at the end effector is M = J^-T D J^-1 [kg].
-#include <hapsyn/json.hpp>
 #include <hapsyn/mechanism.hpp>
+#include <hapsyn/options.hpp>
 
 #include <Eigen/Core>
 #include <memory>
@@ -35,23 +35,51 @@
 
 namespace hapsyn::plugins {
 
-/// Options of the five-bar (see schema.json). The defaults repeat schema.json's so that a model
-/// can be built from an empty options object (tests); the unit test checks that they agree.
+/// Options of the five-bar, declared once (the plugin's schema is derived from them). Tests and
+/// benchmarks that build a FiveBarModel directly take them from hapsyn::default_options or
+/// hapsyn::make_options.
 struct FiveBarOptions {
-  std::string elbow = "out";            ///< assembly branch; only "out" (the paper's)
-  double rho = 1.08;                    ///< linear density of every bar [kg/m]
-  double k = 0.005;                     ///< width of every bar [m] (enters the bar inertias)
-  double singularity_tolerance = 1e-4;  ///< smallest admissible |sin| of the three
-                                        ///< transmission angles [-]
+  std::string elbow{};                ///< assembly branch; only "out" (the paper's)
+  double rho{};                       ///< linear density of every bar [kg/m]
+  double k{};                         ///< width of every bar [m] (enters the bar inertias)
+  double singularity_tolerance{};     ///< smallest admissible |sin| of the three transmission angles [-]
   /// Footprint limit (Unal 2008, Figure 7) [m]: width (x) and height (y) of the box the
   /// mechanism must fit in; 0 = no limit. When either is set, a second design constraint
   /// "footprint" is declared (see FiveBar::footprint_constraint).
-  double footprint_width = 0.0;
-  double footprint_height = 0.0;
+  double footprint_width{};
+  double footprint_height{};
 
-  /// Reads and checks options (missing keys keep the defaults above).
-  /// \throws Error("fivebar: options.<key> = <value>: <rule>") on a wrong type or value.
-  static FiveBarOptions from_json(const Json& options);
+  static void declare(OptionDeclarations<FiveBarOptions>& d) {
+    d.describe(
+        "Symmetric planar five-bar linkage (Unal, Kiziltas & Patoglu 2008), elbow-out. Design variables l0, l1, l2, r "
+        "[m]; actuated joints at (-l0/2, 0) and (+l0/2, 0); a scene sample (x, y) puts the end effector at (x, y + r). "
+        "Bars are uniform, of linear density rho and width k.");
+    d.add(&FiveBarOptions::elbow, "elbow", "out",
+          "Assembly branch: \"out\", the paper's elbow-out posture (left elbow bends left, right elbow right).")
+        .one_of({"out"});
+    d.add(&FiveBarOptions::rho, "rho", 1.08,
+          "Linear density of every bar: m_i = rho * l_i (m1 = m4, m2 = m3). 1.08 kg/m reproduces Unal 2008 Table 2.")
+        .greater_than(0)
+        .unit("kg/m");
+    d.add(&FiveBarOptions::k, "k", 0.005,
+          "Width of every bar; a bar's inertia about its centre is m (l^2 + k^2) / 12. Any k in [0, 0.012] m "
+          "reproduces the GDI values of Unal 2008 Table 2.")
+        .minimum(0)
+        .unit("m");
+    d.add(&FiveBarOptions::footprint_width, "footprint_width", 0.0,
+          "Footprint limit in x (Unal 2008, Figure 7): the box around both actuated joints' circles of radius l1 and "
+          "the scene must be at most this wide; 0 = no limit. Adds the design constraint 'footprint'.")
+        .minimum(0)
+        .unit("m");
+    d.add(&FiveBarOptions::footprint_height, "footprint_height", 0.0,
+          "Footprint limit in y (see footprint_width); 0 = no limit.")
+        .minimum(0)
+        .unit("m");
+    d.add(&FiveBarOptions::singularity_tolerance, "singularity_tolerance", 1e-4,
+          "A sample whose |sin(q1 - q2)|, |sin(q3 - q4)| or |sin(q3 - q2)| is below this is classified singular.")
+        .greater_than(0)
+        .maximum(1);
+  }
 };
 
 /// One design in SI units [m].
@@ -103,8 +131,9 @@ class FiveBarModel final : public MechanismModel {
 /// The five-bar mechanism plugin ("fivebar").
 class FiveBar final : public Mechanism {
  public:
-  /// \param options validated options (schema.json); missing keys take the defaults.
-  explicit FiveBar(const Json& options);
+  using Options = FiveBarOptions;
+  /// \param options validated options (FiveBarOptions::declare), defaults filled.
+  explicit FiveBar(const FiveBarOptions& options) : options_(options) {}
 
   /// \param design l0, l1, l2, r [m]. \throws Error for a non-finite or non-positive length.
   std::unique_ptr<const MechanismModel> build(const double* design) const override;

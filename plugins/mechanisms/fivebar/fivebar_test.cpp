@@ -7,6 +7,7 @@
 #include <planar_square.hpp>
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/options.hpp>
 #include <hapsyn/registry.hpp>
 #include <hapsyn/schema.hpp>
 
@@ -19,7 +20,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <limits>
 #include <random>
 #include <thread>
@@ -90,10 +90,12 @@ constexpr FiveBarDesign kBestGii{0.0004, 0.2997, 0.3000, 0.4196};
 constexpr FiveBarDesign kBestGdi{0.0001, 0.0899, 0.1152, 0.1236};
 
 FiveBarOptions options_with(double k = 0.005, double tolerance = 1e-4) {
-  FiveBarOptions o;
-  o.k = k;
-  o.singularity_tolerance = tolerance;
-  return o;
+  return hapsyn::make_options<FiveBarOptions>(Json{{"k", k}, {"singularity_tolerance", tolerance}});
+}
+
+// The mechanism as the registry builds it from a problem file's options (validated, defaults filled).
+FiveBar fivebar(const Json& options = Json::object()) {
+  return FiveBar(hapsyn::make_options<FiveBarOptions>(options));
 }
 
 SampleSet square(double side, double step) {
@@ -115,8 +117,8 @@ bool all_finite(const SampleQuantities& q, bool quantities) {
 // GII and GDI of a design over a scene, computed with the metric classes directly (the same
 // reductions the framework's evaluator applies: min/max over samples, then combine).
 Indices evaluate(const FiveBarModel& model, const SampleSet& scene) {
-  const Gii gii(Json::object());
-  const Gdi gdi(Json::object());
+  const Gii gii;
+  const Gdi gdi;
   MechanismScratch scratch;
   SampleQuantities q;
   double sigma_min = std::numeric_limits<double>::infinity(), sigma_max = 0.0, mass_max = 0.0;
@@ -234,12 +236,6 @@ int for_random_reachable(const FiveBarModel& model, unsigned seed, int draws, Vi
   return reachable;
 }
 
-Json read_schema() {
-  std::ifstream file(HAPSYN_SOURCE_DIR "/plugins/mechanisms/fivebar/schema.json");
-  EXPECT_TRUE(file.good());
-  return Json::parse(file);
-}
-
 // ---------------------------------------------------------------------------------------------
 // Unal 2008 Table 2 (scene: 0.1 m square, 0.001 m step; rho 1.08 kg/m).
 
@@ -284,7 +280,7 @@ TEST(FiveBarTable2, LiteralPaperWorkspaceOf200MillimetresDoesNotReproduce) {
   const SampleSet scene = square(0.2, 0.002);
   const Indices g = evaluate(FiveBarModel(kBestGii, options_with()), scene);
   EXPECT_NEAR(g.gii, 0.534, 0.0005);
-  const FiveBar mechanism(Json::object());
+  const FiveBar mechanism = fivebar();
   const double design[4] = {kBestGdi.l0, kBestGdi.l1, kBestGdi.l2, kBestGdi.r};
   double reach = 0.0;
   mechanism.evaluate_constraints(design, scene, &reach);
@@ -617,7 +613,7 @@ TEST(FiveBarExtremes, DesignThatCannotReachPartOfTheSquareIsClassifiedAndViolate
   EXPECT_GT(r.unreachable, 0);
   EXPECT_GT(r.reachable, 0);
   EXPECT_TRUE(r.finite);
-  const FiveBar mechanism(Json::object());
+  const FiveBar mechanism = fivebar();
   const double vector[4] = {design.l0, design.l1, design.l2, design.r};
   double g = 0.0;
   mechanism.evaluate_constraints(vector, scene, &g);
@@ -627,7 +623,7 @@ TEST(FiveBarExtremes, DesignThatCannotReachPartOfTheSquareIsClassifiedAndViolate
 // Every corner of the default design box and of the hard limits: every sample is classified,
 // every quantity finite, the constraint finite, and the indices finite.
 void check_corners(const std::array<double, 2> (&bounds)[4]) {
-  const FiveBar mechanism(Json::object());
+  const FiveBar mechanism = fivebar();
   const SampleSet scene = square(0.1, 0.005);
   for (int corner = 0; corner < 16; ++corner) {
     double design[4];
@@ -657,7 +653,7 @@ TEST(FiveBarExtremes, EveryCornerOfTheHardLimitsIsFiniteOrClassified) {
 }
 
 TEST(FiveBarExtremes, DesignVariablesMatchTheirDeclaredBounds) {
-  const auto variables = FiveBar(Json::object()).variables();
+  const auto variables = fivebar().variables();
   ASSERT_EQ(variables.size(), 4u);
   const char* names[4] = {"l0", "l1", "l2", "r"};
   const double lower[4] = {0.0, 0.01, 0.01, 0.0}, upper[4] = {0.3, 0.3, 0.3, 0.6};
@@ -676,7 +672,7 @@ TEST(FiveBarExtremes, DesignVariablesMatchTheirDeclaredBounds) {
 }
 
 TEST(FiveBarExtremes, BuildRefusesNonPhysicalDesigns) {
-  const FiveBar mechanism(Json::object());
+  const FiveBar mechanism = fivebar();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double bad[][4] = {{-0.1, 0.2, 0.2, 0.2}, {0.1, 0.0, 0.2, 0.2}, {0.1, 0.2, -0.2, 0.2}, {0.1, 0.2, 0.2, nan}};
   for (const auto& design : bad) EXPECT_THROW(mechanism.build(design), hapsyn::Error);
@@ -693,7 +689,7 @@ TEST(FiveBarExtremes, BuildRefusesNonPhysicalDesigns) {
 // The reach constraint.
 
 TEST(FiveBarReach, ConstraintMatchesThePapersFormulaForTheSquare) {
-  const FiveBar mechanism(Json::object());
+  const FiveBar mechanism = fivebar();
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> l0(0.0, 0.3), l(0.01, 0.3), r(0.0, 0.6);
   for (double side : {0.1, 0.2}) {
@@ -717,7 +713,7 @@ TEST(FiveBarReach, ConstraintUsesTheScenesBoundingBox) {
   scene.poses.resize(3, 2);
   scene.poses << 0.02, -0.01, -0.07, 0.03, 0.05, 0.08;
   const Eigen::VectorXd lo = scene.lower_corner(), hi = scene.upper_corner();
-  const FiveBar mechanism(Json::object());
+  const FiveBar mechanism = fivebar();
   const double design[4] = {0.12, 0.1, 0.15, 0.05};
   double g = 0.0;
   mechanism.evaluate_constraints(design, scene, &g);
@@ -751,7 +747,7 @@ TEST(FiveBarReach, SatisfiedConstraintMeansTheFarCornersAreReachable) {
 }
 
 TEST(FiveBarReach, DeclaresOneConstraintNamedReach) {
-  const auto constraints = FiveBar(Json::object()).constraints();
+  const auto constraints = fivebar().constraints();
   ASSERT_EQ(constraints.size(), 1u);
   EXPECT_EQ(constraints[0].name, "reach");
   EXPECT_FALSE(constraints[0].description.empty());
@@ -761,7 +757,7 @@ TEST(FiveBarReach, DeclaresOneConstraintNamedReach) {
 // Conformance: determinism, thread safety, allocation, needs, options, scene check.
 
 TEST(FiveBarConformance, TwoEvaluationsOfTheSameDesignAreBitIdentical) {
-  const FiveBar mechanism(Json::object());
+  const FiveBar mechanism = fivebar();
   const SampleSet scene = square(0.1, 0.005);
   const double design[4] = {kBestGdi.l0, kBestGdi.l1, kBestGdi.l2, kBestGdi.r};
   const auto first = mechanism.build(design);
@@ -808,8 +804,8 @@ TEST(FiveBarConformance, SolveAndMetricLocalsDoNotAllocate) {
 #else
   const FiveBarModel model(kBestGii, options_with());
   const SampleSet scene = square(0.1, 0.005);
-  const Gii gii(Json::object());
-  const Gdi gdi(Json::object());
+  const Gii gii;
+  const Gdi gdi;
   MechanismScratch scratch;
   SampleQuantities q;
   SampleQuantities wide;  // a 3 x 3 Jacobian / mass exercises the metrics' SVD fallback
@@ -853,49 +849,53 @@ TEST(FiveBarConformance, OnlyRequestedQuantitiesAreComputed) {
   model.solve(pose, hapsyn::kNeedEffectiveMass, scratch, q);
   EXPECT_EQ(q.inertia.rows(), 2);
   EXPECT_EQ(q.effective_mass.rows(), 2);
-  EXPECT_EQ(FiveBar(Json::object()).provides(),
+  EXPECT_EQ(fivebar().provides(),
             hapsyn::kNeedJacobian | hapsyn::kNeedInertia | hapsyn::kNeedEffectiveMass);
 }
 
-TEST(FiveBarConformance, SchemaIsValidAndItsDefaultsAreTheClassDefaults) {
-  const Json schema = read_schema();
+TEST(FiveBarConformance, SchemaIsDerivedFromTheDeclarationsWithThePapersDefaults) {
+  const Json schema = hapsyn::options_schema<FiveBarOptions>();
   EXPECT_NO_THROW(hapsyn::check_schema(schema, "fivebar"));
-  const Json filled = hapsyn::validate_and_fill(schema, Json::object(), "mechanism.options");
-  const FiveBarOptions defaults;
-  EXPECT_EQ(filled.at("elbow"), defaults.elbow);
-  EXPECT_EQ(filled.at("rho").get<double>(), defaults.rho);
-  EXPECT_EQ(filled.at("k").get<double>(), defaults.k);
-  EXPECT_EQ(filled.at("singularity_tolerance").get<double>(), defaults.singularity_tolerance);
   for (const auto& item : schema.at("properties").items()) {
     EXPECT_TRUE(item.value().contains("description")) << item.key();
     EXPECT_TRUE(item.value().contains("default")) << item.key();
   }
-  // The filled options build the same mechanism as the class defaults.
-  EXPECT_EQ(FiveBar(filled).options().k, defaults.k);
+  // The declared defaults, as the registry fills them: Unal 2008's rho and a width inside the
+  // range that reproduces Table 2, no footprint limit.
+  const FiveBarOptions defaults = hapsyn::default_options<FiveBarOptions>();
+  EXPECT_EQ(defaults.elbow, "out");
+  EXPECT_EQ(defaults.rho, 1.08);
+  EXPECT_EQ(defaults.k, 0.005);
+  EXPECT_EQ(defaults.singularity_tolerance, 1e-4);
+  EXPECT_EQ(defaults.footprint_width, 0.0);
+  EXPECT_EQ(defaults.footprint_height, 0.0);
+  EXPECT_EQ(fivebar().options().k, defaults.k);
 }
 
 TEST(FiveBarConformance, BadOptionsAreRefusedWithTheirPathAndRule) {
   auto message = [](const Json& options) {
     try {
-      FiveBar mechanism(options);
+      fivebar(options);
     } catch (const hapsyn::Error& e) {
       return std::string(e.what());
     }
     return std::string("no error");
   };
-  EXPECT_EQ(message(Json{{"rho", -1.0}}), "fivebar: options.rho = -1.0: must be > 0");
-  EXPECT_EQ(message(Json{{"k", -0.001}}), "fivebar: options.k = -0.001: must be >= 0");
+  EXPECT_EQ(message(Json{{"rho", -1.0}}), "problem: options.rho = -1.0: must be > 0.0");
+  EXPECT_EQ(message(Json{{"k", -0.001}}), "problem: options.k = -0.001: must be >= 0.0");
   EXPECT_EQ(message(Json{{"singularity_tolerance", 0.0}}),
-            "fivebar: options.singularity_tolerance = 0.0: must be > 0 and <= 1");
-  EXPECT_EQ(message(Json{{"elbow", "in"}}),
-            "fivebar: options.elbow = \"in\": must be \"out\" (the paper's elbow-out posture)");
-  EXPECT_EQ(message(Json{{"rho", "heavy"}}), "fivebar: options.rho = \"heavy\": must be a number");
+            "problem: options.singularity_tolerance = 0.0: must be > 0.0");
+  EXPECT_EQ(message(Json{{"singularity_tolerance", 1.5}}),
+            "problem: options.singularity_tolerance = 1.5: must be <= 1.0");
+  EXPECT_EQ(message(Json{{"elbow", "in"}}), "problem: options.elbow = \"in\": must be one of \"out\"");
+  EXPECT_EQ(message(Json{{"rho", "heavy"}}), "problem: options.rho = \"heavy\": must be a number");
   EXPECT_EQ(message(Json{{"width", 0.01}}),
-            "fivebar: options.width: unknown option (known: elbow, rho, k, singularity_tolerance, footprint_width, footprint_height)");
+            "problem: options.width: unknown key; known keys: elbow, footprint_height, footprint_width, k, rho, "
+            "singularity_tolerance");
 }
 
 TEST(FiveBarConformance, CheckSceneRefusesNonPlanarScenes) {
-  const FiveBar mechanism(Json::object());
+  const FiveBar mechanism = fivebar();
   EXPECT_NO_THROW(mechanism.check_scene(square(0.1, 0.005)));
   SampleSet spatial;
   spatial.coordinates = {"x", "y", "z"};
@@ -915,7 +915,8 @@ TEST(FiveBarConformance, CheckSceneRefusesNonPlanarScenes) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The plugin files: loaded by name through the registry, with their embedded schemas.
+// The plugin files: loaded by name through the registry, with the schemas derived from their
+// declarations.
 
 TEST(FiveBarPlugin, LoadedPluginsReproduceTable2) {
   const hapsyn::Registry registry({HAPSYN_PLUGIN_DIR});
@@ -950,7 +951,7 @@ TEST(FiveBarPlugin, LoadedPluginsReproduceTable2) {
   }
   EXPECT_NEAR(gii->combine(reduced_gii, samples.size()), 0.783, 0.0005);
   EXPECT_NEAR(gdi->combine(&reduced_gdi, samples.size()), 0.622, 0.0005);
-  // Options are validated against the embedded schema.
+  // Options are validated against the schema derived from the declarations.
   EXPECT_THROW(registry.create_mechanism("fivebar", Json{{"rho", 0.0}}, "mechanism.options"), hapsyn::Error);
   EXPECT_THROW(registry.create_scene("planar_square", Json{{"step", 0.03}}, "scene.options"), hapsyn::Error);
 }
@@ -981,9 +982,9 @@ TEST(FiveBar, FootprintConstraintBoundsTheMechanismInEveryPosture) {
 }
 
 TEST(FiveBar, FootprintOptionDeclaresASecondConstraintAndRefusesNegativeLimits) {
-  const FiveBar plain(Json::object());
+  const FiveBar plain = fivebar();
   EXPECT_EQ(plain.constraints().size(), 1u);
-  const FiveBar limited(Json{{"footprint_width", 0.3}, {"footprint_height", 0.3}});
+  const FiveBar limited = fivebar(Json{{"footprint_width", 0.3}, {"footprint_height", 0.3}});
   ASSERT_EQ(limited.constraints().size(), 2u);
   EXPECT_EQ(limited.constraints()[1].name, "footprint");
   const SampleSet scene = square(0.1, 0.05);
@@ -992,9 +993,9 @@ TEST(FiveBar, FootprintOptionDeclaresASecondConstraintAndRefusesNegativeLimits) 
   limited.evaluate_constraints(gii_best, scene, g);
   EXPECT_GT(g[1], 0.0);  // l1 = 0.3 m: 0.6 m wide
   try {
-    FiveBar(Json{{"footprint_width", -0.1}});
+    fivebar(Json{{"footprint_width", -0.1}});
     ADD_FAILURE() << "expected an error";
   } catch (const hapsyn::Error& e) {
-    EXPECT_NE(std::string(e.what()).find("fivebar: options.footprint_width = -0.1: must be >= 0"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("options.footprint_width = -0.1: must be >= 0.0"), std::string::npos) << e.what();
   }
 }

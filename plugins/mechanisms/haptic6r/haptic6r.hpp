@@ -30,9 +30,8 @@
 ///   (l5 from the wrist point to E), outer diameter tube_outer_diameter, wall tube_wall; the end
 ///   effector a solid cylinder (ee_mass, ee_diameter, ee_length) centred at E, axis z_E.
 ///   Gravity -gravity e_z in B; gravity torque = the joint torque that holds the arm static.
-#include <hapsyn/json.hpp>
 #include <hapsyn/mechanism.hpp>
-
+#include <hapsyn/options.hpp>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -95,26 +94,99 @@ ActuatorTable read_actuator_table(const std::string& path);
 /// share directory (source tree, then install tree). \throws Error naming the option.
 std::string resolve_haptic6r_file(const std::string& option_name, const std::string& value);
 
-/// Options of the mechanism (see schema.json); defaults repeat schema.json's.
+/// Options of the mechanism, declared once (the plugin's schema is derived from them), as the
+/// problem file gives them: data files by name, angles in degrees. Haptic6RSetup holds what the
+/// model computes with.
 struct Haptic6ROptions {
+  std::string dh_file{};
+  std::string actuator_file{};
+  std::string selection{};            ///< "closest_to_home", "elbow_left" or "elbow_right"
+  std::vector<double> home{};         ///< 6 angles [deg]
+  std::vector<double> joint_lower{};  ///< 6 angles [deg]
+  std::vector<double> joint_upper{};  ///< 6 angles [deg]
+  double singularity_tolerance{};     ///< [-]
+  double link_density{};              ///< tube linear density [kg/m]
+  double tube_outer_diameter{};       ///< [m]
+  double tube_wall{};                 ///< [m]
+  double ee_mass{};                   ///< [kg]
+  double ee_diameter{};               ///< [m]
+  double ee_length{};                 ///< [m]
+  double motor_mass_factor{};         ///< mounting structure allowance [-]
+  double gravity{};                   ///< [m/s^2]
+
+  static void declare(OptionDeclarations<Haptic6ROptions>& d) {
+    d.describe(
+        "SCARA-like serial 6R haptic manipulator (Fennel, Zea, Hanebeck 2022; DH table reconstructed in docs/design.md "
+        "section 4, read from dh_file). Design variables l (5, m), s (6 joint sizes 1..3), r (6 gear codes 1..6). "
+        "Scene samples are end-effector poses (x, y, z, qw, qx, qy, qz) in the base frame B. Closed-form IK (up to 8 "
+        "solutions), one picked by 'selection' within the joint limits.");
+    d.add(&Haptic6ROptions::dh_file, "dh_file", "haptic6r/fennel2022_dh.json",
+          "DH table: absolute, relative to the current directory, or to hapsyn's share directory.");
+    d.add(&Haptic6ROptions::actuator_file, "actuator_file", "haptic6r/actuators_assumed.json",
+          "Actuator table (f_qdot, f_tau, f_m); the shipped one is assumed (see share/haptic6r/README.md).");
+    d.add(&Haptic6ROptions::selection, "selection", "closest_to_home",
+          "Which IK solution is used: the admissible one closest to 'home' (sum of squared wrapped angle "
+          "differences); elbow_left / elbow_right first keep only q2 >= 0 / q2 <= 0.")
+        .one_of({"closest_to_home", "elbow_left", "elbow_right"});
+    d.add(&Haptic6ROptions::home, "home", {0, 90, 0, 90, 90, 0}, "Reference configuration of the selection rule.")
+        .size(6)
+        .unit("deg");
+    d.add(&Haptic6ROptions::joint_lower, "joint_lower", {-180, -180, -180, 0, -180, -180},
+          "Joint lower limits (q4 in [0, 180] keeps l4 on one side of joint 3's plane: one of each mirror pair).")
+        .size(6)
+        .unit("deg");
+    d.add(&Haptic6ROptions::joint_upper, "joint_upper", {180, 180, 180, 180, 180, 180},
+          "Joint upper limits (span at most 360 deg).")
+        .size(6)
+        .unit("deg");
+    d.add(&Haptic6ROptions::singularity_tolerance, "singularity_tolerance", 1e-4,
+          "A configuration with |sin q2|, |cos theta4| (l4 vertical) or the horizontal part of the roll axis below "
+          "this is classified singular.")
+        .minimum(0)
+        .less_than(1);
+    d.add(&Haptic6ROptions::link_density, "link_density", 4.0, "Linear density of the link tubes (the paper's 4 kg/m).")
+        .minimum(0)
+        .unit("kg/m");
+    d.add(&Haptic6ROptions::tube_outer_diameter, "tube_outer_diameter", 0.1, "Outer diameter of the link tubes.")
+        .minimum(0)
+        .unit("m");
+    d.add(&Haptic6ROptions::tube_wall, "tube_wall", 0.002,
+          "Wall thickness of the link tubes (enters their inertia only).")
+        .minimum(0)
+        .unit("m");
+    d.add(&Haptic6ROptions::ee_mass, "ee_mass", 0.5, "End-effector mass (solid cylinder centred at E, axis z_E).")
+        .minimum(0)
+        .unit("kg");
+    d.add(&Haptic6ROptions::ee_diameter, "ee_diameter", 0.1, "End-effector cylinder diameter.").minimum(0).unit("m");
+    d.add(&Haptic6ROptions::ee_length, "ee_length", 0.05, "End-effector cylinder length.").minimum(0).unit("m");
+    d.add(&Haptic6ROptions::motor_mass_factor, "motor_mass_factor", 1.2,
+          "Motor point mass = factor * table mass (the paper's +20 % for mountings).")
+        .minimum(0);
+    d.add(&Haptic6ROptions::gravity, "gravity", 9.81, "Gravitational acceleration, along -z of B.")
+        .minimum(0)
+        .unit("m/s^2");
+  }
+};
+
+/// The IK solution rule of the "selection" option.
+enum class Haptic6RSelection { kClosestToHome, kElbowLeft, kElbowRight };
+
+/// The options resolved for the model: the data files read, the angles in radians. Built once
+/// per plugin object; every Haptic6RModel keeps a pointer to it.
+struct Haptic6RSetup {
+  Haptic6ROptions options;            ///< as declared (tolerance, mass model and gravity are read here)
   Haptic6RDh dh;
   ActuatorTable actuators;
-  std::string selection = "closest_to_home";  ///< "closest_to_home", "elbow_left", "elbow_right"
-  Vector6d home;                              ///< [rad]
-  Vector6d joint_lower, joint_upper;          ///< [rad]
-  double singularity_tolerance = 1e-4;        ///< [-]
-  double link_density = 4.0;                  ///< tube linear density [kg/m]
-  double tube_outer_diameter = 0.1;           ///< [m]
-  double tube_wall = 0.002;                   ///< [m]
-  double ee_mass = 0.5;                       ///< [kg]
-  double ee_diameter = 0.1;                   ///< [m]
-  double ee_length = 0.05;                    ///< [m]
-  double motor_mass_factor = 1.2;             ///< mounting structure allowance [-]
-  double gravity = 9.81;                      ///< [m/s^2]
+  Haptic6RSelection selection = Haptic6RSelection::kClosestToHome;
+  Vector6d home;                      ///< [rad]
+  Vector6d joint_lower, joint_upper;  ///< [rad]
 
-  /// Reads and checks options (missing keys keep the defaults; the data files are read).
-  /// \throws Error("haptic6r: options.<key> = <value>: <rule>").
-  static Haptic6ROptions from_json(const Json& options);
+  /// Reads the data files and converts the angles; checks what the declarations cannot
+  /// express: the files (they must exist and hold a valid table), joint_upper[i] >=
+  /// joint_lower[i] with a span of at most 360 deg, and tube_wall <= tube_outer_diameter / 2.
+  /// \param options validated options (Haptic6ROptions::declare)
+  /// \throws Error("haptic6r: options.<key> = <value>: <rule>"), or naming the data file.
+  static Haptic6RSetup from_options(const Haptic6ROptions& options);
 };
 
 /// cos and sin of the six DH angles theta_i = q_i + theta_offset_i of one configuration.
@@ -134,9 +206,10 @@ struct Haptic6RBody {
 class Haptic6RModel final : public MechanismModel {
  public:
   Haptic6RModel() = default;
-  /// (Re)builds for a design vector (l[5], s[6], r[6]) without allocating.
+  /// (Re)builds for a design vector (l[5], s[6], r[6]) without allocating. The model keeps a
+  /// pointer to `setup`, which must outlive it.
   /// \throws Error for a non-finite or non-positive length, or a size / code out of range.
-  void rebuild(const double* design, const Haptic6ROptions& options);
+  void rebuild(const double* design, const Haptic6RSetup& setup);
 
   void solve(const double* pose, Needs needs, MechanismScratch& scratch,
              SampleQuantities& out) const override;
@@ -167,19 +240,20 @@ class Haptic6RModel final : public MechanismModel {
   const std::array<double, 5>& links() const { return l_; }       ///< l1..l5 [m]
   /// DH row i evaluated for this design: (theta_offset [rad], d [m], a [m], alpha [rad]).
   Eigen::Vector4d dh_row(int i) const;
-  const Haptic6ROptions& options() const { return *options_; }
+  const Haptic6RSetup& setup() const { return *setup_; }
 
  private:
   // The bodies of solve(), inverse_kinematics() and quantities(), compiled for AVX2/FMA and
   // baseline CPUs (hapsyn/multiversion.hpp: GCC cannot multiversion the virtual solve(), and
-  // clang exports no plain symbol for a multiversioned function).
+  // clang exports no plain symbol for a multiversioned function). Each is defined in the file
+  // of its wrapper: solve_sample and inverse_kinematics_impl in haptic6r_kinematics.cpp,
+  // quantities_impl in haptic6r_dynamics.cpp.
   void solve_sample(const double* pose, Needs needs, SampleQuantities& out) const;
   int inverse_kinematics_impl(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions,
                               std::array<JointTrig, 8>* trig) const;
   void quantities_impl(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const;
 
-  const Haptic6ROptions* options_ = nullptr;
-  int selection_ = 0;  // 0 closest_to_home, 1 elbow_left, 2 elbow_right
+  const Haptic6RSetup* setup_ = nullptr;
   std::array<double, 5> l_{};
   std::array<double, 6> d_{}, a_{}, offset_{}, ca_{}, sa_{};
   std::array<Haptic6RBody, 6> bodies_;
@@ -189,7 +263,10 @@ class Haptic6RModel final : public MechanismModel {
 /// The "haptic6r" mechanism plugin.
 class Haptic6R final : public Mechanism {
  public:
-  explicit Haptic6R(const Json& options);
+  using Options = Haptic6ROptions;
+  /// Reads the data files (see Haptic6RSetup::from_options, which throws).
+  /// \param options validated options (Haptic6ROptions::declare), defaults filled.
+  explicit Haptic6R(const Haptic6ROptions& options) : setup_(Haptic6RSetup::from_options(options)) {}
 
   std::unique_ptr<const MechanismModel> build(const double* design) const override;
   const MechanismModel* build_in(const double* design, MechanismScratch& scratch) const override;
@@ -204,10 +281,10 @@ class Haptic6R final : public Mechanism {
   /// kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits.
   Needs provides() const override;
 
-  const Haptic6ROptions& options() const { return options_; }
+  const Haptic6RSetup& setup() const { return setup_; }
 
  private:
-  Haptic6ROptions options_;
+  Haptic6RSetup setup_;
 };
 
 }  // namespace hapsyn::plugins

@@ -5,6 +5,7 @@
 #include "test_support.hpp"
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/options.hpp>
 
 #include <gtest/gtest.h>
 
@@ -46,12 +47,15 @@ std::vector<double> random_design(std::mt19937& rng) {
   return d;
 }
 
+// The mechanism as the registry builds it from a problem file's options (validated, defaults filled).
+Haptic6R haptic6r(const Json& options = Json::object()) { return Haptic6R(make_options<Haptic6ROptions>(options)); }
+
 struct Fixture {
-  Haptic6ROptions options = Haptic6ROptions::from_json(Json::object());
+  Haptic6RSetup setup;
   Haptic6RModel model;
-  explicit Fixture(const std::vector<double>& design, const Json& json = Json::object()) {
-    options = Haptic6ROptions::from_json(json);
-    model.rebuild(design.data(), options);
+  explicit Fixture(const std::vector<double>& design, const Json& json = Json::object())
+      : setup(Haptic6RSetup::from_options(make_options<Haptic6ROptions>(json))) {
+    model.rebuild(design.data(), setup);
   }
 };
 
@@ -341,7 +345,7 @@ TEST(Haptic6R, SelectionRulesAndJointLimits) {
       const int count = home.model.inverse_kinematics(home.model.forward(q), sol);
       const auto dist = [&](const Vector6d& x) {
         double s = 0;
-        for (int i = 0; i < 6; ++i) s += std::pow(std::remainder(x(i) - home.options.home(i), 2 * kPi), 2);
+        for (int i = 0; i < 6; ++i) s += std::pow(std::remainder(x(i) - home.setup.home(i), 2 * kPi), 2);
         return s;
       };
       for (int s = 0; s < count; ++s) {
@@ -361,7 +365,7 @@ TEST(Haptic6R, SelectionRulesAndJointLimits) {
 
 TEST(Haptic6R, ActuatorTableAndOnDemandQuantities) {
   Fixture f(paper_like_design());
-  const ActuatorTable& t = f.options.actuators;
+  const ActuatorTable& t = f.setup.actuators;
   EXPECT_NEAR(t.max_velocity(3, 2), 4000 * 2 * kPi / 60 / 50, 1e-12);
   EXPECT_NEAR(t.max_torque(3, 2), 1.2 * 50 * 0.8, 1e-12);
   EXPECT_NEAR(t.max_torque(1, 6), 30.0, 1e-12) << "capped by the gear's peak torque";
@@ -400,7 +404,7 @@ TEST(Haptic6R, ActuatorTableAndOnDemandQuantities) {
 }
 
 TEST(Haptic6R, DesignSpaceAndConstraints) {
-  Haptic6R mech(Json::object());
+  const Haptic6R mech = haptic6r();
   const auto vars = mech.variables();
   ASSERT_EQ(vars.size(), 3u);
   EXPECT_EQ(vars[0].name, "l");
@@ -430,28 +434,31 @@ TEST(Haptic6R, DesignSpaceAndConstraints) {
 
 TEST(Haptic6R, ErrorMessagesNameTheOptionValueAndRule) {
   using test::expect_error;
-  expect_error([] { Haptic6R m(Json{{"bogus", 1}}); }, {"haptic6r", "options.bogus", "unknown option"});
-  expect_error([] { Haptic6R m(Json{{"selection", "nearest"}}); }, {"options.selection", "nearest", "closest_to_home"});
-  expect_error([] { Haptic6R m(Json{{"home", {1, 2}}}); }, {"options.home", "6 angles"});
-  expect_error([] { Haptic6R m(Json{{"joint_lower", {0, 0, 0, 90, 0, 0}}, {"joint_upper", {10, 10, 10, 80, 10, 10}}}); },
+  // The declared rules (the framework's messages), then the relations and files the constructor checks.
+  expect_error([] { haptic6r(Json{{"bogus", 1}}); }, {"problem", "options.bogus", "unknown key"});
+  expect_error([] { haptic6r(Json{{"selection", "nearest"}}); }, {"options.selection", "nearest", "closest_to_home"});
+  // (A list's size through the registry: the schema as the plugin file exports it.)
+  expect_error([] { test::registry().create_mechanism("haptic6r", Json{{"home", {1, 2}}}, "mechanism"); },
+               {"options.home", "must have at least 6 items"});
+  expect_error([] { haptic6r(Json{{"joint_lower", {0, 0, 0, 90, 0, 0}}, {"joint_upper", {10, 10, 10, 80, 10, 10}}}); },
                {"options.joint_upper[3]", "must be >= joint_lower[3]"});
-  expect_error([] { Haptic6R m(Json{{"tube_wall", 0.2}}); }, {"options.tube_wall", "tube_outer_diameter"});
-  expect_error([] { Haptic6R m(Json{{"dh_file", "/nonexistent/dh.json"}}); }, {"options.dh_file", "no such file"});
+  expect_error([] { haptic6r(Json{{"tube_wall", 0.2}}); }, {"options.tube_wall", "tube_outer_diameter"});
+  expect_error([] { haptic6r(Json{{"dh_file", "/nonexistent/dh.json"}}); }, {"options.dh_file", "no such file"});
   const std::string dir = ::testing::TempDir();
   {
     std::ofstream(dir + "/bad_dh.json") << R"({"format": "hapsyn-haptic6r-dh", "dh": [
       {"theta_offset": 0, "d": 0, "a": "l1", "alpha": 0}, {"theta_offset": 0, "d": 0, "a": "l2", "alpha": 0},
       {"theta_offset": 0, "d": "l3", "a": 0, "alpha": 90}, {"theta_offset": -90, "d": 0, "a": "l4", "alpha": 0},
       {"theta_offset": 0, "d": 0, "a": 0, "alpha": 90}, {"theta_offset": 0, "d": "l5", "a": 0, "alpha": 0}]})";
-    expect_error([&] { Haptic6R m(Json{{"dh_file", dir + "/bad_dh.json"}}); },
+    expect_error([&] { haptic6r(Json{{"dh_file", dir + "/bad_dh.json"}}); },
                  {"bad_dh.json", "dh[2]", "d = (0, 0, -l3, 0, 0, l5)"});
     std::ofstream(dir + "/bad_dh2.json") << R"({"format": "hapsyn-haptic6r-dh", "dh": [{"theta_offset": 0, "d": "l9", "a": 0, "alpha": 0}, 1, 2, 3, 4, 5]})";
-    expect_error([&] { Haptic6R m(Json{{"dh_file", dir + "/bad_dh2.json"}}); }, {"bad_dh2.json", "dh[0].d = \"l9\"", "link name"});
+    expect_error([&] { haptic6r(Json{{"dh_file", dir + "/bad_dh2.json"}}); }, {"bad_dh2.json", "dh[0].d = \"l9\"", "link name"});
     std::ofstream(dir + "/bad_act.json") << R"({"format": "hapsyn-actuator-table", "gear_ratios": [30, 50, -80, 100, 120, 160],
       "gear_efficiency": 0.8, "sizes": []})";
-    expect_error([&] { Haptic6R m(Json{{"actuator_file", dir + "/bad_act.json"}}); }, {"bad_act.json", "gear_ratios[2] = -80"});
+    expect_error([&] { haptic6r(Json{{"actuator_file", dir + "/bad_act.json"}}); }, {"bad_act.json", "gear_ratios[2] = -80"});
   }
-  Haptic6R mech(Json::object());
+  const Haptic6R mech = haptic6r();
   std::vector<double> d = paper_like_design();
   d[6] = 4;
   expect_error([&] { mech.build(d.data()); }, {"design s[1] = 4", "sizes must be in {1, 2, 3}"});

@@ -74,42 +74,17 @@ bool Coverage::solve_jacobian(const Matrix6& jacobian, Eigen::Matrix<double, 6, 
 
 bool Coverage::solve_jacobian(const Matrix6& jacobian, Eigen::Matrix<double, 6, 12>& x) { return eliminate12(jacobian, x); }
 
-Coverage::Coverage(const Json& options_in) {
-  const Json options = options_in.is_null() ? Json::object() : options_in;
-  if (!options.is_object()) throw Error(kName, "options = " + options.dump() + ": must be an object");
-  for (auto it = options.begin(); it != options.end(); ++it) {
-    if (it.key() != "terms" && it.key() != "m_max" && it.key() != "f_max") {
-      throw Error(kName, "options." + it.key() + ": unknown option (terms, m_max, f_max)");
-    }
+Coverage::Coverage(const CoverageOptions& options) : options_(options) {
+  for (std::size_t i = 0; i < options_.terms.size(); ++i) {
+    const std::string& term = options_.terms[i];
+    // The declared one_of leaves exactly these four names.
+    bool& flag = term == "pose"           ? pose_
+                 : term == "velocity"     ? velocity_
+                 : term == "acceleration" ? acceleration_
+                                          : force_;
+    if (flag) throw Error(kName, "options.terms[" + std::to_string(i) + "] = " + Json(term).dump() + ": listed twice");
+    flag = true;
   }
-  if (options.contains("terms")) {
-    const Json& t = options["terms"];
-    if (!t.is_array() || t.empty()) {
-      throw Error(kName, "options.terms = " + t.dump() + ": must be a non-empty array of \"pose\", \"velocity\", \"acceleration\", \"force\"");
-    }
-    pose_ = velocity_ = acceleration_ = force_ = false;
-    for (std::size_t i = 0; i < t.size(); ++i) {
-      const std::string name = t[i].is_string() ? t[i].get<std::string>() : "";
-      bool* flag = name == "pose" ? &pose_ : name == "velocity" ? &velocity_ : name == "acceleration" ? &acceleration_
-                                                                     : name == "force"  ? &force_ : nullptr;
-      if (!flag) {
-        throw Error(kName, "options.terms[" + std::to_string(i) + "] = " + t[i].dump() +
-                               ": must be \"pose\", \"velocity\", \"acceleration\" or \"force\"");
-      }
-      if (*flag) throw Error(kName, "options.terms[" + std::to_string(i) + "] = " + t[i].dump() + ": listed twice");
-      *flag = true;
-    }
-  }
-  const auto positive = [&](const char* key, double fallback) {
-    if (!options.contains(key)) return fallback;
-    const Json& v = options[key];
-    if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() <= 0.0) {
-      throw Error(kName, std::string("options.") + key + " = " + v.dump() + ": must be a finite number > 0");
-    }
-    return v.get<double>();
-  };
-  m_max_ = positive("m_max", 10.0);
-  f_max_ = positive("f_max", 50.0);
 }
 
 Needs Coverage::needs() const {
@@ -211,7 +186,7 @@ void Coverage::local_sample(const SampleQuantities& q, double* out) const {
       out[k++] = solved ? ratio_eta(b, Vector6(q.max_torque), &gravity) : 0.0;
     }
   }
-  if (force_) out[k++] = eta_force(jac, gravity, Vector6(q.max_torque), m_max_, f_max_);
+  if (force_) out[k++] = eta_force(jac, gravity, Vector6(q.max_torque), options_.m_max, options_.f_max);
 }
 
 // After local_sample: clang refuses to multiversion a function already called.

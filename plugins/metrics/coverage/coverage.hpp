@@ -11,8 +11,8 @@
 /// applies blockdiag(C_S^B, C_S^B) to M_v, M_a. Every scene sample is a human-reachable pose, so
 /// n_reach^h is the sample count. A manipulator-unreachable (or singular / invalid) sample adds
 /// 0 to n_reach^m and to every eta sum. With n_reach^m = 0, J_v = J_a = J_f = 0.
-#include <hapsyn/json.hpp>
 #include <hapsyn/metric.hpp>
+#include <hapsyn/options.hpp>
 
 #include <Eigen/Core>
 #include <cmath>
@@ -20,6 +20,32 @@
 #include <vector>
 
 namespace hapsyn::plugins {
+
+/// Options of the coverage metric, declared once (the plugin's schema is derived from them).
+struct CoverageOptions {
+  std::vector<std::string> terms{};  ///< selected terms, each listed once (checked by Coverage)
+  double m_max{};                    ///< [N m]
+  double f_max{};                    ///< [N]
+
+  static void declare(OptionDeclarations<CoverageOptions>& d) {
+    d.describe(
+        "Coverage of the human arm's capabilities by a 6-joint manipulator (Fennel, Zea, Hanebeck 2022, eqs. 9-18): "
+        "the sum of the selected terms, each in [0, 1]. pose J_x = n_reach^m / n_reach^h; velocity J_v, acceleration "
+        "J_a, force J_f = mean of eta over the manipulator-reachable samples. Needs the human_arm scene (M_v, M_a "
+        "requested only for velocity / acceleration).");
+    d.add(&CoverageOptions::terms, "terms", {"pose", "velocity", "acceleration", "force"},
+          "Terms summed into the value: \"pose\" (J_x), \"velocity\" (J_v), \"acceleration\" (J_a), \"force\" "
+          "(J_f). Only what the selected terms need is computed.")
+        .one_of({"pose", "velocity", "acceleration", "force"})
+        .min_size(1);
+    d.add(&CoverageOptions::m_max, "m_max", 10.0, "Worst-case torque magnitude of the force/torque term (eq. 17).")
+        .greater_than(0)
+        .unit("N m");
+    d.add(&CoverageOptions::f_max, "f_max", 50.0, "Worst-case force magnitude of the force/torque term (eq. 17).")
+        .greater_than(0)
+        .unit("N");
+  }
+};
 
 /// The "coverage" metric. Locals (all Sum-reduced): reach_h (1 per sample), reach_m (1 when the
 /// manipulator reaches), then eta_v, eta_a, eta_f for the selected terms (0 when unreachable).
@@ -29,9 +55,11 @@ class Coverage final : public Metric {
   using Matrix6 = Eigen::Matrix<double, 6, 6>;
   using Vector6 = Eigen::Matrix<double, 6, 1>;
 
-  /// Options: terms (array of "pose", "velocity", "acceleration", "force"; default all),
-  /// m_max [N m] (default 10), f_max [N] (default 50). \throws Error for bad options.
-  explicit Coverage(const Json& options);
+  using Options = CoverageOptions;
+  /// \param options validated options (CoverageOptions::declare).
+  /// \throws Error("coverage: options.terms[i] = <term>: listed twice") for a repeated term
+  ///         (the one rule the declarations cannot express).
+  explicit Coverage(const CoverageOptions& options);
 
   void local(const SampleQuantities& q, double* out) const override;
   /// pose only: kNeedPose; velocity: Jacobian + ActuatorLimits; acceleration: + Inertia +
@@ -48,8 +76,8 @@ class Coverage final : public Metric {
   bool velocity() const { return velocity_; }
   bool acceleration() const { return acceleration_; }
   bool force() const { return force_; }
-  double m_max() const { return m_max_; }
-  double f_max() const { return f_max_; }
+  double m_max() const { return options_.m_max; }  ///< [N m]
+  double f_max() const { return options_.f_max; }  ///< [N]
 
   /// Solves jacobian * x = x (x holds the right-hand side on entry, 6 x 6 or 6 x 12) by Gaussian
   /// elimination with partial pivoting: fixed size, allocation-free, and several times faster at
@@ -72,8 +100,9 @@ class Coverage final : public Metric {
   // local()'s body, compiled for AVX2/FMA and baseline CPUs (see hapsyn/multiversion.hpp).
   void local_sample(const SampleQuantities& q, double* out) const;
 
-  bool pose_ = true, velocity_ = true, acceleration_ = true, force_ = true;
-  double m_max_ = 10.0, f_max_ = 50.0;
+  CoverageOptions options_;
+  // The selected terms (options_.terms as flags: local() runs per sample).
+  bool pose_{}, velocity_{}, acceleration_{}, force_{};
 };
 
 }  // namespace hapsyn::plugins

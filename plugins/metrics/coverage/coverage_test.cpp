@@ -7,6 +7,7 @@
 #include "test_support.hpp"
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/options.hpp>
 #include <hapsyn/problem.hpp>
 #include <hapsyn/study.hpp>
 
@@ -32,6 +33,9 @@ double naive_eta(const Matrix6& m, const Vector6& limit, const Vector6& extra) {
   }
   return eta;
 }
+
+// The metric as the registry builds it from a problem file's options (validated, defaults filled).
+Coverage coverage(const Json& options = Json::object()) { return Coverage(make_options<CoverageOptions>(options)); }
 
 Json study(const Json& terms, bool with_terms = true) {
   Json doc = Json::parse(R"({
@@ -123,12 +127,12 @@ TEST(Coverage, LocalValuesOnScenePosesMatchNaiveEquations) {
   Study s = load_study(doc, test::registry());
   const SampleSet& scene = s.problem->samples();
   ASSERT_TRUE(scene.attributes.count("M_v") && scene.attributes.count("M_a"));
-  Haptic6R mech(Json::object());
+  const Haptic6R mech(default_options<Haptic6ROptions>());
   mech.check_scene(scene);
   const std::vector<double> design{0.45, 0.45, 0.65, 0.55, 0.15, 3, 3, 2, 2, 1, 1, 2, 2, 3, 2, 3, 3};
   auto model = mech.build(design.data());
   auto scratch = mech.make_scratch();
-  const Coverage metric(Json::object());
+  const Coverage metric = coverage();
   ASSERT_EQ(metric.locals().size(), 5u);
   int checked = 0;
   for (int i = 0; i < scene.size() && checked < 20; ++i) {
@@ -164,13 +168,13 @@ TEST(Coverage, LocalValuesOnScenePosesMatchNaiveEquations) {
 }
 
 TEST(Coverage, CombineUsesHumanAndManipulatorReachableCounts) {
-  const Coverage all(Json::object());
+  const Coverage all = coverage();
   const double reduced[5] = {200, 50, 25, 10, 50};  // n_h, n_m, sum eta_v, eta_a, eta_f
   EXPECT_DOUBLE_EQ(all.combine(reduced, 200), 50.0 / 200 + 25.0 / 50 + 10.0 / 50 + 50.0 / 50);
-  const Coverage vel(Json{{"terms", {"velocity"}}});
+  const Coverage vel = coverage(Json{{"terms", {"velocity"}}});
   const double r2[3] = {200, 50, 25};
   EXPECT_DOUBLE_EQ(vel.combine(r2, 200), 0.5);
-  const Coverage pose(Json{{"terms", {"pose"}}});
+  const Coverage pose = coverage(Json{{"terms", {"pose"}}});
   const double r3[2] = {200, 50};
   EXPECT_DOUBLE_EQ(pose.combine(r3, 200), 0.25);
   const double none[5] = {200, 0, 0, 0, 0};
@@ -180,16 +184,16 @@ TEST(Coverage, CombineUsesHumanAndManipulatorReachableCounts) {
 }
 
 TEST(Coverage, NeedsAndSceneAttributesFollowTheTerms) {
-  EXPECT_EQ(Coverage(Json{{"terms", {"pose"}}}).needs(), Needs{kNeedPose});
-  EXPECT_TRUE(Coverage(Json{{"terms", {"pose"}}}).scene_attributes().empty());
-  EXPECT_EQ(Coverage(Json{{"terms", {"velocity"}}}).needs(), Needs{kNeedJacobian | kNeedActuatorLimits});
-  EXPECT_EQ(Coverage(Json{{"terms", {"velocity"}}}).scene_attributes(), std::vector<std::string>{"M_v"});
-  EXPECT_EQ(Coverage(Json{{"terms", {"acceleration"}}}).needs(),
+  EXPECT_EQ(coverage(Json{{"terms", {"pose"}}}).needs(), Needs{kNeedPose});
+  EXPECT_TRUE(coverage(Json{{"terms", {"pose"}}}).scene_attributes().empty());
+  EXPECT_EQ(coverage(Json{{"terms", {"velocity"}}}).needs(), Needs{kNeedJacobian | kNeedActuatorLimits});
+  EXPECT_EQ(coverage(Json{{"terms", {"velocity"}}}).scene_attributes(), std::vector<std::string>{"M_v"});
+  EXPECT_EQ(coverage(Json{{"terms", {"acceleration"}}}).needs(),
             Needs{kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits});
-  EXPECT_EQ(Coverage(Json{{"terms", {"acceleration"}}}).scene_attributes(), std::vector<std::string>{"M_a"});
-  EXPECT_EQ(Coverage(Json{{"terms", {"force"}}}).needs(), Needs{kNeedJacobian | kNeedGravity | kNeedActuatorLimits});
-  EXPECT_TRUE(Coverage(Json{{"terms", {"force"}}}).scene_attributes().empty());
-  EXPECT_EQ(Coverage(Json::object()).aggregation(), Aggregation::kAveraging);
+  EXPECT_EQ(coverage(Json{{"terms", {"acceleration"}}}).scene_attributes(), std::vector<std::string>{"M_a"});
+  EXPECT_EQ(coverage(Json{{"terms", {"force"}}}).needs(), Needs{kNeedJacobian | kNeedGravity | kNeedActuatorLimits});
+  EXPECT_TRUE(coverage(Json{{"terms", {"force"}}}).scene_attributes().empty());
+  EXPECT_EQ(coverage().aggregation(), Aggregation::kAveraging);
 }
 
 TEST(Coverage, EvaluatorComputesOnlyWhatTheTermsNeed) {
@@ -211,7 +215,7 @@ TEST(Coverage, EvaluatorComputesOnlyWhatTheTermsNeed) {
     const Problem& p = *s.problem;
     EXPECT_EQ(p.samples().attributes.count("M_v") == 1, c.m_v) << c.terms.dump();
     EXPECT_EQ(p.samples().attributes.count("M_a") == 1, c.m_a) << c.terms.dump();
-    auto mech = std::make_shared<CountingMechanism>(std::make_shared<Haptic6R>(Json::object()));
+    auto mech = std::make_shared<CountingMechanism>(std::make_shared<Haptic6R>(default_options<Haptic6ROptions>()));
     Problem counted("haptic6r", mech, std::make_shared<const SampleSet>(p.samples()), p.metrics(), p.objectives(),
                     p.design_space());
     g_needs_seen = 0;
@@ -249,13 +253,16 @@ TEST(Coverage, ReducedCountsMatchTheirDefinitions) {
 
 TEST(Coverage, ErrorMessagesNameTheOptionValueAndRule) {
   using test::expect_error;
-  expect_error([] { Coverage c(Json{{"terms", {"speed"}}}); }, {"coverage", "options.terms[0] = \"speed\"", "\"velocity\""});
-  expect_error([] { Coverage c(Json{{"terms", Json::array()}}); }, {"options.terms", "non-empty"});
-  expect_error([] { Coverage c(Json{{"terms", {"pose", "pose"}}}); }, {"options.terms[1]", "twice"});
-  expect_error([] { Coverage c(Json{{"m_max", 0}}); }, {"options.m_max = 0", "> 0"});
-  expect_error([] { Coverage c(Json{{"bogus", 0}}); }, {"options.bogus", "unknown option"});
+  // The declared rules (the framework's messages) and the one the constructor keeps (a repeat).
+  expect_error([] { coverage(Json{{"terms", {"speed"}}}); }, {"problem", "options.terms[0] = \"speed\"", "\"velocity\""});
+  // (A list's size through the registry: the schema as the plugin file exports it.)
+  expect_error([] { test::registry().create_metric("coverage", Json{{"terms", Json::array()}}, "metrics[0]"); },
+               {"options.terms", "must have at least 1 item"});
+  expect_error([] { coverage(Json{{"terms", {"pose", "pose"}}}); }, {"coverage", "options.terms[1] = \"pose\"", "twice"});
+  expect_error([] { coverage(Json{{"m_max", 0}}); }, {"options.m_max = 0", "> 0"});
+  expect_error([] { coverage(Json{{"bogus", 0}}); }, {"options.bogus", "unknown key"});
   // A velocity term without a sample (called outside the evaluator), and with a scene lacking M_v.
-  const Coverage c(Json{{"terms", {"velocity"}}});
+  const Coverage c = coverage(Json{{"terms", {"velocity"}}});
   SampleQuantities q;
   q.status = SampleStatus::kReachable;
   q.jacobian = Matrix6::Identity();
@@ -276,8 +283,8 @@ TEST(Coverage, EvaluatorResolvedAttributesGiveTheSameValuesAsLookupByName) {
                             Json::array({"velocity"})}) {
     Study s = load_study(study(terms), test::registry());
     const SampleSet& scene = s.problem->samples();
-    const Coverage metric(Json{{"terms", terms}});
-    Haptic6R mech(Json::object());
+    const Coverage metric = coverage(Json{{"terms", terms}});
+    const Haptic6R mech(default_options<Haptic6ROptions>());
     const std::vector<double> design{0.45, 0.45, 0.65, 0.55, 0.15, 3, 3, 2, 2, 1, 1, 2, 2, 3, 2, 3, 3};
     auto model = mech.build(design.data());
     auto scratch = mech.make_scratch();
@@ -326,7 +333,7 @@ class AttributeProbe final : public Metric {
 TEST(Coverage, EvaluatorHandsEachMetricItsAttributeRowsInDeclaredOrder) {
   Study s = load_study(study(Json::array({"velocity", "acceleration"})), test::registry());
   auto scene = std::make_shared<SampleSet>(s.problem->samples());
-  auto mech = std::make_shared<Haptic6R>(Json::object());
+  auto mech = std::make_shared<Haptic6R>(default_options<Haptic6ROptions>());
   // Two metrics with the attributes in opposite orders: each sees its own order.
   std::vector<MetricEntry> metrics = {{"probe_va", std::make_shared<AttributeProbe>(std::vector<std::string>{"M_v", "M_a"})},
                                       {"probe_av", std::make_shared<AttributeProbe>(std::vector<std::string>{"M_a", "M_v"})}};

@@ -1,19 +1,9 @@
 #include "gdi.hpp"
 
-#include <hapsyn/error.hpp>
-
 #include <Eigen/SVD>
 #include <cmath>
 
 namespace hapsyn::plugins {
-
-Gdi::Gdi(const Json& options) {
-  if (options.is_null()) return;
-  if (!options.is_object()) throw Error("gdi", "options = " + options.dump() + ": must be an object");
-  if (!options.empty()) {
-    throw Error("gdi", "options." + options.begin().key() + ": unknown option (gdi takes no options)");
-  }
-}
 
 double Gdi::largest_singular_value(const TaskMatrix& m) {
   if (m.rows() == 2 && m.cols() == 2) {

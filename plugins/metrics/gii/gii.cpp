@@ -1,20 +1,10 @@
 #include "gii.hpp"
 
-#include <hapsyn/error.hpp>
-
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 
 namespace hapsyn::plugins {
-
-Gii::Gii(const Json& options) {
-  if (options.is_null()) return;
-  if (!options.is_object()) throw Error("gii", "options = " + options.dump() + ": must be an object");
-  if (!options.empty()) {
-    throw Error("gii", "options." + options.begin().key() + ": unknown option (gii takes no options)");
-  }
-}
 
 void Gii::singular_values(const TaskJointMatrix& m, double& sigma_min, double& sigma_max) {
   if (m.rows() == 2 && m.cols() == 2) {

@@ -3,21 +3,18 @@
 /// The global isotropy index (Stocco et al. 1998; Unal 2008 eq. 1), a worst-case metric:
 ///   GII = min over samples sigma_min(J) / max over samples sigma_max(J),
 /// J the mechanism's task Jacobian (task velocity per actuator rate).
-#include <hapsyn/json.hpp>
 #include <hapsyn/metric.hpp>
 
 #include <vector>
 
 namespace hapsyn::plugins {
 
-/// The "gii" metric. Locals: sigma_min_J (reduced by min) and sigma_max_J (reduced by max), in
+/// The "gii" metric. It has no options (no Options type): the framework default-constructs it.
+/// Locals: sigma_min_J (reduced by min) and sigma_max_J (reduced by max), in
 /// the Jacobian's units (m/rad for the five-bar); combine = reduced[0] / reduced[1] [-].
 /// Thread safety: stateless; every method is const and thread-safe; local() never allocates.
 class Gii final : public Metric {
  public:
-  /// \param options an empty object (or null). \throws Error for any key.
-  explicit Gii(const Json& options);
-
   /// out[0] = sigma_min(J), out[1] = sigma_max(J) of q.jacobian.
   void local(const SampleQuantities& q, double* out) const override;
   Needs needs() const override { return kNeedJacobian; }

@@ -1,0 +1,165 @@
+// The haptic6r data files: the DH table and the actuator table (share/haptic6r/), read and
+// checked with messages naming the file, the JSON path, the value and the rule.
+#include "haptic6r.hpp"
+
+#include <hapsyn/data_file.hpp>
+#include <hapsyn/error.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <string>
+
+namespace hapsyn::plugins {
+
+namespace {
+
+constexpr const char* kName = "haptic6r";
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+
+std::string show(const Json& v) { return v.dump(); }
+
+Json read_json_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(kName, path + ": cannot be read");
+  try {
+    return Json::parse(in);
+  } catch (const std::exception& e) {
+    throw Error(kName, path + ": not valid JSON (" + e.what() + ")");
+  }
+}
+
+double number_at(const Json& doc, const std::string& file, const std::string& path, const Json& v,
+                 double lower, double upper, bool lower_open = false) {
+  if (!v.is_number()) throw Error(kName, file + ": " + path + " = " + show(v) + ": must be a number");
+  const double x = v.get<double>();
+  if (!std::isfinite(x) || x < lower || (lower_open && x == lower) || x > upper) {
+    throw Error(kName, file + ": " + path + " = " + show(v) + ": must be in " + (lower_open ? "(" : "[") +
+                           std::to_string(lower) + ", " + std::to_string(upper) + "]");
+  }
+  (void)doc;
+  return x;
+}
+
+LinkRef parse_length(const Json& v, const std::string& file, const std::string& path) {
+  LinkRef r;
+  if (v.is_number()) {
+    r.value = v.get<double>();
+    if (!std::isfinite(r.value)) throw Error(kName, file + ": " + path + " = " + show(v) + ": must be finite");
+    return r;
+  }
+  if (v.is_string()) {
+    std::string s = v.get<std::string>();
+    if (!s.empty() && s[0] == '-') {
+      r.factor = -1.0;
+      s = s.substr(1);
+    }
+    if (s.size() == 2 && s[0] == 'l' && s[1] >= '1' && s[1] <= '5') {
+      r.link = s[1] - '1';
+      return r;
+    }
+  }
+  throw Error(kName, file + ": " + path + " = " + show(v) + ": must be a number [m] or a link name l1..l5, optionally negated");
+}
+
+// Double rows of the DH structure the closed-form IK serves.
+bool same_ref(const LinkRef& r, int link, double factor) {
+  if (link < 0) return r.link < 0 && r.value == 0.0;
+  return r.link == link && r.factor == factor;
+}
+
+}  // namespace
+
+double ActuatorTable::max_velocity(int size, int code) const {
+  return motor_speed[static_cast<std::size_t>(size - 1)] / gear_ratios[static_cast<std::size_t>(code - 1)];
+}
+
+double ActuatorTable::max_torque(int size, int code) const {
+  const std::size_t s = static_cast<std::size_t>(size - 1);
+  return std::min(motor_torque[s] * gear_ratios[static_cast<std::size_t>(code - 1)] * gear_efficiency, gear_torque[s]);
+}
+
+std::string resolve_haptic6r_file(const std::string& option_name, const std::string& value) {
+  return find_data_file(kName, option_name, value);
+}
+
+Haptic6RDh read_haptic6r_dh(const std::string& path) {
+  const Json doc = read_json_file(path);
+  Haptic6RDh dh;
+  dh.file = path;
+  if (!doc.is_object() || doc.value("format", "") != "hapsyn-haptic6r-dh") {
+    throw Error(kName, path + ": format = " + (doc.is_object() && doc.contains("format") ? show(doc["format"]) : "(missing)") +
+                           ": must be \"hapsyn-haptic6r-dh\"");
+  }
+  if (!doc.contains("dh") || !doc["dh"].is_array() || doc["dh"].size() != 6) {
+    throw Error(kName, path + ": dh = " + (doc.contains("dh") ? show(doc["dh"]) : "(missing)") + ": must be an array of 6 rows");
+  }
+  for (std::size_t i = 0; i < 6; ++i) {
+    const Json& row = doc["dh"][i];
+    const std::string at = "dh[" + std::to_string(i) + "]";
+    for (const char* key : {"theta_offset", "d", "a", "alpha"}) {
+      if (!row.is_object() || !row.contains(key)) throw Error(kName, path + ": " + at + "." + key + ": missing");
+    }
+    Haptic6RDhRow& r = dh.rows[i];
+    r.theta_offset = number_at(doc, path, at + ".theta_offset", row["theta_offset"], -360.0, 360.0) * kDeg;
+    r.alpha = number_at(doc, path, at + ".alpha", row["alpha"], -360.0, 360.0) * kDeg;
+    r.d = parse_length(row["d"], path, at + ".d");
+    r.a = parse_length(row["a"], path, at + ".a");
+  }
+  // The structure the closed-form IK is derived for (docs/design.md section 4).
+  static const int a_link[6] = {0, 1, -1, 3, -1, -1};
+  static const int d_link[6] = {-1, -1, 2, -1, -1, 4};
+  static const double d_sign[6] = {1, 1, -1, 1, 1, 1};
+  static const double alpha_deg[6] = {0, 0, 90, 0, 90, 0};
+  for (std::size_t i = 0; i < 6; ++i) {
+    const Haptic6RDhRow& r = dh.rows[i];
+    if (!same_ref(r.a, a_link[i], 1.0) || !same_ref(r.d, d_link[i], d_sign[i]) ||
+        std::abs(r.alpha - alpha_deg[i] * kDeg) > 1e-12) {
+      throw Error(kName, path + ": dh[" + std::to_string(i) + "] = " + show(doc["dh"][i]) +
+                             ": the closed-form IK serves a = (l1, l2, 0, l4, 0, 0), d = (0, 0, -l3, 0, 0, l5), "
+                             "alpha = (0, 0, 90, 0, 90, 0) deg; only theta_offset may differ");
+    }
+  }
+  return dh;
+}
+
+ActuatorTable read_actuator_table(const std::string& path) {
+  const Json doc = read_json_file(path);
+  ActuatorTable t;
+  t.file = path;
+  if (!doc.is_object() || doc.value("format", "") != "hapsyn-actuator-table") {
+    throw Error(kName, path + ": format = " + (doc.is_object() && doc.contains("format") ? show(doc["format"]) : "(missing)") +
+                           ": must be \"hapsyn-actuator-table\"");
+  }
+  if (!doc.contains("gear_ratios") || !doc["gear_ratios"].is_array() || doc["gear_ratios"].size() != 6) {
+    throw Error(kName, path + ": gear_ratios = " + (doc.contains("gear_ratios") ? show(doc["gear_ratios"]) : "(missing)") +
+                           ": must be an array of 6 ratios (gear codes 1..6)");
+  }
+  for (std::size_t i = 0; i < 6; ++i) {
+    t.gear_ratios[i] = number_at(doc, path, "gear_ratios[" + std::to_string(i) + "]", doc["gear_ratios"][i], 0.0, 1e6, true);
+  }
+  if (!doc.contains("gear_efficiency")) throw Error(kName, path + ": gear_efficiency: missing");
+  t.gear_efficiency = number_at(doc, path, "gear_efficiency", doc["gear_efficiency"], 0.0, 1.0, true);
+  if (!doc.contains("sizes") || !doc["sizes"].is_array() || doc["sizes"].size() != 3) {
+    throw Error(kName, path + ": sizes = " + (doc.contains("sizes") ? show(doc["sizes"]) : "(missing)") +
+                           ": must be an array of 3 entries (sizes 1..3)");
+  }
+  for (std::size_t i = 0; i < 3; ++i) {
+    const Json& s = doc["sizes"][i];
+    const std::string at = "sizes[" + std::to_string(i) + "]";
+    for (const char* key : {"size", "mass", "motor_speed_rpm", "motor_peak_torque", "gear_peak_torque"}) {
+      if (!s.is_object() || !s.contains(key)) throw Error(kName, path + ": " + at + "." + key + ": missing");
+    }
+    if (!s["size"].is_number_integer() || s["size"].get<int>() != static_cast<int>(i) + 1) {
+      throw Error(kName, path + ": " + at + ".size = " + show(s["size"]) + ": must be " + std::to_string(i + 1) + " (sizes in order)");
+    }
+    t.mass[i] = number_at(doc, path, at + ".mass", s["mass"], 0.0, 1e3);
+    t.motor_speed[i] = number_at(doc, path, at + ".motor_speed_rpm", s["motor_speed_rpm"], 0.0, 1e6, true) * 2.0 * kPi / 60.0;
+    t.motor_torque[i] = number_at(doc, path, at + ".motor_peak_torque", s["motor_peak_torque"], 0.0, 1e6, true);
+    t.gear_torque[i] = number_at(doc, path, at + ".gear_peak_torque", s["gear_peak_torque"], 0.0, 1e6, true);
+  }
+  return t;
+}
+
+}  // namespace hapsyn::plugins
