@@ -91,7 +91,12 @@ std::unique_ptr<Kind> create_plugin(const Json& options, const PluginArguments& 
 
 template <class Class>
 PluginInfo plugin_info(const char* name, const char* kind, const char* version, const char* description) {
-  static const std::string schema = options_schema<typename OptionsOf<Class>::type>().dump();
+  // A plugin whose options describe nothing (no options at all) is described by its one line.
+  static const std::string schema = [description] {
+    Json s = options_schema<typename OptionsOf<Class>::type>();
+    if (!s.contains("description")) s["description"] = description;
+    return s.dump();
+  }();
   return PluginInfo{HAPSYN_PLUGIN_BUILT_API_VERSION, name, kind, version, description, schema.c_str(),
                     to_string(ThreadSafetyOf<Class>::value)};
 }

@@ -881,12 +881,12 @@ TEST(FiveBarConformance, BadOptionsAreRefusedWithTheirPathAndRule) {
     }
     return std::string("no error");
   };
-  EXPECT_EQ(message(Json{{"rho", -1.0}}), "problem: options.rho = -1.0: must be > 0.0");
-  EXPECT_EQ(message(Json{{"k", -0.001}}), "problem: options.k = -0.001: must be >= 0.0");
+  EXPECT_EQ(message(Json{{"rho", -1.0}}), "problem: options.rho = -1.0: must be > 0");
+  EXPECT_EQ(message(Json{{"k", -0.001}}), "problem: options.k = -0.001: must be >= 0");
   EXPECT_EQ(message(Json{{"singularity_tolerance", 0.0}}),
-            "problem: options.singularity_tolerance = 0.0: must be > 0.0");
+            "problem: options.singularity_tolerance = 0.0: must be > 0");
   EXPECT_EQ(message(Json{{"singularity_tolerance", 1.5}}),
-            "problem: options.singularity_tolerance = 1.5: must be <= 1.0");
+            "problem: options.singularity_tolerance = 1.5: must be <= 1");
   EXPECT_EQ(message(Json{{"elbow", "in"}}), "problem: options.elbow = \"in\": must be one of \"out\"");
   EXPECT_EQ(message(Json{{"rho", "heavy"}}), "problem: options.rho = \"heavy\": must be a number");
   EXPECT_EQ(message(Json{{"width", 0.01}}),
@@ -996,6 +996,6 @@ TEST(FiveBar, FootprintOptionDeclaresASecondConstraintAndRefusesNegativeLimits) 
     fivebar(Json{{"footprint_width", -0.1}});
     ADD_FAILURE() << "expected an error";
   } catch (const hapsyn::Error& e) {
-    EXPECT_NE(std::string(e.what()).find("options.footprint_width = -0.1: must be >= 0.0"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("options.footprint_width = -0.1: must be >= 0"), std::string::npos) << e.what();
   }
 }
