@@ -209,19 +209,16 @@ std::string samples_csv(const hapsyn::SampleSet& set) {
 // as gnuplot data + script and rendered to density_slices.png (Fennel 2022, Figure 3).
 void plot_density(const hapsyn::SampleSet& set, const std::string& directory) {
   namespace fs = boost::filesystem;
-  const auto index = set.attributes.find("lattice_index");
-  if (index == set.attributes.end() || !set.info.contains("lattice_per_axis") || !set.info.contains("lattice_step") ||
-      !set.info.contains("orientations")) {
-    throw hapsyn::Error("scene", "--plot needs a lattice scene (attribute lattice_index and info lattice_per_axis, "
-                                 "lattice_step, orientations), e.g. human_arm");
+  if (!set.lattice) {
+    throw hapsyn::Error("scene", "--plot needs a lattice scene (one that declares a SampleLattice), e.g. human_arm");
   }
   hapsyn::LatticeField density;
-  density.per_axis = set.info["lattice_per_axis"].get<int>();
-  density.step = set.info["lattice_step"].get<double>();
-  const double orientations = set.info["orientations"].get<double>();
+  density.per_axis = set.lattice->per_axis;
+  density.step = set.lattice->step;
+  const double orientations = set.lattice->candidates_per_point;
   const std::size_t n = static_cast<std::size_t>(density.per_axis);
   density.values.assign(n * n * n, 0.0);
-  for (int i = 0; i < set.size(); ++i) density.values[static_cast<std::size_t>(index->second(i, 0))] += 1.0 / orientations;
+  for (const long long index : set.lattice->index_of_sample) density.values[static_cast<std::size_t>(index)] += 1.0 / orientations;
   fs::create_directories(directory);
   const std::string why = hapsyn::plot_lattice_slices(
       directory, "density_slices", "reachable orientations / " + std::to_string(static_cast<int>(orientations)) +

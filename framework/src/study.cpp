@@ -357,6 +357,7 @@ Study load_study(const Json& input, const Registry& registry) {
     throw Error("problem", std::string("scene.options: ") + e.what());
   }
 
+  check_lattice(*samples, scene_name);
   if (samples->size() > 0) samples->cache_bounds();
   study.problem = std::make_shared<Problem>(mechanism_name, mechanism, samples, std::move(metrics),
                                             std::move(objectives), std::move(space));

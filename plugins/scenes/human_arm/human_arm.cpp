@@ -929,6 +929,14 @@ SampleSet HumanArmScene::build(const SceneRequest& request) const {
   };
   if (want_mv) set.attributes["M_v"] = matrix_attribute(raw.mv);
   if (want_ma) set.attributes["M_a"] = matrix_attribute(raw.ma);
+  // The lattice declaration the framework's maps and plots use (the lattice frame is S).
+  SampleLattice lattice;
+  lattice.per_axis = n_axis;
+  lattice.step = o.lattice_step;
+  lattice.index_of_sample.assign(raw.lattice.begin(), raw.lattice.end());
+  lattice.candidates_per_point = o.orientations;
+  lattice.candidates = "orientations";
+  set.lattice = std::move(lattice);
 
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   info["n_reach"] = static_cast<long long>(n);
