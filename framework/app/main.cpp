@@ -5,6 +5,7 @@
 // error, 3 unexpected internal error.
 #include <hapsyn/compare.hpp>
 #include <hapsyn/error.hpp>
+#include <hapsyn/output_files.hpp>
 #include <hapsyn/plot.hpp>
 #include <hapsyn/registry.hpp>
 #include <hapsyn/study.hpp>
@@ -23,7 +24,6 @@
 #include <iomanip>
 #include <iostream>
 #include <sstream>
-#include <unistd.h>
 
 namespace {
 
@@ -165,24 +165,6 @@ std::string exact_number(double v) {
   return std::string(buffer, r.ptr);
 }
 
-// Writes `text` to `path` atomically (temporary file in the same directory + rename).
-void write_atomically(const boost::filesystem::path& path, const std::string& text, const std::string& what) {
-  namespace fs = boost::filesystem;
-  if (path.has_parent_path()) fs::create_directories(path.parent_path());
-  const fs::path tmp = path.string() + ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp.string(), std::ios::binary | std::ios::trunc);
-    out << text;
-    out.flush();
-    if (!out) {
-      boost::system::error_code ec;
-      fs::remove(tmp, ec);
-      throw hapsyn::Error("scene", what + " " + path.string() + ": cannot be written");
-    }
-  }
-  fs::rename(tmp, path);
-}
-
 // CSV: the pose columns, then every attribute (alphabetical) flattened as name[i] (name alone
 // for a single column).
 std::string samples_csv(const hapsyn::SampleSet& set) {
@@ -275,7 +257,9 @@ int scene_command(const std::string& file, const std::vector<std::string>& sets,
               << (it.value().is_string() ? it.value().get<std::string>() : it.value().dump()) << "\n";
   }
   if (!csv.empty()) {
-    write_atomically(csv, samples_csv(set), "--csv");
+    const boost::filesystem::path path(csv);
+    if (path.has_parent_path()) boost::filesystem::create_directories(path.parent_path());
+    hapsyn::write_file_atomically(csv, samples_csv(set));
     std::cout << "csv: " << csv << " (" << set.size() << " rows)\n";
   }
   if (!plot.empty()) {

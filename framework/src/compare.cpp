@@ -1,5 +1,6 @@
 #include <hapsyn/compare.hpp>
 #include <hapsyn/error.hpp>
+#include <hapsyn/output_files.hpp>
 #include <hapsyn/plot.hpp>
 #include <hapsyn/study.hpp>
 

@@ -1,7 +1,7 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/maps.hpp>
 #include <hapsyn/plot.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/output_files.hpp>
 
 #include <boost/filesystem.hpp>
 

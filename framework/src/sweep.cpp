@@ -1,4 +1,5 @@
 #include <hapsyn/error.hpp>
+#include <hapsyn/output_files.hpp>
 #include <hapsyn/plot.hpp>
 #include <hapsyn/study.hpp>
 #include <hapsyn/sweep.hpp>

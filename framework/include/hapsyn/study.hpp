@@ -74,12 +74,4 @@ struct RunOptions {
 ///         study, or when the checkpoint's seed contradicts options.seed.
 Json run_study(Study& study, const RunOptions& options);
 
-/// Writes `content` to `path` atomically (temporary file in the same directory, then rename).
-void write_file_atomically(const std::string& path, const std::string& content);
-
-/// Machine description for logs: host, CPU model, cores, OS.
-Json machine_info();
-/// "0.1.0" (the project version).
-const char* version();
-
 }  // namespace hapsyn

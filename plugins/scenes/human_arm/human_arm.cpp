@@ -3,6 +3,7 @@
 #include <hapsyn/data_file.hpp>
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/output_files.hpp>
 #include <hapsyn/parallel.hpp>
 
 #include <Eigen/Cholesky>
@@ -686,7 +687,7 @@ std::string payload_bytes(const RawScene& raw) {
   return payload;
 }
 
-// Writes the cache atomically: a temporary file in the same directory, then rename(). Returns
+// Writes the cache atomically (write_file_atomically). Returns
 // "" on success, else why it failed (a failed write never fails the build).
 std::string write_cache(const std::string& file, const std::string& key, const RawScene& raw, bool ellipsoids) {
   try {
@@ -703,21 +704,7 @@ std::string write_cache(const std::string& file, const std::string& key, const R
     put(out, static_cast<std::uint64_t>(payload.size()));
     put(out, fnv1a64(payload.data(), payload.size()));
     put(out, fnv1a64(out.data(), out.size()));  // header checksum
-    std::random_device rd;
-    const fs::path tmp = path.parent_path() / (path.filename().string() + ".tmp." + std::to_string(::getpid()) + "." +
-                                               std::to_string(rd()));
-    {
-      std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-      f.write(out.data(), static_cast<std::streamsize>(out.size()));
-      f.write(payload.data(), static_cast<std::streamsize>(payload.size()));
-      f.flush();
-      if (!f) {
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        return "cannot write " + tmp.string();
-      }
-    }
-    fs::rename(tmp, path);
+    write_file_atomically(file, {out, payload});
     return "";
   } catch (const std::exception& e) {
     return e.what();

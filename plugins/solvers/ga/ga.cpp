@@ -4,7 +4,7 @@
 
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/error.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/output_files.hpp>
 
 #include <pagmo/algorithms/gaco.hpp>
 #include <pagmo/algorithms/sga.hpp>
