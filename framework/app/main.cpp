@@ -7,6 +7,7 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/output_files.hpp>
 #include <hapsyn/plot.hpp>
+#include <hapsyn/problem_file.hpp>
 #include <hapsyn/registry.hpp>
 #include <hapsyn/study.hpp>
 #include <hapsyn/sweep.hpp>

@@ -2,6 +2,7 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/output_files.hpp>
 #include <hapsyn/plot.hpp>
+#include <hapsyn/problem_file.hpp>
 #include <hapsyn/study.hpp>
 
 #include <boost/filesystem.hpp>

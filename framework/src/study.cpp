@@ -2,6 +2,7 @@
 #include <hapsyn/parallel.hpp>
 #include <hapsyn/schema.hpp>
 #include <hapsyn/output_files.hpp>
+#include <hapsyn/problem_file.hpp>
 #include <hapsyn/study.hpp>
 #include <hapsyn/maps.hpp>
 #include <hapsyn/plugin.hpp>

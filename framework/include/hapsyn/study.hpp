@@ -15,18 +15,6 @@
 
 namespace hapsyn {
 
-/// Parses a problem file. \throws Error("problem: FILE:LINE:COLUMN: ...") on malformed JSON,
-/// or when the file cannot be read.
-Json read_problem_file(const std::string& path);
-/// Parses JSON text; `source` names it in errors.
-Json parse_problem_text(const std::string& text, const std::string& source);
-
-/// Applies one override "path=value" (path with '.' separators; array elements by index,
-/// "objectives.0.metric" or "objectives[0].metric"). The value is JSON when it parses as
-/// JSON, else a string. Missing objects on the path are created.
-/// \throws Error("set: ...") for a malformed override or a path through a non-object.
-void apply_override(Json& problem, const std::string& assignment);
-
 /// A validated, ready-to-run study.
 struct Study {
   Json resolved;                         ///< the problem with defaults and overrides applied
