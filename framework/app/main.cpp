@@ -10,6 +10,7 @@
 #include <hapsyn/problem_file.hpp>
 #include <hapsyn/registry.hpp>
 #include <hapsyn/study.hpp>
+#include <hapsyn/study_runner.hpp>
 #include <hapsyn/sweep.hpp>
 
 #include <CLI/CLI.hpp>

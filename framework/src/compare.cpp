@@ -4,6 +4,7 @@
 #include <hapsyn/plot.hpp>
 #include <hapsyn/problem_file.hpp>
 #include <hapsyn/study.hpp>
+#include <hapsyn/study_runner.hpp>
 
 #include <boost/filesystem.hpp>
 

@@ -3,6 +3,7 @@
 #include <hapsyn/plot.hpp>
 #include <hapsyn/problem_file.hpp>
 #include <hapsyn/study.hpp>
+#include <hapsyn/study_runner.hpp>
 #include <hapsyn/sweep.hpp>
 
 #include <boost/filesystem.hpp>
