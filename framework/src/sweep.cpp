@@ -166,14 +166,13 @@ void write_plot(const fs::path& dir, std::ostream& log) {
   if (!why.empty()) log << "sweep: no plot written (the CSV has the data): " << why << "\n";
 }
 
-}  // namespace
-
-Json run_sweep(const Json& problem, const SweepOptions& options, const Registry& registry) {
-  if (options.axes.empty()) throw Error("sweep", "at least one --vary is required");
-  // Every combination, the last axis fastest.
-  std::vector<std::vector<std::string>> combos = {{}};
-  std::vector<Json> combo_values = {Json::object()};
-  for (const SweepAxis& axis : options.axes) {
+// Every combination of the axes' values, the last axis fastest: its overrides and its values
+// (path -> value).
+void combinations(const std::vector<SweepAxis>& axes, std::vector<std::vector<std::string>>& combos,
+                  std::vector<Json>& combo_values) {
+  combos = {{}};
+  combo_values = {Json::object()};
+  for (const SweepAxis& axis : axes) {
     std::vector<std::vector<std::string>> next;
     std::vector<Json> next_values;
     for (std::size_t c = 0; c < combos.size(); ++c) {
@@ -191,6 +190,62 @@ Json run_sweep(const Json& problem, const SweepOptions& options, const Registry&
     combos = std::move(next);
     combo_values = std::move(next_values);
   }
+}
+
+// The runs against the reference: the rows of sweep.json's "runs" (returned) and sweep.csv.
+Json tabulate_runs(const std::vector<RunRecord>& runs, const Json& reference, const std::vector<SweepAxis>& axes,
+                   std::string& csv_text) {
+  Json rows = Json::array();
+  std::ostringstream csv;
+  csv.precision(10);
+  std::vector<std::string> objective_names;
+  if (reference.contains("best")) {
+    for (auto it = reference["best"]["objectives"].begin(); it != reference["best"]["objectives"].end(); ++it) {
+      objective_names.push_back(it.key());
+    }
+  }
+  csv << "label";
+  for (const SweepAxis& axis : axes) csv << "," << axis.paths[0];
+  csv << ",run_time_s,solve_time_s,scene_from_cache,designs,samples,status";
+  for (const auto& n : objective_names) csv << "," << n;
+  csv << ",objective_error,design_distance,igd,time_ratio_to_reference\n";
+  const double reference_time = reference["sweep_run_time_s"].get<double>();
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const Json& r = runs[i].result;
+    const Json from_cache = r.contains("scene") && r["scene"].contains("from_cache") ? r["scene"]["from_cache"] : Json(nullptr);
+    Json row = {{"values", runs[i].values},
+                {"run_time_s", r["sweep_run_time_s"]},
+                {"solve_time_s", r["wall_time_s"]},
+                {"scene_from_cache", from_cache},
+                {"evaluations", r["evaluations"]},
+                {"status", r["status"]},
+                {"errors", errors_against(r, reference)}};
+    if (r.contains("best")) row["objectives"] = r["best"]["objectives"];
+    rows.push_back(row);
+    std::string label;
+    for (const SweepAxis& axis : axes) label += (label.empty() ? "" : " ") + csv_cell(runs[i].values[axis.paths[0]]);
+    csv << '"' << label << '"';
+    for (const SweepAxis& axis : axes) csv << "," << csv_cell(runs[i].values[axis.paths[0]]);
+    csv << "," << r["sweep_run_time_s"].get<double>() << "," << r["wall_time_s"].get<double>() << "," << csv_cell(from_cache)
+        << "," << r["evaluations"]["designs"] << "," << r["evaluations"]["samples"]
+        << "," << r["status"].get<std::string>();
+    for (const auto& n : objective_names) {
+      csv << "," << (r.contains("best") && r["best"]["objectives"].contains(n) ? r["best"]["objectives"][n].dump() : "");
+    }
+    csv << "," << csv_cell(row["errors"]["objective_error"]) << "," << csv_cell(row["errors"]["design_distance"]) << ","
+        << csv_cell(row["errors"]["igd"]) << "," << r["sweep_run_time_s"].get<double>() / reference_time << "\n";
+  }
+  csv_text = csv.str();
+  return rows;
+}
+
+}  // namespace
+
+Json run_sweep(const Json& problem, const SweepOptions& options, const Registry& registry) {
+  if (options.axes.empty()) throw Error("sweep", "at least one --vary is required");
+  std::vector<std::vector<std::string>> combos;
+  std::vector<Json> combo_values;
+  combinations(options.axes, combos, combo_values);
   // Validate every run (and the reference) before any of them starts.
   auto make_doc = [&](const std::vector<std::string>& sets) {
     Json doc = problem;
@@ -241,48 +296,9 @@ Json run_sweep(const Json& problem, const SweepOptions& options, const Registry&
   summary["machine"] = reference["machine"];
   summary["seed"] = reference["seed"];
   summary["problem"] = problem;
-  Json rows = Json::array();
-  std::ostringstream csv;
-  csv.precision(10);
-  std::vector<std::string> objective_names;
-  if (reference.contains("best")) {
-    for (auto it = reference["best"]["objectives"].begin(); it != reference["best"]["objectives"].end(); ++it) {
-      objective_names.push_back(it.key());
-    }
-  }
-  csv << "label";
-  for (const SweepAxis& axis : options.axes) csv << "," << axis.paths[0];
-  csv << ",run_time_s,solve_time_s,scene_from_cache,designs,samples,status";
-  for (const auto& n : objective_names) csv << "," << n;
-  csv << ",objective_error,design_distance,igd,time_ratio_to_reference\n";
-  const double reference_time = reference["sweep_run_time_s"].get<double>();
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    const Json& r = runs[i].result;
-    const Json from_cache = r.contains("scene") && r["scene"].contains("from_cache") ? r["scene"]["from_cache"] : Json(nullptr);
-    Json row = {{"values", runs[i].values},
-                {"run_time_s", r["sweep_run_time_s"]},
-                {"solve_time_s", r["wall_time_s"]},
-                {"scene_from_cache", from_cache},
-                {"evaluations", r["evaluations"]},
-                {"status", r["status"]},
-                {"errors", errors_against(r, reference)}};
-    if (r.contains("best")) row["objectives"] = r["best"]["objectives"];
-    rows.push_back(row);
-    std::string label;
-    for (const SweepAxis& axis : options.axes) label += (label.empty() ? "" : " ") + csv_cell(runs[i].values[axis.paths[0]]);
-    csv << '"' << label << '"';
-    for (const SweepAxis& axis : options.axes) csv << "," << csv_cell(runs[i].values[axis.paths[0]]);
-    csv << "," << r["sweep_run_time_s"].get<double>() << "," << r["wall_time_s"].get<double>() << "," << csv_cell(from_cache)
-        << "," << r["evaluations"]["designs"] << "," << r["evaluations"]["samples"]
-        << "," << r["status"].get<std::string>();
-    for (const auto& n : objective_names) {
-      csv << "," << (r.contains("best") && r["best"]["objectives"].contains(n) ? r["best"]["objectives"][n].dump() : "");
-    }
-    csv << "," << csv_cell(row["errors"]["objective_error"]) << "," << csv_cell(row["errors"]["design_distance"]) << ","
-        << csv_cell(row["errors"]["igd"]) << "," << r["sweep_run_time_s"].get<double>() / reference_time << "\n";
-  }
-  summary["runs"] = rows;
-  write_file_atomically((out / "sweep.csv").string(), csv.str());
+  std::string csv;
+  summary["runs"] = tabulate_runs(runs, reference, options.axes, csv);
+  write_file_atomically((out / "sweep.csv").string(), csv);
   write_file_atomically((out / "sweep.json").string(), summary.dump(2) + "\n");
   write_plot(out, std::cerr);
   summary["output_directory"] = out.string();
