@@ -273,7 +273,8 @@ void define_study_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.describe = app.add_subcommand("describe", "Show a plugin's options, defaults and units");
   c.describe->add_option("name", a.plugin_name, "Plugin name")->required();
 
-  c.scene = app.add_subcommand("scene", "Build a problem file's scene alone: summary, CSV export, reachability-density plots");
+  c.scene = app.add_subcommand("scene",
+                               "Build a problem file's scene alone: summary, CSV export, reachability-density plots");
   c.scene->add_option("file", a.file, "Problem or scene file (JSON); only its \"scene\" section is read")->required();
   c.scene->add_option("--set", a.sets, "Override a key: path=value (e.g. scene.options.lattice_step=0.2)");
   c.scene->add_option("--csv", a.csv_out, "Write the samples as CSV: pose columns, then every attribute as name[i]");
@@ -285,7 +286,8 @@ void define_study_commands(CLI::App& app, Arguments& a, Commands& c) {
 }
 
 void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
-  c.sweep = app.add_subcommand("sweep", "Run a study across values of some keys; error against a reference run versus time");
+  c.sweep = app.add_subcommand("sweep",
+                               "Run a study across values of some keys; error against a reference run versus time");
   c.sweep->add_option("file", a.file, "Problem file (JSON)")->required();
   c.sweep->add_option("--vary", a.vary, "path[,path...]=v1,v2,...: keys set together to each value (repeatable: a grid)")
       ->required();
@@ -297,7 +299,8 @@ void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.sweep->add_option("--seed", a.sweep_seed, "Random seed of every run");
   c.sweep->add_flag("--progress", a.sweep_progress, "Show each run's progress");
 
-  c.compare = app.add_subcommand("compare", "Run several studies on this machine: one table (front quality, evaluations, time) and plots");
+  c.compare = app.add_subcommand(
+      "compare", "Run several studies on this machine: one table (front quality, evaluations, time) and plots");
   c.compare->add_option("files", a.compare.files, "Problem files (JSON), run in this order")->required();
   c.compare->add_option("--set", a.compare.overrides, "Override a key in every study: path=value");
   c.compare->add_option("--out", a.compare.output_directory, "Output directory (one folder per study)");

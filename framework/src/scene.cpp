@@ -26,8 +26,12 @@ void check_lattice(const SampleSet& samples, const std::string& scene) {
   const SampleLattice& l = *samples.lattice;
   const auto refuse = [&](const std::string& why) { throw Error(scene, "lattice: " + why); };
   // At most 2^20 points per axis: n^3 stays far inside long long.
-  if (l.per_axis < 1 || l.per_axis > (1 << 20)) refuse("per_axis = " + std::to_string(l.per_axis) + ": must be in [1, 2^20]");
-  if (!(l.step > 0.0) || !std::isfinite(l.step)) refuse("step = " + render_value(Json(l.step)) + ": must be finite and > 0");
+  if (l.per_axis < 1 || l.per_axis > (1 << 20)) {
+    refuse("per_axis = " + std::to_string(l.per_axis) + ": must be in [1, 2^20]");
+  }
+  if (!(l.step > 0.0) || !std::isfinite(l.step)) {
+    refuse("step = " + render_value(Json(l.step)) + ": must be finite and > 0");
+  }
   if (l.candidates_per_point < 1) {
     refuse("candidates_per_point = " + std::to_string(l.candidates_per_point) + ": must be >= 1");
   }

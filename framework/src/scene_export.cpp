@@ -89,7 +89,9 @@ std::string plot_lattice_density(const SampleSet& set, const std::string& direct
   const double candidates = lattice.candidates_per_point;
   const std::size_t n = static_cast<std::size_t>(density.per_axis);
   density.values.assign(n * n * n, 0.0);
-  for (const long long index : lattice.index_of_sample) density.values[static_cast<std::size_t>(index)] += 1.0 / candidates;
+  for (const long long index : lattice.index_of_sample) {
+    density.values[static_cast<std::size_t>(index)] += 1.0 / candidates;
+  }
   boost::filesystem::create_directories(directory);
   return plot_lattice_slices(directory, "density_slices",
                              "reachable " + lattice.candidates + " / " + std::to_string(lattice.candidates_per_point) +
