@@ -5,6 +5,7 @@
 #include "common.hpp"
 
 #include <hapsyn/registry.hpp>
+#include <hapsyn/problem_file.hpp>
 #include <hapsyn/study.hpp>
 #include <solvers/grid/grid.hpp>
 

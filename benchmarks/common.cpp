@@ -1,7 +1,7 @@
 #include "common.hpp"
 
+#include <hapsyn/output_files.hpp>
 #include <hapsyn/plugin.hpp>
-#include <hapsyn/study.hpp>
 
 #include <benchmark/benchmark.h>
 

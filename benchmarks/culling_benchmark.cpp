@@ -8,6 +8,7 @@
 #include "common.hpp"
 
 #include <hapsyn/registry.hpp>
+#include <hapsyn/problem_file.hpp>
 #include <hapsyn/study.hpp>
 #include <solvers/culling/culling.hpp>
 #include <solvers/grid/grid.hpp>

@@ -10,6 +10,7 @@
 #include "common.hpp"
 
 #include <hapsyn/registry.hpp>
+#include <hapsyn/problem_file.hpp>
 #include <hapsyn/study.hpp>
 
 #include <benchmark/benchmark.h>

@@ -7,7 +7,7 @@
 #include <functional>
 #include <hapsyn/error.hpp>
 #include <hapsyn/json.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/problem_file.hpp>
 
 #include "test_support.hpp"
 #include <string>

@@ -5,9 +5,13 @@
 // error, 3 unexpected internal error.
 #include <hapsyn/compare.hpp>
 #include <hapsyn/error.hpp>
+#include <hapsyn/output_files.hpp>
 #include <hapsyn/plot.hpp>
+#include <hapsyn/problem_file.hpp>
 #include <hapsyn/registry.hpp>
+#include <hapsyn/scene_export.hpp>
 #include <hapsyn/study.hpp>
+#include <hapsyn/study_runner.hpp>
 #include <hapsyn/sweep.hpp>
 
 #include <CLI/CLI.hpp>
@@ -15,15 +19,11 @@
 #include <boost/filesystem.hpp>
 
 #include <algorithm>
-#include <charconv>
-#include <chrono>
-#include <cmath>
-#include <cstdlib>
-#include <fstream>
+#include <cstdint>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <sstream>
-#include <unistd.h>
 
 namespace {
 
@@ -158,116 +158,16 @@ int list_plugins(const hapsyn::Registry& registry) {
 
 // ---- hapsyn scene: build a problem file's scene alone, summarize, export CSV, plot density ----
 
-// Shortest text that reads back as the same double.
-std::string exact_number(double v) {
-  char buffer[32];
-  const auto r = std::to_chars(buffer, buffer + sizeof buffer, v);
-  return std::string(buffer, r.ptr);
-}
-
-// Writes `text` to `path` atomically (temporary file in the same directory + rename).
-void write_atomically(const boost::filesystem::path& path, const std::string& text, const std::string& what) {
-  namespace fs = boost::filesystem;
-  if (path.has_parent_path()) fs::create_directories(path.parent_path());
-  const fs::path tmp = path.string() + ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp.string(), std::ios::binary | std::ios::trunc);
-    out << text;
-    out.flush();
-    if (!out) {
-      boost::system::error_code ec;
-      fs::remove(tmp, ec);
-      throw hapsyn::Error("scene", what + " " + path.string() + ": cannot be written");
-    }
-  }
-  fs::rename(tmp, path);
-}
-
-// CSV: the pose columns, then every attribute (alphabetical) flattened as name[i] (name alone
-// for a single column).
-std::string samples_csv(const hapsyn::SampleSet& set) {
-  std::string text;
-  for (std::size_t c = 0; c < set.coordinates.size(); ++c) text += (c ? "," : "") + set.coordinates[c];
-  for (const auto& [name, values] : set.attributes) {
-    for (Eigen::Index c = 0; c < values.cols(); ++c) {
-      text += "," + (values.cols() == 1 ? name : name + "[" + std::to_string(c) + "]");
-    }
-  }
-  text += "\n";
-  for (int i = 0; i < set.size(); ++i) {
-    for (int c = 0; c < set.dimension(); ++c) text += (c ? "," : "") + exact_number(set.pose(i)[c]);
-    for (const auto& [name, values] : set.attributes) {
-      for (Eigen::Index c = 0; c < values.cols(); ++c) text += "," + exact_number(values(i, c));
-    }
-    text += "\n";
-  }
-  return text;
-}
-
-// Reachability density per lattice position (reachable orientations / orientations tried), as
-// slices through the shoulder along x_S (x_S points down: each slice is one height), written
-// as gnuplot data + script and rendered to density_slices.png (Fennel 2022, Figure 3).
-void plot_density(const hapsyn::SampleSet& set, const std::string& directory) {
-  namespace fs = boost::filesystem;
-  const auto index = set.attributes.find("lattice_index");
-  if (index == set.attributes.end() || !set.info.contains("lattice_per_axis") || !set.info.contains("lattice_step") ||
-      !set.info.contains("orientations")) {
-    throw hapsyn::Error("scene", "--plot needs a lattice scene (attribute lattice_index and info lattice_per_axis, "
-                                 "lattice_step, orientations), e.g. human_arm");
-  }
-  hapsyn::LatticeField density;
-  density.per_axis = set.info["lattice_per_axis"].get<int>();
-  density.step = set.info["lattice_step"].get<double>();
-  const double orientations = set.info["orientations"].get<double>();
-  const std::size_t n = static_cast<std::size_t>(density.per_axis);
-  density.values.assign(n * n * n, 0.0);
-  for (int i = 0; i < set.size(); ++i) density.values[static_cast<std::size_t>(index->second(i, 0))] += 1.0 / orientations;
-  fs::create_directories(directory);
-  const std::string why = hapsyn::plot_lattice_slices(
-      directory, "density_slices", "reachable orientations / " + std::to_string(static_cast<int>(orientations)) +
-                                       " per position; slices by height above the shoulder",
-      density, std::max(1e-9, *std::max_element(density.values.begin(), density.values.end())));
-  if (!why.empty()) {
-    throw hapsyn::Error("scene", "--plot: " + why + "; " + directory + "/density_slices.dat and .gp were written");
-  }
-}
-
 int scene_command(const std::string& file, const std::vector<std::string>& sets, const std::string& csv,
-                  const std::string& plot, int threads, bool threads_given, const std::vector<std::string>& attributes,
+                  const std::string& plot, std::optional<int> threads, const std::vector<std::string>& attributes,
                   const hapsyn::Registry& registry) {
   Json doc = hapsyn::read_problem_file(file);
   for (const std::string& s : sets) hapsyn::apply_override(doc, s);
-  if (!doc.is_object() || !doc.contains("scene")) throw hapsyn::Error("problem", "scene: missing");
-  const Json& scene = doc["scene"];
-  if (!scene.is_object()) {
-    throw hapsyn::Error("problem", "scene = " + hapsyn::render_value(scene) + ": must be an object {\"plugin\", \"options\"}");
-  }
-  for (auto it = scene.begin(); it != scene.end(); ++it) {
-    if (it.key() != "plugin" && it.key() != "options") {
-      throw hapsyn::Error("problem", "scene." + it.key() + ": unknown key; known keys: options, plugin");
-    }
-  }
-  if (!scene.contains("plugin") || !scene["plugin"].is_string()) {
-    throw hapsyn::Error("problem", "scene.plugin = " + hapsyn::render_value(scene.value("plugin", Json())) +
-                                       ": must be a plugin name (string)");
-  }
-  const std::string name = scene["plugin"];
-  Json options = scene.value("options", Json::object());
-  if (threads_given) {
-    const hapsyn::PluginRecord& record = registry.find(name);
-    if (record.schema.contains("properties") && record.schema["properties"].contains("threads") && options.is_object()) {
-      options["threads"] = threads;
-    }
-  }
-  const auto plugin = registry.create_scene(name, options, "scene");
-  hapsyn::SceneRequest request;
-  request.attributes = attributes;
-  const auto start = std::chrono::steady_clock::now();
-  const hapsyn::SampleSet set = plugin->build(request);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::cout << "scene " << name << ": " << set.size() << " samples (";
+  const hapsyn::BuiltScene built = hapsyn::build_scene_alone(doc, registry, threads, attributes);
+  const hapsyn::SampleSet& set = built.samples;
+  std::cout << "scene " << built.plugin << ": " << set.size() << " samples (";
   for (std::size_t c = 0; c < set.coordinates.size(); ++c) std::cout << (c ? ", " : "") << set.coordinates[c];
-  std::cout << "; unit " << set.unit << ") in " << format_number(seconds) << " s\n";
+  std::cout << "; unit " << set.unit << ") in " << format_number(built.build_time_s) << " s\n";
   if (!set.attributes.empty()) {
     std::cout << "attributes:";
     for (const auto& [attribute, values] : set.attributes) std::cout << " " << attribute << "[" << values.cols() << "]";
@@ -278,17 +178,26 @@ int scene_command(const std::string& file, const std::vector<std::string>& sets,
               << (it.value().is_string() ? it.value().get<std::string>() : it.value().dump()) << "\n";
   }
   if (!csv.empty()) {
-    write_atomically(csv, samples_csv(set), "--csv");
+    const boost::filesystem::path path(csv);
+    if (path.has_parent_path()) boost::filesystem::create_directories(path.parent_path());
+    hapsyn::write_file_atomically(csv, hapsyn::scene_csv(set));
     std::cout << "csv: " << csv << " (" << set.size() << " rows)\n";
   }
   if (!plot.empty()) {
-    plot_density(set, plot);
+    if (!set.lattice) {
+      throw hapsyn::Error("scene", "--plot needs a lattice scene (one that declares a SampleLattice), e.g. human_arm");
+    }
+    const std::string why = hapsyn::plot_lattice_density(set, plot);
+    if (!why.empty()) {
+      throw hapsyn::Error("scene", (hapsyn::gnuplot_available() ? "--plot: " + why
+                                                                : std::string("--plot needs gnuplot, which is not installed "
+                                                                              "(apt-get install gnuplot-nox)")) +
+                                       "; " + plot + "/density_slices.dat and .gp were written");
+    }
     std::cout << "plot: " << plot << "/density_slices.png\n";
   }
   return 0;
 }
-
-}  // namespace
 
 void print_sweep(const Json& summary, std::ostream& out) {
   out << "sweep: " << summary["runs"].size() << " runs; reference " << summary["reference"]["overrides"].dump()
@@ -312,130 +221,164 @@ void print_sweep(const Json& summary, std::ostream& out) {
   out << "written: " << summary["output_directory"].get<std::string>() << "/sweep.csv, sweep.json\n";
 }
 
-int main(int argc, char** argv) {
-  CLI::App app{"hapsyn: optimization-driven design of haptic interfaces and robot mechanisms"};
-  app.set_version_flag("--version", std::string("hapsyn ") + hapsyn::version());
-  app.require_subcommand(1);
+// ---- the command line ----
 
+// Every option of every subcommand (subcommands share file, sets, threads, seed).
+struct Arguments {
   std::string file;
   std::vector<std::string> sets;
   std::string out_dir;
   int threads = 0;
   std::uint64_t seed = 0;
-  bool quiet = false;
-
-  CLI::App* run = app.add_subcommand("run", "Run a study and write result.json (+ samples.csv)");
-  run->add_option("file", file, "Problem file (JSON)")->required();
-  run->add_option("--set", sets, "Override a key: path=value (value read as JSON when it parses, else a string)");
-  run->add_option("--out", out_dir, "Output directory (overrides output.directory)");
-  run->add_option("--threads", threads, "Worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
-  CLI::Option* seed_option = run->add_option("--seed", seed, "Random seed (default: from the file, else drawn)");
-  run->add_flag("--quiet,-q", quiet, "No progress output");
-  bool resume = false, force = false;
-  run->add_flag("--resume", resume, "Continue from the output directory's checkpoint (solvers that checkpoint: ga)");
-  run->add_flag("--force", force, "Overwrite a finished study (an existing result.json) in the output directory");
-
-  CLI::App* validate = app.add_subcommand("validate", "Check a problem file completely without running it");
-  validate->add_option("file", file, "Problem file (JSON)")->required();
-  validate->add_option("--set", sets, "Override a key: path=value");
-
-  app.add_subcommand("plugins", "List the plugins found (name, kind, version, file)");
-
+  bool quiet = false, resume = false, force = false;
   std::string plugin_name;
-  CLI::App* describe_cmd = app.add_subcommand("describe", "Show a plugin's options, defaults and units");
-  describe_cmd->add_option("name", plugin_name, "Plugin name")->required();
-
   std::string csv_out, plot_dir;
   std::vector<std::string> scene_attributes;
-  CLI::App* scene_cmd = app.add_subcommand(
-      "scene", "Build a problem file's scene alone: summary, CSV export, reachability-density plots");
-  scene_cmd->add_option("file", file, "Problem or scene file (JSON); only its \"scene\" section is read")->required();
-  scene_cmd->add_option("--set", sets, "Override a key: path=value (e.g. scene.options.lattice_step=0.2)");
-  scene_cmd->add_option("--csv", csv_out, "Write the samples as CSV: pose columns, then every attribute as name[i]");
-  scene_cmd->add_option("--plot", plot_dir, "Write reachability-density slices (gnuplot) into this directory");
-  CLI::Option* scene_threads =
-      scene_cmd->add_option("--threads", threads, "Threads for building (sets scene.options.threads when the scene has it)")
-          ->check(CLI::NonNegativeNumber);
-  scene_cmd->add_option("--attribute", scene_attributes, "Request a per-sample attribute (e.g. M_v, M_a); repeatable");
-
   std::vector<std::string> vary, reference;
   std::string sweep_out = "results/sweep";
   std::uint64_t sweep_seed = 1;
-  CLI::App* sweep_cmd = app.add_subcommand(
-      "sweep", "Run a study across values of some keys; error against a reference run versus time");
-  sweep_cmd->add_option("file", file, "Problem file (JSON)")->required();
-  sweep_cmd->add_option("--vary", vary,
-                        "path[,path...]=v1,v2,...: keys set together to each value (repeatable: a grid)")
-      ->required();
-  sweep_cmd->add_option("--reference", reference,
-                        "path=value overrides of the reference run (repeatable; default: the last combination)");
-  sweep_cmd->add_option("--set", sets, "Override a key in every run: path=value");
-  sweep_cmd->add_option("--out", sweep_out, "Output directory (sweep.csv, sweep.json, sweep.png/svg, one folder per run)");
-  sweep_cmd->add_option("--threads", threads, "Worker threads per run (default: all cores)")->check(CLI::NonNegativeNumber);
-  sweep_cmd->add_option("--seed", sweep_seed, "Random seed of every run");
   bool sweep_progress = false;
-  sweep_cmd->add_flag("--progress", sweep_progress, "Show each run's progress");
+  hapsyn::CompareOptions compare;
+};
 
-  hapsyn::CompareOptions compare_options;
-  CLI::App* compare_cmd = app.add_subcommand(
+struct Commands {
+  CLI::App* run = nullptr;
+  CLI::Option* run_seed = nullptr;
+  CLI::App* validate = nullptr;
+  CLI::App* plugins = nullptr;
+  CLI::App* describe = nullptr;
+  CLI::App* scene = nullptr;
+  CLI::Option* scene_threads = nullptr;
+  CLI::App* sweep = nullptr;
+  CLI::App* compare = nullptr;
+};
+
+void define_study_commands(CLI::App& app, Arguments& a, Commands& c) {
+  c.run = app.add_subcommand("run", "Run a study and write result.json (+ samples.csv)");
+  c.run->add_option("file", a.file, "Problem file (JSON)")->required();
+  c.run->add_option("--set", a.sets, "Override a key: path=value (value read as JSON when it parses, else a string)");
+  c.run->add_option("--out", a.out_dir, "Output directory (overrides output.directory)");
+  c.run->add_option("--threads", a.threads, "Worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
+  c.run_seed = c.run->add_option("--seed", a.seed, "Random seed (default: from the file, else drawn)");
+  c.run->add_flag("--quiet,-q", a.quiet, "No progress output");
+  c.run->add_flag("--resume", a.resume, "Continue from the output directory's checkpoint (solvers that checkpoint: ga)");
+  c.run->add_flag("--force", a.force, "Overwrite a finished study (an existing result.json) in the output directory");
+
+  c.validate = app.add_subcommand("validate", "Check a problem file completely without running it");
+  c.validate->add_option("file", a.file, "Problem file (JSON)")->required();
+  c.validate->add_option("--set", a.sets, "Override a key: path=value");
+
+  c.plugins = app.add_subcommand("plugins", "List the plugins found (name, kind, version, file)");
+
+  c.describe = app.add_subcommand("describe", "Show a plugin's options, defaults and units");
+  c.describe->add_option("name", a.plugin_name, "Plugin name")->required();
+
+  c.scene = app.add_subcommand("scene",
+                               "Build a problem file's scene alone: summary, CSV export, reachability-density plots");
+  c.scene->add_option("file", a.file, "Problem or scene file (JSON); only its \"scene\" section is read")->required();
+  c.scene->add_option("--set", a.sets, "Override a key: path=value (e.g. scene.options.lattice_step=0.2)");
+  c.scene->add_option("--csv", a.csv_out, "Write the samples as CSV: pose columns, then every attribute as name[i]");
+  c.scene->add_option("--plot", a.plot_dir, "Write reachability-density slices (gnuplot) into this directory");
+  c.scene_threads =
+      c.scene->add_option("--threads", a.threads, "Threads for building (sets scene.options.threads when the scene has it)")
+          ->check(CLI::NonNegativeNumber);
+  c.scene->add_option("--attribute", a.scene_attributes, "Request a per-sample attribute (e.g. M_v, M_a); repeatable");
+}
+
+void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
+  c.sweep = app.add_subcommand("sweep",
+                               "Run a study across values of some keys; error against a reference run versus time");
+  c.sweep->add_option("file", a.file, "Problem file (JSON)")->required();
+  c.sweep->add_option("--vary", a.vary, "path[,path...]=v1,v2,...: keys set together to each value (repeatable: a grid)")
+      ->required();
+  c.sweep->add_option("--reference", a.reference,
+                      "path=value overrides of the reference run (repeatable; default: the last combination)");
+  c.sweep->add_option("--set", a.sets, "Override a key in every run: path=value");
+  c.sweep->add_option("--out", a.sweep_out, "Output directory (sweep.csv, sweep.json, sweep.png/svg, one folder per run)");
+  c.sweep->add_option("--threads", a.threads, "Worker threads per run (default: all cores)")->check(CLI::NonNegativeNumber);
+  c.sweep->add_option("--seed", a.sweep_seed, "Random seed of every run");
+  c.sweep->add_flag("--progress", a.sweep_progress, "Show each run's progress");
+
+  c.compare = app.add_subcommand(
       "compare", "Run several studies on this machine: one table (front quality, evaluations, time) and plots");
-  compare_cmd->add_option("files", compare_options.files, "Problem files (JSON), run in this order")->required();
-  compare_cmd->add_option("--set", compare_options.overrides, "Override a key in every study: path=value");
-  compare_cmd->add_option("--out", compare_options.output_directory, "Output directory (one folder per study)");
-  compare_cmd->add_option("--threads", compare_options.threads, "Worker threads per study")->check(CLI::NonNegativeNumber);
-  compare_cmd->add_option("--seed", seed, "Random seed of every study");
+  c.compare->add_option("files", a.compare.files, "Problem files (JSON), run in this order")->required();
+  c.compare->add_option("--set", a.compare.overrides, "Override a key in every study: path=value");
+  c.compare->add_option("--out", a.compare.output_directory, "Output directory (one folder per study)");
+  c.compare->add_option("--threads", a.compare.threads, "Worker threads per study")->check(CLI::NonNegativeNumber);
+  c.compare->add_option("--seed", a.seed, "Random seed of every study");
+}
 
+int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& registry) {
+  hapsyn::Study study = load(a.file, a.sets, registry);
+  hapsyn::RunOptions options;
+  options.output_directory = a.out_dir;
+  options.threads = a.threads;
+  if (*c.run_seed) options.seed = a.seed;
+  options.quiet = a.quiet;
+  options.resume = a.resume;
+  options.force = a.force;
+  print_summary(hapsyn::run_study(study, options), std::cout);
+  return 0;
+}
+
+int validate_command(const Arguments& a, const hapsyn::Registry& registry) {
+  hapsyn::Study study = load(a.file, a.sets, registry);
+  std::cout << a.file << ": valid (" << study.problem->dimension() << " free design variables, "
+            << study.problem->samples().size() << " samples, " << study.problem->objectives().size()
+            << " objective(s), solver " << study.solver_plugin << ")\n";
+  return 0;
+}
+
+int sweep_command(const Arguments& a, const hapsyn::Registry& registry) {
+  Json doc = hapsyn::read_problem_file(a.file);
+  for (const std::string& s : a.sets) hapsyn::apply_override(doc, s);
+  hapsyn::SweepOptions options;
+  for (const std::string& v : a.vary) options.axes.push_back(hapsyn::parse_sweep_axis(v));
+  options.reference = a.reference;
+  options.output_directory = a.sweep_out;
+  options.threads = a.threads;
+  options.seed = a.sweep_seed;
+  options.quiet = !a.sweep_progress;
+  print_sweep(hapsyn::run_sweep(doc, options, registry), std::cout);
+  return 0;
+}
+
+int dispatch(const Commands& c, Arguments& a, const hapsyn::Registry& registry) {
+  if (*c.run) return run_command(a, c, registry);
+  if (*c.validate) return validate_command(a, registry);
+  if (*c.plugins) return list_plugins(registry);
+  if (*c.describe) return describe(a.plugin_name, registry);
+  if (*c.sweep) return sweep_command(a, registry);
+  if (*c.compare) {
+    if (c.compare->count("--seed") > 0) a.compare.seed = a.seed;
+    hapsyn::print_compare(hapsyn::run_compare(a.compare, registry), std::cout);
+    return 0;
+  }
+  if (*c.scene) {
+    const std::optional<int> threads = c.scene_threads->count() > 0 ? std::optional<int>(a.threads) : std::nullopt;
+    return scene_command(a.file, a.sets, a.csv_out, a.plot_dir, threads, a.scene_attributes, registry);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"hapsyn: optimization-driven design of haptic interfaces and robot mechanisms"};
+  app.set_version_flag("--version", std::string("hapsyn ") + hapsyn::version());
+  app.require_subcommand(1);
+  Arguments arguments;
+  Commands commands;
+  define_study_commands(app, arguments, commands);
+  define_batch_commands(app, arguments, commands);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
-
   try {
     hapsyn::Registry registry;
-    if (*run) {
-      hapsyn::Study study = load(file, sets, registry);
-      hapsyn::RunOptions options;
-      options.output_directory = out_dir;
-      options.threads = threads;
-      if (*seed_option) options.seed = seed;
-      options.quiet = quiet;
-      options.resume = resume;
-      options.force = force;
-      const Json result = hapsyn::run_study(study, options);
-      print_summary(result, std::cout);
-      return 0;
-    }
-    if (*validate) {
-      hapsyn::Study study = load(file, sets, registry);
-      std::cout << file << ": valid (" << study.problem->dimension() << " free design variables, "
-                << study.problem->samples().size() << " samples, " << study.problem->objectives().size()
-                << " objective(s), solver " << study.solver_plugin << ")\n";
-      return 0;
-    }
-    if (app.got_subcommand("plugins")) return list_plugins(registry);
-    if (*describe_cmd) return describe(plugin_name, registry);
-    if (*sweep_cmd) {
-      Json doc = hapsyn::read_problem_file(file);
-      for (const std::string& s : sets) hapsyn::apply_override(doc, s);
-      hapsyn::SweepOptions options;
-      for (const std::string& v : vary) options.axes.push_back(hapsyn::parse_sweep_axis(v));
-      options.reference = reference;
-      options.output_directory = sweep_out;
-      options.threads = threads;
-      options.seed = sweep_seed;
-      options.quiet = !sweep_progress;
-      print_sweep(hapsyn::run_sweep(doc, options, registry), std::cout);
-      return 0;
-    }
-    if (*compare_cmd) {
-      if (compare_cmd->count("--seed") > 0) compare_options.seed = seed;
-      hapsyn::print_compare(hapsyn::run_compare(compare_options, registry), std::cout);
-      return 0;
-    }
-    if (*scene_cmd) {
-      return scene_command(file, sets, csv_out, plot_dir, threads, scene_threads->count() > 0, scene_attributes, registry);
-    }
+    return dispatch(commands, arguments, registry);
   } catch (const hapsyn::Error& e) {
     std::cerr << "hapsyn: error: " << e.what() << "\n";
     return 1;
@@ -443,5 +386,4 @@ int main(int argc, char** argv) {
     std::cerr << "hapsyn: internal error: " << e.what() << "\n";
     return 3;
   }
-  return 0;
 }

@@ -1,7 +1,10 @@
 #include <hapsyn/compare.hpp>
 #include <hapsyn/error.hpp>
+#include <hapsyn/output_files.hpp>
 #include <hapsyn/plot.hpp>
+#include <hapsyn/problem_file.hpp>
 #include <hapsyn/study.hpp>
+#include <hapsyn/study_runner.hpp>
 
 #include <boost/filesystem.hpp>
 

@@ -10,8 +10,6 @@ namespace hapsyn {
 
 namespace fs = boost::filesystem;
 
-std::string share_directory() { return HAPSYN_SHARE_DIR; }
-
 std::string find_data_file(const std::string& component, const std::string& option, const std::string& value) {
   const std::string shown = "options." + option + " = " + Json(value).dump();
   if (value.empty()) throw Error(component, shown + ": must name a file");

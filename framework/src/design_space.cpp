@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <sstream>
+#include <string>
 
 namespace hapsyn {
 
@@ -75,6 +77,188 @@ int DesignSpace::find(const std::string& name) const {
     if (components_[i].name == name) return static_cast<int>(i);
   }
   return -1;
+}
+
+// ---- resolution of a problem file's "design" section ----
+
+namespace {
+
+std::string number(double v) {
+  std::ostringstream s;
+  s.precision(12);
+  s << v;
+  return s.str();
+}
+
+// Reads a per-component number of a design entry: a number (broadcast) or an array of `size`.
+std::vector<double> components_of(const Json& value, int size, const std::string& path, bool integer) {
+  std::vector<double> out;
+  if (value.is_number()) {
+    out.assign(static_cast<std::size_t>(size), value.get<double>());
+  } else if (value.is_array()) {
+    if (static_cast<int>(value.size()) != size) {
+      throw Error("problem", path + " = " + render_value(value) + ": must have " + std::to_string(size) +
+                                 " entries (one per component), or be a single number");
+    }
+    for (std::size_t i = 0; i < value.size(); ++i) {
+      if (!value[i].is_number()) {
+        throw Error("problem", path + "[" + std::to_string(i) + "] = " + render_value(value[i]) + ": must be a number");
+      }
+      out.push_back(value[i].get<double>());
+    }
+  } else {
+    throw Error("problem", path + " = " + render_value(value) + ": must be a number" +
+                               (size > 1 ? " or an array of " + std::to_string(size) + " numbers" : ""));
+  }
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const std::string p = value.is_array() ? path + "[" + std::to_string(i) + "]" : path;
+    if (!std::isfinite(out[i])) throw Error("problem", p + " = " + number(out[i]) + ": must be finite");
+    if (integer && out[i] != std::floor(out[i])) {
+      throw Error("problem", p + " = " + number(out[i]) + ": must be an integer (the variable is integer-valued)");
+    }
+  }
+  return out;
+}
+
+double pick(const std::vector<double>& v, std::size_t i) { return v.size() == 1 ? v[0] : v[i]; }
+
+// Refuses keys of "design" that name no variable of the mechanism, and entries that are not objects.
+void check_design_keys(const Json& design, const std::vector<VariableDecl>& decls) {
+  std::vector<std::string> names;
+  for (const VariableDecl& d : decls) names.push_back(d.name);
+  for (auto it = design.begin(); it != design.end(); ++it) {
+    if (std::find(names.begin(), names.end(), it.key()) == names.end()) {
+      std::string message = "design." + it.key() + ": unknown design variable";
+      const std::string near = nearest_name(it.key(), names);
+      if (!near.empty()) message += " (did you mean '" + near + "'?)";
+      std::string known;
+      for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
+      throw Error("problem", message + "; the mechanism's variables are: " + known);
+    }
+    if (!it.value().is_object()) {
+      throw Error("problem", "design." + it.key() + " = " + render_value(it.value()) +
+                                 ": must be an object with \"lower\"/\"upper\"/\"step\", or \"value\"");
+    }
+  }
+}
+
+// One variable's entry, read into per-component lists (a list is empty when its key is absent;
+// lower and upper fall back to the declared defaults).
+struct EntryValues {
+  bool has_value = false;
+  std::vector<double> lower, upper, value, step;
+};
+
+EntryValues read_entry(const Json& entry, const VariableDecl& d, const std::string& path) {
+  static const std::vector<std::string> kKeys = {"lower", "upper", "step", "value"};
+  for (auto it = entry.begin(); it != entry.end(); ++it) {
+    if (std::find(kKeys.begin(), kKeys.end(), it.key()) == kKeys.end()) {
+      std::string message = path + "." + it.key() + ": unknown key";
+      const std::string near = nearest_name(it.key(), kKeys);
+      if (!near.empty()) message += " (did you mean '" + near + "'?)";
+      throw Error("problem", message + "; known keys: lower, upper, step, value");
+    }
+  }
+  EntryValues e;
+  e.has_value = entry.contains("value");
+  if (e.has_value && entry.contains("step")) {
+    throw Error("problem", path + ".step: a fixed variable (with \"value\") takes no step");
+  }
+  e.lower = entry.contains("lower") ? components_of(entry["lower"], d.size, path + ".lower", false) : d.default_lower;
+  e.upper = entry.contains("upper") ? components_of(entry["upper"], d.size, path + ".upper", false) : d.default_upper;
+  if (e.has_value) e.value = components_of(entry["value"], d.size, path + ".value", d.integer);
+  if (entry.contains("step")) e.step = components_of(entry["step"], d.size, path + ".step", d.integer);
+  return e;
+}
+
+// Component i of variable d, checked against the mechanism's hard limits.
+DesignComponent resolve_component(const VariableDecl& d, const Json& entry, const EntryValues& e, int i,
+                                  const std::string& path) {
+  const std::size_t ui = static_cast<std::size_t>(i);
+  const std::string suffix = d.size > 1 ? "[" + std::to_string(i) + "]" : "";
+  DesignComponent c;
+  c.name = d.size > 1 ? d.name + "[" + std::to_string(i) + "]" : d.name;
+  c.variable = d.name;
+  c.index = i;
+  c.integer = d.integer;
+  c.lower = pick(e.lower, ui);
+  c.upper = pick(e.upper, ui);
+  const double hard_lower = d.hard_lower.empty() ? -INFINITY : pick(d.hard_lower, ui);
+  const double hard_upper = d.hard_upper.empty() ? INFINITY : pick(d.hard_upper, ui);
+  if (c.lower < hard_lower) {
+    throw Error("problem", path + ".lower" + suffix + " = " + number(c.lower) + ": must be >= " + number(hard_lower) +
+                               " (the mechanism's limit for " + d.name + ")");
+  }
+  if (c.upper > hard_upper) {
+    throw Error("problem", path + ".upper" + suffix + " = " + number(c.upper) + ": must be <= " + number(hard_upper) +
+                               " (the mechanism's limit for " + d.name + ")");
+  }
+  if (c.lower > c.upper) {
+    throw Error("problem", path + ".upper" + suffix + " = " + number(c.upper) + ": must be >= lower (" +
+                               number(c.lower) + ")");
+  }
+  if (e.has_value) {
+    const double v = pick(e.value, ui);
+    if (v < c.lower || v > c.upper) {
+      throw Error("problem", path + ".value" + suffix + " = " + number(v) + ": must lie within the bounds [" +
+                                 number(c.lower) + ", " + number(c.upper) + "]" +
+                                 (entry.contains("lower") || entry.contains("upper")
+                                      ? ""
+                                      : " (give \"lower\"/\"upper\" to widen them, within the mechanism's limits)"));
+    }
+    c.lower = c.upper = v;
+    c.fixed = true;
+  } else if (!e.step.empty()) {
+    c.step = pick(e.step, ui);
+    if (!(c.step > 0.0)) throw Error("problem", path + ".step" + suffix + " = " + number(c.step) + ": must be > 0");
+    if (c.upper > c.lower && c.step > (c.upper - c.lower) * (1 + 1e-12)) {
+      throw Error("problem", path + ".step" + suffix + " = " + number(c.step) +
+                                 ": must not exceed the range upper - lower (" + number(c.upper - c.lower) + ")");
+    }
+    if (c.upper == c.lower) c.fixed = true;
+  } else if (c.integer) {
+    c.step = 1.0;
+  }
+  if (c.integer && (c.lower != std::floor(c.lower) || c.upper != std::floor(c.upper))) {
+    throw Error("problem", path + suffix + ": bounds [" + number(c.lower) + ", " + number(c.upper) +
+                               "] of an integer variable must be integers");
+  }
+  if (!e.has_value && c.lower == c.upper) c.fixed = true;
+  return c;
+}
+
+// The entry as result.json records it: a fixed variable as written, else its bounds and step
+// (defaults filled in); the unit when the mechanism declares one.
+Json resolved_entry(const Json& entry, const VariableDecl& d, const EntryValues& e) {
+  Json resolved = Json::object();
+  if (e.has_value) {
+    resolved["value"] = entry["value"];
+    if (entry.contains("lower")) resolved["lower"] = entry["lower"];
+    if (entry.contains("upper")) resolved["upper"] = entry["upper"];
+  } else {
+    auto as_json = [&](const std::vector<double>& v) { return v.size() == 1 ? Json(v[0]) : Json(v); };
+    resolved["lower"] = as_json(e.lower);
+    resolved["upper"] = as_json(e.upper);
+    if (!e.step.empty()) resolved["step"] = as_json(e.step);
+  }
+  if (!d.unit.empty()) resolved["unit"] = d.unit;
+  return resolved;
+}
+
+}  // namespace
+
+DesignSpace build_design_space(const Json& design, const std::vector<VariableDecl>& decls, Json& resolved_design) {
+  check_design_keys(design, decls);
+  std::vector<DesignComponent> components;
+  resolved_design = Json::object();
+  for (const VariableDecl& d : decls) {
+    const std::string path = "design." + d.name;
+    const Json entry = design.contains(d.name) ? design.at(d.name) : Json::object();
+    const EntryValues e = read_entry(entry, d, path);
+    for (int i = 0; i < d.size; ++i) components.push_back(resolve_component(d, entry, e, i, path));
+    resolved_design[d.name] = resolved_entry(entry, d, e);
+  }
+  return DesignSpace(std::move(components));
 }
 
 }  // namespace hapsyn

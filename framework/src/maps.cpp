@@ -1,7 +1,7 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/maps.hpp>
 #include <hapsyn/plot.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/output_files.hpp>
 
 #include <boost/filesystem.hpp>
 
@@ -90,12 +90,10 @@ PositionMaps position_maps(const Problem& problem, const SampleRecords& records)
     if (name == "y") axis[1] = static_cast<int>(c);
     if (name == "z") axis[2] = static_cast<int>(c);
   }
-  const auto lattice = samples.attributes.find("lattice_index");
-  const bool is_lattice = lattice != samples.attributes.end() && samples.info.contains("lattice_per_axis") &&
-                          samples.info.contains("lattice_step");
+  const bool is_lattice = samples.lattice.has_value();
   if (is_lattice) {
-    maps.lattice_per_axis = samples.info["lattice_per_axis"].get<int>();
-    maps.lattice_step = samples.info["lattice_step"].get<double>();
+    maps.lattice_per_axis = samples.lattice->per_axis;
+    maps.lattice_step = samples.lattice->step;
   }
 
   // Group samples by position, in order of first appearance (deterministic).
@@ -109,7 +107,7 @@ PositionMaps position_maps(const Problem& problem, const SampleRecords& records)
     }
     int g;
     if (is_lattice) {
-      const long long key = std::llround(lattice->second(i, 0));
+      const long long key = samples.lattice->index_of_sample[static_cast<std::size_t>(i)];
       const auto [it, inserted] = by_lattice.emplace(key, static_cast<int>(maps.position.size()));
       g = it->second;
       if (inserted) maps.lattice_index.push_back(static_cast<int>(key));

@@ -34,16 +34,6 @@ void run_threads(int threads, const std::function<void(int)>& fn) {
 }
 }  // namespace
 
-void parallel_for(long long n, int threads, const std::function<void(long long, long long, int)>& body) {
-  if (n <= 0) return;
-  threads = static_cast<int>(std::max(1LL, std::min<long long>(threads, n)));
-  run_threads(threads, [&](int t) {
-    const long long begin = n * t / threads;
-    const long long end = n * (t + 1) / threads;
-    if (begin < end) body(begin, end, t);
-  });
-}
-
 void parallel_for_dynamic(long long n, int threads, long long block,
                           const std::function<void(long long, int)>& body) {
   if (n <= 0) return;

@@ -1,6 +1,6 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/plot.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/output_files.hpp>
 
 #include <boost/filesystem.hpp>
 

@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <cstring>
 #include <hapsyn/error.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/problem_file.hpp>
 #include <memory>
 #include <optional>
 #include <string>

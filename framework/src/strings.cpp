@@ -1,10 +1,7 @@
 #include <hapsyn/metric.hpp>
 #include <hapsyn/problem.hpp>
 #include <hapsyn/quantities.hpp>
-#include <hapsyn/scene.hpp>
 #include <hapsyn/solver.hpp>
-
-#include <cassert>
 
 namespace hapsyn {
 
@@ -44,20 +41,6 @@ Aggregation Metric::aggregation() const {
     if (l.reduction == Reduction::kSum) return Aggregation::kAveraging;
   }
   return Aggregation::kWorstCase;
-}
-
-SampleSet::Corner SampleSet::lower_corner() const {
-  if (cached_lower_.size() == poses.cols()) return cached_lower_;
-  return poses.colwise().minCoeff().transpose();
-}
-SampleSet::Corner SampleSet::upper_corner() const {
-  if (cached_upper_.size() == poses.cols()) return cached_upper_;
-  return poses.colwise().maxCoeff().transpose();
-}
-void SampleSet::cache_bounds() {
-  assert(poses.cols() <= 16 && "SampleSet::Corner holds at most 16 pose coordinates");
-  cached_lower_ = poses.colwise().minCoeff().transpose();
-  cached_upper_ = poses.colwise().maxCoeff().transpose();
 }
 
 }  // namespace hapsyn

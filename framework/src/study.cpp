@@ -1,39 +1,17 @@
+// Loading a study: the framework's schema of a problem file, and load_study, which validates a
+// problem document and builds the plugins, the design space, the scene and the problem.
+#include <hapsyn/design_space.hpp>
 #include <hapsyn/error.hpp>
-#include <hapsyn/parallel.hpp>
+#include <hapsyn/problem_file.hpp>
 #include <hapsyn/schema.hpp>
 #include <hapsyn/study.hpp>
-#include <hapsyn/maps.hpp>
-#include <hapsyn/plugin.hpp>
 
 #include <boost/filesystem.hpp>
 
-#include <sys/utsname.h>
-#include <unistd.h>
-
-#include <algorithm>
-#include <cerrno>
-#include <chrono>
-#include <cstring>
 #include <cmath>
-#include <cstdio>
-#include <ctime>
-#include <fstream>
-#include <iomanip>
-#include <iostream>
-#include <optional>
-#include <random>
 #include <set>
-#include <sstream>
-
-#ifndef HAPSYN_VERSION
-#define HAPSYN_VERSION "0.0.0"
-#endif
 
 namespace hapsyn {
-
-namespace fs = boost::filesystem;
-
-const char* version() { return HAPSYN_VERSION; }
 
 namespace {
 
@@ -74,152 +52,68 @@ const char* const kProblemSchema = R"json({
   "required": ["mechanism", "scene", "objectives", "solver"]
 })json";
 
-std::string number(double v) {
-  std::ostringstream s;
-  s.precision(12);
-  s << v;
-  return s.str();
+// Records plugin `name` among the plugins the study uses (each plugin file once).
+void note_plugin(Study& study, const Registry& registry, const std::string& name) {
+  const PluginRecord& r = registry.find(name);
+  for (const PluginRecord& p : study.plugins) {
+    if (p.file == r.file) return;
+  }
+  study.plugins.push_back(r);
 }
 
-// Reads a per-component number of a design entry: a number (broadcast) or an array of `size`.
-std::vector<double> components_of(const Json& value, int size, const std::string& path, bool integer) {
-  std::vector<double> out;
-  if (value.is_number()) {
-    out.assign(static_cast<std::size_t>(size), value.get<double>());
-  } else if (value.is_array()) {
-    if (static_cast<int>(value.size()) != size) {
-      throw Error("problem", path + " = " + render_value(value) + ": must have " + std::to_string(size) +
-                                 " entries (one per component), or be a single number");
+// The metric and the objective of each entry of the "objectives" section (its options resolved
+// in place); the scene attributes the metrics need are added to `request`.
+void load_objectives(Json& objs, const Registry& registry, Study& study, std::vector<MetricEntry>& metrics,
+                     std::vector<Objective>& objectives, SceneRequest& request) {
+  std::set<std::string> objective_names;
+  for (std::size_t i = 0; i < objs.size(); ++i) {
+    const std::string path = "objectives[" + std::to_string(i) + "]";
+    Json& o = objs[i];
+    const std::string metric_name = o["metric"];
+    const PluginRecord& record = registry.find(metric_name);
+    if (record.kind != "metric") {
+      throw Error("problem", path + ".metric = \"" + metric_name + "\": '" + metric_name + "' is a " + record.kind +
+                                 " plugin, not a metric plugin");
     }
-    for (std::size_t i = 0; i < value.size(); ++i) {
-      if (!value[i].is_number()) {
-        throw Error("problem", path + "[" + std::to_string(i) + "] = " + render_value(value[i]) + ": must be a number");
-      }
-      out.push_back(value[i].get<double>());
+    std::shared_ptr<Metric> metric = registry.create_metric(metric_name, o["options"], path, &o["options"]);
+    note_plugin(study, registry, metric_name);
+    if (!o.contains("name")) o["name"] = metric_name;
+    const std::string name = o["name"];
+    if (!objective_names.insert(name).second) {
+      throw Error("problem", path + ".name = \"" + name +
+                                 "\": duplicate objective name (give each objective a distinct \"name\")");
     }
-  } else {
-    throw Error("problem", path + " = " + render_value(value) + ": must be a number" +
-                               (size > 1 ? " or an array of " + std::to_string(size) + " numbers" : ""));
+    if (!std::isfinite(o["weight"].get<double>())) {
+      throw Error("problem", path + ".weight = " + render_value(o["weight"]) + ": must be finite");
+    }
+    for (const std::string& a : metric->scene_attributes()) request.attributes.push_back(a);
+    Objective objective;
+    objective.name = name;
+    objective.metric = static_cast<int>(metrics.size());
+    objective.sense = o["sense"] == "minimize" ? Sense::kMinimize : Sense::kMaximize;
+    objective.weight = o["weight"];
+    objectives.push_back(objective);
+    metrics.push_back(MetricEntry{metric_name, metric});
   }
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    const std::string p = value.is_array() ? path + "[" + std::to_string(i) + "]" : path;
-    if (!std::isfinite(out[i])) throw Error("problem", p + " = " + number(out[i]) + ": must be finite");
-    if (integer && out[i] != std::floor(out[i])) {
-      throw Error("problem", p + " = " + number(out[i]) + ": must be an integer (the variable is integer-valued)");
-    }
-  }
-  return out;
 }
 
-double pick(const std::vector<double>& v, std::size_t i) { return v.size() == 1 ? v[0] : v[i]; }
-
-DesignSpace build_design_space(const Json& design, const std::vector<VariableDecl>& decls, Json& resolved_design) {
-  std::vector<std::string> names;
-  for (const VariableDecl& d : decls) names.push_back(d.name);
-  for (auto it = design.begin(); it != design.end(); ++it) {
-    if (std::find(names.begin(), names.end(), it.key()) == names.end()) {
-      std::string message = "design." + it.key() + ": unknown design variable";
-      const std::string near = nearest_name(it.key(), names);
-      if (!near.empty()) message += " (did you mean '" + near + "'?)";
-      std::string known;
-      for (const std::string& n : names) known += (known.empty() ? "" : ", ") + n;
-      throw Error("problem", message + "; the mechanism's variables are: " + known);
-    }
-    if (!it.value().is_object()) {
-      throw Error("problem", "design." + it.key() + " = " + render_value(it.value()) +
-                                 ": must be an object with \"lower\"/\"upper\"/\"step\", or \"value\"");
-    }
+// The scene's samples: the plugin created (options resolved in place) and built with what the
+// metrics request; its lattice declaration checked and its bounding box cached.
+std::shared_ptr<SampleSet> build_samples(Json& resolved, const Registry& registry, Study& study,
+                                         const SceneRequest& request) {
+  const std::string scene_name = resolved["scene"]["plugin"];
+  std::shared_ptr<Scene> scene =
+      registry.create_scene(scene_name, resolved["scene"]["options"], "scene", &resolved["scene"]["options"]);
+  note_plugin(study, registry, scene_name);
+  std::shared_ptr<SampleSet> samples;
+  try {
+    samples = std::make_shared<SampleSet>(scene->build(request));
+  } catch (const Error& e) {
+    throw Error("problem", std::string("scene.options: ") + e.what());
   }
-  std::vector<DesignComponent> components;
-  resolved_design = Json::object();
-  for (const VariableDecl& d : decls) {
-    const std::string path = "design." + d.name;
-    const Json entry = design.contains(d.name) ? design.at(d.name) : Json::object();
-    static const std::vector<std::string> kKeys = {"lower", "upper", "step", "value"};
-    for (auto it = entry.begin(); it != entry.end(); ++it) {
-      if (std::find(kKeys.begin(), kKeys.end(), it.key()) == kKeys.end()) {
-        std::string message = path + "." + it.key() + ": unknown key";
-        const std::string near = nearest_name(it.key(), kKeys);
-        if (!near.empty()) message += " (did you mean '" + near + "'?)";
-        throw Error("problem", message + "; known keys: lower, upper, step, value");
-      }
-    }
-    const bool has_value = entry.contains("value");
-    if (has_value && entry.contains("step")) {
-      throw Error("problem", path + ".step: a fixed variable (with \"value\") takes no step");
-    }
-    std::vector<double> lower = entry.contains("lower") ? components_of(entry["lower"], d.size, path + ".lower", false) : d.default_lower;
-    std::vector<double> upper = entry.contains("upper") ? components_of(entry["upper"], d.size, path + ".upper", false) : d.default_upper;
-    const std::vector<double> value = has_value ? components_of(entry["value"], d.size, path + ".value", d.integer) : std::vector<double>{};
-    const std::vector<double> step = entry.contains("step") ? components_of(entry["step"], d.size, path + ".step", d.integer) : std::vector<double>{};
-    Json resolved_entry = Json::object();
-    for (int i = 0; i < d.size; ++i) {
-      const std::size_t ui = static_cast<std::size_t>(i);
-      const std::string suffix = d.size > 1 ? "[" + std::to_string(i) + "]" : "";
-      DesignComponent c;
-      c.name = d.size > 1 ? d.name + "[" + std::to_string(i) + "]" : d.name;
-      c.variable = d.name;
-      c.index = i;
-      c.integer = d.integer;
-      c.lower = pick(lower, ui);
-      c.upper = pick(upper, ui);
-      const double hard_lower = d.hard_lower.empty() ? -INFINITY : pick(d.hard_lower, ui);
-      const double hard_upper = d.hard_upper.empty() ? INFINITY : pick(d.hard_upper, ui);
-      if (c.lower < hard_lower) {
-        throw Error("problem", path + ".lower" + suffix + " = " + number(c.lower) + ": must be >= " + number(hard_lower) +
-                                   " (the mechanism's limit for " + d.name + ")");
-      }
-      if (c.upper > hard_upper) {
-        throw Error("problem", path + ".upper" + suffix + " = " + number(c.upper) + ": must be <= " + number(hard_upper) +
-                                   " (the mechanism's limit for " + d.name + ")");
-      }
-      if (c.lower > c.upper) {
-        throw Error("problem", path + ".upper" + suffix + " = " + number(c.upper) + ": must be >= lower (" +
-                                   number(c.lower) + ")");
-      }
-      if (has_value) {
-        const double v = pick(value, ui);
-        if (v < c.lower || v > c.upper) {
-          throw Error("problem", path + ".value" + suffix + " = " + number(v) + ": must lie within the bounds [" +
-                                     number(c.lower) + ", " + number(c.upper) + "]" +
-                                     (entry.contains("lower") || entry.contains("upper")
-                                          ? ""
-                                          : " (give \"lower\"/\"upper\" to widen them, within the mechanism's limits)"));
-        }
-        c.lower = c.upper = v;
-        c.fixed = true;
-      } else if (!step.empty()) {
-        c.step = pick(step, ui);
-        if (!(c.step > 0.0)) throw Error("problem", path + ".step" + suffix + " = " + number(c.step) + ": must be > 0");
-        if (c.upper > c.lower && c.step > (c.upper - c.lower) * (1 + 1e-12)) {
-          throw Error("problem", path + ".step" + suffix + " = " + number(c.step) +
-                                     ": must not exceed the range upper - lower (" + number(c.upper - c.lower) + ")");
-        }
-        if (c.upper == c.lower) c.fixed = true;
-      } else if (c.integer) {
-        c.step = 1.0;
-      }
-      if (c.integer && (c.lower != std::floor(c.lower) || c.upper != std::floor(c.upper))) {
-        throw Error("problem", path + suffix + ": bounds [" + number(c.lower) + ", " + number(c.upper) +
-                                   "] of an integer variable must be integers");
-      }
-      if (!has_value && c.lower == c.upper) c.fixed = true;
-      components.push_back(c);
-    }
-    if (has_value) {
-      resolved_entry["value"] = entry["value"];
-      if (entry.contains("lower")) resolved_entry["lower"] = entry["lower"];
-      if (entry.contains("upper")) resolved_entry["upper"] = entry["upper"];
-    } else {
-      auto as_json = [&](const std::vector<double>& v) { return v.size() == 1 ? Json(v[0]) : Json(v); };
-      resolved_entry["lower"] = as_json(lower);
-      resolved_entry["upper"] = as_json(upper);
-      if (!step.empty()) resolved_entry["step"] = as_json(step);
-    }
-    if (!d.unit.empty()) resolved_entry["unit"] = d.unit;
-    resolved_design[d.name] = resolved_entry;
-  }
-  return DesignSpace(std::move(components));
+  check_lattice(*samples, scene_name);
+  if (samples->size() > 0) samples->cache_bounds();
+  return samples;
 }
 
 // The optional "indicators" section: a reference point with one finite value per objective,
@@ -282,19 +176,11 @@ Study load_study(const Json& input, const Registry& registry) {
   }
 
   Study study;
-  auto note = [&](const std::string& name) {
-    const PluginRecord& r = registry.find(name);
-    for (const PluginRecord& p : study.plugins) {
-      if (p.file == r.file) return;
-    }
-    study.plugins.push_back(r);
-  };
-
   // Mechanism.
   const std::string mechanism_name = resolved["mechanism"]["plugin"];
-  std::shared_ptr<Mechanism> mechanism = registry.create_mechanism(
-      mechanism_name, resolved["mechanism"]["options"], "mechanism", &resolved["mechanism"]["options"]);
-  note(mechanism_name);
+  std::shared_ptr<Mechanism> mechanism =
+      registry.create_mechanism(mechanism_name, resolved["mechanism"]["options"], "mechanism", &resolved["mechanism"]["options"]);
+  note_plugin(study, registry, mechanism_name);
 
   // Design space (before anything expensive: bounds errors are found first).
   Json resolved_design;
@@ -304,58 +190,17 @@ Study load_study(const Json& input, const Registry& registry) {
   // Metrics, one per objective.
   std::vector<MetricEntry> metrics;
   std::vector<Objective> objectives;
-  std::set<std::string> objective_names;
   SceneRequest request;
-  Json& objs = resolved["objectives"];
-  for (std::size_t i = 0; i < objs.size(); ++i) {
-    const std::string path = "objectives[" + std::to_string(i) + "]";
-    Json& o = objs[i];
-    const std::string metric_name = o["metric"];
-    const PluginRecord& record = registry.find(metric_name);
-    if (record.kind != "metric") {
-      throw Error("problem", path + ".metric = \"" + metric_name + "\": '" + metric_name + "' is a " + record.kind +
-                                 " plugin, not a metric plugin");
-    }
-    std::shared_ptr<Metric> metric = registry.create_metric(metric_name, o["options"], path, &o["options"]);
-    note(metric_name);
-    if (!o.contains("name")) o["name"] = metric_name;
-    const std::string name = o["name"];
-    if (!objective_names.insert(name).second) {
-      throw Error("problem", path + ".name = \"" + name +
-                                 "\": duplicate objective name (give each objective a distinct \"name\")");
-    }
-    if (!std::isfinite(o["weight"].get<double>())) {
-      throw Error("problem", path + ".weight = " + render_value(o["weight"]) + ": must be finite");
-    }
-    for (const std::string& a : metric->scene_attributes()) request.attributes.push_back(a);
-    Objective objective;
-    objective.name = name;
-    objective.metric = static_cast<int>(metrics.size());
-    objective.sense = o["sense"] == "minimize" ? Sense::kMinimize : Sense::kMaximize;
-    objective.weight = o["weight"];
-    objectives.push_back(objective);
-    metrics.push_back(MetricEntry{metric_name, metric});
-  }
+  load_objectives(resolved["objectives"], registry, study, metrics, objectives, request);
 
   // Solver (created before the scene is built: its options are checked before any work).
   study.solver_plugin = resolved["solver"]["plugin"];
   study.solver =
       registry.create_solver(study.solver_plugin, resolved["solver"]["options"], "solver", &resolved["solver"]["options"]);
-  note(study.solver_plugin);
+  note_plugin(study, registry, study.solver_plugin);
 
   // Scene.
-  const std::string scene_name = resolved["scene"]["plugin"];
-  std::shared_ptr<Scene> scene =
-      registry.create_scene(scene_name, resolved["scene"]["options"], "scene", &resolved["scene"]["options"]);
-  note(scene_name);
-  std::shared_ptr<SampleSet> samples;
-  try {
-    samples = std::make_shared<SampleSet>(scene->build(request));
-  } catch (const Error& e) {
-    throw Error("problem", std::string("scene.options: ") + e.what());
-  }
-
-  if (samples->size() > 0) samples->cache_bounds();
+  std::shared_ptr<SampleSet> samples = build_samples(resolved, registry, study, request);
   study.problem = std::make_shared<Problem>(mechanism_name, mechanism, samples, std::move(metrics),
                                             std::move(objectives), std::move(space));
   try {
@@ -363,9 +208,9 @@ Study load_study(const Json& input, const Registry& registry) {
   } catch (const Error& e) {
     throw Error("problem", std::string("solver: ") + e.what());
   }
-  study.registry = &registry;
+  study.solver->prepare_sub_solvers(*study.problem, registry);
   load_indicators(resolved, *study.problem, study);
-  if (objs.size() > 1 && !study.solver->pareto()) {
+  if (resolved["objectives"].size() > 1 && !study.solver->pareto()) {
     resolved["aggregation"] = "weighted_sum";
   }
   study.output_directory = resolved["output"].contains("directory")
@@ -373,229 +218,6 @@ Study load_study(const Json& input, const Registry& registry) {
                                : "results/" + resolved["name"].get<std::string>();
   study.resolved = resolved;
   return study;
-}
-
-void write_file_atomically(const std::string& path, const std::string& content) {
-  const fs::path target(path);
-  const fs::path temp = target.parent_path() / (".tmp-" + target.filename().string() + "-" + std::to_string(::getpid()));
-  {
-    std::ofstream out(temp.string(), std::ios::binary | std::ios::trunc);
-    if (!out) throw Error("output", "cannot write " + temp.string() + ": " + std::strerror(errno));
-    out << content;
-    out.flush();
-    if (!out) {
-      const std::string reason = std::strerror(errno);
-      out.close();
-      fs::remove(temp);
-      throw Error("output", "cannot write " + temp.string() + ": " + reason);
-    }
-  }
-  // rename(2) replaces the target in one step: readers see the old file or the new one.
-  if (std::rename(temp.string().c_str(), target.string().c_str()) != 0) {
-    const std::string reason = std::strerror(errno);
-    fs::remove(temp);
-    throw Error("output", "cannot move " + temp.string() + " to " + path + ": " + reason);
-  }
-}
-
-Json machine_info() {
-  Json m;
-  char host[256] = {0};
-  if (::gethostname(host, sizeof host - 1) == 0) m["host"] = host;
-  std::ifstream cpu("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(cpu, line)) {
-    if (line.rfind("model name", 0) == 0) {
-      const auto colon = line.find(':');
-      if (colon != std::string::npos) m["cpu"] = line.substr(colon + 2);
-      break;
-    }
-  }
-  m["hardware_threads"] = hardware_threads();
-  struct utsname u;
-  if (::uname(&u) == 0) m["os"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
-#if defined(__clang__)
-  m["compiler"] = std::string("clang ") + __clang_version__;
-#elif defined(__GNUC__)
-  m["compiler"] = std::string("gcc ") + __VERSION__;
-#endif
-  return m;
-}
-
-namespace {
-
-std::string iso_time_now() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  std::ostringstream s;
-  s << std::put_time(&tm, "%Y-%m-%dT%H:%M:%SZ");
-  return s.str();
-}
-
-Json point_to_json(const Problem& problem, const SolutionPoint& p) {
-  Json j;
-  j["design"] = problem.design_to_json(p.design);
-  Json objectives = Json::object();
-  for (std::size_t i = 0; i < problem.objectives().size(); ++i) objectives[problem.objectives()[i].name] = p.objectives[i];
-  j["objectives"] = objectives;
-  j["score"] = p.score;
-  return j;
-}
-
-}  // namespace
-
-Json run_study(Study& study, const RunOptions& options) {
-  Json& resolved = study.resolved;
-  const int threads = options.threads > 0 ? options.threads
-                      : resolved.contains("threads") && resolved["threads"].get<int>() > 0 ? resolved["threads"].get<int>()
-                                                                                            : hardware_threads();
-  const std::string out_dir = options.output_directory.empty() ? study.output_directory : options.output_directory;
-  const fs::path result_file = fs::path(out_dir) / "result.json";
-  const fs::path checkpoint_file = fs::path(out_dir) / "checkpoint.json";
-
-  // A finished study is never overwritten by accident.
-  if (fs::exists(result_file) && !options.force) {
-    if (options.resume) {
-      throw Error("output", result_file.string() + ": the study in " + out_dir +
-                                " has finished; there is nothing to resume (pass --force to run it again)");
-    }
-    throw Error("output", out_dir + " already holds a finished study (" + result_file.string() +
-                              "); pass --force to overwrite it, or --out for another directory");
-  }
-
-  std::uint64_t seed;
-  std::optional<std::uint64_t> checkpoint_seed;
-  if (options.resume && !options.force && fs::exists(checkpoint_file)) {
-    Json checkpoint;
-    try {
-      std::ifstream in(checkpoint_file.string());
-      checkpoint = Json::parse(in);
-    } catch (const std::exception& e) {
-      throw Error("output", checkpoint_file.string() + ": cannot be read as a checkpoint (" + e.what() +
-                                "); delete it, or run without --resume");
-    }
-    if (!checkpoint.is_object() || !checkpoint.contains("seed") || !checkpoint["seed"].is_number_unsigned()) {
-      throw Error("output", checkpoint_file.string() + ": not a checkpoint (no \"seed\"); delete it, or run without --resume");
-    }
-    checkpoint_seed = checkpoint["seed"].get<std::uint64_t>();
-  }
-  if (options.seed) {
-    seed = *options.seed;
-    if (checkpoint_seed && *checkpoint_seed != seed) {
-      throw Error("output", "--seed " + std::to_string(seed) + ": the checkpoint " + checkpoint_file.string() +
-                                " was written with seed " + std::to_string(*checkpoint_seed) +
-                                "; resume with that seed (or without --seed)");
-    }
-  } else if (checkpoint_seed) {
-    seed = *checkpoint_seed;
-  } else if (resolved.contains("seed")) {
-    seed = resolved["seed"].get<std::uint64_t>();
-  } else {
-    seed = std::random_device{}();
-  }
-
-  // Refuse an unusable output directory before any work is done.
-  boost::system::error_code ec;
-  fs::create_directories(out_dir, ec);
-  if (ec || !fs::is_directory(out_dir)) {
-    throw Error("output", "cannot create the output directory " + out_dir + (ec ? ": " + ec.message() : ""));
-  }
-  if (::access(out_dir.c_str(), W_OK) != 0) {
-    throw Error("output", "the output directory " + out_dir + " is not writable: " + std::strerror(errno));
-  }
-
-  std::ofstream log((fs::path(out_dir) / "run.log").string(), options.resume ? std::ios::app : std::ios::trunc);
-  log << "hapsyn " << version() << " " << (options.resume ? "resume" : "run") << " " << resolved["name"].get<std::string>()
-      << " at " << iso_time_now() << ", seed " << seed << ", " << threads << " threads\n";
-  log.flush();
-
-  SolverContext context;
-  context.threads = threads;
-  context.seed = seed;
-  context.progress = options.quiet ? nullptr : &std::cerr;
-  context.output_directory = out_dir;
-  context.log = log ? &log : nullptr;
-  context.checkpoint_file = checkpoint_file.string();
-  context.resume = options.resume && !options.force;
-
-  const std::string started = iso_time_now();
-  const auto t0 = std::chrono::steady_clock::now();
-  SolverResult result = study.solver->solve(*study.problem, context);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-
-  Json doc;
-  doc["hapsyn"] = {{"version", version()}, {"plugin_api", HAPSYN_PLUGIN_API_VERSION}};
-  doc["problem"] = resolved;
-  Json plugins = Json::array();
-  for (const PluginRecord& p : study.plugins) {
-    plugins.push_back({{"name", p.name}, {"kind", p.kind}, {"version", p.version}, {"file", p.file}});
-  }
-  doc["plugins"] = plugins;
-  doc["seed"] = seed;
-  doc["threads"] = threads;
-  doc["machine"] = machine_info();
-  doc["started"] = started;
-  doc["wall_time_s"] = wall;
-  doc["status"] = to_string(result.status);
-  doc["message"] = result.message;
-  doc["evaluations"] = {{"designs", result.design_evaluations}, {"samples", result.sample_evaluations}};
-  doc["samples_in_scene"] = study.problem->samples().size();
-  doc["scene"] = study.problem->samples().info;
-  if (result.best) doc["best"] = point_to_json(*study.problem, *result.best);
-  if (!result.front.empty()) {
-    Json front = Json::array();
-    for (const SolutionPoint& p : result.front) front.push_back(point_to_json(*study.problem, p));
-    doc["front"] = front;
-  }
-  doc["statistics"] = result.statistics;
-  if (!result.front.empty() || !study.reference_front.empty() || !study.reference_point.empty() ||
-      !study.reference_front_missing.empty()) {
-    IndicatorInputs in;
-    for (const Objective& o : study.problem->objectives()) {
-      in.names.push_back(o.name);
-      in.senses.push_back(o.sense);
-    }
-    for (const SolutionPoint& p : result.front) in.front.push_back(p.objectives);
-    if (result.best) in.best = &result.best->objectives;
-    in.reference_front = study.reference_front;
-    in.reference_point = study.reference_point;
-    Json indicators = front_indicators(in);
-    if (!study.reference_front_missing.empty()) {
-      indicators["reference_front_missing"] = study.reference_front_missing +
-                                              " does not exist: run the reference study first for GD, IGD and domination gaps";
-    }
-    indicators["evaluations"] = doc["evaluations"];
-    indicators["wall_time_s"] = wall;
-    doc["indicators"] = indicators;
-  }
-  doc["files"] = Json::object();
-  const bool want_samples = options.write_samples && resolved["output"].value("samples_csv", true);
-  const bool want_maps = options.write_samples && resolved["output"].value("maps", true);
-  if (result.best && (want_samples || want_maps)) {
-    const SampleRecords records = record_samples(*study.problem, result.best->design);
-    if (want_samples) {
-      write_file_atomically((fs::path(out_dir) / "samples.csv").string(), samples_csv(*study.problem, records));
-      doc["files"]["samples"] = "samples.csv";
-    }
-    if (want_maps) {
-      const PositionMaps maps = position_maps(*study.problem, records);
-      write_file_atomically((fs::path(out_dir) / "maps.csv").string(), maps_csv(maps));
-      doc["files"]["maps"] = "maps.csv";
-      if (resolved["output"].value("plots", false)) {
-        std::string message;
-        doc["files"]["plots"] = plot_maps(maps, out_dir, message);
-        if (!message.empty()) doc["plot_message"] = message;
-      }
-    }
-  }
-  doc["output_directory"] = out_dir;
-  write_file_atomically(result_file.string(), doc.dump(2) + "\n");
-  // The study is finished: its checkpoint has served.
-  boost::system::error_code remove_error;
-  fs::remove(checkpoint_file, remove_error);
-  if (log) log << "finished: status " << doc["status"].get<std::string>() << ", wall time " << wall << " s\n";
-  return doc;
 }
 
 }  // namespace hapsyn

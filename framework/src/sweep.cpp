@@ -1,6 +1,9 @@
 #include <hapsyn/error.hpp>
+#include <hapsyn/output_files.hpp>
 #include <hapsyn/plot.hpp>
+#include <hapsyn/problem_file.hpp>
 #include <hapsyn/study.hpp>
+#include <hapsyn/study_runner.hpp>
 #include <hapsyn/sweep.hpp>
 
 #include <boost/filesystem.hpp>
@@ -163,49 +166,37 @@ void write_plot(const fs::path& dir, std::ostream& log) {
   if (!why.empty()) log << "sweep: no plot written (the CSV has the data): " << why << "\n";
 }
 
-}  // namespace
-
-namespace {
-
-// Every combination of the axes' values, the last axis fastest: the --set assignments of each
-// run and the values it takes (path -> value).
-struct Combinations {
-  std::vector<std::vector<std::string>> sets = {{}};
-  std::vector<Json> values = {Json::object()};
-};
-
-Combinations combinations(const std::vector<SweepAxis>& axes) {
-  Combinations all;
+// Every combination of the axes' values, the last axis fastest: its overrides and its values
+// (path -> value).
+void combinations(const std::vector<SweepAxis>& axes, std::vector<std::vector<std::string>>& combos,
+                  std::vector<Json>& combo_values) {
+  combos = {{}};
+  combo_values = {Json::object()};
   for (const SweepAxis& axis : axes) {
-    Combinations next;
-    next.sets.clear();
-    next.values.clear();
-    for (std::size_t c = 0; c < all.sets.size(); ++c) {
+    std::vector<std::vector<std::string>> next;
+    std::vector<Json> next_values;
+    for (std::size_t c = 0; c < combos.size(); ++c) {
       for (const Json& v : axis.values) {
-        auto sets = all.sets[c];
-        Json values = all.values[c];
+        auto sets = combos[c];
+        Json values = combo_values[c];
         for (const std::string& p : axis.paths) {
           sets.push_back(assignment(p, v));
           values[p] = v;
         }
-        next.sets.push_back(sets);
-        next.values.push_back(values);
+        next.push_back(sets);
+        next_values.push_back(values);
       }
     }
-    all = std::move(next);
+    combos = std::move(next);
+    combo_values = std::move(next_values);
   }
-  return all;
 }
 
-Json with_overrides(const Json& problem, const std::vector<std::string>& sets) {
-  Json doc = problem;
-  for (const std::string& s : sets) apply_override(doc, s);
-  return doc;
-}
-
-// The sweep's summary rows (sweep.json) and table (sweep.csv) against the reference run.
-void summarize(const std::vector<RunRecord>& runs, const Json& reference, const SweepOptions& options, Json& rows,
-               std::ostringstream& csv) {
+// The runs against the reference: the rows of sweep.json's "runs" (returned) and sweep.csv.
+Json tabulate_runs(const std::vector<RunRecord>& runs, const Json& reference, const std::vector<SweepAxis>& axes,
+                   std::string& csv_text) {
+  Json rows = Json::array();
+  std::ostringstream csv;
   csv.precision(10);
   std::vector<std::string> objective_names;
   if (reference.contains("best")) {
@@ -214,15 +205,15 @@ void summarize(const std::vector<RunRecord>& runs, const Json& reference, const 
     }
   }
   csv << "label";
-  for (const SweepAxis& axis : options.axes) csv << "," << axis.paths[0];
+  for (const SweepAxis& axis : axes) csv << "," << axis.paths[0];
   csv << ",run_time_s,solve_time_s,scene_from_cache,designs,samples,status";
   for (const auto& n : objective_names) csv << "," << n;
   csv << ",objective_error,design_distance,igd,time_ratio_to_reference\n";
   const double reference_time = reference["sweep_run_time_s"].get<double>();
-  for (const RunRecord& run : runs) {
-    const Json& r = run.result;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const Json& r = runs[i].result;
     const Json from_cache = r.contains("scene") && r["scene"].contains("from_cache") ? r["scene"]["from_cache"] : Json(nullptr);
-    Json row = {{"values", run.values},
+    Json row = {{"values", runs[i].values},
                 {"run_time_s", r["sweep_run_time_s"]},
                 {"solve_time_s", r["wall_time_s"]},
                 {"scene_from_cache", from_cache},
@@ -232,9 +223,9 @@ void summarize(const std::vector<RunRecord>& runs, const Json& reference, const 
     if (r.contains("best")) row["objectives"] = r["best"]["objectives"];
     rows.push_back(row);
     std::string label;
-    for (const SweepAxis& axis : options.axes) label += (label.empty() ? "" : " ") + csv_cell(run.values[axis.paths[0]]);
+    for (const SweepAxis& axis : axes) label += (label.empty() ? "" : " ") + csv_cell(runs[i].values[axis.paths[0]]);
     csv << '"' << label << '"';
-    for (const SweepAxis& axis : options.axes) csv << "," << csv_cell(run.values[axis.paths[0]]);
+    for (const SweepAxis& axis : axes) csv << "," << csv_cell(runs[i].values[axis.paths[0]]);
     csv << "," << r["sweep_run_time_s"].get<double>() << "," << r["wall_time_s"].get<double>() << "," << csv_cell(from_cache)
         << "," << r["evaluations"]["designs"] << "," << r["evaluations"]["samples"]
         << "," << r["status"].get<std::string>();
@@ -244,23 +235,32 @@ void summarize(const std::vector<RunRecord>& runs, const Json& reference, const 
     csv << "," << csv_cell(row["errors"]["objective_error"]) << "," << csv_cell(row["errors"]["design_distance"]) << ","
         << csv_cell(row["errors"]["igd"]) << "," << r["sweep_run_time_s"].get<double>() / reference_time << "\n";
   }
+  csv_text = csv.str();
+  return rows;
 }
 
 }  // namespace
 
 Json run_sweep(const Json& problem, const SweepOptions& options, const Registry& registry) {
   if (options.axes.empty()) throw Error("sweep", "at least one --vary is required");
-  const Combinations combos = combinations(options.axes);
+  std::vector<std::vector<std::string>> combos;
+  std::vector<Json> combo_values;
+  combinations(options.axes, combos, combo_values);
   // Validate every run (and the reference) before any of them starts.
-  for (std::size_t c = 0; c < combos.sets.size(); ++c) {
+  auto make_doc = [&](const std::vector<std::string>& sets) {
+    Json doc = problem;
+    for (const std::string& s : sets) apply_override(doc, s);
+    return doc;
+  };
+  for (std::size_t c = 0; c < combos.size(); ++c) {
     try {
-      load_study(with_overrides(problem, combos.sets[c]), registry);
+      load_study(make_doc(combos[c]), registry);
     } catch (const Error& e) {
-      throw Error("sweep", "run with " + combos.values[c].dump() + ": " + e.what());
+      throw Error("sweep", "run with " + combo_values[c].dump() + ": " + e.what());
     }
   }
   const bool separate_reference = !options.reference.empty();
-  if (separate_reference) load_study(with_overrides(problem, options.reference), registry);
+  if (separate_reference) load_study(make_doc(options.reference), registry);
 
   const fs::path out(options.output_directory);
   fs::create_directories(out);
@@ -274,7 +274,7 @@ Json run_sweep(const Json& problem, const SweepOptions& options, const Registry&
   // its cache: scene knobs cost there, not in the solver) and the solve.
   auto run_one = [&](const std::vector<std::string>& sets, const std::string& name) {
     const auto t0 = std::chrono::steady_clock::now();
-    Study study = load_study(with_overrides(problem, sets), registry);
+    Study study = load_study(make_doc(sets), registry);
     run_options.output_directory = (out / name).string();
     Json result = run_study(study, run_options);
     result["sweep_run_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -282,25 +282,23 @@ Json run_sweep(const Json& problem, const SweepOptions& options, const Registry&
   };
 
   std::vector<RunRecord> runs;
-  for (std::size_t c = 0; c < combos.sets.size(); ++c) {
-    if (!options.quiet) std::cerr << "sweep: run " << (c + 1) << "/" << combos.sets.size() << " " << combos.values[c].dump() << "\n";
-    runs.push_back({combos.values[c], run_one(combos.sets[c], "run-" + std::to_string(c))});
+  for (std::size_t c = 0; c < combos.size(); ++c) {
+    if (!options.quiet) std::cerr << "sweep: run " << (c + 1) << "/" << combos.size() << " " << combo_values[c].dump() << "\n";
+    runs.push_back({combo_values[c], run_one(combos[c], "run-" + std::to_string(c))});
   }
   Json reference = separate_reference ? run_one(options.reference, "reference") : runs.back().result;
 
   Json summary;
-  summary["reference"] = {{"overrides", options.reference.empty() ? Json(combos.values.back()) : Json(options.reference)},
+  summary["reference"] = {{"overrides", options.reference.empty() ? Json(combo_values.back()) : Json(options.reference)},
                           {"run_time_s", reference["sweep_run_time_s"]},
                           {"best", reference.contains("best") ? reference["best"] : Json(nullptr)}};
   summary["hapsyn"] = reference["hapsyn"];
   summary["machine"] = reference["machine"];
   summary["seed"] = reference["seed"];
   summary["problem"] = problem;
-  Json rows = Json::array();
-  std::ostringstream csv;
-  summarize(runs, reference, options, rows, csv);
-  summary["runs"] = rows;
-  write_file_atomically((out / "sweep.csv").string(), csv.str());
+  std::string csv;
+  summary["runs"] = tabulate_runs(runs, reference, options.axes, csv);
+  write_file_atomically((out / "sweep.csv").string(), csv);
   write_file_atomically((out / "sweep.json").string(), summary.dump(2) + "\n");
   write_plot(out, std::cerr);
   summary["output_directory"] = out.string();

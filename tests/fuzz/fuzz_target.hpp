@@ -4,6 +4,7 @@
 // (plugins, schemas, design space, scene build). Bad input must end in hapsyn::Error; anything
 // else (another exception, a crash, a sanitizer report, a hang) is a bug.
 #include <hapsyn/error.hpp>
+#include <hapsyn/problem_file.hpp>
 #include <hapsyn/registry.hpp>
 #include <hapsyn/study.hpp>
 

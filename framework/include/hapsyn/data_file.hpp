@@ -14,7 +14,4 @@ namespace hapsyn {
 /// \throws Error("<component>: options.<option> = \"<value>\": no such file (tried ...)")
 std::string find_data_file(const std::string& component, const std::string& option, const std::string& value);
 
-/// The directories searched for relative data files after the current directory.
-std::string share_directory();
-
 }  // namespace hapsyn

@@ -5,6 +5,11 @@
 /// A mechanism declares its variables (VariableDecl); the problem file narrows them (bounds,
 /// grid step, fixed value). Vector variables are flattened into scalar components named
 /// "name[i]"; solvers only ever see a flat vector of the *free* (not fixed) components.
+///
+/// Resolution (build_design_space, below) turns a problem file's "design" section and the
+/// mechanism's declarations into a DesignSpace; load_study calls it before anything expensive.
+#include <hapsyn/json.hpp>
+
 #include <Eigen/Core>
 #include <string>
 #include <vector>
@@ -81,5 +86,21 @@ class DesignSpace {
   std::vector<DesignComponent> components_;
   std::vector<int> free_;
 };
+
+/// Resolves a problem file's "design" section against the mechanism's variables: every
+/// declared variable becomes its components, each with the file's bounds (or the declared
+/// defaults), grid step or fixed value. An entry is {"lower", "upper", "step"} or {"value"
+/// (with optional "lower"/"upper")}; each of these is a number (broadcast to every component)
+/// or an array with one number per component. A component whose bounds coincide is fixed.
+/// \param design          the "design" object (variable name -> entry); may be empty
+/// \param decls           the mechanism's variables, in declaration order
+/// \param resolved_design out: the section as resolved (defaults filled in, units added), for
+///                        result.json
+/// \throws Error("problem", ...) naming the path ("design.l1.upper"), the value and the rule:
+///         unknown variables or keys (with the nearest name), non-numbers, non-finite values,
+///         wrong component counts, bounds outside the mechanism's hard limits, lower > upper,
+///         a value outside its bounds, a step <= 0 or wider than the range, a step with a
+///         value, non-integers for integer variables.
+DesignSpace build_design_space(const Json& design, const std::vector<VariableDecl>& decls, Json& resolved_design);
 
 }  // namespace hapsyn

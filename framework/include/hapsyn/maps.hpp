@@ -25,18 +25,19 @@ SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full
 std::string samples_csv(const Problem& problem, const SampleRecords& records);
 
 /// Every objective's value per workspace position: the samples at one position (one lattice
-/// point of a lattice scene such as human_arm, else equal x, y, z coordinates) are reduced as
-/// the metric reduces the whole scene and combined by Metric::combine. For the coverage metric
-/// this is the per-position J_x (reachable share of the human poses there), J_v, J_a, J_f.
+/// point of a scene that declares a SampleLattice, such as human_arm, else equal x, y, z
+/// coordinates) are reduced as the metric reduces the whole scene and combined by
+/// Metric::combine. For the coverage metric this is the per-position J_x (reachable share of
+/// the human poses there), J_v, J_a, J_f.
 struct PositionMaps {
   std::vector<std::string> objectives;  ///< column names (the objectives' names)
   std::vector<Eigen::Vector3d> position;  ///< per position: x, y, z scene coordinates (0 when absent)
   std::vector<int> samples;               ///< per position: samples there
-  std::vector<int> lattice_index;         ///< per position: lattice point (lattice scenes), else -1
+  std::vector<int> lattice_index;         ///< per position: SampleLattice index (lattice scenes), else -1
   Eigen::MatrixXd values;                 ///< positions x objectives; NaN = undefined (a worst-case
                                           ///< metric met an unreachable sample there)
-  int lattice_per_axis = 0;               ///< > 0 for lattice scenes
-  double lattice_step = 0.0;              ///< [m]
+  int lattice_per_axis = 0;               ///< SampleLattice::per_axis; 0 without a lattice
+  double lattice_step = 0.0;              ///< SampleLattice::step
 };
 
 PositionMaps position_maps(const Problem& problem, const SampleRecords& records);

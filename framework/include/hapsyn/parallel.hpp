@@ -1,13 +1,9 @@
 #pragma once
 /// \file
-/// Minimal parallel-for used by the framework and solvers.
+/// Minimal dynamic parallel-for used by the framework and plugins, and the hardware thread count.
 #include <functional>
 
 namespace hapsyn {
-
-/// Runs body(begin, end, thread_index) over [0, n) split into contiguous chunks on `threads`
-/// threads (the calling thread included). Exceptions from any chunk are rethrown (the first).
-void parallel_for(long long n, int threads, const std::function<void(long long, long long, int)>& body);
 
 /// Dynamic scheduling: body(index, thread_index) for index in [0, n), handed out in blocks of
 /// `block` to `threads` threads. Exceptions are rethrown (the first).

@@ -6,10 +6,39 @@
 
 #include <Eigen/Core>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace hapsyn {
+
+/// The declaration of a scene whose samples sit on the points of a cubic lattice, several
+/// samples per point (human_arm: the reachable orientations at each position). It is the only
+/// lattice knowledge the framework has: a scene that fills SampleSet::lattice gets
+///  - maps.csv / position maps grouped by lattice point (one row per point that holds samples,
+///    with a `lattice_index` column), and map_<objective>.png drawn as lattice slices;
+///  - `hapsyn scene --plot`: the density (samples at a point / candidates_per_point) as slices.
+/// Without it, samples are grouped by equal x, y, z coordinates and `scene --plot` refuses.
+///
+/// Geometry: point (ix, iy, iz), each in [0, per_axis), has the index ix + n (iy + n iz)
+/// (n = per_axis; x varies fastest) and lies at ((ix - h) step, (iy - h) step, (iz - h) step),
+/// h = (n - 1) / 2, in the scene's own lattice frame (human_arm: the shoulder frame S, x_S
+/// pointing down, so a slice at fixed ix is one height). The plots slice along that frame's
+/// first axis; the lattice frame need not be the frame of SampleSet::poses.
+///
+/// The framework checks the declaration after Scene::build (check_lattice) and refuses a scene
+/// that breaks it.
+struct SampleLattice {
+  int per_axis = 0;    ///< n >= 1: points per axis (n^3 points)
+  double step = 0.0;   ///< > 0: spacing of neighbouring points [SampleSet::unit]
+  /// One entry per sample (SampleSet::size() entries): the index in [0, n^3) of its point.
+  std::vector<long long> index_of_sample;
+  /// How many candidate samples each point was tried with (human_arm: the orientation set's
+  /// size), >= 1; the density plot shows samples at a point / candidates_per_point.
+  int candidates_per_point = 1;
+  /// What a candidate is, for plot titles (human_arm: "orientations").
+  std::string candidates = "samples";
+};
 
 /// The samples of a scene. Each sample is a row of `poses` (e.g. (x, y) [m] for a planar
 /// scene), optionally with named per-sample attributes (e.g. the human's ellipsoid axes).
@@ -24,6 +53,8 @@ struct SampleSet {
   /// What the scene reports about itself (e.g. build time, cache file, counts); copied into
   /// result.json under "scene" and printed by `hapsyn scene`.
   Json info = Json::object();
+  /// Set by scenes whose samples sit on a cubic lattice (see SampleLattice); empty otherwise.
+  std::optional<SampleLattice> lattice;
 
   int size() const { return static_cast<int>(poses.rows()); }
   int dimension() const { return static_cast<int>(poses.cols()); }
@@ -38,6 +69,13 @@ struct SampleSet {
  private:
   Corner cached_lower_, cached_upper_;
 };
+
+/// Checks a scene's SampleLattice declaration against its samples (nothing to check without
+/// one). \param scene the scene plugin, for the error
+/// \throws Error("<scene>: lattice: ...") when per_axis < 1, step <= 0 or not finite,
+///         candidates_per_point < 1, index_of_sample does not hold one entry per sample, or an
+///         index lies outside [0, per_axis^3).
+void check_lattice(const SampleSet& samples, const std::string& scene);
 
 /// What the scene must provide, derived from the study's metrics (e.g. the human ellipsoids
 /// are built only when a metric needs them).

@@ -1,31 +1,19 @@
 #pragma once
 /// \file
-/// Problem files: loading (with clear errors), --set overrides, and running a study.
+/// A study and how it is loaded: a problem document (read by problem_file.hpp) validated
+/// completely and turned into a ready-to-run Problem and Solver. Nothing here runs a study:
+/// that is run_study (study_runner.hpp).
 #include <hapsyn/json.hpp>
 #include <hapsyn/pareto.hpp>
 #include <hapsyn/problem.hpp>
 #include <hapsyn/registry.hpp>
 #include <hapsyn/solver.hpp>
 
-#include <cstdint>
 #include <memory>
-#include <optional>
 #include <string>
 #include <vector>
 
 namespace hapsyn {
-
-/// Parses a problem file. \throws Error("problem: FILE:LINE:COLUMN: ...") on malformed JSON,
-/// or when the file cannot be read.
-Json read_problem_file(const std::string& path);
-/// Parses JSON text; `source` names it in errors.
-Json parse_problem_text(const std::string& text, const std::string& source);
-
-/// Applies one override "path=value" (path with '.' separators; array elements by index,
-/// "objectives.0.metric" or "objectives[0].metric"). The value is JSON when it parses as
-/// JSON, else a string. Missing objects on the path are created.
-/// \throws Error("set: ...") for a malformed override or a path through a non-object.
-void apply_override(Json& problem, const std::string& assignment);
 
 /// A validated, ready-to-run study.
 struct Study {
@@ -35,7 +23,6 @@ struct Study {
   std::string solver_plugin;
   std::vector<PluginRecord> plugins;     ///< every plugin the study uses
   std::string output_directory;          ///< from the file, or --out
-  const Registry* registry = nullptr;    ///< the registry that loaded it (sub-solvers use it)
   /// From the optional "indicators" section: the reference front (objective points, loaded from
   /// a result.json) and the hypervolume reference point (natural units, one per objective).
   std::vector<ObjectivePoint> reference_front;
@@ -45,41 +32,18 @@ struct Study {
   std::string reference_front_missing;
 };
 
-/// Validates a problem document completely (framework rules, each plugin's schema, design
-/// bounds against the mechanism's limits, the "indicators" section and its reference front
-/// file) and builds the scene and problem. Nothing runs. The registry must outlive the study.
-/// \throws Error naming the JSON path, the value and the rule.
+/// Validates a problem document completely and builds the study; nothing runs. In order:
+/// the framework's own schema of a problem file (defaults filled in), the mechanism and its
+/// options, the "design" section against the mechanism's variables (build_design_space), each
+/// objective's metric and options, the solver and its options, the scene and its options (the
+/// scene is built here, with the attributes the metrics ask for; its SampleLattice, if any, is
+/// checked), Solver::check, the "indicators" section and its reference front file.
+/// The resolved document (Study::resolved) records every default, and "aggregation":
+/// "weighted_sum" for several objectives under a single-objective solver.
+/// \param problem  the parsed (and overridden) problem document
+/// \param registry finds and creates the plugins; must outlive the study
+/// \throws Error naming the JSON path, the value and the rule (component "problem" for the
+///         file's own rules, the plugin's name for its options), or a scene's lattice error.
 Study load_study(const Json& problem, const Registry& registry);
-
-struct RunOptions {
-  std::string output_directory;  ///< overrides output.directory when not empty
-  int threads = 0;               ///< 0 = hardware concurrency
-  std::optional<std::uint64_t> seed;
-  bool quiet = false;
-  bool write_samples = true;     ///< per-sample CSV of the best design
-  /// Overwrite a finished study (an existing result.json in the output directory).
-  bool force = false;
-  /// Continue from the output directory's checkpoint.json (solvers that checkpoint); the seed
-  /// is the checkpoint's unless given.
-  bool resume = false;
-};
-
-/// Runs a loaded study: solves, then writes result.json (atomically) and samples.csv into the
-/// output directory. Returns the result document. The solver's outcome is in "status".
-/// Studies with a front (or a reference front) get "indicators" (see front_indicators).
-/// Progress lines also go to run.log in the output directory (appended on --resume); the
-/// solver's checkpoint is <output>/checkpoint.json and is removed once result.json is written.
-/// \throws Error("output", ...) when the output directory holds a finished study
-///         (result.json) and `force` is not set, when `resume` finds a finished
-///         study, or when the checkpoint's seed contradicts options.seed.
-Json run_study(Study& study, const RunOptions& options);
-
-/// Writes `content` to `path` atomically (temporary file in the same directory, then rename).
-void write_file_atomically(const std::string& path, const std::string& content);
-
-/// Machine description for logs: host, CPU model, cores, OS.
-Json machine_info();
-/// "0.1.0" (the project version).
-const char* version();
 
 }  // namespace hapsyn

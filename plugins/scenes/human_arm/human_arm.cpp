@@ -3,6 +3,7 @@
 #include <hapsyn/data_file.hpp>
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/output_files.hpp>
 #include <hapsyn/parallel.hpp>
 
 #include <Eigen/Cholesky>
@@ -686,7 +687,7 @@ std::string payload_bytes(const RawScene& raw) {
   return payload;
 }
 
-// Writes the cache atomically: a temporary file in the same directory, then rename(). Returns
+// Writes the cache atomically (write_file_atomically). Returns
 // "" on success, else why it failed (a failed write never fails the build).
 std::string write_cache(const std::string& file, const std::string& key, const RawScene& raw, bool ellipsoids) {
   try {
@@ -703,21 +704,7 @@ std::string write_cache(const std::string& file, const std::string& key, const R
     put(out, static_cast<std::uint64_t>(payload.size()));
     put(out, fnv1a64(payload.data(), payload.size()));
     put(out, fnv1a64(out.data(), out.size()));  // header checksum
-    std::random_device rd;
-    const fs::path tmp = path.parent_path() / (path.filename().string() + ".tmp." + std::to_string(::getpid()) + "." +
-                                               std::to_string(rd()));
-    {
-      std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-      f.write(out.data(), static_cast<std::streamsize>(out.size()));
-      f.write(payload.data(), static_cast<std::streamsize>(payload.size()));
-      f.flush();
-      if (!f) {
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        return "cannot write " + tmp.string();
-      }
-    }
-    fs::rename(tmp, path);
+    write_file_atomically(file, {out, payload});
     return "";
   } catch (const std::exception& e) {
     return e.what();
@@ -929,6 +916,14 @@ SampleSet HumanArmScene::build(const SceneRequest& request) const {
   };
   if (want_mv) set.attributes["M_v"] = matrix_attribute(raw.mv);
   if (want_ma) set.attributes["M_a"] = matrix_attribute(raw.ma);
+  // The lattice declaration the framework's maps and plots use (the lattice frame is S).
+  SampleLattice lattice;
+  lattice.per_axis = n_axis;
+  lattice.step = o.lattice_step;
+  lattice.index_of_sample.assign(raw.lattice.begin(), raw.lattice.end());
+  lattice.candidates_per_point = o.orientations;
+  lattice.candidates = "orientations";
+  set.lattice = std::move(lattice);
 
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   info["n_reach"] = static_cast<long long>(n);

@@ -4,7 +4,7 @@
 
 #include <hapsyn/error.hpp>
 #include <hapsyn/options.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/output_files.hpp>
 
 #include <fstream>
 #include <sstream>

@@ -1,0 +1,53 @@
+#include <hapsyn/error.hpp>
+#include <hapsyn/scene.hpp>
+
+#include <cassert>
+#include <cmath>
+#include <string>
+
+namespace hapsyn {
+
+SampleSet::Corner SampleSet::lower_corner() const {
+  if (cached_lower_.size() == poses.cols()) return cached_lower_;
+  return poses.colwise().minCoeff().transpose();
+}
+SampleSet::Corner SampleSet::upper_corner() const {
+  if (cached_upper_.size() == poses.cols()) return cached_upper_;
+  return poses.colwise().maxCoeff().transpose();
+}
+void SampleSet::cache_bounds() {
+  assert(poses.cols() <= 16 && "SampleSet::Corner holds at most 16 pose coordinates");
+  cached_lower_ = poses.colwise().minCoeff().transpose();
+  cached_upper_ = poses.colwise().maxCoeff().transpose();
+}
+
+void check_lattice(const SampleSet& samples, const std::string& scene) {
+  if (!samples.lattice) return;
+  const SampleLattice& l = *samples.lattice;
+  const auto refuse = [&](const std::string& why) { throw Error(scene, "lattice: " + why); };
+  // At most 2^20 points per axis: n^3 stays far inside long long.
+  if (l.per_axis < 1 || l.per_axis > (1 << 20)) {
+    refuse("per_axis = " + std::to_string(l.per_axis) + ": must be in [1, 2^20]");
+  }
+  if (!(l.step > 0.0) || !std::isfinite(l.step)) {
+    refuse("step = " + render_value(Json(l.step)) + ": must be finite and > 0");
+  }
+  if (l.candidates_per_point < 1) {
+    refuse("candidates_per_point = " + std::to_string(l.candidates_per_point) + ": must be >= 1");
+  }
+  if (l.index_of_sample.size() != static_cast<std::size_t>(samples.size())) {
+    refuse("index_of_sample has " + std::to_string(l.index_of_sample.size()) + " entries for " +
+           std::to_string(samples.size()) + " samples (one per sample)");
+  }
+  const long long n = l.per_axis;
+  const long long points = n * n * n;
+  for (std::size_t i = 0; i < l.index_of_sample.size(); ++i) {
+    const long long index = l.index_of_sample[i];
+    if (index < 0 || index >= points) {
+      refuse("index_of_sample[" + std::to_string(i) + "] = " + std::to_string(index) + ": must be in [0, " +
+             std::to_string(points) + ")");
+    }
+  }
+}
+
+}  // namespace hapsyn

@@ -1,0 +1,90 @@
+// The lattice contract of a scene (SampleSet::lattice): what the framework checks, and
+// human_arm's declaration against its own per-sample lattice_index attribute.
+#include "test_support.hpp"
+
+#include <hapsyn/scene.hpp>
+#include <hapsyn/scene_export.hpp>
+
+#include <boost/filesystem.hpp>
+
+#include <unistd.h>
+
+using hapsyn::Json;
+using hapsyn::SampleLattice;
+using hapsyn::SampleSet;
+using hapsyn::test::error_of;
+using hapsyn::test::registry;
+
+namespace {
+// Three samples on a 3 x 3 x 3 lattice.
+SampleSet lattice_scene() {
+  SampleSet set;
+  set.coordinates = {"x", "y", "z"};
+  set.poses = SampleSet::RowMatrix::Zero(3, 3);
+  SampleLattice lattice;
+  lattice.per_axis = 3;
+  lattice.step = 0.5;
+  lattice.index_of_sample = {0, 13, 13};
+  lattice.candidates_per_point = 2;
+  set.lattice = lattice;
+  return set;
+}
+}  // namespace
+
+TEST(SceneLattice, AConsistentDeclarationOrNoneIsAccepted) {
+  EXPECT_EQ(error_of([] { hapsyn::check_lattice(lattice_scene(), "toy"); }), "(no error)");
+  SampleSet plain = lattice_scene();
+  plain.lattice.reset();
+  EXPECT_EQ(error_of([&] { hapsyn::check_lattice(plain, "toy"); }), "(no error)");
+}
+
+TEST(SceneLattice, EachBrokenRuleIsRefusedNamingTheScene) {
+  SampleSet s = lattice_scene();
+  s.lattice->per_axis = 0;
+  EXPECT_EQ(error_of([&] { hapsyn::check_lattice(s, "toy"); }), "toy: lattice: per_axis = 0: must be in [1, 2^20]");
+  s = lattice_scene();
+  s.lattice->step = 0.0;
+  EXPECT_EQ(error_of([&] { hapsyn::check_lattice(s, "toy"); }), "toy: lattice: step = 0.0: must be finite and > 0");
+  s = lattice_scene();
+  s.lattice->candidates_per_point = 0;
+  EXPECT_EQ(error_of([&] { hapsyn::check_lattice(s, "toy"); }), "toy: lattice: candidates_per_point = 0: must be >= 1");
+  s = lattice_scene();
+  s.lattice->index_of_sample.pop_back();
+  EXPECT_EQ(error_of([&] { hapsyn::check_lattice(s, "toy"); }),
+            "toy: lattice: index_of_sample has 2 entries for 3 samples (one per sample)");
+  s = lattice_scene();
+  s.lattice->index_of_sample[1] = 27;
+  EXPECT_EQ(error_of([&] { hapsyn::check_lattice(s, "toy"); }),
+            "toy: lattice: index_of_sample[1] = 27: must be in [0, 27)");
+}
+
+TEST(SceneLattice, DensityCountsSamplesPerPointOverCandidates) {
+  const auto dir = boost::filesystem::temp_directory_path() / ("hapsyn-scene-test-" + std::to_string(::getpid()));
+  hapsyn::plot_lattice_density(lattice_scene(), dir.string());
+  EXPECT_TRUE(boost::filesystem::exists(dir / "density_slices.dat"));
+  EXPECT_TRUE(boost::filesystem::exists(dir / "density_slices.gp"));
+  boost::filesystem::remove_all(dir);
+  SampleSet plain = lattice_scene();
+  plain.lattice.reset();
+  EXPECT_NE(error_of([&] { hapsyn::plot_lattice_density(plain, dir.string()); }).find("declares no SampleLattice"),
+            std::string::npos);
+}
+
+TEST(SceneLattice, HumanArmDeclaresItsLatticeAsItsLatticeIndexAttribute) {
+  const Json doc = {{"scene",
+                     {{"plugin", "human_arm"},
+                      {"options", {{"lattice_step", 0.35}, {"orientations", 20}, {"joint3_steps", 5}, {"cache", false}}}}}};
+  const hapsyn::BuiltScene built = hapsyn::build_scene_alone(doc, registry(), 2, {});
+  const SampleSet& set = built.samples;
+  ASSERT_GT(set.size(), 0);
+  ASSERT_TRUE(set.lattice.has_value());
+  EXPECT_EQ(set.lattice->per_axis, set.info["lattice_per_axis"].get<int>());
+  EXPECT_EQ(set.lattice->step, set.info["lattice_step"].get<double>());
+  EXPECT_EQ(set.lattice->candidates_per_point, set.info["orientations"].get<int>());
+  EXPECT_EQ(set.lattice->candidates, "orientations");
+  const auto& index = set.attributes.at("lattice_index");
+  ASSERT_EQ(set.lattice->index_of_sample.size(), static_cast<std::size_t>(set.size()));
+  for (int i = 0; i < set.size(); ++i) {
+    EXPECT_EQ(set.lattice->index_of_sample[static_cast<std::size_t>(i)], static_cast<long long>(index(i, 0))) << i;
+  }
+}
