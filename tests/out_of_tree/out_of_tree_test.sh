@@ -137,8 +137,8 @@ run_examples() {
     text=$("$hapsyn" describe "$1") || fail "[$tree] hapsyn describe $1"
     grep -Eq "$2" <<<"$text" || { echo "$text"; fail "[$tree] 'hapsyn describe $1' does not show /$2/"; }
   }
-  describe mean_isotropy "^ +exponent +number +default 1\.0 .*\[>= 0\.1\]"
-  describe planar_disc "^ +radius +number +default 0\.05 +m .*\[> 0\.0\]"
+  describe mean_isotropy "^ +exponent +number +default 1(\.0)? .*\[>= 0\.1\]"
+  describe planar_disc "^ +radius +number +default 0\.05 +m .*\[> 0(\.0)?\]"
   describe planar_2r '^ +q2_sign +string +default "positive" .*\[one of \["positive","negative"\]\]'
   describe planar_2r "^ +l1 +real \[0\.05, 0\.5\] m"
   describe random_search "^ +samples +integer +default 200 "

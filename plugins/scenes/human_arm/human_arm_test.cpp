@@ -816,8 +816,8 @@ TEST(HumanArm, OptionErrorsNameTheOptionTheValueAndTheRule) {
             "problem: scene.options.lattice_stp: unknown key (did you mean 'lattice_step'?); known keys: C_E_P, C_S_B, "
             "arm_file, cache, cache_directory, joint3_steps, lattice_extent, lattice_step, orientations, threads, x_E_P, "
             "x_S_B");
-  EXPECT_EQ(registry_error(Json{{"lattice_step", 0.0}}), "problem: scene.options.lattice_step = 0.0: must be > 0.0");
-  EXPECT_EQ(registry_error(Json{{"orientations", 0}}), "problem: scene.options.orientations = 0: must be >= 1.0");
+  EXPECT_EQ(registry_error(Json{{"lattice_step", 0.0}}), "problem: scene.options.lattice_step = 0.0: must be > 0");
+  EXPECT_EQ(registry_error(Json{{"orientations", 0}}), "problem: scene.options.orientations = 0: must be >= 1");
   EXPECT_EQ(registry_error(Json{{"joint3_steps", 2.5}}), "problem: scene.options.joint3_steps = 2.5: must be an integer");
   EXPECT_EQ(registry_error(Json{{"x_S_B", {0.0, 1.0}}}),
             "problem: scene.options.x_S_B = [0.0,1.0]: must have at least 3 items");

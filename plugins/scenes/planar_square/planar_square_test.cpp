@@ -109,8 +109,8 @@ TEST(PlanarSquare, RefusesAStepLargerThanTheSide) {
 
 TEST(PlanarSquare, RefusesNonPositiveUnknownAndHugeOptions) {
   // The declared rules (> 0, a number, known keys) are the framework's: component "problem".
-  EXPECT_EQ(error_of(Json{{"side", 0.0}}), "problem: options.side = 0.0: must be > 0.0");
-  EXPECT_EQ(error_of(Json{{"step", -0.001}}), "problem: options.step = -0.001: must be > 0.0");
+  EXPECT_EQ(error_of(Json{{"side", 0.0}}), "problem: options.side = 0.0: must be > 0");
+  EXPECT_EQ(error_of(Json{{"step", -0.001}}), "problem: options.step = -0.001: must be > 0");
   EXPECT_EQ(error_of(Json{{"step", "fine"}}), "problem: options.step = \"fine\": must be a number");
   EXPECT_EQ(error_of(Json{{"stpe", 0.001}}),
             "problem: options.stpe: unknown key (did you mean 'step'?); known keys: side, step");
