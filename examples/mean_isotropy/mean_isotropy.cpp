@@ -14,7 +14,6 @@
 // metric's aggregation is kAveraging (the default rule of Metric::aggregation()), so the
 // framework passes unreachable / singular / invalid samples to local() as well, with
 // q.status telling which; their Jacobian is not meaningful and must not be read.
-#include <hapsyn/error.hpp>
 #include <hapsyn/plugin.hpp>
 
 #include <Eigen/SVD>
@@ -25,7 +24,6 @@
 
 namespace mean_isotropy_example {
 
-using hapsyn::Json;
 using hapsyn::LocalValue;
 using hapsyn::Needs;
 using hapsyn::Reduction;
@@ -33,19 +31,33 @@ using hapsyn::SampleQuantities;
 using hapsyn::SampleStatus;
 using hapsyn::TaskJointMatrix;
 
+/// The options, declared once: the framework derives the schema from this (`hapsyn describe
+/// mean_isotropy`), checks the problem file against it (unknown keys, types, the minimum) and
+/// fills the struct before the constructor runs. Member initialisers stay `{}`: the declared
+/// default is the only one.
+struct MeanIsotropyOptions {
+  double exponent{};
+
+  static void declare(hapsyn::OptionDeclarations<MeanIsotropyOptions>& d) {
+    d.describe(
+        "Mean isotropy: the average over the reachable samples of (sigma_min(J) / sigma_max(J))^exponent, J the "
+        "task Jacobian (averaging counterpart of the worst-case GII). Unreachable, singular and invalid samples "
+        "are left out of the average; 0 when no sample is reachable. Dimensionless, in [0, 1].");
+    d.add(&MeanIsotropyOptions::exponent, "exponent", 1.0,
+          "Each sample contributes (sigma_min / sigma_max)^exponent; 1 averages the inverse condition number "
+          "itself, larger values penalise poorly conditioned samples more.")
+        .minimum(0.1);
+  }
+};
+
 /// The "mean_isotropy" metric. Thread safety: immutable after construction; local() is
 /// const, allocation-free and safe to call from several threads at once.
 class MeanIsotropy final : public hapsyn::Metric {
  public:
-  /// \param options validated against schema.json with defaults filled in by the framework
-  ///        (a null or empty object also works, for direct construction in tests).
-  explicit MeanIsotropy(const Json& options) {
-    if (options.is_object() && options.contains("exponent")) exponent_ = options.at("exponent").get<double>();
-    // The schema already enforces this; repeated so that direct construction is safe too.
-    if (!std::isfinite(exponent_) || exponent_ < 0.1) {
-      throw hapsyn::Error("mean_isotropy", "options.exponent = " + std::to_string(exponent_) + ": must be >= 0.1");
-    }
-  }
+  using Options = MeanIsotropyOptions;
+  /// \param options validated against the declarations, defaults filled in by the framework
+  ///        (in a test: hapsyn::make_options<MeanIsotropyOptions>(json)).
+  explicit MeanIsotropy(const MeanIsotropyOptions& options) : exponent_(options.exponent) {}
 
   void local(const SampleQuantities& q, double* out) const override {
     if (q.status != SampleStatus::kReachable) {
@@ -91,7 +103,7 @@ class MeanIsotropy final : public hapsyn::Metric {
   }
 
  private:
-  double exponent_ = 1.0;
+  double exponent_;
 };
 
 }  // namespace mean_isotropy_example

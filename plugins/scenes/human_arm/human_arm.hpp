@@ -10,6 +10,7 @@
 /// velocities in rad/s, joint accelerations in rad/s^2 (the arm file holds degrees; they are
 /// converted once on load).
 #include <hapsyn/json.hpp>
+#include <hapsyn/options.hpp>
 #include <hapsyn/scene.hpp>
 
 #include <Eigen/Core>
@@ -67,7 +68,8 @@ HumanArmData load_human_arm(const std::string& path);
 
 /// Resolves an arm_file option: an absolute path as is; a relative path against the current
 /// directory when it exists there, else against the share directory (installed or source tree).
-/// "" means the shipped fennel2022_right_arm.json. \throws Error when no candidate exists.
+/// "" means the declared default (the shipped fennel2022_right_arm.json).
+/// \throws Error("human_arm", "options.arm_file = \"...\": no such file ...") when no candidate exists.
 std::string resolve_arm_file(const std::string& option);
 
 /// One IK solution for a fixed joint-3 angle.
@@ -130,25 +132,104 @@ std::vector<Eigen::Quaterniond> orientation_set(int n);
 /// Lattice coordinates along one axis: k * step for k = -m..m, m = floor(extent/step + 1e-9).
 std::vector<double> lattice_axis(double step, double extent);
 
-/// Resolved options of the scene (see schema.json).
-struct HumanArmSceneOptions {
-  std::string arm_file;          ///< resolved absolute path
-  double lattice_step = 0.1;     ///< [m]
-  double lattice_extent = 0.7;   ///< [m], cube of +-extent around the shoulder
-  int orientations = 505;
-  int joint3_steps = 17;
-  Eigen::Vector3d x_S_B{0.0, 0.0, -0.61};  ///< shoulder position in B [m]
-  Eigen::Matrix3d C_S_B;                   ///< rotation S -> B
-  Eigen::Matrix3d C_E_P;                   ///< rotation E -> P
-  Eigen::Vector3d x_E_P{0.0, 0.0, 0.0};    ///< end-effector position in P [m]
-  bool cache = true;
-  std::string cache_directory;  ///< "" = $XDG_CACHE_HOME/hapsyn or ~/.cache/hapsyn
-  int threads = 0;              ///< 0 = all cores
+/// The options of the human_arm scene as a problem file gives them, declared once
+/// (`hapsyn describe human_arm`). Shapes, ranges and types are checked by the framework from
+/// these declarations; HumanArmScene's constructor checks the rest (see
+/// resolve_human_arm_scene_options).
+struct HumanArmOptions {
+  std::string arm_file;                     ///< as given; resolved by resolve_arm_file
+  double lattice_step{};                    ///< [m], > 0
+  double lattice_extent{};                  ///< [m], >= 0: cube of +-extent around the shoulder
+  int orientations{};                       ///< [1, 1000000]
+  int joint3_steps{};                       ///< [1, 10000]
+  std::vector<double> x_S_B;                ///< 3: shoulder position in B [m]
+  std::vector<std::vector<double>> C_S_B;   ///< 3 rows of 3: rotation S -> B
+  std::vector<std::vector<double>> C_E_P;   ///< 3 rows of 3: rotation E -> P
+  std::vector<double> x_E_P;                ///< 3: end-effector position in P [m]
+  bool cache{};
+  std::string cache_directory;              ///< "" = $XDG_CACHE_HOME/hapsyn or ~/.cache/hapsyn
+  int threads{};                            ///< [0, 4096], 0 = all cores
+
+  static void declare(OptionDeclarations<HumanArmOptions>& d) {
+    using O = HumanArmOptions;
+    d.describe(
+        "Reachable palm poses of the 7-DOF human arm of Fennel et al. 2022 (section V): a position lattice around "
+        "the shoulder x a near-uniform orientation set; per pose the closed-form IK with joint 3 on a grid, the "
+        "solution of highest manipulability kept, unreachable poses dropped. Samples are the end-effector targets "
+        "T_E^B = T_S^B T_P^S T_E^P as (x, y, z, qw, qx, qy, qz) [m]; attributes shoulder_pose, human_q, "
+        "manipulability, lattice_index, and on request M_v, M_a (6x6 row-major, base frame). Built scenes are "
+        "cached on disk.");
+    d.add(&O::arm_file, "arm_file", "human_arm/fennel2022_right_arm.json",
+          "Arm model (JSON, see share/human_arm/README.md): an absolute path, a path relative to the current "
+          "directory, or relative to hapsyn's share directory. The default is Table II of the paper.");
+    d.add(&O::lattice_step, "lattice_step", 0.1,
+          "Spacing of the position lattice (the paper: 0.1 m). Points are k * step, |k * step| <= lattice_extent, "
+          "on each axis of the shoulder frame S.")
+        .greater_than(0)
+        .unit("m");
+    d.add(&O::lattice_extent, "lattice_extent", 0.7,
+          "Half side of the lattice cube around the shoulder; 0.7 m covers the arm's reach (0.677 m) with 15 points "
+          "per axis at 0.1 m.")
+        .minimum(0)
+        .unit("m");
+    d.add(&O::orientations, "orientations", 505,
+          "Number of orientations per position (the paper: 505), a generalized Fibonacci grid mapped to the "
+          "unit-quaternion hemisphere with constant Jacobian determinant.")
+        .range(1, 1000000);
+    d.add(&O::joint3_steps, "joint3_steps", 17,
+          "Number of equidistant joint-3 values between its limits, both included (17: 10 deg steps over [-80, 80] "
+          "deg).")
+        .range(1, 10000);
+    d.add(&O::x_S_B, "x_S_B", {0.0, 0.0, -0.61},
+          "Shoulder position in the manipulator base frame B (the paper: 0.61 m below joint 1).")
+        .size(3)
+        .unit("m");
+    d.add(&O::C_S_B, "C_S_B", {{0.0, -1.0, 0.0}, {0.0, 0.0, 1.0}, {-1.0, 0.0, 0.0}},
+          "Rotation from the shoulder frame S to B, as 3 rows (the paper's (0,-1,0; 0,0,1; -1,0,0)).")
+        .size(3)
+        .row_size(3);
+    d.add(&O::C_E_P, "C_E_P", {{0.0, 0.0, 1.0}, {0.0, -1.0, 0.0}, {1.0, 0.0, 0.0}},
+          "Rotation from the end-effector frame E to the palm frame P, as 3 rows (the paper's (0,0,1; 0,-1,0; "
+          "1,0,0)).")
+        .size(3)
+        .row_size(3);
+    d.add(&O::x_E_P, "x_E_P", {0.0, 0.0, 0.0},
+          "End-effector position in the palm frame P (the paper: 0). M_v and M_a are the twists of this point.")
+        .size(3)
+        .unit("m");
+    d.add(&O::cache, "cache", true,
+          "Keep built scenes on disk, keyed by a hash of the options and the arm file; a corrupt or stale file is "
+          "rebuilt.");
+    d.add(&O::cache_directory, "cache_directory", "",
+          "Where cached scenes live; \"\" means $XDG_CACHE_HOME/hapsyn, else ~/.cache/hapsyn.");
+    d.add(&O::threads, "threads", 0, "Threads used to build the scene (0: all cores). The samples do not depend on it.")
+        .range(0, 4096);
+  }
 };
 
-/// Parses scene options (defaults for missing keys). \throws Error("human_arm", "options.<key>
-/// = <value>: <rule>") for unknown keys, wrong types, non-positive steps, non-rotations.
-HumanArmSceneOptions parse_human_arm_scene_options(const Json& options);
+/// The options resolved for building (what build() and the cache key read): the arm file found,
+/// the placement as Eigen types, the rotations checked.
+struct HumanArmSceneOptions {
+  std::string arm_file;          ///< resolved absolute path
+  double lattice_step{};         ///< [m]
+  double lattice_extent{};       ///< [m], cube of +-extent around the shoulder
+  int orientations{};
+  int joint3_steps{};
+  Eigen::Vector3d x_S_B;         ///< shoulder position in B [m]
+  Eigen::Matrix3d C_S_B;         ///< rotation S -> B
+  Eigen::Matrix3d C_E_P;         ///< rotation E -> P
+  Eigen::Vector3d x_E_P;         ///< end-effector position in P [m]
+  bool cache{};
+  std::string cache_directory;   ///< "" = $XDG_CACHE_HOME/hapsyn or ~/.cache/hapsyn
+  int threads{};                 ///< 0 = all cores
+};
+
+/// Resolves declared options (already validated against HumanArmOptions::declare) for building.
+/// \\throws Error("human_arm", "options.<key> = <value>: <rule>") for what the declarations cannot
+///         express: an arm_file that is not found (resolve_arm_file); lattice_step and
+///         lattice_extent giving more than 401 lattice points per axis; C_S_B or C_E_P not a
+///         rotation (max |C^T C - I| > 1e-6 or det <= 0).
+HumanArmSceneOptions resolve_human_arm_scene_options(const HumanArmOptions& options);
 
 /// The human_arm scene: the reachable palm poses of the arm on lattice x orientation set.
 ///
@@ -159,7 +240,10 @@ HumanArmSceneOptions parse_human_arm_scene_options(const Json& options);
 /// "lattice_index" (1), and on request "M_v", "M_a" (36 each, row-major 6x6 in B at E).
 class HumanArmScene final : public Scene {
  public:
-  explicit HumanArmScene(const Json& options);
+  using Options = HumanArmOptions;
+  /// Resolves the options and loads the arm file.
+  /// \throws Error("human_arm", ...) as resolve_human_arm_scene_options and load_human_arm do.
+  explicit HumanArmScene(const HumanArmOptions& options);
   SampleSet build(const SceneRequest& request) const override;
 
   const HumanArm& arm() const { return arm_; }

@@ -19,7 +19,7 @@ using namespace hapsyn::plugins;
 TEST(HumanArmSlow, PaperResolutionSceneBuildsAndReloadsFromCache) {
   const fs::path dir = fs::temp_directory_path() / ("hapsyn-human-arm-slow-" + std::to_string(::getpid()));
   fs::remove_all(dir);
-  const HumanArmScene scene(Json{{"cache_directory", dir.string()}});
+  const HumanArmScene scene(hapsyn::make_options<HumanArmOptions>(Json{{"cache_directory", dir.string()}}));
   hapsyn::SceneRequest request;
   request.attributes = {"M_v", "M_a"};
   const SampleSet built = scene.build(request);

@@ -2,8 +2,9 @@
 // trips, joint limits, manipulability selection by brute force, M_v / M_a against a direct SVD,
 // the orientation set (Kolmogorov-Smirnov on the rotation angle), extremes without NaN, the
 // scene's samples and attributes, the disk cache (hit, corrupt, truncated, stale), arm-file and
-// option errors, and the schema.
+// option errors, and the declared schema.
 #include "human_arm.hpp"
+#include "test_support.hpp"
 
 #include <hapsyn/error.hpp>
 #include <hapsyn/schema.hpp>
@@ -57,6 +58,12 @@ std::string arm_error(const Json& doc) {
   return "no error";
 }
 
+// The scene created as a study creates it: the options validated against the declared schema
+// (defaults filled), then the constructor.
+std::string registry_error(const Json& options) {
+  return hapsyn::test::error_of([&] { hapsyn::test::registry().create_scene("human_arm", options, "scene"); });
+}
+
 template <class Fn>
 std::string error_of(Fn&& fn) {
   try {
@@ -98,6 +105,9 @@ fs::path temp_dir(const std::string& name) {
   fs::create_directories(dir);
   return dir;
 }
+
+// The options as the registry hands them over: validated against the declarations, defaults filled.
+HumanArmOptions options_of(const Json& options) { return hapsyn::make_options<HumanArmOptions>(options); }
 
 Json small_scene(const fs::path& cache_dir) {
   return Json{{"lattice_step", 0.2},  {"lattice_extent", 0.6},   {"orientations", 40},
@@ -476,7 +486,7 @@ TEST(HumanArm, SceneSamplesAreConsistentReachablePoses) {
   const fs::path dir = temp_dir("consistent");
   Json options = small_scene(dir);
   options["cache"] = false;
-  const HumanArmScene scene(options);
+  const HumanArmScene scene(options_of(options));
   const SampleSet set = scene.build({});
   ASSERT_GT(set.size(), 100);
   EXPECT_EQ(set.coordinates, (std::vector<std::string>{"x", "y", "z", "qw", "qx", "qy", "qz"}));
@@ -516,9 +526,9 @@ TEST(HumanArm, SceneDoesNotDependOnTheThreadCount) {
   Json options = small_scene(dir);
   options["cache"] = false;
   options["threads"] = 1;
-  const SampleSet one = HumanArmScene(options).build({});
+  const SampleSet one = HumanArmScene(options_of(options)).build({});
   options["threads"] = 3;
-  const SampleSet three = HumanArmScene(options).build({});
+  const SampleSet three = HumanArmScene(options_of(options)).build({});
   EXPECT_TRUE(one.poses == three.poses);
   EXPECT_TRUE(one.attributes == three.attributes);
   fs::remove_all(dir);
@@ -529,7 +539,7 @@ TEST(HumanArm, EllipsoidsAreBuiltOnlyWhenRequestedAndExpressedInTheBaseFrame) {
   Json options = small_scene(dir);
   options["cache"] = false;
   options["x_E_P"] = {0.0, 0.0, 0.05};  // a non-zero offset: M is the twist of E, not P
-  const HumanArmScene scene(options);
+  const HumanArmScene scene(options_of(options));
   hapsyn::SceneRequest request;
   request.attributes = {"M_v"};
   const SampleSet only_v = scene.build(request);
@@ -576,7 +586,7 @@ TEST(HumanArm, RefusesUnknownAttributes) {
   options["cache"] = false;
   hapsyn::SceneRequest request;
   request.attributes = {"force_axes"};
-  EXPECT_EQ(error_of([&] { HumanArmScene(options).build(request); }),
+  EXPECT_EQ(error_of([&] { HumanArmScene(options_of(options)).build(request); }),
             "human_arm: per-sample attribute 'force_axes' requested: this scene provides shoulder_pose, human_q, "
             "manipulability, lattice_index, M_v, M_a");
   fs::remove_all(dir);
@@ -590,7 +600,7 @@ bool same_samples(const SampleSet& a, const SampleSet& b) {
 
 TEST(HumanArm, CacheIsWrittenAtomicallyAndLoadsBitForBit) {
   const fs::path dir = temp_dir("cache");
-  const HumanArmScene scene(small_scene(dir));
+  const HumanArmScene scene(options_of(small_scene(dir)));
   hapsyn::SceneRequest request;
   request.attributes = {"M_v", "M_a"};
   const SampleSet built = scene.build(request);
@@ -627,7 +637,7 @@ void expect_rebuilt(const HumanArmScene& scene, const SampleSet& reference, cons
 
 TEST(HumanArm, CorruptCacheIsDetectedAndRebuilt) {
   const fs::path dir = temp_dir("corrupt");
-  const HumanArmScene scene(small_scene(dir));
+  const HumanArmScene scene(options_of(small_scene(dir)));
   const SampleSet reference = scene.build({});
   const std::string file = reference.info["cache_file"];
   {
@@ -651,7 +661,7 @@ TEST(HumanArm, CorruptCacheIsDetectedAndRebuilt) {
 
 TEST(HumanArm, TruncatedCacheIsDetectedAndRebuilt) {
   const fs::path dir = temp_dir("truncated");
-  const HumanArmScene scene(small_scene(dir));
+  const HumanArmScene scene(options_of(small_scene(dir)));
   const SampleSet reference = scene.build({});
   const std::string file = reference.info["cache_file"];
   fs::resize_file(file, fs::file_size(file) - 100);
@@ -666,10 +676,10 @@ TEST(HumanArm, TruncatedCacheIsDetectedAndRebuilt) {
 TEST(HumanArm, StaleCacheIsDetectedAndRebuilt) {
   const fs::path dir = temp_dir("stale");
   Json options = small_scene(dir);
-  const HumanArmScene a(options);
+  const HumanArmScene a(options_of(options));
   const SampleSet built_a = a.build({});
   options["joint3_steps"] = 3;
-  const HumanArmScene b(options);
+  const HumanArmScene b(options_of(options));
   EXPECT_NE(a.cache_file(false), b.cache_file(false));
   EXPECT_NE(a.cache_key(false), b.cache_key(false));
   // A's file placed under B's name (a hash collision, or a file copied by hand) is not trusted.
@@ -684,12 +694,12 @@ TEST(HumanArm, StaleCacheIsDetectedAndRebuilt) {
   std::ofstream(arm_copy) << doc.dump(2);
   options["arm_file"] = arm_copy.string();
   options["joint3_steps"] = 5;
-  const HumanArmScene c(options);
+  const HumanArmScene c(options_of(options));
   EXPECT_NE(c.cache_file(false), a.cache_file(false));
   // Thread count and cache location are not part of the key.
   Json other = small_scene(dir);
   other["threads"] = 1;
-  EXPECT_EQ(HumanArmScene(other).cache_key(false), a.cache_key(false));
+  EXPECT_EQ(HumanArmScene(options_of(other)).cache_key(false), a.cache_key(false));
   fs::remove_all(dir);
 }
 
@@ -698,7 +708,7 @@ TEST(HumanArm, UnwritableCacheDirectoryDoesNotFailTheBuild) {
   const fs::path blocker = dir / "file";
   std::ofstream(blocker) << "x";
   Json options = small_scene(blocker / "sub");  // a directory below a regular file
-  const SampleSet set = HumanArmScene(options).build({});
+  const SampleSet set = HumanArmScene(options_of(options)).build({});
   EXPECT_GT(set.size(), 0);
   EXPECT_NE(set.info["cache_status"].get<std::string>().find("cache not written"), std::string::npos)
       << set.info["cache_status"];
@@ -767,12 +777,12 @@ TEST(HumanArm, UnreadableOrMalformedArmFilesAreRefused) {
   std::ofstream(broken) << "{ \"dh\": [ }";
   EXPECT_EQ(error_of([&] { load_human_arm(broken.string()); }).rfind("human_arm: " + broken.string() + ": not valid JSON (", 0),
             0u);
-  EXPECT_EQ(error_of([&] { HumanArmScene(Json{{"arm_file", missing}}); }),
+  EXPECT_EQ(error_of([&] { HumanArmScene(options_of(Json{{"arm_file", missing}})); }),
             "human_arm: options.arm_file = \"" + missing + "\": no such file");
-  const std::string relative_error = error_of([&] { HumanArmScene(Json{{"arm_file", "nowhere/arm.json"}}); });
+  const std::string relative_error = error_of([&] { HumanArmScene(options_of(Json{{"arm_file", "nowhere/arm.json"}})); });
   EXPECT_EQ(relative_error.rfind("human_arm: options.arm_file = \"nowhere/arm.json\": no such file (tried ", 0), 0u);
   // A relative path resolves against the share directory too.
-  EXPECT_EQ(HumanArmScene(Json{{"arm_file", "human_arm/fennel2022_right_arm.json"}, {"cache", false}}).options().arm_file,
+  EXPECT_EQ(HumanArmScene(options_of(Json{{"arm_file", "human_arm/fennel2022_right_arm.json"}, {"cache", false}})).options().arm_file,
             fs::path(kArmFile).lexically_normal().string());
   fs::remove_all(dir);
 }
@@ -801,54 +811,60 @@ TEST(HumanArm, LeftArmFileIsTheRightArmMirroredInTheSagittalPlane) {
 }
 
 TEST(HumanArm, OptionErrorsNameTheOptionTheValueAndTheRule) {
-  EXPECT_EQ(error_of([] { HumanArmScene(Json{{"lattice_stp", 0.1}}); }),
-            "human_arm: options.lattice_stp: unknown option (known: arm_file, lattice_step, lattice_extent, "
-            "orientations, joint3_steps, x_S_B, C_S_B, C_E_P, x_E_P, cache, cache_directory, threads)");
-  EXPECT_EQ(error_of([] { HumanArmScene(Json{{"lattice_step", 0.0}}); }),
-            "human_arm: options.lattice_step = 0.0: must be > 0");
-  EXPECT_EQ(error_of([] { HumanArmScene(Json{{"lattice_step", 0.001}}); }),
+  // The declared rules, checked by the framework when a study creates the scene.
+  EXPECT_EQ(registry_error(Json{{"lattice_stp", 0.1}}),
+            "problem: scene.options.lattice_stp: unknown key (did you mean 'lattice_step'?); known keys: C_E_P, C_S_B, "
+            "arm_file, cache, cache_directory, joint3_steps, lattice_extent, lattice_step, orientations, threads, x_E_P, "
+            "x_S_B");
+  EXPECT_EQ(registry_error(Json{{"lattice_step", 0.0}}), "problem: scene.options.lattice_step = 0.0: must be > 0");
+  EXPECT_EQ(registry_error(Json{{"orientations", 0}}), "problem: scene.options.orientations = 0: must be >= 1");
+  EXPECT_EQ(registry_error(Json{{"joint3_steps", 2.5}}), "problem: scene.options.joint3_steps = 2.5: must be an integer");
+  EXPECT_EQ(registry_error(Json{{"x_S_B", {0.0, 1.0}}}),
+            "problem: scene.options.x_S_B = [0.0,1.0]: must have at least 3 items");
+  EXPECT_EQ(registry_error(Json{{"cache", "yes"}}), "problem: scene.options.cache = \"yes\": must be a boolean");
+  // What the declarations cannot express, checked by the constructor.
+  EXPECT_EQ(error_of([] { HumanArmScene(options_of(Json{{"lattice_step", 0.001}})); }),
             "human_arm: options.lattice_step = 0.001: gives 1401.0 lattice points per axis; at most 401 are allowed "
             "(lattice_extent 0.7)");
-  EXPECT_EQ(error_of([] { HumanArmScene(Json{{"orientations", 0}}); }),
-            "human_arm: options.orientations = 0: must be in [1, 1000000]");
-  EXPECT_EQ(error_of([] { HumanArmScene(Json{{"joint3_steps", 2.5}}); }),
-            "human_arm: options.joint3_steps = 2.5: must be an integer");
-  EXPECT_EQ(error_of([] { HumanArmScene(Json{{"x_S_B", {0.0, 1.0}}}); }),
-            "human_arm: options.x_S_B = [0.0,1.0]: must be an array of 3 numbers [m]");
   const std::string rotation = error_of([] {
-    HumanArmScene(Json{{"C_S_B", {{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, -1.0}}}});
+    HumanArmScene(options_of(Json{{"C_S_B", {{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, -1.0}}}}));
   });
   EXPECT_EQ(rotation.rfind("human_arm: options.C_S_B = [[1.0,0.0,0.0],[0.0,1.0,0.0],[0.0,0.0,-1.0]]: must be a "
                            "rotation matrix (orthonormal, det +1)",
                            0),
             0u)
       << rotation;
-  EXPECT_EQ(error_of([] { HumanArmScene(Json{{"cache", "yes"}}); }),
-            "human_arm: options.cache = \"yes\": must be true or false");
+  // Through a study, the constructor's message is kept under the options' path.
+  EXPECT_EQ(registry_error(Json{{"lattice_step", 0.001}}),
+            "problem: scene.options: human_arm: options.lattice_step = 0.001: gives 1401.0 lattice points per axis; at "
+            "most 401 are allowed (lattice_extent 0.7)");
 }
 
-TEST(HumanArm, SchemaIsValidAndItsDefaultsAreTheClassDefaults) {
-  std::ifstream file(HAPSYN_SOURCE_DIR "/plugins/scenes/human_arm/schema.json");
-  ASSERT_TRUE(file.good());
-  const Json schema = Json::parse(file);
+TEST(HumanArm, DeclaredSchemaIsValidAndItsDefaultsAreThePapers) {
+  // The schema the plugin exports (what `hapsyn describe` prints) is the declarations'.
+  const Json schema = hapsyn::test::registry().find("human_arm").schema;
+  EXPECT_EQ(schema, hapsyn::options_schema<HumanArmOptions>());
   EXPECT_NO_THROW(hapsyn::check_schema(schema, "human_arm"));
-  Json filled = hapsyn::validate_and_fill(schema, Json::object(), "scene.options");
-  const HumanArmSceneOptions defaults = parse_human_arm_scene_options(Json::object());
-  const HumanArmSceneOptions from_schema = parse_human_arm_scene_options(filled);
-  EXPECT_EQ(from_schema.arm_file, defaults.arm_file);
-  EXPECT_EQ(from_schema.lattice_step, 0.1);
-  EXPECT_EQ(from_schema.lattice_step, defaults.lattice_step);
-  EXPECT_EQ(from_schema.lattice_extent, defaults.lattice_extent);
-  EXPECT_EQ(from_schema.orientations, 505);
-  EXPECT_EQ(from_schema.orientations, defaults.orientations);
-  EXPECT_EQ(from_schema.joint3_steps, defaults.joint3_steps);
-  EXPECT_EQ(from_schema.x_S_B, defaults.x_S_B);
-  EXPECT_EQ(from_schema.C_S_B, defaults.C_S_B);
-  EXPECT_EQ(from_schema.C_E_P, defaults.C_E_P);
-  EXPECT_EQ(from_schema.x_E_P, defaults.x_E_P);
-  EXPECT_EQ(from_schema.cache, defaults.cache);
-  EXPECT_EQ(from_schema.threads, defaults.threads);
+  const HumanArmSceneOptions defaults = resolve_human_arm_scene_options(hapsyn::default_options<HumanArmOptions>());
+  EXPECT_EQ(defaults.arm_file, fs::path(kArmFile).lexically_normal().string());
+  EXPECT_EQ(resolve_arm_file(""), defaults.arm_file);  // "" is the declared default
+  EXPECT_EQ(defaults.lattice_step, 0.1);
+  EXPECT_EQ(defaults.lattice_extent, 0.7);
+  EXPECT_EQ(defaults.orientations, 505);
+  EXPECT_EQ(defaults.joint3_steps, 17);
   EXPECT_EQ(defaults.x_S_B, Eigen::Vector3d(0, 0, -0.61));
+  Eigen::Matrix3d C_S_B, C_E_P;
+  C_S_B << 0, -1, 0, 0, 0, 1, -1, 0, 0;
+  C_E_P << 0, 0, 1, 0, -1, 0, 1, 0, 0;
+  EXPECT_EQ(defaults.C_S_B, C_S_B);
+  EXPECT_EQ(defaults.C_E_P, C_E_P);
+  EXPECT_EQ(defaults.x_E_P, Eigen::Vector3d::Zero());
+  EXPECT_TRUE(defaults.cache);
+  EXPECT_EQ(defaults.cache_directory, "");
+  EXPECT_EQ(defaults.threads, 0);
+  for (const char* key : {"lattice_step", "lattice_extent", "x_S_B", "x_E_P"}) {
+    EXPECT_EQ(schema.at("properties").at(key).at("unit"), "m") << key;
+  }
   EXPECT_THROW(hapsyn::validate_and_fill(schema, Json{{"orientations", -1}}, "scene.options"), hapsyn::Error);
 }
 

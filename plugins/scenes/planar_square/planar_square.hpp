@@ -2,13 +2,34 @@
 /// \file
 /// The planar square scene of the five-bar study (Unal 2008): a regular grid of (x, y) [m]
 /// samples covering a square centred at the scene origin.
-#include <hapsyn/json.hpp>
+#include <hapsyn/options.hpp>
 #include <hapsyn/scene.hpp>
 
 namespace hapsyn::plugins {
 
 /// Largest number of samples the scene builds (memory guard: 16 bytes per sample).
 constexpr long long kPlanarSquareMaxSamples = 2000000;  // 0.07 mm steps on a 100 mm square
+
+/// The options of planar_square (`hapsyn describe planar_square`).
+struct PlanarSquareOptions {
+  double side{};  ///< side length of the square [m], > 0
+  double step{};  ///< grid spacing [m], > 0
+
+  static void declare(OptionDeclarations<PlanarSquareOptions>& d) {
+    d.describe(
+        "A square of side `side` centred at (0, 0), sampled on a regular grid of spacing `step` including its "
+        "edges: round(side/step) + 1 samples per axis, x fastest. Coordinates x, y in metres.");
+    d.add(&PlanarSquareOptions::side, "side", 0.1,
+          "Side length of the square. 0.1 m reproduces Unal 2008 Table 2 (the paper's printed w = 200 mm does not).")
+        .greater_than(0)
+        .unit("m");
+    d.add(&PlanarSquareOptions::step, "step", 0.005,
+          "Grid spacing; must divide side into whole steps (relative tolerance 1e-9) and be <= side. The paper "
+          "uses 0.001 m.")
+        .greater_than(0)
+        .unit("m");
+  }
+};
 
 /// A square of side `side` [m] centred at (0, 0), sampled on a regular grid of spacing `step`
 /// [m] including its edges: n = round(side / step) + 1 samples per axis, n^2 in all, in
@@ -19,24 +40,24 @@ constexpr long long kPlanarSquareMaxSamples = 2000000;  // 0.07 mm steps on a 10
 /// Thread safety: const methods are thread-safe; build() holds no state.
 class PlanarSquare final : public Scene {
  public:
-  /// \param options {"side": [m], "step": [m]} (missing keys take the schema's defaults
-  ///        0.1 and 0.005).
-  /// \throws Error("planar_square: options.step = ...: ...") when step does not divide side
-  ///         into whole steps (relative tolerance 1e-9), step > side, or the grid would exceed
-  ///         kPlanarSquareMaxSamples.
-  explicit PlanarSquare(const Json& options);
+  using Options = PlanarSquareOptions;
+
+  /// \param options validated against the declarations (side, step > 0).
+  /// \throws Error("planar_square: options.step = ...: ...") for what the declarations cannot
+  ///         express: step does not divide side into whole steps (relative tolerance 1e-9),
+  ///         step > side, or the grid would exceed kPlanarSquareMaxSamples.
+  explicit PlanarSquare(const PlanarSquareOptions& options);
 
   /// Builds the grid. \throws Error when a per-sample attribute is requested (none exist).
   SampleSet build(const SceneRequest& request) const override;
 
-  double side() const { return side_; }  ///< side of the square [m]
-  double step() const { return step_; }  ///< grid spacing [m]
-  int per_axis() const { return per_axis_; }  ///< samples per axis, round(side / step) + 1
+  double side() const { return options_.side; }  ///< side of the square [m]
+  double step() const { return options_.step; }  ///< grid spacing [m]
+  int per_axis() const { return per_axis_; }     ///< samples per axis, round(side / step) + 1
 
  private:
-  double side_ = 0.1;
-  double step_ = 0.005;
-  int per_axis_ = 21;
+  PlanarSquareOptions options_;
+  int per_axis_{};
 };
 
 }  // namespace hapsyn::plugins

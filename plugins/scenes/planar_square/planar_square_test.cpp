@@ -8,7 +8,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <fstream>
 #include <string>
 
 namespace {
@@ -16,12 +15,16 @@ namespace {
 using hapsyn::Json;
 using hapsyn::SampleSet;
 using hapsyn::plugins::PlanarSquare;
+using hapsyn::plugins::PlanarSquareOptions;
 
-SampleSet build(double side, double step) { return PlanarSquare(Json{{"side", side}, {"step", step}}).build({}); }
+// The options as the registry hands them over: validated against the declarations, defaults filled.
+PlanarSquareOptions options_of(const Json& options) { return hapsyn::make_options<PlanarSquareOptions>(options); }
+
+SampleSet build(double side, double step) { return PlanarSquare(options_of(Json{{"side", side}, {"step", step}})).build({}); }
 
 std::string error_of(const Json& options) {
   try {
-    PlanarSquare scene(options);
+    PlanarSquare scene(options_of(options));
   } catch (const hapsyn::Error& e) {
     return e.what();
   }
@@ -29,7 +32,7 @@ std::string error_of(const Json& options) {
 }
 
 TEST(PlanarSquare, DefaultOptionsGiveA21By21Grid) {
-  const PlanarSquare scene(Json::object());
+  const PlanarSquare scene(options_of(Json::object()));
   EXPECT_EQ(scene.side(), 0.1);
   EXPECT_EQ(scene.step(), 0.005);
   EXPECT_EQ(scene.per_axis(), 21);
@@ -105,10 +108,12 @@ TEST(PlanarSquare, RefusesAStepLargerThanTheSide) {
 }
 
 TEST(PlanarSquare, RefusesNonPositiveUnknownAndHugeOptions) {
-  EXPECT_EQ(error_of(Json{{"side", 0.0}}), "planar_square: options.side = 0.0: must be finite and > 0");
-  EXPECT_EQ(error_of(Json{{"step", -0.001}}), "planar_square: options.step = -0.001: must be finite and > 0");
-  EXPECT_EQ(error_of(Json{{"step", "fine"}}), "planar_square: options.step = \"fine\": must be a number");
-  EXPECT_EQ(error_of(Json{{"stpe", 0.001}}), "planar_square: options.stpe: unknown option (known: side, step)");
+  // The declared rules (> 0, a number, known keys) are the framework's: component "problem".
+  EXPECT_EQ(error_of(Json{{"side", 0.0}}), "problem: options.side = 0.0: must be > 0");
+  EXPECT_EQ(error_of(Json{{"step", -0.001}}), "problem: options.step = -0.001: must be > 0");
+  EXPECT_EQ(error_of(Json{{"step", "fine"}}), "problem: options.step = \"fine\": must be a number");
+  EXPECT_EQ(error_of(Json{{"stpe", 0.001}}),
+            "problem: options.stpe: unknown key (did you mean 'step'?); known keys: side, step");
   EXPECT_EQ(error_of(Json{{"side", 1.0}, {"step", 1e-4}}),
             "planar_square: options.step = 0.0001: gives 10001.0 x 10001.0 samples; at most 2000000 are allowed");
 }
@@ -117,26 +122,25 @@ TEST(PlanarSquare, RefusesRequestedAttributes) {
   hapsyn::SceneRequest request;
   request.attributes = {"human_velocity_axes"};
   try {
-    PlanarSquare(Json::object()).build(request);
+    PlanarSquare(options_of(Json::object())).build(request);
     FAIL() << "no error";
   } catch (const hapsyn::Error& e) {
     EXPECT_STREQ(e.what(), "planar_square: per-sample attribute 'human_velocity_axes' requested: this scene provides none");
   }
 }
 
-TEST(PlanarSquare, SchemaIsValidAndItsDefaultsAreTheClassDefaults) {
-  std::ifstream file(HAPSYN_SOURCE_DIR "/plugins/scenes/planar_square/schema.json");
-  ASSERT_TRUE(file.good());
-  const Json schema = Json::parse(file);
+TEST(PlanarSquare, DeclaredSchemaIsValidWithThePaperDefaultsAndUnits) {
+  const Json schema = hapsyn::options_schema<PlanarSquareOptions>();
   EXPECT_NO_THROW(hapsyn::check_schema(schema, "planar_square"));
   const Json filled = hapsyn::validate_and_fill(schema, Json::object(), "scene.options");
-  const PlanarSquare defaults(Json::object());
-  EXPECT_EQ(filled.at("side").get<double>(), defaults.side());
-  EXPECT_EQ(filled.at("step").get<double>(), defaults.step());
+  EXPECT_EQ(filled.at("side").get<double>(), 0.1);
+  EXPECT_EQ(filled.at("step").get<double>(), 0.005);
   EXPECT_EQ(schema.at("properties").at("side").at("unit"), "m");
   EXPECT_EQ(schema.at("properties").at("step").at("unit"), "m");
+  EXPECT_EQ(schema.at("properties").at("side").at("exclusiveMinimum"), 0);
+  EXPECT_EQ(schema.at("properties").at("step").at("exclusiveMinimum"), 0);
   EXPECT_THROW(hapsyn::validate_and_fill(schema, Json{{"side", -1.0}}, "scene.options"), hapsyn::Error);
-  EXPECT_EQ(PlanarSquare(filled).build({}).size(), 441);
+  EXPECT_EQ(PlanarSquare(options_of(filled)).build({}).size(), 441);
 }
 
 }  // namespace
