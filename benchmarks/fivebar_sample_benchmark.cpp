@@ -30,7 +30,7 @@ using hapsyn::SampleSet;
 using namespace hapsyn::plugins;
 
 const SampleSet& scene() {
-  static const SampleSet set = PlanarSquare(Json{{"side", 0.1}, {"step", 0.005}}).build({});
+  static const SampleSet set = PlanarSquare(hapsyn::make_options<PlanarSquareOptions>(Json{{"side", 0.1}, {"step", 0.005}})).build({});
   return set;
 }
 

@@ -40,7 +40,9 @@ const SampleSet& scene() {
   static const SampleSet set = [] {
     hapsyn::SceneRequest request;
     request.attributes = {"M_v", "M_a"};
-    return HumanArmScene(Json{{"lattice_step", 0.1}, {"orientations", 505}, {"joint3_steps", 17}}).build(request);
+    return HumanArmScene(hapsyn::make_options<HumanArmOptions>(
+                             Json{{"lattice_step", 0.1}, {"orientations", 505}, {"joint3_steps", 17}}))
+        .build(request);
   }();
   return set;
 }

@@ -40,7 +40,7 @@ void report(benchmark::State& state, const SampleSet& set) {
 }
 
 void BM_HumanArmBuild(benchmark::State& state) {
-  const HumanArmScene scene(options(state));
+  const HumanArmScene scene(hapsyn::make_options<hapsyn::plugins::HumanArmOptions>(options(state)));
   hapsyn::SceneRequest request;
   if (state.range(4)) request.attributes = {"M_v", "M_a"};
   SampleSet set;
@@ -58,7 +58,7 @@ void BM_HumanArmCacheLoad(benchmark::State& state) {
   Json o = options(state);
   o["cache"] = true;
   o["cache_directory"] = dir.string();
-  const HumanArmScene scene(o);
+  const HumanArmScene scene(hapsyn::make_options<hapsyn::plugins::HumanArmOptions>(o));
   hapsyn::SceneRequest request;
   if (state.range(4)) request.attributes = {"M_v", "M_a"};
   SampleSet set = scene.build(request);  // writes the cache

@@ -146,11 +146,11 @@ TEST_P(Conformance, CreatedWithDefaultsAndDeterministic) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Registry, Conformance, ::testing::ValuesIn(plugin_names()),
-                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+                         [](const ::testing::TestParamInfo<std::string>& row) { return row.param; });
 
 TEST(Conformance, RegistryFindsEveryInTreePlugin) {
   std::vector<std::string> errors;
   const auto plugins = hapsyn::test::registry().list(&errors);
   EXPECT_TRUE(errors.empty()) << errors.front();
-  EXPECT_GE(plugins.size(), 16u);
+  EXPECT_GE(plugins.size(), 15u);
 }

@@ -105,8 +105,12 @@ void describe_properties(const Json& schema, const std::string& prefix, std::ost
   }
 }
 
-int describe(const std::string& name, const hapsyn::Registry& registry) {
+int describe(const std::string& name, bool json, const hapsyn::Registry& registry) {
   const hapsyn::PluginRecord& r = registry.find(name);
+  if (json) {
+    std::cout << r.schema.dump(2) << "\n";
+    return 0;
+  }
   std::cout << r.name << " (" << r.kind << " plugin, version " << r.version << ")\n"
             << "  " << r.description << "\n"
             << "  file: " << r.file << "\n"
@@ -232,6 +236,7 @@ struct Arguments {
   std::uint64_t seed = 0;
   bool quiet = false, resume = false, force = false;
   std::string plugin_name;
+  bool describe_json = false;
   std::string csv_out, plot_dir;
   std::vector<std::string> scene_attributes;
   std::vector<std::string> vary, reference;
@@ -272,6 +277,7 @@ void define_study_commands(CLI::App& app, Arguments& a, Commands& c) {
 
   c.describe = app.add_subcommand("describe", "Show a plugin's options, defaults and units");
   c.describe->add_option("name", a.plugin_name, "Plugin name")->required();
+  c.describe->add_flag("--json", a.describe_json, "Print the options schema derived from the plugin's declarations");
 
   c.scene = app.add_subcommand("scene",
                                "Build a problem file's scene alone: summary, CSV export, reachability-density plots");
@@ -347,7 +353,7 @@ int dispatch(const Commands& c, Arguments& a, const hapsyn::Registry& registry) 
   if (*c.run) return run_command(a, c, registry);
   if (*c.validate) return validate_command(a, registry);
   if (*c.plugins) return list_plugins(registry);
-  if (*c.describe) return describe(a.plugin_name, registry);
+  if (*c.describe) return describe(a.plugin_name, a.describe_json, registry);
   if (*c.sweep) return sweep_command(a, registry);
   if (*c.compare) {
     if (c.compare->count("--seed") > 0) a.compare.seed = a.seed;

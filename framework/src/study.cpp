@@ -208,7 +208,6 @@ Study load_study(const Json& input, const Registry& registry) {
   } catch (const Error& e) {
     throw Error("problem", std::string("solver: ") + e.what());
   }
-  study.solver->prepare_sub_solvers(*study.problem, registry);
   load_indicators(resolved, *study.problem, study);
   if (resolved["objectives"].size() > 1 && !study.solver->pareto()) {
     resolved["aggregation"] = "weighted_sum";

@@ -78,6 +78,7 @@ using hapsyn::plugins::FiveBar;
 using hapsyn::plugins::FiveBarDesign;
 using hapsyn::plugins::FiveBarModel;
 using hapsyn::plugins::FiveBarOptions;
+using hapsyn::plugins::PlanarSquareOptions;
 using hapsyn::plugins::Gdi;
 using hapsyn::plugins::Gii;
 using hapsyn::plugins::PlanarSquare;
@@ -99,7 +100,7 @@ FiveBar fivebar(const Json& options = Json::object()) {
 }
 
 SampleSet square(double side, double step) {
-  return PlanarSquare(Json{{"side", side}, {"step", step}}).build({});
+  return PlanarSquare(hapsyn::make_options<PlanarSquareOptions>(Json{{"side", side}, {"step", step}})).build({});
 }
 
 struct Indices {
