@@ -45,7 +45,7 @@ TEST(Maps, EverySampleOfAPlanarSceneIsItsOwnPositionWithItsLocalValue) {
   ASSERT_EQ(static_cast<int>(maps.position.size()), problem.samples().size());
   EXPECT_EQ(maps.lattice_per_axis, 0);
   // The worst case over the positions is the design's GII and GDI.
-  auto ws = problem.make_workspace();
+  auto ws = problem.make_eval_scratch();
   const std::vector<double> free_design = {0.0004, 0.2997, 0.3, 0.4196};
   const hapsyn::Evaluation& e = problem.evaluate(free_design.data(), *ws);
   ASSERT_EQ(e.status, hapsyn::EvalStatus::kFeasible);

@@ -25,7 +25,7 @@ const std::vector<double> kGood = {0.0004, 0.2997, 0.3, 0.4196};
 
 TEST(Problem, ParallelEvaluationEqualsSequentialForAnyThreadCount) {
   const auto study = study_with({"gii", "gdi"});
-  auto ws = study.problem->make_workspace();
+  auto ws = study.problem->make_eval_scratch();
   const hapsyn::Evaluation sequential = study.problem->evaluate(kGood.data(), *ws);
   ASSERT_EQ(sequential.status, EvalStatus::kFeasible);
   for (int threads : {1, 2, 3, 4, 7}) {
@@ -39,7 +39,7 @@ TEST(Problem, ParallelEvaluationEqualsSequentialForAnyThreadCount) {
 
 TEST(Problem, SubsetValueIsAnUpperBoundOfTheWorstCaseValue) {
   const auto study = study_with({"gii", "gdi"});
-  auto ws = study.problem->make_workspace();
+  auto ws = study.problem->make_eval_scratch();
   std::mt19937 rng(42);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int feasible = 0;
@@ -70,7 +70,7 @@ TEST(Problem, SubsetValueIsAnUpperBoundOfTheWorstCaseValue) {
 
 TEST(Problem, PruningStopsOnlyBelowTheThreshold) {
   const auto study = study_with({"gii"});
-  auto ws = study.problem->make_workspace();
+  auto ws = study.problem->make_eval_scratch();
   const double value = study.problem->evaluate(kGood.data(), *ws).score;
   hapsyn::EvalOptions options;
   options.prune_below = value;  // a design that ties is never pruned
@@ -83,7 +83,7 @@ TEST(Problem, PruningStopsOnlyBelowTheThreshold) {
 
 TEST(Problem, ConstraintViolationIsAStatusAndSkipsTheSamples) {
   const auto study = study_with({"gii"});
-  auto ws = study.problem->make_workspace();
+  auto ws = study.problem->make_eval_scratch();
   const std::vector<double> short_links = {0.3, 0.05, 0.05, 0.6};
   const hapsyn::Evaluation& e = study.problem->evaluate(short_links.data(), *ws);
   EXPECT_EQ(e.status, EvalStatus::kConstraintViolated);
@@ -115,7 +115,7 @@ TEST(Problem, AveragingStudiesVisitSamplesInSceneOrder) {
 
 TEST(Problem, DesignFromASolverIsCheckedCentrally) {
   const auto study = study_with({"gii"});
-  auto ws = study.problem->make_workspace();
+  auto ws = study.problem->make_eval_scratch();
   const std::vector<double> nan_design = {std::nan(""), 0.2, 0.2, 0.3};
   expect_error([&] { study.problem->evaluate(nan_design.data(), *ws); }, {"design component l0 = nan", "must be finite"});
   const std::vector<double> outside = {0.0, 0.2, 0.2, 0.7};
@@ -127,7 +127,7 @@ TEST(Problem, NanFromAMetricIsAnErrorNamingTheMetricAndSample) {
   Json doc = fivebar_study();
   doc["objectives"] = Json::array({{{"metric", "nanmetric"}}});
   const hapsyn::Study study = hapsyn::load_study(doc, registry);
-  auto ws = study.problem->make_workspace();
+  auto ws = study.problem->make_eval_scratch();
   expect_error([&] { study.problem->evaluate(kGood.data(), *ws); },
                {"metric 'nanmetric' returned nan", "at sample", "\"l1\":0.2997"});
 }
@@ -141,8 +141,8 @@ TEST(Problem, WithObjectivesSharesTheSceneAndChangesTheScore) {
   const auto only_gii = study.problem->with_objectives(objectives);
   EXPECT_EQ(&only_gii->samples(), &study.problem->samples());  // shared, not rebuilt
   const std::vector<double> x = {0.0, 0.3, 0.3, 0.4};
-  auto a = study.problem->make_workspace();
-  auto b = only_gii->make_workspace();
+  auto a = study.problem->make_eval_scratch();
+  auto b = only_gii->make_eval_scratch();
   const hapsyn::Evaluation both = study.problem->evaluate(x.data(), *a);
   const hapsyn::Evaluation one = only_gii->evaluate(x.data(), *b);
   ASSERT_EQ(both.status, hapsyn::EvalStatus::kFeasible);
@@ -168,7 +168,7 @@ TEST(Problem, ParetoPruningNeverCutsADesignTheFrontDoesNotDominate) {
   hapsyn::Json doc = hapsyn::test::fivebar_study();
   doc["objectives"] = hapsyn::Json::array({{{"metric", "gii"}}, {{"metric", "gdi"}}});
   const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
-  auto ws = study.problem->make_workspace();
+  auto ws = study.problem->make_eval_scratch();
   const std::vector<double> x = {0.0, 0.3, 0.3, 0.4};
   const hapsyn::Evaluation full = study.problem->evaluate(x.data(), *ws);
   ASSERT_EQ(full.status, hapsyn::EvalStatus::kFeasible);
@@ -204,7 +204,7 @@ TEST(Problem, FixedChunksMakeAveragingMetricsIndependentOfTheThreadCount) {
     EXPECT_EQ(many.objectives, one.objectives) << threads;  // bit for bit
     EXPECT_EQ(many.samples_evaluated, study.problem->samples().size());
   }
-  auto ws = study.problem->make_workspace();
+  auto ws = study.problem->make_eval_scratch();
   EXPECT_NEAR(study.problem->evaluate(x.data(), *ws).objectives[0], one.objectives[0], 1e-12);
   const std::vector<int> subset = {0, 2, 4, 6, 8};
   options.subset = &subset;

@@ -30,7 +30,7 @@ class RandomSearch : public hapsyn::Solver {
     const hapsyn::DesignSpace& space = problem.design_space();
     std::mt19937_64 rng(context.seed);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
-    auto workspace = problem.make_workspace();
+    auto eval_scratch = problem.make_eval_scratch();
     std::vector<double> x(space.free_size()), best_x;
     hapsyn::SolverResult result;
     for (int i = 0; i < options_.samples; ++i) {
@@ -40,7 +40,7 @@ class RandomSearch : public hapsyn::Solver {
         break;
       }
       draw(space, rng, unit, x);
-      const hapsyn::Evaluation& e = problem.evaluate(x.data(), *workspace);
+      const hapsyn::Evaluation& e = problem.evaluate(x.data(), *eval_scratch);
       ++result.design_evaluations;
       result.sample_evaluations += e.samples_evaluated;
       if (e.status == hapsyn::EvalStatus::kFeasible && (!result.best || e.score > result.best->score)) {

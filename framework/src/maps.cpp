@@ -26,7 +26,7 @@ SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full
   for (std::size_t k = 0; k < problem.dimension(); ++k) {
     free_design[static_cast<Eigen::Index>(k)] = full[problem.design_space().free_indices()[k]];
   }
-  auto ws = problem.make_workspace();
+  auto ws = problem.make_eval_scratch();
   std::vector<int> one(1);
   const SampleCallback record = [&](int sample, const SampleQuantities& q, const std::vector<std::vector<double>>& locals) {
     const std::size_t i = static_cast<std::size_t>(sample);

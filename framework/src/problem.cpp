@@ -110,8 +110,8 @@ std::shared_ptr<const Problem> Problem::with_design_space(DesignSpace space) con
   return std::make_shared<const Problem>(mechanism_plugin_, mechanism_, samples_, metrics_, objectives_, std::move(space));
 }
 
-std::unique_ptr<Problem::Workspace> Problem::make_workspace() const {
-  auto ws = std::make_unique<Workspace>();
+std::unique_ptr<Problem::EvalScratch> Problem::make_eval_scratch() const {
+  auto ws = std::make_unique<EvalScratch>();
   ws->scratch = mechanism_->make_scratch();
   ws->full.resize(static_cast<Eigen::Index>(space_.size()));
   ws->locals.resize(local_reduction_.size());
@@ -202,7 +202,7 @@ void reset_accumulators(const std::vector<Reduction>& reductions, std::vector<do
 }
 }  // namespace
 
-bool Problem::front_dominates(const std::vector<double>& front, Workspace& ws) const {
+bool Problem::front_dominates(const std::vector<double>& front, EvalScratch& ws) const {
   // Upper bounds of the objectives from the reductions so far (samples seen: a count is only
   // needed by sum reductions, which worst-case metrics do not have).
   const std::size_t m = objectives_.size();
@@ -239,7 +239,7 @@ bool Problem::front_dominates(const std::vector<double>& front, Workspace& ws) c
 // evaluate() in named steps. Each returns early the way evaluate() does; the per-sample steps are
 // in this file so that the compiler can inline them into the sample loop.
 
-bool Problem::constraints_hold(Workspace& ws, Evaluation& out) const {
+bool Problem::constraints_hold(EvalScratch& ws, Evaluation& out) const {
   if (constraint_names_.empty()) return true;
   mechanism_->evaluate_constraints(ws.full.data(), *samples_, ws.g.data());
   for (std::size_t i = 0; i < constraint_names_.size(); ++i) {
@@ -256,7 +256,7 @@ bool Problem::constraints_hold(Workspace& ws, Evaluation& out) const {
   return true;
 }
 
-void Problem::accumulate_locals(int sample, Workspace& ws, bool keep_locals) const {
+void Problem::accumulate_locals(int sample, EvalScratch& ws, bool keep_locals) const {
   for (std::size_t m = 0; m < metrics_.size(); ++m) {
     const int begin = local_offset_[m];
     const int end = local_offset_[m + 1];
@@ -284,7 +284,7 @@ void Problem::accumulate_locals(int sample, Workspace& ws, bool keep_locals) con
   }
 }
 
-double Problem::score_bound(const Workspace& ws, long long samples) const {
+double Problem::score_bound(const EvalScratch& ws, long long samples) const {
   // The metrics over the samples seen so far bound their final values from above.
   double bound = 0.0;
   for (std::size_t o = 0; o < objectives_.size(); ++o) {
@@ -295,7 +295,7 @@ double Problem::score_bound(const Workspace& ws, long long samples) const {
   return bound;
 }
 
-void Problem::mark_pruned(const Workspace& ws, Evaluation& out) const {
+void Problem::mark_pruned(const EvalScratch& ws, Evaluation& out) const {
   // The samples attaining the reductions so far are what made the bound fall: culling collects
   // them as critical samples.
   for (std::size_t m = 0; m < metrics_.size(); ++m) {
@@ -304,7 +304,7 @@ void Problem::mark_pruned(const Workspace& ws, Evaluation& out) const {
   out.status = EvalStatus::kPruned;
 }
 
-void Problem::combine_objectives(const Workspace& ws, Evaluation& out) const {
+void Problem::combine_objectives(const EvalScratch& ws, Evaluation& out) const {
   for (std::size_t m = 0; m < metrics_.size(); ++m) {
     const int begin = local_offset_[m];
     const int end = local_offset_[m + 1];
@@ -325,7 +325,7 @@ void Problem::combine_objectives(const Workspace& ws, Evaluation& out) const {
   out.score = score(out.objectives);
 }
 
-const Evaluation& Problem::evaluate(const double* free_design, Workspace& ws, const EvalOptions& options) const {
+const Evaluation& Problem::evaluate(const double* free_design, EvalScratch& ws, const EvalOptions& options) const {
   check_design(free_design);
   Evaluation& out = ws.result;
   out.status = EvalStatus::kFeasible;
@@ -384,7 +384,7 @@ Evaluation Problem::evaluate_parallel(const double* free_design, int threads, co
   const int chunk_count = static_cast<int>(std::max(1LL, std::min<long long>(options.chunks > 0 ? options.chunks : threads, n)));
   threads = std::max(1, std::min(threads, chunk_count));
   if (chunk_count == 1) {
-    auto ws = make_workspace();
+    auto ws = make_eval_scratch();
     EvalOptions o;
     o.subset = options.subset;
     return evaluate(free_design, *ws, o);
@@ -392,10 +392,10 @@ Evaluation Problem::evaluate_parallel(const double* free_design, int threads, co
   // Each chunk is a contiguous piece of the sample order; the reductions are merged in chunk
   // order with the same tie rule (lower sample index wins) as a sequential run, so the result
   // does not depend on the thread count.
-  std::vector<std::unique_ptr<Workspace>> spaces(static_cast<std::size_t>(chunk_count));
+  std::vector<std::unique_ptr<EvalScratch>> spaces(static_cast<std::size_t>(chunk_count));
   std::vector<std::vector<int>> chunks(static_cast<std::size_t>(chunk_count));
   for (int t = 0; t < chunk_count; ++t) {
-    spaces[static_cast<std::size_t>(t)] = make_workspace();
+    spaces[static_cast<std::size_t>(t)] = make_eval_scratch();
     chunks[static_cast<std::size_t>(t)].assign(indices.begin() + n * t / chunk_count, indices.begin() + n * (t + 1) / chunk_count);
   }
   parallel_for_dynamic(chunk_count, threads, 1, [&](long long t, int) {

@@ -88,7 +88,7 @@ struct EvalOptions {
   const std::vector<double>* prune_dominated_by = nullptr;
 };
 
-/// The study's problem. Immutable and shared by threads; per-thread state is a Workspace.
+/// The study's problem. Immutable and shared by threads; per-thread state is an EvalScratch.
 class Problem {
  public:
   /// \throws Error if a metric needs quantities the mechanism does not provide, or the scene is
@@ -126,7 +126,7 @@ class Problem {
 
   /// Per-thread evaluation state (mechanism scratch, accumulators). Not shareable; its
   /// members are the evaluator's business.
-  class Workspace {
+  class EvalScratch {
    public:
     const Evaluation& last() const { return result; }
 
@@ -143,12 +143,12 @@ class Problem {
     std::vector<double> objective_bound;             // per objective, for Pareto pruning
     Evaluation result;
   };
-  std::unique_ptr<Workspace> make_workspace() const;
+  std::unique_ptr<EvalScratch> make_eval_scratch() const;
 
   /// Evaluates a design given as the free vector (dimension() values; not checkable through
-  /// the pointer). Not thread-safe for one workspace: one workspace per thread.
+  /// the pointer). One EvalScratch per thread: a scratch is never used by two threads at once.
   /// \throws Error on a NaN/inf or out-of-bounds component, or a NaN/inf from a plugin.
-  const Evaluation& evaluate(const double* free_design, Workspace& workspace,
+  const Evaluation& evaluate(const double* free_design, EvalScratch& eval_scratch,
                              const EvalOptions& options = {}) const;
   /// How evaluate_parallel splits the work.
   struct ParallelOptions {
@@ -179,12 +179,12 @@ class Problem {
  private:
   void check_design(const double* free_design) const;
   // The steps of evaluate().
-  bool constraints_hold(Workspace& ws, Evaluation& out) const;
-  void accumulate_locals(int sample, Workspace& ws, bool keep_locals) const;
-  double score_bound(const Workspace& ws, long long samples) const;
-  void mark_pruned(const Workspace& ws, Evaluation& out) const;
-  void combine_objectives(const Workspace& ws, Evaluation& out) const;
-  bool front_dominates(const std::vector<double>& front, Workspace& workspace) const;
+  bool constraints_hold(EvalScratch& ws, Evaluation& out) const;
+  void accumulate_locals(int sample, EvalScratch& ws, bool keep_locals) const;
+  double score_bound(const EvalScratch& ws, long long samples) const;
+  void mark_pruned(const EvalScratch& ws, Evaluation& out) const;
+  void combine_objectives(const EvalScratch& ws, Evaluation& out) const;
+  bool front_dominates(const std::vector<double>& front, EvalScratch& eval_scratch) const;
 
   std::string mechanism_plugin_;
   std::shared_ptr<const Mechanism> mechanism_;

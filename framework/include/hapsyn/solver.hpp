@@ -67,7 +67,7 @@ struct SolverContext {
 /// check() runs once at load, after the problem is built and before anything runs; solve() runs
 /// once per run, from one thread (it may start `context.threads` workers of its own and call
 /// Problem::evaluate / evaluate_parallel from them: the problem is thread-safe, one
-/// Problem::Workspace per thread).
+/// Problem::EvalScratch per thread).
 ///
 /// What the framework checks centrally, so a solver need not: the problem's designs are
 /// validated on every evaluation (finite, within bounds), plugin outputs are checked for NaN/inf,

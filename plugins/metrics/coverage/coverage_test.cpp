@@ -240,7 +240,7 @@ TEST(Coverage, EvaluatorComputesOnlyWhatTheTermsNeed) {
 TEST(Coverage, ReducedCountsMatchTheirDefinitions) {
   Study s = load_study(study(Json::array({"pose", "velocity"})), test::registry());
   const Problem& p = *s.problem;
-  auto ws = p.make_workspace();
+  auto ws = p.make_eval_scratch();
   const Evaluation& e = p.evaluate(nullptr, *ws);
   ASSERT_EQ(e.status, EvalStatus::kFeasible);
   const std::vector<double>& r = e.reduced[0];

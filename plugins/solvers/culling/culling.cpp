@@ -136,7 +136,7 @@ struct Seed {
 
 // The best feasible point of a coarse grid of start points (empty if none); at most 1e5 points.
 std::vector<double> best_start_point(const Problem& problem, const Bounds& bounds, int start_points,
-                                     Problem::Workspace& ws, Seed& seed) {
+                                     Problem::EvalScratch& ws, Seed& seed) {
   const std::size_t n = bounds.lower.size();
   int m = start_points;
   while (m > 2 && std::pow(static_cast<double>(m), static_cast<double>(n)) > 1e5) --m;
@@ -166,7 +166,7 @@ std::vector<double> best_start_point(const Problem& problem, const Bounds& bound
 
 // Offers the feasible corners of the grid cell that holds `continuous` as the reference.
 void snap_to_grid(const Problem& problem, const Grid& grid, const std::vector<double>& continuous,
-                  Problem::Workspace& ws, Reference& reference, Seed& seed) {
+                  Problem::EvalScratch& ws, Reference& reference, Seed& seed) {
   const std::size_t n = continuous.size();
   std::vector<double> x(n);
   const long long corners = 1LL << n;
@@ -192,7 +192,7 @@ Seed seed_reference(const Problem& problem, const Grid& grid, const Bounds& boun
                     Reference& reference) {
   Seed seed;
   const auto t0 = Clock::now();
-  auto ws = problem.make_workspace();
+  auto ws = problem.make_eval_scratch();
   const std::vector<double> start = best_start_point(problem, bounds, options.start_points, *ws, seed);
   if (!start.empty()) {
     std::vector<double> continuous = start;
@@ -233,7 +233,7 @@ struct SweepCounts {
 };
 
 struct SweepThread {
-  std::unique_ptr<Problem::Workspace> workspace;
+  std::unique_ptr<Problem::EvalScratch> eval_scratch;
   std::vector<int> local;  // critical samples, most recently useful first
   int known = 0;           // global critical samples merged so far
   std::vector<double> x;
@@ -257,7 +257,7 @@ bool ruled_out_by_bound(const Problem& problem, SweepThread& s, double threshold
   EvalOptions bound;
   bound.subset = &s.local;
   bound.prune_below = threshold;
-  const Evaluation& e = problem.evaluate(s.x.data(), *s.workspace, bound);
+  const Evaluation& e = problem.evaluate(s.x.data(), *s.eval_scratch, bound);
   s.counts.bound_samples += e.samples_evaluated;
   if (e.status == EvalStatus::kConstraintViolated) {
     ++s.counts.constraint_violated;
@@ -282,7 +282,7 @@ bool ruled_out_by_bound(const Problem& problem, SweepThread& s, double threshold
 void full_search(const Problem& problem, SweepThread& s, long long index, double threshold, Reference& reference) {
   EvalOptions full;
   full.prune_below = threshold;
-  const Evaluation& e = problem.evaluate(s.x.data(), *s.workspace, full);
+  const Evaluation& e = problem.evaluate(s.x.data(), *s.eval_scratch, full);
   if (e.status == EvalStatus::kConstraintViolated) {
     ++s.counts.constraint_violated;
     return;
@@ -345,7 +345,7 @@ SweepCounts sweep(const Problem& problem, const Grid& grid, const CullingOptions
                   const SolverContext& context, Reference& reference) {
   std::vector<SweepThread> states(static_cast<std::size_t>(std::max(1, context.threads)));
   for (SweepThread& s : states) {
-    s.workspace = problem.make_workspace();
+    s.eval_scratch = problem.make_eval_scratch();
     s.x.resize(grid.counts.size());
   }
   const long long lines = grid.total / grid.counts.back();
@@ -393,7 +393,7 @@ Json sweep_statistics(const Grid& grid, const SweepCounts& sum, const Reference&
 // Replaces `point` (the grid optimum x) by the polished design when that is better; returns
 // the polish statistics.
 Json polish_cell(const Problem& problem, const std::vector<double>& x, const CullingOptions& options,
-                 Problem::Workspace& ws, SolutionPoint& point, SolverResult& result) {
+                 Problem::EvalScratch& ws, SolutionPoint& point, SolverResult& result) {
   const DesignSpace& space = problem.design_space();
   const std::size_t n = x.size();
   std::vector<double> lo(n), hi(n);
@@ -469,7 +469,7 @@ SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& c
   }
   std::vector<double> x(space.free_size());
   grid.decode(reference.best.index, x.data());
-  auto ws = problem.make_workspace();
+  auto ws = problem.make_eval_scratch();
   const Evaluation grid_best = problem.evaluate(x.data(), *ws);
   result.sample_evaluations += grid_best.samples_evaluated;
   SolutionPoint point{problem.full_design(x.data()), grid_best.objectives, grid_best.score};

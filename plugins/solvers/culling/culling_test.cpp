@@ -117,7 +117,7 @@ TEST(Culling, WeightedSumOfWorstCaseMetricsHasAValidBound) {
   Json doc = hapsyn::test::fivebar_study("culling");
   doc["objectives"] = Json::array({{{"metric", "gii"}, {"weight", 0.5}}, {{"metric", "gdi"}, {"weight", 2.0}}});
   const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
-  auto ws = study.problem->make_workspace();
+  auto ws = study.problem->make_eval_scratch();
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int checked = 0;

@@ -106,7 +106,7 @@ struct Tally {
 // Per-thread state of a sweep; `Extra` holds what the mode keeps besides the tally.
 template <class Extra>
 struct SweepThread : Extra {
-  std::unique_ptr<Problem::Workspace> workspace;
+  std::unique_ptr<Problem::EvalScratch> eval_scratch;
   std::vector<double> x;
   Tally tally;
 };
@@ -115,7 +115,7 @@ template <class Extra>
 std::vector<SweepThread<Extra>> make_threads(const Problem& problem, const SolverContext& context) {
   std::vector<SweepThread<Extra>> states(static_cast<std::size_t>(std::max(1, context.threads)));
   for (SweepThread<Extra>& s : states) {
-    s.workspace = problem.make_workspace();
+    s.eval_scratch = problem.make_eval_scratch();
     s.x.resize(problem.design_space().free_size());
   }
   return states;
@@ -159,7 +159,7 @@ std::vector<BestThread> sweep_for_best(const Problem& problem, const GridShape& 
     space.grid_point(index, grid.counts, s.x.data());
     EvalOptions options;
     if (prune) options.prune_below = incumbent.load(std::memory_order_relaxed);
-    const Evaluation& e = problem.evaluate(s.x.data(), *s.workspace, options);
+    const Evaluation& e = problem.evaluate(s.x.data(), *s.eval_scratch, options);
     s.tally.count(e);
     if (e.status == EvalStatus::kFeasible && s.improves_on(e.score, index)) {
       s.best_score = e.score;
@@ -268,7 +268,7 @@ std::vector<FrontThread> sweep_for_front(const Problem& problem, const GridShape
     space.grid_point(index, grid.counts, s.x.data());
     EvalOptions options;
     if (prune) options.prune_dominated_by = &s.snapshot;
-    const Evaluation& e = problem.evaluate(s.x.data(), *s.workspace, options);
+    const Evaluation& e = problem.evaluate(s.x.data(), *s.eval_scratch, options);
     s.tally.count(e);
     if (e.status == EvalStatus::kFeasible) shared.offer(e.objectives, index);
     const long long finished = done.fetch_add(1, std::memory_order_relaxed) + 1;
@@ -320,7 +320,7 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
   // Re-evaluate the winner in full (its running evaluation may have been bounded).
   std::vector<double> x(space.free_size());
   space.grid_point(best.best_index, grid.counts, x.data());
-  auto ws = problem.make_workspace();
+  auto ws = problem.make_eval_scratch();
   const Evaluation& e = problem.evaluate(x.data(), *ws);
   result.sample_evaluations += e.samples_evaluated;
   result.best = SolutionPoint{problem.full_design(x.data()), e.objectives, e.score};

@@ -31,7 +31,7 @@ Brute brute_force(const hapsyn::Problem& problem) {
   std::vector<long long> counts(n), index(n, 0);
   long long total = 1;
   for (std::size_t k = 0; k < n; ++k) total *= (counts[k] = space.grid_count(k));
-  auto ws = problem.make_workspace();
+  auto ws = problem.make_eval_scratch();
   Brute best;
   std::vector<double> x(n);
   for (long long i = 0; i < total; ++i) {
@@ -152,7 +152,7 @@ TEST(Grid, ParetoModeReturnsTheBruteForceFrontWithAndWithoutPruning) {
   for (long long c : counts) total *= c;
   std::vector<hapsyn::ObjectivePoint> all;
   std::vector<long long> index;
-  auto ws = problem.make_workspace();
+  auto ws = problem.make_eval_scratch();
   std::vector<double> x(problem.dimension());
   for (long long i = 0; i < total; ++i) {
     problem.design_space().grid_point(i, counts, x.data());
@@ -196,7 +196,7 @@ TEST(Grid, ParetoModeHandlesThreeObjectives) {
   long long total = 1;
   for (long long c : counts) total *= c;
   std::vector<hapsyn::ObjectivePoint> all;
-  auto ws = problem->make_workspace();
+  auto ws = problem->make_eval_scratch();
   std::vector<double> x(problem->dimension());
   for (long long i = 0; i < total; ++i) {
     problem->design_space().grid_point(i, counts, x.data());

@@ -158,7 +158,7 @@ TEST(Nbi, FiveBarFrontIsNotDominatedByExhaustiveSearch) {
   long long total = 1;
   for (long long c : counts) total *= c;
   std::vector<hapsyn::ObjectivePoint> all;
-  auto ws = problem.make_workspace();
+  auto ws = problem.make_eval_scratch();
   std::vector<double> x(problem.dimension());
   for (long long i = 0; i < total; ++i) {
     problem.design_space().grid_point(i, counts, x.data());

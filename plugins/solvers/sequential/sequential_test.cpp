@@ -30,7 +30,7 @@ TEST(Sequential, PicksTheBestSecondObjectiveAmongTheFirstObjectiveOptimaPerValue
   long long total = 1;
   for (long long c : counts) total *= c;
   std::vector<double> best_gii(static_cast<std::size_t>(counts[3]), -1.0), gdi_of(static_cast<std::size_t>(counts[3]), -1.0);
-  auto ws = problem.make_workspace();
+  auto ws = problem.make_eval_scratch();
   std::vector<double> x(4);
   for (long long i = 0; i < total; ++i) {
     problem.design_space().grid_point(i, counts, x.data());

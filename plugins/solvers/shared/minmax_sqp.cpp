@@ -87,7 +87,7 @@ void add_design_constraints(nlopt::opt& opt, DesignConstraints& d, double tolera
 struct Epigraph {
   const Problem* problem = nullptr;
   const MinMaxGoal* goal = nullptr;
-  Problem::Workspace* workspace = nullptr;
+  Problem::EvalScratch* eval_scratch = nullptr;
   std::vector<LocalIndex> locals;  // the z layout
   std::vector<int> active;         // active samples
   std::size_t n = 0;               // design dimension
@@ -116,7 +116,7 @@ struct Epigraph {
     EvalOptions o;
     o.subset = &active;
     o.on_sample = &record;
-    const Evaluation& e = problem->evaluate(p, *workspace, o);
+    const Evaluation& e = problem->evaluate(p, *eval_scratch, o);
     ++evaluations;
     samples += e.samples_evaluated;
     return e.status == EvalStatus::kFeasible;
@@ -217,7 +217,7 @@ void epigraph_constraints(unsigned count, double* c, unsigned dim, const double*
 // Samples whose local value lies within `fraction` of the extreme, per min/max local (at most
 // `per_local` each, the closest first), from one full evaluation of p with every sample's values.
 std::vector<int> near_critical(const Problem& problem, const std::vector<LocalIndex>& locals, const double* p,
-                               Problem::Workspace& ws, double fraction, std::size_t per_local, long long& samples) {
+                               Problem::EvalScratch& ws, double fraction, std::size_t per_local, long long& samples) {
   const int count = problem.samples().size();
   std::vector<double> values(static_cast<std::size_t>(count) * locals.size(), std::nan(""));
   SampleCallback record = [&](int s, const SampleQuantities&, const std::vector<std::vector<double>>& per_metric) {
@@ -301,7 +301,7 @@ std::string run_epigraph_slsqp(Epigraph& g, const MinMaxGoal& goal, const SqpSet
 // becomes `current` (and `out`'s point when it beats it); samples critical at any of them join
 // `active` (`grew` says whether one did). Returns false when no candidate is feasible.
 bool adopt_best_candidate(const Epigraph& g, const MinMaxGoal& goal, const std::vector<double>& y,
-                          Problem::Workspace& workspace, std::set<int>& active, std::vector<double>& current,
+                          Problem::EvalScratch& eval_scratch, std::set<int>& active, std::vector<double>& current,
                           bool& grew, SqpOutcome& out) {
   std::vector<std::vector<double>> candidates = {y};
   if (!g.best_y.empty() && g.best_y != y) candidates.push_back(g.best_y);
@@ -312,7 +312,7 @@ bool adopt_best_candidate(const Epigraph& g, const MinMaxGoal& goal, const std::
   for (const auto& cand : candidates) {
     std::vector<double> q(cand.begin(), cand.begin() + static_cast<std::ptrdiff_t>(g.n));
     for (std::size_t k = 0; k < g.n; ++k) q[k] = std::clamp(q[k], g.lower[k], g.upper[k]);
-    const Evaluation& e = g.problem->evaluate(q.data(), workspace);
+    const Evaluation& e = g.problem->evaluate(q.data(), eval_scratch);
     ++out.evaluations;
     out.samples += e.samples_evaluated;
     if (e.status != EvalStatus::kFeasible) continue;
@@ -337,18 +337,18 @@ bool adopt_best_candidate(const Epigraph& g, const MinMaxGoal& goal, const std::
 SqpOutcome run_epigraph(const Problem& problem, std::vector<double> x, const std::vector<double>& lower,
                         const std::vector<double>& upper, const SqpSettings& settings, const MinMaxGoal& goal) {
   const auto t0 = Clock::now();
-  auto workspace = problem.make_workspace();
+  auto eval_scratch = problem.make_eval_scratch();
   Epigraph g;
   g.problem = &problem;
   g.goal = &goal;
-  g.workspace = workspace.get();
+  g.eval_scratch = eval_scratch.get();
   g.n = x.size();
   g.lower = lower;
   g.upper = upper;
   g.tolerance = settings.constraint_tolerance;
   g.locals = flat_locals(problem, nullptr);
   SqpOutcome out;
-  const Evaluation& start = problem.evaluate(x.data(), *workspace);
+  const Evaluation& start = problem.evaluate(x.data(), *eval_scratch);
   out.samples += start.samples_evaluated;
   ++out.evaluations;
   if (start.status != EvalStatus::kFeasible) {
@@ -359,7 +359,7 @@ SqpOutcome run_epigraph(const Problem& problem, std::vector<double> x, const std
   out.x = x;
   out.merit = goal.merit(start);
   std::set<int> active;
-  for (int s : near_critical(problem, g.locals, x.data(), *workspace, 0.02, 8, out.samples)) active.insert(s);
+  for (int s : near_critical(problem, g.locals, x.data(), *eval_scratch, 0.02, 8, out.samples)) active.insert(s);
   std::vector<double> current = x;
   const std::size_t dim = g.n + g.zsize() + static_cast<std::size_t>(goal.extra);
   for (int round = 0; round < settings.rounds; ++round) {
@@ -371,9 +371,9 @@ SqpOutcome run_epigraph(const Problem& problem, std::vector<double> x, const std
     out.status = run_epigraph_slsqp(g, goal, settings, y);
     ++out.rounds;
     bool grew = false;
-    if (!adopt_best_candidate(g, goal, y, *workspace, active, current, grew, out)) break;
+    if (!adopt_best_candidate(g, goal, y, *eval_scratch, active, current, grew, out)) break;
     if (!grew) break;  // the full workspace agrees with the active set: converged
-    for (int s : near_critical(problem, g.locals, current.data(), *workspace, 0.02, 8, out.samples)) active.insert(s);
+    for (int s : near_critical(problem, g.locals, current.data(), *eval_scratch, 0.02, 8, out.samples)) active.insert(s);
   }
   out.evaluations += g.evaluations;
   out.samples += g.samples;
@@ -387,7 +387,7 @@ SqpOutcome run_epigraph(const Problem& problem, std::vector<double> x, const std
 struct PlainRun {
   const Problem* problem = nullptr;
   const MinMaxGoal* goal = nullptr;
-  Problem::Workspace* workspace = nullptr;
+  Problem::EvalScratch* eval_scratch = nullptr;
   std::vector<double> lower, upper, probe;
   long long evaluations = 0, samples = 0;
   double lowest_feasible = 0.0;
@@ -395,7 +395,7 @@ struct PlainRun {
   double best_merit = -kInf;
 
   double merit(const double* x) {
-    const Evaluation& e = problem->evaluate(x, *workspace);
+    const Evaluation& e = problem->evaluate(x, *eval_scratch);
     ++evaluations;
     samples += e.samples_evaluated;
     if (e.status != EvalStatus::kFeasible) return lowest_feasible - 1.0;
@@ -432,11 +432,11 @@ double plain_objective(unsigned n, const double* x, double* grad, void* data) {
 SqpOutcome run_plain(const Problem& problem, std::vector<double> x, const std::vector<double>& lower,
                      const std::vector<double>& upper, const SqpSettings& settings, const MinMaxGoal& goal) {
   const auto t0 = Clock::now();
-  auto workspace = problem.make_workspace();
+  auto eval_scratch = problem.make_eval_scratch();
   PlainRun run;
   run.problem = &problem;
   run.goal = &goal;
-  run.workspace = workspace.get();
+  run.eval_scratch = eval_scratch.get();
   run.lower = lower;
   run.upper = upper;
   nlopt::opt opt(nlopt::LD_SLSQP, static_cast<unsigned>(x.size()));

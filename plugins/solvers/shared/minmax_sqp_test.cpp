@@ -33,7 +33,7 @@ std::shared_ptr<hapsyn::Problem> circle_problem(double lower_y = 0.0) {
 }
 
 double score_at(const hapsyn::Problem& problem, const std::vector<double>& x) {
-  auto ws = problem.make_workspace();
+  auto ws = problem.make_eval_scratch();
   const hapsyn::Evaluation& e = problem.evaluate(x.data(), *ws);
   EXPECT_EQ(e.status, hapsyn::EvalStatus::kFeasible);
   return e.score;

@@ -117,7 +117,7 @@ Evaluator::Evaluator(const Problem& problem, Encoding encoding, EvaluationSettin
     : problem_(problem), encoding_(std::move(encoding)), settings_(settings), multi_objective_(multi_objective) {
   settings_.threads = std::max(1, settings_.threads);
   settings_.sample_chunks = std::max(1, settings_.sample_chunks);
-  for (int t = 0; t < settings_.threads; ++t) workspaces_.push_back(problem_.make_workspace());
+  for (int t = 0; t < settings_.threads; ++t) workspaces_.push_back(problem_.make_eval_scratch());
 }
 
 void Evaluator::set_subset(const std::vector<int>* subset, int fidelity_level) {

@@ -19,7 +19,7 @@
 ///   constraint fails, in every component: worse than any feasible design with |score| < 1e9.
 /// - Evaluation: batch_fitness (used by pagmo algorithms with a batch evaluator: gaco, nsga2,
 ///   and by the solvers for initial populations and re-rankings) runs over individuals on the
-///   threads, one Problem::Workspace per thread, or one design after another each split over
+///   threads, one Problem::EvalScratch per thread, or one design after another each split over
 ///   the samples ("samples"); fitness() (sga calls it one design at a time) splits one design
 ///   over the samples in a fixed number of chunks. Results never depend on the thread count.
 ///   Phenotypes already evaluated at the same fidelity come from a cache.
@@ -142,7 +142,7 @@ class Evaluator {
   const std::vector<int>* subset_ = nullptr;
   int fidelity_level_ = 0;
   std::map<std::pair<int, std::vector<double>>, DesignRecord> cache_;
-  std::vector<std::unique_ptr<Problem::Workspace>> workspaces_;
+  std::vector<std::unique_ptr<Problem::EvalScratch>> workspaces_;
   long long designs_ = 0, samples_ = 0, cache_hits_ = 0;
 };
 

@@ -112,7 +112,7 @@ TEST(SubSolver, ReweightedProblemChangesTheWeightsOnly) {
   EXPECT_EQ(reweighted->objectives()[1].weight, 0.75);
   // The score is the new weighted sum of the same objective values.
   const double x[2] = {0.4, 0.2};
-  auto ws = reweighted->make_workspace();
+  auto ws = reweighted->make_eval_scratch();
   const hapsyn::Evaluation e = reweighted->evaluate(x, *ws);
   EXPECT_EQ(e.score, 0.25 * e.objectives[0] + 0.75 * e.objectives[1]);
 }
