@@ -177,7 +177,7 @@ struct Haptic6RSetup {
   Haptic6ROptions options;            ///< as declared (tolerance, mass model and gravity are read here)
   Haptic6RDh dh;
   ActuatorTable actuators;
-  Haptic6RSelection selection = Haptic6RSelection::kClosestToHome;
+  Haptic6RSelection selection{};  // set from the "selection" option
   Vector6d home;                      ///< [rad]
   Vector6d joint_lower, joint_upper;  ///< [rad]
 

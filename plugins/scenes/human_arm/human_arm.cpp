@@ -285,98 +285,103 @@ std::string HumanArmScene::cache_file(bool ellipsoids) const {
   return (fs::path(dir) / name).string();
 }
 
-SampleSet HumanArmScene::build(const SceneRequest& request) const {
-  const auto start = std::chrono::steady_clock::now();
-  bool want_mv = false, want_ma = false;
+namespace {
+
+// The lattice and orientation set of a build: shared by the solve and the assembly steps.
+struct LatticeGeometry {
+  std::vector<double> axis;
+  int per_axis = 0;
+  int points = 0;
+  std::vector<Eigen::Quaterniond> rotations;
+  Eigen::Vector3d point(int index) const {
+    return Eigen::Vector3d(axis[index % per_axis], axis[(index / per_axis) % per_axis],
+                           axis[index / (per_axis * per_axis)]);
+  }
+};
+
+struct AttributeWish {
+  bool mv = false, ma = false;
+  bool ellipsoids() const { return mv || ma; }
+};
+
+AttributeWish requested_attributes(const SceneRequest& request) {
+  AttributeWish wish;
   for (const std::string& a : request.attributes) {
     if (a == "M_v") {
-      want_mv = true;
+      wish.mv = true;
     } else if (a == "M_a") {
-      want_ma = true;
+      wish.ma = true;
     } else if (a != "shoulder_pose" && a != "human_q" && a != "manipulability" && a != "lattice_index") {
       throw Error(kName, "per-sample attribute '" + a +
                              "' requested: this scene provides shoulder_pose, human_q, manipulability, lattice_index, "
                              "M_v, M_a");
     }
   }
-  const bool ellipsoids = want_mv || want_ma;
-  const HumanArmSceneOptions& o = options_;
-  const std::vector<double> axis = lattice_axis(o.lattice_step, o.lattice_extent);
-  const int n_axis = static_cast<int>(axis.size());
-  const int n_lattice = n_axis * n_axis * n_axis;
-  const std::vector<Eigen::Quaterniond> rotations = orientation_set(o.orientations);
-  const auto lattice_point = [&](int index) {
-    return Eigen::Vector3d(axis[index % n_axis], axis[(index / n_axis) % n_axis], axis[index / (n_axis * n_axis)]);
-  };
+  return wish;
+}
 
-  Json info = Json::object();
-  const std::string file = cache_file(ellipsoids);
-  const std::string key = file.empty() ? std::string() : cache_key(ellipsoids);
+// The reachable poses of one lattice point: every orientation the arm reaches there, with its
+// best joint-3 solution and (on request) its velocity and acceleration ellipsoid axes in B.
+void solve_lattice_point(const HumanArm& arm, const HumanArmSceneOptions& o, const std::vector<Eigen::Matrix3d>& matrices,
+                         const std::vector<double>& grid, bool ellipsoids, int index, const Eigen::Vector3d& p,
+                         RawScene& out) {
+  Vector7d q;
+  double m = 0.0;
+  for (int k = 0; k < o.orientations; ++k) {
+    if (!arm.best(matrices[k], p, grid, &q, &m)) continue;
+    out.lattice.push_back(static_cast<std::int32_t>(index));
+    out.orientation.push_back(k);
+    out.q.insert(out.q.end(), q.data(), q.data() + 7);
+    out.manipulability.push_back(m);
+    if (!ellipsoids) continue;
+    Matrix67d J = arm.jacobian(q);
+    // Twist of E rather than P when x_E^P != 0: v_E = v_P + omega x r, r = C_P^S x_E^P.
+    const Eigen::Vector3d r = matrices[k] * o.x_E_P;
+    for (int c = 0; c < 7; ++c) J.block<3, 1>(3, c) += J.block<3, 1>(0, c).cross(r);
+    // Then rotate both halves into B: blockdiag(C_S^B, C_S^B) M^S, as eq. (12) does.
+    for (const auto& [scale, target] : {std::pair{&arm.data().velocity_max, &out.mv},
+                                        std::pair{&arm.data().acceleration_max, &out.ma}}) {
+      Matrix6d M = ellipsoid_axes(J, *scale);
+      M.topRows<3>() = (o.C_S_B * M.topRows<3>()).eval();
+      M.bottomRows<3>() = (o.C_S_B * M.bottomRows<3>()).eval();
+      const Eigen::Matrix<double, 6, 6, Eigen::RowMajor> row_major = M;
+      target->insert(target->end(), row_major.data(), row_major.data() + 36);
+    }
+  }
+}
+
+// Every lattice point in parallel, merged in lattice order (so the result does not depend on
+// the thread count).
+RawScene solve_lattice(const HumanArm& arm, const HumanArmSceneOptions& o, const LatticeGeometry& g, bool ellipsoids) {
+  const std::vector<double> grid = arm.joint3_grid(o.joint3_steps);
+  std::vector<Eigen::Matrix3d> matrices(g.rotations.size());
+  for (std::size_t i = 0; i < g.rotations.size(); ++i) matrices[i] = g.rotations[i].toRotationMatrix();
+  std::vector<RawScene> per_point(static_cast<std::size_t>(g.points));
+  const int threads = o.threads > 0 ? o.threads : hardware_threads();
+  // Lattice points far from the shoulder cost nothing; near ones cost a full orientation
+  // sweep: dynamic scheduling balances them.
+  parallel_for_dynamic(g.points, threads, 1, [&](long long index, int) {
+    const Eigen::Vector3d p = g.point(static_cast<int>(index));
+    if (p.norm() > arm.reach() * (1.0 + 1e-9)) return;
+    solve_lattice_point(arm, o, matrices, grid, ellipsoids, static_cast<int>(index), p,
+                        per_point[static_cast<std::size_t>(index)]);
+  });
   RawScene raw;
-  bool from_cache = false;
-  std::string cache_status = o.cache ? (file.empty() ? "off: no cache directory ($XDG_CACHE_HOME and $HOME unset)" : "")
-                                     : "off";
-  if (!file.empty()) {
-    const std::string why = read_cache(file, key, ellipsoids, n_lattice, o.orientations, &raw);
-    if (why.empty()) {
-      from_cache = true;
-      cache_status = "hit";
-    } else {
-      cache_status = why == "missing" ? "miss: built" : "rebuilt (" + why + ")";
-    }
+  for (RawScene& s : per_point) {
+    raw.lattice.insert(raw.lattice.end(), s.lattice.begin(), s.lattice.end());
+    raw.orientation.insert(raw.orientation.end(), s.orientation.begin(), s.orientation.end());
+    raw.q.insert(raw.q.end(), s.q.begin(), s.q.end());
+    raw.manipulability.insert(raw.manipulability.end(), s.manipulability.begin(), s.manipulability.end());
+    raw.mv.insert(raw.mv.end(), s.mv.begin(), s.mv.end());
+    raw.ma.insert(raw.ma.end(), s.ma.begin(), s.ma.end());
+    s = RawScene();
   }
-  if (!from_cache) {
-    const std::vector<double> grid = arm_.joint3_grid(o.joint3_steps);
-    std::vector<Eigen::Matrix3d> matrices(rotations.size());
-    for (std::size_t i = 0; i < rotations.size(); ++i) matrices[i] = rotations[i].toRotationMatrix();
-    std::vector<RawScene> per_point(static_cast<std::size_t>(n_lattice));
-    const int threads = o.threads > 0 ? o.threads : hardware_threads();
-    // Lattice points far from the shoulder cost nothing; near ones cost a full orientation
-    // sweep: dynamic scheduling balances them.
-    parallel_for_dynamic(n_lattice, threads, 1, [&](long long index, int) {
-      const Eigen::Vector3d p = lattice_point(static_cast<int>(index));
-      if (p.norm() > arm_.reach() * (1.0 + 1e-9)) return;
-      RawScene& out = per_point[static_cast<std::size_t>(index)];
-      Vector7d q;
-      double m = 0.0;
-      for (int k = 0; k < o.orientations; ++k) {
-        if (!arm_.best(matrices[k], p, grid, &q, &m)) continue;
-        out.lattice.push_back(static_cast<std::int32_t>(index));
-        out.orientation.push_back(k);
-        out.q.insert(out.q.end(), q.data(), q.data() + 7);
-        out.manipulability.push_back(m);
-        if (ellipsoids) {
-          Matrix67d J = arm_.jacobian(q);
-          // Twist of E rather than P when x_E^P != 0: v_E = v_P + omega x r, r = C_P^S x_E^P.
-          const Eigen::Vector3d r = matrices[k] * o.x_E_P;
-          for (int c = 0; c < 7; ++c) J.block<3, 1>(3, c) += J.block<3, 1>(0, c).cross(r);
-          // Then rotate both halves into B: blockdiag(C_S^B, C_S^B) M^S, as eq. (12) does.
-          for (const auto& [scale, target] : {std::pair{&arm_.data().velocity_max, &out.mv},
-                                              std::pair{&arm_.data().acceleration_max, &out.ma}}) {
-            Matrix6d M = ellipsoid_axes(J, *scale);
-            M.topRows<3>() = (o.C_S_B * M.topRows<3>()).eval();
-            M.bottomRows<3>() = (o.C_S_B * M.bottomRows<3>()).eval();
-            const Eigen::Matrix<double, 6, 6, Eigen::RowMajor> row_major = M;
-            target->insert(target->end(), row_major.data(), row_major.data() + 36);
-          }
-        }
-      }
-    });
-    for (RawScene& s : per_point) {
-      raw.lattice.insert(raw.lattice.end(), s.lattice.begin(), s.lattice.end());
-      raw.orientation.insert(raw.orientation.end(), s.orientation.begin(), s.orientation.end());
-      raw.q.insert(raw.q.end(), s.q.begin(), s.q.end());
-      raw.manipulability.insert(raw.manipulability.end(), s.manipulability.begin(), s.manipulability.end());
-      raw.mv.insert(raw.mv.end(), s.mv.begin(), s.mv.end());
-      raw.ma.insert(raw.ma.end(), s.ma.begin(), s.ma.end());
-      s = RawScene();
-    }
-    if (!file.empty()) {
-      const std::string failure = write_cache(file, key, raw, ellipsoids);
-      if (!failure.empty()) cache_status += "; cache not written: " + failure;
-    }
-  }
+  return raw;
+}
 
+// The samples (end-effector poses in B) and their attributes from the solved lattice.
+SampleSet assemble_samples(const RawScene& raw, const HumanArmSceneOptions& o, const LatticeGeometry& g,
+                           const AttributeWish& wish) {
   SampleSet set;
   set.coordinates = {"x", "y", "z", "qw", "qx", "qy", "qz"};
   set.unit = "m";
@@ -385,8 +390,8 @@ SampleSet HumanArmScene::build(const SceneRequest& request) const {
   SampleSet::RowMatrix shoulder(n, 7), human_q(n, 7), manip(n, 1), lattice_index(n, 1);
   const Eigen::Quaterniond q_S_B(o.C_S_B), q_E_P(o.C_E_P);
   for (Eigen::Index i = 0; i < n; ++i) {
-    const Eigen::Vector3d p = lattice_point(raw.lattice[i]);
-    const Eigen::Quaterniond& r = rotations[static_cast<std::size_t>(raw.orientation[i])];
+    const Eigen::Vector3d p = g.point(raw.lattice[i]);
+    const Eigen::Quaterniond& r = g.rotations[static_cast<std::size_t>(raw.orientation[i])];
     shoulder.row(i) << p(0), p(1), p(2), r.w(), r.x(), r.y(), r.z();
     // T_E^B = T_S^B T_P^S T_E^P.
     const Eigen::Vector3d x = o.x_S_B + o.C_S_B * (p + r.toRotationMatrix() * o.x_E_P);
@@ -406,27 +411,66 @@ SampleSet HumanArmScene::build(const SceneRequest& request) const {
     if (n > 0) std::memcpy(M.data(), values.data(), values.size() * sizeof(double));
     return M;
   };
-  if (want_mv) set.attributes["M_v"] = matrix_attribute(raw.mv);
-  if (want_ma) set.attributes["M_a"] = matrix_attribute(raw.ma);
+  if (wish.mv) set.attributes["M_v"] = matrix_attribute(raw.mv);
+  if (wish.ma) set.attributes["M_a"] = matrix_attribute(raw.ma);
   // The lattice declaration the framework's maps and plots use (the lattice frame is S).
   SampleLattice lattice;
-  lattice.per_axis = n_axis;
+  lattice.per_axis = g.per_axis;
   lattice.step = o.lattice_step;
   lattice.index_of_sample.assign(raw.lattice.begin(), raw.lattice.end());
   lattice.candidates_per_point = o.orientations;
   lattice.candidates = "orientations";
   set.lattice = std::move(lattice);
+  return set;
+}
 
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  info["n_reach"] = static_cast<long long>(n);
-  info["lattice_points"] = n_lattice;
-  info["lattice_per_axis"] = n_axis;
+}  // namespace
+
+SampleSet HumanArmScene::build(const SceneRequest& request) const {
+  const auto start = std::chrono::steady_clock::now();
+  const AttributeWish wish = requested_attributes(request);
+  const bool ellipsoids = wish.ellipsoids();
+  const HumanArmSceneOptions& o = options_;
+  LatticeGeometry g;
+  g.axis = lattice_axis(o.lattice_step, o.lattice_extent);
+  g.per_axis = static_cast<int>(g.axis.size());
+  g.points = g.per_axis * g.per_axis * g.per_axis;
+  g.rotations = orientation_set(o.orientations);
+
+  const std::string file = cache_file(ellipsoids);
+  const std::string key = file.empty() ? std::string() : cache_key(ellipsoids);
+  RawScene raw;
+  bool from_cache = false;
+  std::string cache_status = o.cache ? (file.empty() ? "off: no cache directory ($XDG_CACHE_HOME and $HOME unset)" : "")
+                                     : "off";
+  if (!file.empty()) {
+    const std::string why = read_cache(file, key, ellipsoids, g.points, o.orientations, &raw);
+    if (why.empty()) {
+      from_cache = true;
+      cache_status = "hit";
+    } else {
+      cache_status = why == "missing" ? "miss: built" : "rebuilt (" + why + ")";
+    }
+  }
+  if (!from_cache) {
+    raw = solve_lattice(arm_, o, g, ellipsoids);
+    if (!file.empty()) {
+      const std::string failure = write_cache(file, key, raw, ellipsoids);
+      if (!failure.empty()) cache_status += "; cache not written: " + failure;
+    }
+  }
+
+  SampleSet set = assemble_samples(raw, o, g, wish);
+  Json info = Json::object();
+  info["n_reach"] = static_cast<long long>(raw.size());
+  info["lattice_points"] = g.points;
+  info["lattice_per_axis"] = g.per_axis;
   info["lattice_step"] = o.lattice_step;
   info["lattice_extent"] = o.lattice_extent;
   info["orientations"] = o.orientations;
   info["joint3_steps"] = o.joint3_steps;
-  info["poses_tried"] = static_cast<long long>(n_lattice) * o.orientations;
-  info["build_time_s"] = seconds;
+  info["poses_tried"] = static_cast<long long>(g.points) * o.orientations;
+  info["build_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   info["cache_file"] = file;
   info["cache_status"] = cache_status;
   info["from_cache"] = from_cache;
