@@ -83,11 +83,26 @@ struct SceneRequest {
   std::vector<std::string> attributes;  ///< attribute names some metric requires
 };
 
-/// Scene plugin. Thread safety: build() is called once, from one thread.
+/// Scene plugin: the one pure virtual is build().
+///
+/// Life cycle: created once per study (options filled from its declarations, see
+/// hapsyn/options.hpp; relations between options that the declarations cannot express are
+/// checked by the constructor, throwing hapsyn::Error); build() is then called once, from one
+/// thread, after the metrics are known. A scene never depends on the design.
+///
+/// What the framework checks centrally, so a scene need not: the samples exist and are finite,
+/// a declared lattice is consistent with them (check_lattice), the mechanism serves them
+/// (Mechanism::check_scene).
 class Scene {
  public:
   virtual ~Scene() = default;
-  /// Builds the samples. Throws hapsyn::Error for unusable options.
+  /// Builds the samples.
+  /// \param request what the study's metrics need: build exactly these per-sample attributes
+  ///        (each a matrix with one row per sample) and no others (they may be expensive).
+  /// \returns poses in the scene frame (SampleSet::coordinates names the columns, unit the
+  ///          position unit), the attributes asked for, a SampleLattice when the samples sit on
+  ///          one, and `info` for result.json. May use threads of its own and allocate freely.
+  /// \throws hapsyn::Error for an attribute it cannot provide or unusable input files.
   virtual SampleSet build(const SceneRequest& request) const = 0;
 };
 
