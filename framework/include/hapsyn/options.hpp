@@ -23,6 +23,7 @@
 /// creates sub-solvers at load. Member initialisers should be `{}` only: the declared default
 /// is the one default. Every option has a default; a problem file may leave any option out.
 #include <hapsyn/json.hpp>
+#include <hapsyn/schema.hpp>
 
 #include <cmath>
 #include <cstdint>
@@ -328,12 +329,6 @@ template <class O>
 O default_options() {
   return make_options<O>(Json::object(), "options");
 }
-
-}  // namespace hapsyn
-
-#include <hapsyn/schema.hpp>
-
-namespace hapsyn {
 
 template <class O>
 O make_options(const Json& options, const std::string& json_path) {
