@@ -115,7 +115,9 @@ int describe(const std::string& name, bool json, const hapsyn::Registry& registr
             << "  " << r.description << "\n"
             << "  file: " << r.file << "\n"
             << "  thread safety: " << hapsyn::to_string(r.thread_safety) << "\n";
-  if (r.schema.contains("description")) std::cout << "  " << r.schema["description"].get<std::string>() << "\n";
+  if (r.schema.contains("description") && r.schema["description"] != r.description) {
+    std::cout << "  " << r.schema["description"].get<std::string>() << "\n";
+  }
   std::cout << "options:\n";
   if (!r.schema.contains("properties") || r.schema["properties"].empty()) std::cout << "  (none)\n";
   describe_properties(r.schema, "", std::cout);
