@@ -1,0 +1,90 @@
+#pragma once
+/// \file
+/// A chain file (URDF or DH / modified-DH table in JSON) read once, with the named scalar
+/// parameters a design may set, and the Chain (chain.hpp) it gives for a set of parameter values.
+///
+/// Parameter names (docs/design.md, "serial chains"): "<joint>:x|y|z|roll|pitch|yaw" (a URDF
+/// joint origin: metres, radians), "<joint>:a|d|alpha|theta" (a DH row, named by the row's
+/// "joint"; angles in the table's angle unit), a DH table's own named lengths ("l1"),
+/// "<link>:mass" (a URDF link or DH row body; its inertia scales with it) and "mass_scale"
+/// (every mass and inertia). ':' keeps the names free of '.', which problem-file paths and
+/// --set use as a separator.
+#include "chain.hpp"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hapsyn::plugins {
+
+/// A named scalar of a chain file that a design may set.
+struct ChainParameter {
+  std::string name;         ///< e.g. "shoulder_pan_joint:z", "l1", "upper_arm_link:mass", "mass_scale"
+  std::string description;  ///< one line for `hapsyn describe` and the did-you-mean list
+  std::string unit;         ///< "m", "rad", "deg", "kg" or "" (a scale)
+  double nominal = 0.0;     ///< the file's value, in `unit`
+  /// Hard limits a design must respect: masses and mass_scale >= 0; a DH table's named lengths
+  /// >= 0; a DH a or d whose file value is non-zero keeps its sign; otherwise unbounded.
+  double hard_lower = -INFINITY, hard_upper = INFINITY;
+};
+
+/// The simple mass model of Fennel et al. 2022 (docs/design.md, "serial chains"): a motor point
+/// mass at each joint frame's origin carried by the body before it (joint 1's motor sits on the
+/// base and has no effect), a thin-walled tube of linear density `link_density` from each joint
+/// frame's origin to the next one's (the last to the tip) carried by the body between them, and
+/// a solid cylinder end effector centred at the tip with its axis along the tip's z.
+struct FennelMassModel {
+  std::vector<double> motor_mass;    ///< n motor masses [kg] (before motor_mass_factor)
+  double motor_mass_factor = 1.2;    ///< [-]
+  double link_density = 4.0;         ///< [kg/m]
+  double tube_outer_diameter = 0.1;  ///< [m]
+  double tube_wall = 0.002;          ///< [m]
+  double ee_mass = 0.5;              ///< [kg]
+  double ee_diameter = 0.1;          ///< [m]
+  double ee_length = 0.05;           ///< [m]
+};
+
+/// A chain file read once: its parameters and how to build a Chain from their values.
+class ChainTemplate {
+ public:
+  /// Reads a URDF file (urdfdom) and extracts the path from `base_link` to `tip_link`: fixed
+  /// joints fold into the next moving joint's origin (their child links' inertials into the
+  /// body before them), revolute / continuous / prismatic joints become ChainJoints with the
+  /// URDF's limits (continuous: unlimited), everything off the path (other branches,
+  /// transmissions, gazebo tags, meshes) is ignored. Gravity -9.81 along the base's z.
+  /// \throws Error("serial_chain", "<file>: ...") naming the file and, where urdfdom says it,
+  ///         the line: a file that does not parse, a missing base or tip link (with the links it
+  ///         has), a tip that is not below the base, a floating or planar joint on the path,
+  ///         fewer than 1 or more than kMaxChainJoints moving joints.
+  static ChainTemplate from_urdf(const std::string& path, const std::string& base_link, const std::string& tip_link);
+
+  /// Reads a DH or modified-DH table (JSON, format "hapsyn-dh", docs/design.md).
+  /// \throws Error("serial_chain", "<file>: <json path> = <value>: <rule>").
+  static ChainTemplate from_dh_file(const std::string& path);
+
+  /// The parameters, in a fixed order (the file's order): the layout of instantiate's values.
+  const std::vector<ChainParameter>& parameters() const { return parameters_; }
+  /// Index of a parameter by name, -1 when absent.
+  int find(const std::string& name) const;
+  /// Number of moving joints.
+  int dof() const;
+  /// The file it was read from.
+  const std::string& source() const { return source_; }
+  /// The Fennel mass model when the file asks for it (DH tables), else null: the chain's bodies
+  /// then come from the file's inertials.
+  const FennelMassModel* fennel_mass_model() const;
+
+  /// Builds the chain for parameter values (parameters().size() values, in their units).
+  /// \param motor_mass n motor masses [kg] replacing the file's (from an actuator table), or
+  ///        null; used only with the Fennel mass model.
+  /// Allocates (once per design); throws nothing for values within the hard limits.
+  void instantiate(const double* values, const double* motor_mass, Chain& out) const;
+
+ private:
+  struct Impl;
+  std::string source_;
+  std::vector<ChainParameter> parameters_;
+  std::shared_ptr<const Impl> impl_;
+};
+
+}  // namespace hapsyn::plugins
