@@ -12,11 +12,19 @@
 
 namespace hapsyn::plugins {
 
-/// Which task-space rows the IK matches (the others are free).
+/// What of the tip pose the IK (and the task Jacobian) matches; the rest is free.
 struct IkTask {
-  bool position = true;                              ///< match the tip point (3 rows)
-  std::array<bool, 3> orientation = {true, true, true};  ///< match the tip's x, y, z axes' rotation rows (omega_x, omega_y, omega_z in the base frame)
-  int rows() const;  ///< number of matched rows (1..6)
+  enum class Orientation : std::uint8_t {
+    kNone,  ///< position only (3 rows: a 3-DOF device)
+    kAxis,  ///< the tip's axis `axis` points along the target's same axis (2 rows: rotation about it is free)
+    kFull,  ///< the full orientation (3 rows)
+  };
+  bool position = true;                       ///< match the tip point (3 rows: v)
+  Orientation orientation = Orientation::kFull;
+  int axis = 2;                               ///< 0, 1, 2 = x, y, z of the tip frame (kAxis only)
+  int rows() const {                          ///< matched rows, 2..6
+    return (position ? 3 : 0) + (orientation == Orientation::kFull ? 3 : orientation == Orientation::kAxis ? 2 : 0);
+  }
 };
 
 /// Options of the IK (the mechanism declares them as its own options).
@@ -26,7 +34,6 @@ struct IkSettings {
   int max_iterations = 100;              ///< per start
   int restarts = 8;                      ///< extra starts after the given ones (deterministic pseudo-random, seeded)
   std::uint64_t seed = 1;                ///< seed of the restarts' starts
-  double singular_tolerance = 1e-6;      ///< smallest singular value of the task Jacobian (scaled, see chain_ik.cpp) below which a solution is singular
 };
 
 /// How one IK ended.
@@ -53,15 +60,20 @@ IkStatus solve_ik_from(const Chain& chain, const IkTask& task, const IkSettings&
 /// Solves one target from `starts` (tried in order), then `settings.restarts` deterministic
 /// pseudo-random starts inside the limits, and picks among the converged solutions the one
 /// closest to `home` (sum of squared joint differences, revolute ones wrapped to (-pi, pi]).
+/// A redundant chain (n > task.rows()) first moves each converged solution along its
+/// self-motion toward `home` (null-space steps, re-converged), so the rule picks a posture,
+/// not an accident of the start.
 /// When `first_converged` is true it returns the first converged solution instead (faster).
 /// kJointLimit when no start converged inside the limits but an unconstrained run did.
 IkStatus solve_ik(const Chain& chain, const IkTask& task, const IkSettings& settings,
                   const Eigen::Isometry3d& target, const double* const* starts, int start_count,
                   const double* home, bool first_converged, double* q, IkScratch& scratch);
 
-/// The smallest singular value of the task rows of the Jacobian at the solution, each column
-/// scaled as chain_ik.cpp documents (so that metres and radians are comparable); the
-/// mechanism classifies a sample singular when it is below settings.singular_tolerance.
-double task_singular_value(const Chain& chain, const IkTask& task, const TaskJointMatrix& jacobian);
+/// The task Jacobian: the rows of the geometric Jacobian (omega, v) that `task` matches, for a
+/// tip frame at `tip` and a target with the same axis: orientation rows first (kFull: omega;
+/// kAxis: omega projected on the two directions orthogonal to the tip's `axis`, in a fixed
+/// documented basis), then v. Allocation-free.
+void task_jacobian(const IkTask& task, const Eigen::Isometry3d& tip, const TaskJointMatrix& geometric,
+                   TaskJointMatrix& out);
 
 }  // namespace hapsyn::plugins
