@@ -355,9 +355,10 @@ const Evaluation& Problem::evaluate(const double* free_design, EvalScratch& ws, 
   const bool prune_front = front && !front->empty() && worst_case_ && all_maximized;
   const std::vector<int>& indices = options.subset ? *options.subset : order_;
   for (const int sample : indices) {
-    model->solve(samples_->pose(sample), needs_, *ws.scratch, ws.quantities);
+    // Set before solve(): a mechanism may read the scene (its dimension, its attributes).
     ws.quantities.sample = sample;
     ws.quantities.scene = samples_.get();
+    model->solve(samples_->pose(sample), needs_, *ws.scratch, ws.quantities);
     ++out.samples_evaluated;
     if (ws.quantities.status != SampleStatus::kReachable && any_worst_case_) {
       out.status = EvalStatus::kSampleFailed;

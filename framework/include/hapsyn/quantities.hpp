@@ -44,8 +44,9 @@ using AttributeMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Ei
 /// meaningful; the others keep whatever they held.
 struct SampleQuantities {
   SampleStatus status = SampleStatus::kUnreachable;
-  /// Set by the evaluator before the metrics run: the sample's index in `scene`, so a metric can
-  /// read the sample's scene attributes (e.g. the human's M_v). -1 / null outside the evaluator.
+  /// Set by the evaluator before the mechanism's solve(): the sample's index in `scene`, so a
+  /// mechanism or metric can read the scene (its dimension) and the sample's attributes (e.g.
+  /// the human's M_v). -1 / null outside the evaluator.
   int sample = -1;
   const SampleSet* scene = nullptr;
   /// Set by the evaluator before each metric's local(): the scene attributes that metric lists

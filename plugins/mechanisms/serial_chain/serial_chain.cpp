@@ -1,0 +1,240 @@
+// The serial_chain plugin: its options resolved once into a SerialChainSetup (files read,
+// frames and home posture in SI), and the Mechanism interface (design space, constraints).
+#include "serial_chain.hpp"
+
+#include "haptic6r.hpp"  // ActuatorTable, read_actuator_table: the actuator table format is shared
+
+#include <hapsyn/data_file.hpp>
+#include <hapsyn/error.hpp>
+
+#include <cmath>
+#include <sstream>
+
+namespace hapsyn::plugins {
+
+namespace {
+
+constexpr const char* kName = "serial_chain";
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+std::string show(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+// R = Rz(yaw) Ry(pitch) Rx(roll) with the angles in degrees, as URDF's rpy.
+Eigen::Isometry3d pose_from(const std::vector<double>& xyz, const std::vector<double>& rpy_deg) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = (Eigen::AngleAxisd(rpy_deg[2] * kDeg, Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(rpy_deg[1] * kDeg, Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(rpy_deg[0] * kDeg, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  t.translation() = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
+  return t;
+}
+
+ChainTemplate read_chain(const SerialChainOptions& o) {
+  if (o.urdf.empty() == o.dh_file.empty()) {
+    throw Error(kName, o.urdf.empty() ? "options: give the chain as options.urdf or options.dh_file"
+                                      : "options.dh_file = \"" + o.dh_file + "\": give either urdf or dh_file, not both");
+  }
+  if (!o.dh_file.empty()) {
+    if (!o.base_link.empty() || !o.tip_link.empty()) {
+      throw Error(kName, "options.base_link / tip_link: only for a URDF (a DH table's chain is its rows)");
+    }
+    return ChainTemplate::from_dh_file(find_data_file(kName, "dh_file", o.dh_file));
+  }
+  if (o.base_link.empty() || o.tip_link.empty()) {
+    throw Error(kName, std::string("options.") + (o.base_link.empty() ? "base_link" : "tip_link") +
+                           " = \"\": a URDF chain needs base_link and tip_link (the links it runs between)");
+  }
+  return ChainTemplate::from_urdf(find_data_file(kName, "urdf", o.urdf), o.base_link, o.tip_link);
+}
+
+IkTask task_of(const SerialChainOptions& o) {
+  IkTask t;
+  t.position = true;
+  t.orientation = o.task == "pose" ? IkTask::Orientation::kFull
+                  : o.task == "position_axis" ? IkTask::Orientation::kAxis
+                                               : IkTask::Orientation::kNone;
+  t.axis = o.task_axis == "x" ? 0 : o.task_axis == "y" ? 1 : 2;
+  return t;
+}
+
+// The home posture in SI from the option (deg for revolute, m for prismatic joints), or the
+// middle of each limited joint's range.
+JointVector home_of(const SerialChainOptions& o, const Chain& chain) {
+  const int n = chain.dof();
+  if (!o.home.empty() && static_cast<int>(o.home.size()) != n) {
+    throw Error(kName, "options.home has " + std::to_string(o.home.size()) + " values: the chain has " + std::to_string(n) +
+                           " joints (one value per joint, or none)");
+  }
+  JointVector home(n);
+  for (int i = 0; i < n; ++i) {
+    const ChainJoint& j = chain.joints[static_cast<std::size_t>(i)];
+    const double scale = j.type == ChainJointType::kRevolute ? kDeg : 1.0;
+    if (o.home.empty()) {
+      home(i) = std::isfinite(j.lower) && std::isfinite(j.upper) ? 0.5 * (j.lower + j.upper) : 0.0;
+      continue;
+    }
+    home(i) = o.home[static_cast<std::size_t>(i)] * scale;
+    if (home(i) < j.lower - 1e-12 || home(i) > j.upper + 1e-12) {
+      throw Error(kName, "options.home[" + std::to_string(i) + "] = " + show(o.home[static_cast<std::size_t>(i)]) +
+                             ": outside joint " + j.name + "'s limits [" + show(j.lower / scale) + ", " +
+                             show(j.upper / scale) + "] " + (scale == 1.0 ? "m" : "deg"));
+    }
+  }
+  return home;
+}
+
+// The chain's reach at the nominal design: the sum of the distances between consecutive joint
+// origins and to the tip (what makes an angular rate comparable to a linear one).
+double reach_of(const Chain& chain) {
+  double reach = chain.tip.translation().norm();
+  for (std::size_t i = 1; i < chain.joints.size(); ++i) reach += chain.joints[i].origin.translation().norm();
+  return reach;
+}
+
+std::vector<double> nominal_values(const ChainTemplate& t) {
+  std::vector<double> v;
+  for (const ChainParameter& p : t.parameters()) v.push_back(p.nominal);
+  return v;
+}
+
+void check_codes(const std::vector<int>& codes, int n, int max, const std::string& option) {
+  if (!codes.empty() && static_cast<int>(codes.size()) != n) {
+    throw Error(kName, "options." + option + " has " + std::to_string(codes.size()) + " values: the chain has " +
+                           std::to_string(n) + " joints (one code per joint, or none)");
+  }
+  for (std::size_t i = 0; i < codes.size(); ++i) {
+    if (codes[i] < 1 || codes[i] > max) {
+      throw Error(kName, "options." + option + "[" + std::to_string(i) + "] = " + std::to_string(codes[i]) +
+                             ": must be in 1.." + std::to_string(max) + " (the actuator table's codes)");
+    }
+  }
+}
+
+std::shared_ptr<SerialChainSetup> make_setup(const SerialChainOptions& o) {
+  auto s = std::make_shared<SerialChainSetup>();
+  s->options = o;
+  s->chain_template = read_chain(o);
+  s->parameter_count = static_cast<int>(s->chain_template.parameters().size());
+  const int n = s->chain_template.dof();
+  if (!o.actuator_file.empty()) {
+    s->actuators = std::make_shared<const ActuatorTable>(read_actuator_table(find_data_file(kName, "actuator_file", o.actuator_file)));
+  } else if (!o.actuator_size.empty() || !o.actuator_gear.empty()) {
+    throw Error(kName, "options.actuator_size / actuator_gear: only with an actuator_file");
+  }
+  check_codes(o.actuator_size, n, 3, "actuator_size");
+  check_codes(o.actuator_gear, n, 6, "actuator_gear");
+  s->task = task_of(o);
+  if (n < s->task.rows()) {
+    throw Error(kName, "options.task = \"" + o.task + "\": matches " + std::to_string(s->task.rows()) +
+                           " task rows, but the chain has only " + std::to_string(n) +
+                           " joints (a non-redundant task needs at least as many joints as rows; try task \"position\")");
+  }
+  s->ik.position_tolerance = o.ik.position_tolerance;
+  s->ik.orientation_tolerance = o.ik.orientation_tolerance;
+  s->ik.max_iterations = o.ik.max_iterations;
+  s->ik.restarts = o.ik.restarts;
+  s->ik.seed = static_cast<std::uint64_t>(o.ik.seed);
+  s->first_found = o.ik.selection == "first_found";
+  s->base_from_scene = pose_from(o.base_xyz, o.base_rpy).inverse();
+  s->sample_to_tip = pose_from(o.tool_xyz, o.tool_rpy).inverse();
+  Chain nominal;
+  s->chain_template.instantiate(nominal_values(s->chain_template).data(), nullptr, nominal);
+  s->home = home_of(o, nominal);
+  s->characteristic_length = o.characteristic_length > 0.0 ? o.characteristic_length : std::max(reach_of(nominal), 1e-3);
+  return s;
+}
+
+}  // namespace
+
+namespace {
+
+// Every parameter of the chain file, fixed at its value, then size and gear with an actuator table.
+std::vector<VariableDecl> variable_decls(const SerialChainSetup& setup) {
+  std::vector<VariableDecl> out;
+  for (const ChainParameter& p : setup.chain_template.parameters()) {
+    VariableDecl v;
+    v.name = p.name;
+    v.description = p.description + " (fixed at the file's value unless freed)";
+    v.unit = p.unit;
+    v.default_lower = {p.nominal};
+    v.default_upper = {p.nominal};
+    if (std::isfinite(p.hard_lower)) v.hard_lower = {p.hard_lower};
+    if (std::isfinite(p.hard_upper)) v.hard_upper = {p.hard_upper};
+    out.push_back(std::move(v));
+  }
+  if (setup.actuators) {
+    const int n = setup.chain_template.dof();
+    const auto nominal = [n](const std::vector<int>& codes) {
+      std::vector<double> v(static_cast<std::size_t>(n), 1.0);
+      for (std::size_t i = 0; i < codes.size(); ++i) v[i] = codes[i];
+      return v;
+    };
+    const std::vector<double> size = nominal(setup.options.actuator_size), gear = nominal(setup.options.actuator_gear);
+    out.push_back({"size", "actuator size code per joint (1 smallest .. 3 largest, actuator table)", "", n, true, size, size,
+                   {1}, {3}});
+    out.push_back({"gear", "gear code per joint (index into the actuator table's gear_ratios)", "", n, true, gear, gear, {1}, {6}});
+  }
+  return out;
+}
+
+std::vector<std::string> component_names(const std::vector<VariableDecl>& variables) {
+  std::vector<std::string> names;
+  for (const VariableDecl& v : variables) {
+    for (int i = 0; i < v.size; ++i) names.push_back(v.size > 1 ? v.name + "[" + std::to_string(i) + "]" : v.name);
+  }
+  return names;
+}
+
+}  // namespace
+
+SerialChain::SerialChain(const SerialChainOptions& options) {
+  auto setup = make_setup(options);
+  setup->constraints =
+      parse_linear_constraints(options.constraints, component_names(variable_decls(*setup)), kName, "options.constraints");
+  setup_ = std::move(setup);
+}
+
+std::unique_ptr<const MechanismModel> SerialChain::build(const double* design) const {
+  return std::make_unique<SerialChainModel>(design, *setup_);
+}
+
+std::unique_ptr<MechanismScratch> SerialChain::make_scratch() const { return std::make_unique<SerialChainScratch>(); }
+
+std::vector<VariableDecl> SerialChain::variables() const { return variable_decls(*setup_); }
+
+std::vector<ConstraintDecl> SerialChain::constraints() const {
+  std::vector<ConstraintDecl> out;
+  for (const LinearConstraint& c : setup_->constraints) out.push_back({c.name, c.description});
+  return out;
+}
+
+void SerialChain::evaluate_constraints(const double* design, const SampleSet&, double* g) const {
+  for (std::size_t k = 0; k < setup_->constraints.size(); ++k) g[k] = setup_->constraints[k].evaluate(design);
+}
+
+void SerialChain::check_scene(const SampleSet& scene) const {
+  const int d = scene.dimension();
+  const std::string& task = setup_->options.task;
+  if (d == 7 || (d == 3 && task == "position")) return;
+  throw Error(kName, "scene: samples have " + std::to_string(d) + " coordinates; task \"" + task + "\" needs " +
+                         (task == "position" ? "positions (x, y, z) [m] or poses (x, y, z, qw, qx, qy, qz)"
+                                             : "poses (x, y, z, qw, qx, qy, qz)"));
+}
+
+Needs SerialChain::provides() const {
+  Needs n = kNeedJacobian | kNeedInertia | kNeedEffectiveMass | kNeedGravity;
+  if (setup_->actuators) return n | kNeedActuatorLimits;
+  Chain nominal;
+  setup_->chain_template.instantiate(nominal_values(setup_->chain_template).data(), nullptr, nominal);
+  for (const ChainJoint& j : nominal.joints) {
+    if (!(j.max_velocity > 0.0) || !(j.max_effort > 0.0)) return n;
+  }
+  return n | kNeedActuatorLimits;
+}
+
+}  // namespace hapsyn::plugins

@@ -1,0 +1,112 @@
+#pragma once
+/// \file
+/// The serial_chain mechanism: a serial manipulator from a URDF file or a DH table
+/// (chain_template.hpp), every model parameter a design variable, numerical IK (chain_ik.hpp),
+/// and the quantities the metrics need (chain.hpp). Conventions in docs/design.md, "serial
+/// chains":
+/// - A scene sample (x, y, z[, qw, qx, qy, qz]) in the scene frame S is the pose of the sample
+///   frame P; the tip frame E must reach T_B^E = T_B^S T_S^P (T_E^P)^-1, with T_S^B from
+///   base_xyz / base_rpy and T_E^P from tool_xyz / tool_rpy.
+/// - The task Jacobian (SampleQuantities::jacobian) holds the rows the task matches, angular
+///   rows first: pose 6 x n (omega, v), position 3 x n (v), position_axis 5 x n (two omega rows
+///   orthogonal to the tip axis, then v); all in the base frame B, per joint rate.
+/// - Classification: IK converged inside the limits -> kReachable, or kSingular when the
+///   scaled task Jacobian's sigma_min / sigma_max < singularity_tolerance; converged only
+///   outside the limits -> kInvalid; no convergence -> kUnreachable. Never a NaN.
+#include "chain.hpp"
+#include "chain_ik.hpp"
+#include "chain_template.hpp"
+#include "linear_constraints.hpp"
+#include "serial_chain_options.hpp"
+
+#include <hapsyn/mechanism.hpp>
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace hapsyn::plugins {
+
+struct ActuatorTable;
+
+/// What the plugin resolves once from its options: the chain file read, the actuator table,
+/// the frames, the home posture, the constraints. Shared by every model (const).
+struct SerialChainSetup {
+  SerialChainOptions options;
+  ChainTemplate chain_template;
+  std::shared_ptr<const ActuatorTable> actuators;  ///< null without actuator_file
+  IkTask task;
+  IkSettings ik;
+  bool first_found = false;                 ///< ik.selection == "first_found"
+  Eigen::Isometry3d base_from_scene;        ///< T_B^S
+  Eigen::Isometry3d sample_to_tip;          ///< (T_E^P)^-1
+  JointVector home;                         ///< [rad or m]
+  double characteristic_length = 1.0;       ///< [m]
+  int parameter_count = 0;                  ///< design layout: parameters, then size[n], gear[n]
+  std::vector<LinearConstraint> constraints;
+};
+
+/// Per-thread scratch: the IK's and the previous sample's solution (the warm start).
+struct SerialChainScratch final : MechanismScratch {
+  IkScratch ik;
+  ChainFrames frames;
+  TaskJointMatrix geometric, task;
+  std::uint64_t last_model = 0;  ///< id of the model `last_q` was solved with (warm start only; 0 = none)
+  JointVector last_q;
+};
+
+/// The manipulator for one design. solve() is const, thread-safe and allocation-free.
+class SerialChainModel final : public MechanismModel {
+ public:
+  /// Builds the chain for a full design vector (see SerialChainSetup::parameter_count).
+  SerialChainModel(const double* design, const SerialChainSetup& setup);
+
+  void solve(const double* pose, Needs needs, MechanismScratch& scratch, SampleQuantities& out) const override;
+
+  const Chain& chain() const { return chain_; }
+  const JointVector& max_velocity() const { return max_velocity_; }  ///< [rad/s or m/s]
+  const JointVector& max_torque() const { return max_torque_; }      ///< [N m or N]
+  /// T_B^E wanted for a scene sample (dimension 3 or 7).
+  Eigen::Isometry3d target(const double* pose, int dimension) const;
+
+ private:
+  void fill_quantities(const ChainFrames& frames, const TaskJointMatrix& jacobian, Needs needs,
+                       SampleQuantities& out) const;
+
+  const SerialChainSetup* setup_;
+  std::uint64_t id_;  ///< unique per model, for the warm start (an address may be reused)
+  Chain chain_;
+  JointVector max_velocity_, max_torque_;
+};
+
+/// The "serial_chain" mechanism plugin.
+class SerialChain final : public Mechanism {
+ public:
+  using Options = SerialChainOptions;
+  /// Reads the chain file and the actuator table and checks the relations between options.
+  /// \throws Error("serial_chain", ...) naming the option or the file, the value and the rule.
+  explicit SerialChain(const SerialChainOptions& options);
+
+  std::unique_ptr<const MechanismModel> build(const double* design) const override;
+  std::unique_ptr<MechanismScratch> make_scratch() const override;
+  /// Every parameter of the chain file (fixed at its value unless the design section frees
+  /// it), then size and gear (n integer codes each) when an actuator table is given.
+  std::vector<VariableDecl> variables() const override;
+  std::vector<ConstraintDecl> constraints() const override;
+  void evaluate_constraints(const double* design, const SampleSet& scene, double* g) const override;
+  /// 3 coordinates (x, y, z) for the position task, 7 (x, y, z, qw, qx, qy, qz) for any task.
+  void check_scene(const SampleSet& scene) const override;
+  /// Jacobian, inertia, effective mass, gravity; actuator limits when a table is given or the
+  /// file gives every joint's velocity and effort limits.
+  Needs provides() const override;
+
+  const SerialChainSetup& setup() const { return *setup_; }
+
+ private:
+  std::shared_ptr<const SerialChainSetup> setup_;
+};
+
+}  // namespace hapsyn::plugins

@@ -1,0 +1,124 @@
+// SerialChainModel: one design's chain, and the per-sample work: the target in the base frame,
+// the IK, the classification and the quantities the metrics asked for.
+#include "serial_chain.hpp"
+
+#include "haptic6r.hpp"  // ActuatorTable
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <Eigen/SVD>
+#include <atomic>
+#include <cmath>
+
+namespace hapsyn::plugins {
+
+namespace {
+
+std::uint64_t next_model_id() {
+  static std::atomic<std::uint64_t> counter{0};
+  return ++counter;
+}
+
+}  // namespace
+
+SerialChainModel::SerialChainModel(const double* design, const SerialChainSetup& setup)
+    : setup_(&setup), id_(next_model_id()) {
+  const ChainTemplate& t = setup.chain_template;
+  const int n = t.dof();
+  const int p = setup.parameter_count;
+  JointVector motor_mass(n);
+  const double* size = design + p;
+  const double* gear = design + p + n;
+  if (setup.actuators) {
+    for (int i = 0; i < n; ++i) motor_mass(i) = setup.actuators->mass[static_cast<std::size_t>(std::lround(size[i]) - 1)];
+  }
+  t.instantiate(design, setup.actuators ? motor_mass.data() : nullptr, chain_);
+  max_velocity_.resize(n);
+  max_torque_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const ChainJoint& j = chain_.joints[static_cast<std::size_t>(i)];
+    if (setup.actuators) {
+      const int s = static_cast<int>(std::lround(size[i])), r = static_cast<int>(std::lround(gear[i]));
+      max_velocity_(i) = setup.actuators->max_velocity(s, r);
+      max_torque_(i) = setup.actuators->max_torque(s, r);
+    } else {
+      max_velocity_(i) = j.max_velocity;
+      max_torque_(i) = j.max_effort;
+    }
+  }
+}
+
+Eigen::Isometry3d SerialChainModel::target(const double* pose, int dimension) const {
+  Eigen::Isometry3d sample = Eigen::Isometry3d::Identity();
+  sample.translation() = Eigen::Vector3d(pose[0], pose[1], pose[2]);
+  if (dimension == 7) {
+    // Scenes give unit quaternions (the framework checks samples are finite; normalising here
+    // keeps a slightly denormalised file quaternion from skewing the target).
+    sample.linear() = Eigen::Quaterniond(pose[3], pose[4], pose[5], pose[6]).normalized().toRotationMatrix();
+  }
+  return setup_->base_from_scene * sample * setup_->sample_to_tip;
+}
+
+void SerialChainModel::solve(const double* pose, Needs needs, MechanismScratch& scratch, SampleQuantities& out) const {
+  auto& s = static_cast<SerialChainScratch&>(scratch);
+  const SerialChainSetup& setup = *setup_;
+  const int dimension = out.scene ? out.scene->dimension() : (setup.task.orientation == IkTask::Orientation::kNone ? 3 : 7);
+  const Eigen::Isometry3d goal = target(pose, dimension);
+  const double* starts[2];
+  int start_count = 0;
+  if (setup.options.ik.warm_start && s.last_model == id_) starts[start_count++] = s.last_q.data();
+  starts[start_count++] = setup.home.data();
+  out.q.resize(chain_.dof());
+  const IkStatus status = solve_ik(chain_, setup.task, setup.ik, goal, starts, start_count, setup.home.data(),
+                                   setup.first_found, out.q.data(), s.ik);
+  if (status == IkStatus::kUnreachable) {
+    out.status = SampleStatus::kUnreachable;
+    return;
+  }
+  if (status == IkStatus::kJointLimit) {
+    out.status = SampleStatus::kInvalid;
+    return;
+  }
+  if (setup.options.ik.warm_start) {
+    s.last_q = out.q;
+    s.last_model = id_;
+  }
+  chain_frames(chain_, out.q.data(), s.frames);
+  chain_jacobian(chain_, s.frames, s.geometric);
+  task_jacobian(setup.task, s.frames.tip, s.geometric, s.task);
+  // Singularity: the task Jacobian with its angular rows times the characteristic length, so
+  // that every row is a velocity [m/s]; its inverse condition number against the tolerance.
+  const int angular = s.task.rows() - 3;
+  TaskJointMatrix scaled = s.task;
+  scaled.topRows(angular) *= setup.characteristic_length;
+  const Eigen::JacobiSVD<TaskJointMatrix> svd(scaled);
+  const auto& sigma = svd.singularValues();
+  if (!(sigma(sigma.size() - 1) > setup.options.singularity_tolerance * sigma(0))) {
+    out.status = SampleStatus::kSingular;
+    return;
+  }
+  out.status = SampleStatus::kReachable;
+  fill_quantities(s.frames, s.task, needs, out);
+}
+
+void SerialChainModel::fill_quantities(const ChainFrames& frames, const TaskJointMatrix& jacobian, Needs needs,
+                                       SampleQuantities& out) const {
+  if (needs & kNeedJacobian) out.jacobian = jacobian;
+  if (needs & (kNeedInertia | kNeedEffectiveMass)) chain_inertia(chain_, frames, out.inertia);
+  if (needs & kNeedEffectiveMass) {
+    // M = (J H^-1 J^T)^-1: J^-T H J^-1 for a square J, and the task-space inertia of a
+    // redundant chain (Khatib) otherwise. H is symmetric positive definite for a chain whose
+    // every joint moves some mass; LDLT keeps a massless joint from producing a NaN silently.
+    const Eigen::LDLT<JointMatrix> h(out.inertia);
+    const TaskJointMatrix j_h_inv = h.solve(jacobian.transpose()).transpose();  // (H^-1 J^T)^T = J H^-1
+    const TaskMatrix lambda_inv = j_h_inv * jacobian.transpose();
+    out.effective_mass = lambda_inv.inverse();
+  }
+  if (needs & kNeedGravity) chain_gravity(chain_, frames, out.gravity);
+  if (needs & kNeedActuatorLimits) {
+    out.max_velocity = max_velocity_;
+    out.max_torque = max_torque_;
+  }
+}
+
+}  // namespace hapsyn::plugins

@@ -1,0 +1,133 @@
+#pragma once
+/// \file
+/// The options of the serial_chain mechanism, declared once (`hapsyn describe serial_chain`).
+#include <hapsyn/options.hpp>
+
+#include <string>
+#include <vector>
+
+namespace hapsyn::plugins {
+
+/// IK settings as the problem file gives them (a nested group "ik").
+struct SerialChainIkOptions {
+  std::string selection{};
+  double position_tolerance{};
+  double orientation_tolerance{};
+  int max_iterations{};
+  int restarts{};
+  long long seed{};
+  bool warm_start{};
+
+  static void declare(OptionDeclarations<SerialChainIkOptions>& d) {
+    d.describe("Numerical inverse kinematics (damped least squares with joint limits; docs/design.md, serial chains).");
+    d.add(&SerialChainIkOptions::selection, "selection", "closest_to_home",
+          "Which solution a sample gets: among those converged from 'home' and the restarts, the one closest to "
+          "home (deterministic per sample), or the first one found (faster; still deterministic).")
+        .one_of({"closest_to_home", "first_found"});
+    d.add(&SerialChainIkOptions::position_tolerance, "position_tolerance", 1e-10, "Converged when the position error is below this.")
+        .greater_than(0)
+        .maximum(1e-3)
+        .unit("m");
+    d.add(&SerialChainIkOptions::orientation_tolerance, "orientation_tolerance", 1e-10,
+          "... and the orientation error below this.")
+        .greater_than(0)
+        .maximum(1e-3)
+        .unit("rad");
+    d.add(&SerialChainIkOptions::max_iterations, "max_iterations", 100, "Iteration budget per start.").range(1, 10000);
+    d.add(&SerialChainIkOptions::restarts, "restarts", 6,
+          "Deterministic pseudo-random starts inside the joint limits tried after 'home'.")
+        .range(0, 1000);
+    d.add(&SerialChainIkOptions::seed, "seed", 1, "Seed of the restarts' starts (not the study's seed: the model is "
+                                                    "the same in every run).")
+        .minimum(0);
+    d.add(&SerialChainIkOptions::warm_start, "warm_start", false,
+          "Also start from the previous sample's solution on the same thread. Faster on dense scenes, but the "
+          "configuration a sample gets then depends on how samples are split over threads (results repeat for a "
+          "given --threads).");
+  }
+};
+
+/// Options of the serial_chain mechanism.
+struct SerialChainOptions {
+  std::string urdf{};
+  std::string base_link{};
+  std::string tip_link{};
+  std::string dh_file{};
+  std::string task{};
+  std::string task_axis{};
+  std::vector<double> base_xyz{};
+  std::vector<double> base_rpy{};
+  std::vector<double> tool_xyz{};
+  std::vector<double> tool_rpy{};
+  std::vector<double> home{};
+  double singularity_tolerance{};
+  double characteristic_length{};
+  std::string actuator_file{};
+  std::vector<int> actuator_size{};
+  std::vector<int> actuator_gear{};
+  std::vector<std::string> constraints{};
+  SerialChainIkOptions ik{};
+
+  static void declare(OptionDeclarations<SerialChainOptions>& d) {
+    d.describe(
+        "A serial manipulator (1 to 7 revolute or prismatic joints) read from a URDF file (base_link to tip_link) or "
+        "a DH / modified-DH table (dh_file). Every model parameter (joint origins, DH entries, named lengths, link "
+        "masses, mass_scale) is a design variable fixed at the file's value unless the problem file's design "
+        "section frees it; actuator sizes and gear codes too when an actuator table is given. Numerical IK, "
+        "geometric Jacobian, CRBA inertia, gravity. Scene samples: positions (x, y, z) or poses (x, y, z, qw, qx, "
+        "qy, qz) in the scene frame. See docs/design.md, serial chains.");
+    d.add(&SerialChainOptions::urdf, "urdf", "",
+          "URDF file: absolute, relative to the current directory, or to hapsyn's share directory. Exactly one of "
+          "urdf and dh_file.");
+    d.add(&SerialChainOptions::base_link, "base_link", "", "URDF link the chain starts at (its frame is the base).");
+    d.add(&SerialChainOptions::tip_link, "tip_link", "", "URDF link whose frame is the tip (the end effector).");
+    d.add(&SerialChainOptions::dh_file, "dh_file", "", "DH or modified-DH table (format hapsyn-dh, share/serial_chain/README.md).");
+    d.add(&SerialChainOptions::task, "task", "pose",
+          "What of a sample the tip must match: the full pose (6 rows; needs 7-coordinate samples), the position "
+          "(3 rows), or the position and the direction of one tip axis (5 rows; rotation about it is free).")
+        .one_of({"pose", "position", "position_axis"});
+    d.add(&SerialChainOptions::task_axis, "task_axis", "z", "The tip axis of task position_axis.").one_of({"x", "y", "z"});
+    d.add(&SerialChainOptions::base_xyz, "base_xyz", {0, 0, 0}, "Position of the chain's base frame in the scene frame.")
+        .size(3)
+        .unit("m");
+    d.add(&SerialChainOptions::base_rpy, "base_rpy", {0, 0, 0},
+          "Orientation of the base frame in the scene frame: R = Rz(yaw) Ry(pitch) Rx(roll), as URDF.")
+        .size(3)
+        .unit("deg");
+    d.add(&SerialChainOptions::tool_xyz, "tool_xyz", {0, 0, 0},
+          "Position of the scene's sample frame (the handle, say) in the tip frame: the tool offset.")
+        .size(3)
+        .unit("m");
+    d.add(&SerialChainOptions::tool_rpy, "tool_rpy", {0, 0, 0}, "Orientation of the sample frame in the tip frame.")
+        .size(3)
+        .unit("deg");
+    d.add(&SerialChainOptions::home, "home", std::vector<double>{},
+          "Reference posture, one value per joint (deg for revolute, m for prismatic joints): the first IK start "
+          "and the 'closest_to_home' reference. Empty: the middle of each limited joint's range, 0 for unlimited.");
+    d.add(&SerialChainOptions::singularity_tolerance, "singularity_tolerance", 1e-6,
+          "A reachable sample whose scaled task Jacobian has sigma_min / sigma_max below this is classified "
+          "singular (angular rows scaled by characteristic_length).")
+        .minimum(0)
+        .less_than(1);
+    d.add(&SerialChainOptions::characteristic_length, "characteristic_length", 0.0,
+          "Length that makes angular and linear task rows comparable in the singularity test. 0: the chain's "
+          "reach at the nominal design (sum of the distances between consecutive joint origins and the tip).")
+        .minimum(0)
+        .unit("m");
+    d.add(&SerialChainOptions::actuator_file, "actuator_file", "",
+          "Actuator table (format hapsyn-actuator-table, e.g. haptic6r/actuators_assumed.json). When given, the "
+          "design variables size and gear (one per joint) choose each joint's actuator: velocity and torque limits "
+          "from the table, and motor masses for a table using the Fennel mass model. Empty: the file's limits.");
+    d.add(&SerialChainOptions::actuator_size, "actuator_size", std::vector<int>{},
+          "Nominal size code per joint (the design variable size's value unless the design section frees it); "
+          "empty: 1 for every joint.");
+    d.add(&SerialChainOptions::actuator_gear, "actuator_gear", std::vector<int>{},
+          "Nominal gear code per joint; empty: 1 for every joint.");
+    d.add(&SerialChainOptions::constraints, "constraints", std::vector<std::string>{},
+          "Linear design constraints over design variables, e.g. \"l1 + l2 <= 0.9\" or the monotone sequence "
+          "\"size[0] >= size[1] >= size[2]\".");
+    d.add(&SerialChainOptions::ik, "ik", "Inverse kinematics.");
+  }
+};
+
+}  // namespace hapsyn::plugins
