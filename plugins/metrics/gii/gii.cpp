@@ -1,5 +1,7 @@
 #include "gii.hpp"
 
+#include <hapsyn/error.hpp>
+
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -25,8 +27,45 @@ void Gii::singular_values(const TaskJointMatrix& m, double& sigma_min, double& s
   sigma_min = values(values.size() - 1);
 }
 
+Gii::Gii(const GiiOptions& options)
+    : rows_(options.rows == "translational" ? Rows::kTranslational
+            : options.rows == "rotational"  ? Rows::kRotational
+                                            : Rows::kAll),
+      characteristic_length_(options.characteristic_length) {}
+
 void Gii::local(const SampleQuantities& q, double* out) const {
-  singular_values(q.jacobian, out[0], out[1]);
+  const auto& j = q.jacobian;
+  // Angular rows come first and number rows - 3 (hapsyn/quantities.hpp's convention for task
+  // Jacobians: (omega, v) for a 6-row J, none for a planar or positional one).
+  const int angular = j.rows() > 3 ? static_cast<int>(j.rows()) - 3 : 0;
+  if (angular == 0 && rows_ != Rows::kRotational) {
+    singular_values(j, out[0], out[1]);
+    return;
+  }
+  TaskJointMatrix m;
+  switch (rows_) {
+    case Rows::kTranslational:
+      m = j.bottomRows(j.rows() - angular);
+      break;
+    case Rows::kRotational:
+      if (angular == 0) {
+        throw Error("gii", "options.rows = \"rotational\": the mechanism's Jacobian is " + std::to_string(j.rows()) + "x" +
+                               std::to_string(j.cols()) + " with no angular rows");
+      }
+      m = j.topRows(angular);
+      break;
+    case Rows::kAll:
+      if (!(characteristic_length_ > 0.0)) {
+        throw Error("gii", "the mechanism's Jacobian is " + std::to_string(j.rows()) + "x" + std::to_string(j.cols()) +
+                               " with " + std::to_string(angular) +
+                               " angular rows [rad/s] and 3 linear rows [m/s]: set options.characteristic_length [m] "
+                               "to compare them, or options.rows = \"translational\" / \"rotational\"");
+      }
+      m = j;
+      m.topRows(angular) *= characteristic_length_;
+      break;
+  }
+  singular_values(m, out[0], out[1]);
 }
 
 std::vector<LocalValue> Gii::locals() const {

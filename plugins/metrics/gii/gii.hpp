@@ -4,18 +4,50 @@
 ///   GII = min over samples sigma_min(J) / max over samples sigma_max(J),
 /// J the mechanism's task Jacobian (task velocity per actuator rate).
 #include <hapsyn/metric.hpp>
+#include <hapsyn/options.hpp>
 
+#include <string>
 #include <vector>
 
 namespace hapsyn::plugins {
 
-/// The "gii" metric. It has no options (no Options type): the framework default-constructs it.
+/// Options of gii: which rows of a Jacobian that mixes angular and linear rows it uses.
+struct GiiOptions {
+  std::string rows{};
+  double characteristic_length{};
+
+  static void declare(OptionDeclarations<GiiOptions>& d) {
+    d.describe(
+        "Global isotropy index GII = min sigma_min(J) / max sigma_max(J) over the scene (Stocco 1998, Unal 2008 eq. 1). "
+        "A Jacobian with more than 3 rows has its angular rows first (rows - 3 of them: a 6-row J is (omega, v)), "
+        "whose units differ from the linear rows': use both scaled by a characteristic length, or one part alone "
+        "(docs/design.md, serial chains).");
+    d.add(&GiiOptions::rows, "rows", "all",
+          "Rows of J used: all (angular rows times characteristic_length, which a mixed J requires), the linear "
+          "(translational) rows only, or the angular (rotational) rows only.")
+        .one_of({"all", "translational", "rotational"});
+    d.add(&GiiOptions::characteristic_length, "characteristic_length", 0.0,
+          "Length L that turns an angular row [rad/s per rate] into a velocity [m/s per rate]: the rows used are "
+          "(L omega, v). 0: not set; then a J with angular rows and rows = all is refused at the first sample.")
+        .minimum(0)
+        .unit("m");
+  }
+};
+
+/// The "gii" metric. Default-constructed (as in tests) it has the declared defaults: every row
+/// of J, no characteristic length (fine for the five-bar's 2 x 2 J, which has no angular rows).
 /// Locals: sigma_min_J (reduced by min) and sigma_max_J (reduced by max), in
 /// the Jacobian's units (m/rad for the five-bar); combine = reduced[0] / reduced[1] [-].
 /// Thread safety: stateless; every method is const and thread-safe; local() never allocates.
 class Gii final : public Metric {
  public:
-  /// out[0] = sigma_min(J), out[1] = sigma_max(J) of q.jacobian.
+  using Options = GiiOptions;
+  Gii() = default;
+  /// \param options validated (GiiOptions::declare), defaults filled.
+  explicit Gii(const GiiOptions& options);
+  /// out[0] = sigma_min(J), out[1] = sigma_max(J) of q.jacobian (the rows `rows` selects).
+  /// \throws Error("gii: ...") when J has angular rows, rows = all and no characteristic_length,
+  ///         or rows = rotational and J has no angular rows (the first sample stops the study).
   void local(const SampleQuantities& q, double* out) const override;
   Needs needs() const override { return kNeedJacobian; }
   std::vector<LocalValue> locals() const override;
@@ -28,6 +60,11 @@ class Gii final : public Metric {
   /// matrix): never NaN for finite input, exact zeros for rank-deficient integer-like input.
   /// Other shapes: Eigen::JacobiSVD (fixed capacity, no allocation). Empty: both 0.
   static void singular_values(const TaskJointMatrix& matrix, double& sigma_min, double& sigma_max);
+
+ private:
+  enum class Rows { kAll, kTranslational, kRotational };
+  Rows rows_ = Rows::kAll;
+  double characteristic_length_ = 0.0;
 };
 
 }  // namespace hapsyn::plugins

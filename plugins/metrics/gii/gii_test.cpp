@@ -25,6 +25,7 @@ using hapsyn::Reduction;
 using hapsyn::SampleQuantities;
 using hapsyn::TaskJointMatrix;
 using hapsyn::plugins::Gii;
+using hapsyn::plugins::GiiOptions;
 
 TaskJointMatrix matrix2(double a, double b, double c, double d) {
   TaskJointMatrix m(2, 2);
@@ -180,18 +181,49 @@ TEST(Gii, CombineNeverDividesByZero) {
   EXPECT_EQ(gii.combine(normal, 1), 0.5);
 }
 
-TEST(Gii, HasNoOptionsAndRefusesAnyKey) {
-  // No Options type: the framework default-constructs the metric, and the schema it derives
-  // (what the plugin file exports) is an empty object that refuses every key.
-  static_assert(std::is_default_constructible_v<Gii>);
+TEST(Gii, DeclaresRowsAndCharacteristicLengthAndRefusesOtherKeys) {
   const hapsyn::Registry& registry = hapsyn::test::registry();
   const Json& schema = registry.find("gii").schema;
   EXPECT_NO_THROW(hapsyn::check_schema(schema, "gii"));
-  EXPECT_EQ(schema.at("properties"), Json::object());
-  EXPECT_EQ(hapsyn::validate_and_fill(schema, Json::object(), "metrics[0].options"), Json::object());
+  EXPECT_TRUE(schema.at("properties").contains("rows"));
   EXPECT_NO_THROW(registry.create_metric("gii", Json(nullptr), "metrics[0]"));
-  EXPECT_EQ(hapsyn::test::error_of([&] { registry.create_metric("gii", Json{{"scale", 2.0}}, "metrics[0]"); }),
-            "problem: metrics[0].options.scale: unknown key; this object takes no keys");
+  EXPECT_NE(hapsyn::test::error_of([&] { registry.create_metric("gii", Json{{"scale", 2.0}}, "metrics[0]"); })
+                .find("problem: metrics[0].options.scale: unknown key"),
+            std::string::npos);
+  EXPECT_NE(hapsyn::test::error_of([&] { registry.create_metric("gii", Json{{"characteristic_length", -1}}, "metrics[0]"); })
+                .find("metrics[0].options.characteristic_length = -1"),
+            std::string::npos);
+}
+
+// A 6-row (omega, v) Jacobian: the angular rows scaled by L, or one part alone, each against
+// the SVD of the matrix built by hand; no length refuses with the rule.
+TEST(Gii, MixedJacobianUsesTheDeclaredRowsOrRefuses) {
+  SampleQuantities q;
+  q.jacobian = TaskJointMatrix::Random(6, 6);
+  const auto svd = [](const Eigen::MatrixXd& m) {
+    const Eigen::JacobiSVD<Eigen::MatrixXd> s(m);
+    return std::make_pair(s.singularValues().minCoeff(), s.singularValues().maxCoeff());
+  };
+  double out[2];
+  GiiOptions all{"all", 0.4};
+  Gii(all).local(q, out);
+  Eigen::MatrixXd scaled = q.jacobian;
+  scaled.topRows(3) *= 0.4;
+  EXPECT_NEAR(out[0], svd(scaled).first, 1e-14);
+  EXPECT_NEAR(out[1], svd(scaled).second, 1e-14);
+  Gii(GiiOptions{"translational", 0.0}).local(q, out);
+  EXPECT_NEAR(out[0], svd(q.jacobian.bottomRows(3)).first, 1e-14);
+  Gii(GiiOptions{"rotational", 0.0}).local(q, out);
+  EXPECT_NEAR(out[1], svd(q.jacobian.topRows(3)).second, 1e-14);
+  EXPECT_NE(hapsyn::test::error_of([&] { Gii().local(q, out); })
+                .find("gii: the mechanism's Jacobian is 6x6 with 3 angular rows [rad/s] and 3 linear rows [m/s]: set "
+                      "options.characteristic_length"),
+            std::string::npos);
+  SampleQuantities planar;
+  planar.jacobian = TaskJointMatrix::Random(2, 2);
+  EXPECT_NE(hapsyn::test::error_of([&] { Gii(GiiOptions{"rotational", 0.0}).local(planar, out); })
+                .find("options.rows = \"rotational\": the mechanism's Jacobian is 2x2 with no angular rows"),
+            std::string::npos);
 }
 
 }  // namespace

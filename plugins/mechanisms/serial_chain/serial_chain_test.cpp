@@ -1,0 +1,306 @@
+// Tests of the serial_chain mechanism: its design variables and constraints, option errors,
+// the classification, the frames it maps samples through, and the cross-check against the
+// closed-form haptic6r on the human-arm workspace.
+#include "serial_chain.hpp"
+
+#include "haptic6r.hpp"
+#include "test_support.hpp"
+
+#include <hapsyn/error.hpp>
+#include <hapsyn/options.hpp>
+#include <hapsyn/study.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using namespace hapsyn;
+using namespace hapsyn::plugins;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// The haptic 6R as a DH table, with the haptic6r-evaluate design's actuators.
+Json haptic6r_dh_options() {
+  return Json{{"dh_file", "serial_chain/haptic6r_dh.json"},
+              {"actuator_file", "haptic6r/actuators_assumed.json"},
+              {"actuator_size", {3, 3, 2, 2, 1, 1}},
+              {"actuator_gear", {2, 2, 3, 2, 3, 3}},
+              {"home", {0, 90, 0, 90, 90, 0}}};
+}
+
+// The same manipulator as a URDF (its inertials are those of the same design).
+Json haptic6r_urdf_options() {
+  Json o = haptic6r_dh_options();
+  o.erase("dh_file");
+  o["urdf"] = "serial_chain/haptic6r.urdf";
+  o["base_link"] = "base_link";
+  o["tip_link"] = "end_effector";
+  return o;
+}
+
+SerialChain serial_chain(const Json& options) { return SerialChain(make_options<SerialChainOptions>(options)); }
+
+// The full design vector at the file's values (each variable's default bounds coincide).
+std::vector<double> nominal_design(const Mechanism& m) {
+  std::vector<double> d;
+  for (const VariableDecl& v : m.variables()) {
+    for (int i = 0; i < v.size; ++i) d.push_back(v.default_lower.size() == 1 ? v.default_lower[0] : v.default_lower[static_cast<std::size_t>(i)]);
+  }
+  return d;
+}
+
+SampleSet one_pose_scene(const Eigen::Isometry3d& t) {
+  SampleSet s;
+  s.coordinates = {"x", "y", "z", "qw", "qx", "qy", "qz"};
+  s.poses.resize(1, 7);
+  const Eigen::Quaterniond q(t.linear());
+  s.poses << t.translation().x(), t.translation().y(), t.translation().z(), q.w(), q.x(), q.y(), q.z();
+  return s;
+}
+
+SampleQuantities solve_one(const MechanismModel& model, const Mechanism& mech, const SampleSet& scene, int i,
+                           Needs needs = kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits) {
+  SampleQuantities q;
+  q.scene = &scene;
+  q.sample = i;
+  const auto scratch = mech.make_scratch();
+  model.solve(scene.pose(i), needs, *scratch, q);
+  return q;
+}
+
+double wrapped_distance(const JointVector& a, const JointVector& b) {
+  double m = 0.0;
+  for (int i = 0; i < a.size(); ++i) m = std::max(m, std::abs(std::remainder(a(i) - b(i), 2.0 * kPi)));
+  return m;
+}
+
+double home_distance(const JointVector& q, const JointVector& home) {
+  double s = 0.0;
+  for (int i = 0; i < q.size(); ++i) s += std::pow(std::remainder(q(i) - home(i), 2.0 * kPi), 2);
+  return s;
+}
+
+}  // namespace
+
+TEST(LinearConstraints, ParsesSumsCoefficientsAndChains) {
+  const std::vector<std::string> names = {"l1", "l2", "size[0]", "size[1]", "size[2]"};
+  const auto g = parse_linear_constraints({"l1 + l2 <= 0.9", "2*l1 - 0.5 * l2 >= -0.1 + 0.2", "size[0] >= size[1] >= size[2]"},
+                                          names, "serial_chain", "options.constraints");
+  ASSERT_EQ(g.size(), 4u);
+  const double p[5] = {0.3, 0.5, 3, 2, 2};
+  EXPECT_DOUBLE_EQ(g[0].evaluate(p), 0.3 + 0.5 - 0.9);
+  EXPECT_DOUBLE_EQ(g[1].evaluate(p), 0.1 - (2 * 0.3 - 0.5 * 0.5));
+  EXPECT_DOUBLE_EQ(g[2].evaluate(p), 2 - 3);  // size[1] - size[0] <= 0
+  EXPECT_DOUBLE_EQ(g[3].evaluate(p), 0.0);
+  EXPECT_EQ(g[2].name, "constraints[2].0");
+  EXPECT_EQ(g[3].description, "size[1] >= size[2]");
+}
+
+TEST(LinearConstraints, ErrorsNameTheConstraintTheValueAndTheRule) {
+  const std::vector<std::string> names = {"l1", "l2"};
+  const auto parse = [&](const std::string& text) {
+    return test::error_of([&] { parse_linear_constraints({text}, names, "serial_chain", "options.constraints"); });
+  };
+  EXPECT_EQ(parse("l1 + l3 <= 1"),
+            "serial_chain: options.constraints[0] = \"l1 + l3 <= 1\": unknown design variable 'l3' (did you mean 'l1'?); "
+            "the mechanism's design variables are: l1, l2");
+  EXPECT_NE(parse("l1 + l2").find("a constraint needs '<=' or '>='"), std::string::npos);
+  EXPECT_NE(parse("l1 + l2 < 1").find("expected '<=', '>=' or the end of the constraint (at character 9)"), std::string::npos);
+  EXPECT_NE(parse("l1 - l1 <= 1").find("has no design variable left"), std::string::npos);
+  EXPECT_NE(parse("l1 * 2 <= 1").find("expected '<=', '>='"), std::string::npos);
+  EXPECT_NE(parse("l1 <= 1e999").find("numbers must be finite"), std::string::npos);
+}
+
+TEST(SerialChain, DesignVariablesAreTheChainParametersFixedAtTheirValues) {
+  const SerialChain m = serial_chain(haptic6r_dh_options());
+  const auto vars = m.variables();
+  std::vector<std::string> names;
+  for (const auto& v : vars) names.push_back(v.name);
+  for (const char* expected : {"l1", "l2", "l3", "l4", "l5", "mass_scale", "size", "gear"}) {
+    EXPECT_NE(std::find(names.begin(), names.end(), expected), names.end()) << expected;
+  }
+  for (const auto& v : vars) {
+    EXPECT_EQ(v.default_lower, v.default_upper) << v.name << " must be fixed unless the design section frees it";
+  }
+  const auto l1 = std::find_if(vars.begin(), vars.end(), [](const VariableDecl& v) { return v.name == "l1"; });
+  EXPECT_DOUBLE_EQ(l1->default_lower[0], 0.45);
+  ASSERT_EQ(l1->hard_lower.size(), 1u);
+  EXPECT_EQ(l1->hard_lower[0], 0.0);
+  const auto size = std::find_if(vars.begin(), vars.end(), [](const VariableDecl& v) { return v.name == "size"; });
+  EXPECT_EQ(size->size, 6);
+  EXPECT_TRUE(size->integer);
+  EXPECT_EQ(size->default_lower, (std::vector<double>{3, 3, 2, 2, 1, 1}));
+}
+
+TEST(SerialChain, StudyErrorsNameTheParameterTheValueAndTheRule) {
+  Json study = {{"name", "t"},
+                {"mechanism", {{"plugin", "serial_chain"}, {"options", haptic6r_dh_options()}}},
+                {"scene", {{"plugin", "human_arm"}, {"options", {{"lattice_step", 0.2}, {"orientations", 30}, {"joint3_steps", 5}, {"cache", false}}}}},
+                {"objectives", {{{"metric", "coverage"}}}},
+                {"solver", {{"plugin", "evaluate"}}}};
+  Json unknown = study;
+  unknown["design"] = {{"l7", {{"lower", 0.3}, {"upper", 0.6}}}};
+  const std::string m1 = test::error_of([&] { load_study(unknown, test::registry()); });
+  EXPECT_NE(m1.find("design.l7: unknown design variable (did you mean 'l1'?); the mechanism's variables are: "), std::string::npos) << m1;
+  EXPECT_NE(m1.find("l5"), std::string::npos) << m1;
+  Json negative = study;
+  negative["design"] = {{"l1", {{"lower", -0.1}, {"upper", 0.6}}}};
+  const std::string m2 = test::error_of([&] { load_study(negative, test::registry()); });
+  EXPECT_NE(m2.find("design.l1.lower = -0.1: must be >= 0 (the mechanism's limit for l1)"), std::string::npos) << m2;
+  Json constraint = study;
+  constraint["mechanism"]["options"]["constraints"] = {"l1 + l2 <= 0.9", "siz[0] >= size[1]"};
+  const std::string m3 = test::error_of([&] { load_study(constraint, test::registry()); });
+  EXPECT_NE(m3.find("options.constraints[1] = \"siz[0] >= size[1]\": unknown design variable 'siz[0]' (did you mean 'size[0]'?)"),
+            std::string::npos)
+      << m3;
+}
+
+TEST(SerialChain, OptionErrorsNameTheOptionTheValueAndTheRule) {
+  const auto error = [](Json o) { return test::error_of([&] { serial_chain(o); }); };
+  Json both = haptic6r_dh_options();
+  both["urdf"] = "serial_chain/haptic6r.urdf";
+  EXPECT_NE(error(both).find("give either urdf or dh_file, not both"), std::string::npos);
+  EXPECT_NE(error(Json::object()).find("serial_chain: options: give the chain as options.urdf or options.dh_file"), std::string::npos);
+  Json no_tip = haptic6r_urdf_options();
+  no_tip.erase("tip_link");
+  EXPECT_NE(error(no_tip).find("options.tip_link = \"\": a URDF chain needs base_link and tip_link"), std::string::npos);
+  Json home = haptic6r_dh_options();
+  home["home"] = {0, 0, 0};
+  EXPECT_NE(error(home).find("options.home has 3 values: the chain has 6 joints"), std::string::npos);
+  home["home"] = {0, 90, 0, -90, 90, 0};
+  EXPECT_NE(error(home).find("options.home[3] = -90: outside joint"), std::string::npos);
+  Json codes = haptic6r_dh_options();
+  codes["actuator_size"] = {3, 3, 2, 2, 1, 4};
+  EXPECT_NE(error(codes).find("options.actuator_size[5] = 4: must be in 1..3"), std::string::npos);
+  Json missing = haptic6r_dh_options();
+  missing["dh_file"] = "no/such.json";
+  EXPECT_NE(error(missing).find("options.dh_file = \"no/such.json\": no such file"), std::string::npos);
+}
+
+TEST(SerialChain, ThreeJointChainRefusesThePoseTask) {
+  const std::string m = test::error_of([] {
+    serial_chain(Json{{"urdf", "serial_chain/phantom_3r.urdf"}, {"base_link", "base_link"}, {"tip_link", "stylus_tip"}});
+  });
+  EXPECT_NE(m.find("options.task = \"pose\": matches 6 task rows, but the chain has only 3 joints"), std::string::npos) << m;
+}
+
+TEST(SerialChain, SolvedSamplesReproduceTheTargetThroughBaseAndToolFrames) {
+  Json o = haptic6r_dh_options();
+  o["base_xyz"] = {0.1, -0.2, 0.3};
+  o["base_rpy"] = {10, -20, 30};
+  o["tool_xyz"] = {0.0, 0.0, 0.05};
+  o["tool_rpy"] = {0, 0, 45};
+  const SerialChain m = serial_chain(o);
+  const auto design = nominal_design(m);
+  const auto model = m.build(design.data());
+  const auto& chain = static_cast<const SerialChainModel&>(*model).chain();
+  // A target made from a configuration: T_S^P = T_S^B T_B^E(q) T_E^P, computed independently.
+  const auto rpy = [](double r, double p, double y) {
+    return (Eigen::AngleAxisd(y * kPi / 180, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(p * kPi / 180, Eigen::Vector3d::UnitY()) *
+            Eigen::AngleAxisd(r * kPi / 180, Eigen::Vector3d::UnitX()))
+        .toRotationMatrix();
+  };
+  Eigen::Isometry3d scene_base = Eigen::Isometry3d::Identity(), tip_tool = Eigen::Isometry3d::Identity();
+  scene_base.linear() = rpy(10, -20, 30);
+  scene_base.translation() << 0.1, -0.2, 0.3;
+  tip_tool.linear() = rpy(0, 0, 45);
+  tip_tool.translation() << 0, 0, 0.05;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-2.5, 2.5);
+  int reached = 0;
+  for (int k = 0; k < 50; ++k) {
+    JointVector q(6);
+    q << u(rng), u(rng), u(rng), 0.3 + 0.1 * std::abs(u(rng)), u(rng), u(rng);
+    ChainFrames f;
+    chain_frames(chain, q.data(), f);
+    const SampleSet scene = one_pose_scene(scene_base * f.tip * tip_tool);
+    const SampleQuantities out = solve_one(*model, m, scene, 0);
+    ASSERT_TRUE(out.status == SampleStatus::kReachable || out.status == SampleStatus::kSingular) << k;
+    ChainFrames g;
+    chain_frames(chain, out.q.data(), g);
+    const Eigen::Isometry3d reached_pose = scene_base * g.tip * tip_tool;
+    EXPECT_LT((reached_pose.translation() - scene.poses.row(0).head<3>().transpose()).norm(), 1e-9);
+    EXPECT_LT((reached_pose.linear() - (scene_base * f.tip * tip_tool).linear()).norm(), 1e-9);
+    reached += out.status == SampleStatus::kReachable;
+  }
+  EXPECT_GE(reached, 45);
+}
+
+TEST(SerialChain, ClassifiesUnreachableSingularAndLimitSamplesNeverNaN) {
+  const SerialChain m = serial_chain(haptic6r_dh_options());
+  const auto design = nominal_design(m);
+  const auto model = m.build(design.data());
+  const auto& chain = static_cast<const SerialChainModel&>(*model).chain();
+  // Far beyond the reach.
+  Eigen::Isometry3d far = Eigen::Isometry3d::Identity();
+  far.translation() << 10, 0, 0;
+  EXPECT_EQ(solve_one(*model, m, one_pose_scene(far), 0).status, SampleStatus::kUnreachable);
+  // SCARA stretched (q2 = 0) is a singular configuration of the haptic 6R.
+  JointVector q(6);
+  q << 0.3, 0.0, 0.2, 1.0, 0.5, 0.1;
+  ChainFrames f;
+  chain_frames(chain, q.data(), f);
+  const SampleQuantities s = solve_one(*model, m, one_pose_scene(f.tip), 0);
+  EXPECT_EQ(s.status, SampleStatus::kSingular);
+  for (int i = 0; i < s.q.size(); ++i) EXPECT_TRUE(std::isfinite(s.q(i)));
+  // Only reachable with q4 < 0, outside joint 4's limits [0, 180] deg: every mirror solution of
+  // this pose has q4 < 0 or violates nothing else, so it is kInvalid (joint limit).
+  q << 0.3, 1.0, 0.2, -0.8, 0.5, 0.1;
+  chain_frames(chain, q.data(), f);
+  const SampleStatus limit = solve_one(*model, m, one_pose_scene(f.tip), 0).status;
+  EXPECT_TRUE(limit == SampleStatus::kInvalid || limit == SampleStatus::kReachable);
+}
+
+// The acceptance cross-check: the haptic 6R as a serial_chain (DH table and URDF) against the
+// closed-form haptic6r, sample by sample, on a human-arm workspace.
+class SerialChainHaptic6R : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(SerialChainHaptic6R, AgreesWithTheClosedFormWhereBothPickTheSameConfiguration) {
+  const Json options = std::string(GetParam()) == "dh" ? haptic6r_dh_options() : haptic6r_urdf_options();
+  const SerialChain chain = serial_chain(options);
+  const Haptic6R closed(make_options<Haptic6ROptions>(Json{{"selection", "closest_to_home"}}));
+  const std::vector<double> closed_design = {0.45, 0.45, 0.65, 0.55, 0.15, 3, 3, 2, 2, 1, 1, 2, 2, 3, 2, 3, 3};
+  const auto chain_model = chain.build(nominal_design(chain).data());
+  const auto closed_model = closed.build(closed_design.data());
+  const auto scene_plugin = test::registry().create_scene(
+      "human_arm", Json{{"lattice_step", 0.2}, {"orientations", 101}, {"joint3_steps", 9}, {"cache", false}}, "scene");
+  const SampleSet scene = scene_plugin->build(SceneRequest{});
+  const Needs all = kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits;
+  const auto cs = chain.make_scratch();
+  const auto hs = closed.make_scratch();
+  int same = 0, both_reachable = 0, closer = 0, missed = 0;
+  for (int i = 0; i < scene.size(); ++i) {
+    SampleQuantities a, b;
+    a.scene = b.scene = &scene;
+    a.sample = b.sample = i;
+    chain_model->solve(scene.pose(i), all, *cs, a);
+    closed_model->solve(scene.pose(i), all, *hs, b);
+    if (b.status == SampleStatus::kReachable && a.status != SampleStatus::kReachable) ++missed;
+    if (a.status != SampleStatus::kReachable || b.status != SampleStatus::kReachable) continue;
+    ++both_reachable;
+    const JointVector& home = chain.setup().home;
+    // The closed form sees every solution, so the generic one is never strictly closer to home.
+    EXPECT_GE(home_distance(a.q, home), home_distance(b.q, home) - 1e-9) << "sample " << i;
+    if (wrapped_distance(a.q, b.q) > 1e-6) {
+      ++closer;
+      continue;
+    }
+    ++same;
+    EXPECT_LT((a.jacobian - b.jacobian).norm(), 1e-9 * (1 + b.jacobian.norm())) << "sample " << i;
+    EXPECT_LT((a.inertia - b.inertia).norm(), 1e-9 * (1 + b.inertia.norm())) << "sample " << i;
+    EXPECT_LT((a.gravity - b.gravity).norm(), 1e-9 * (1 + b.gravity.norm())) << "sample " << i;
+    EXPECT_LT((a.max_velocity - b.max_velocity).norm(), 1e-12);
+    EXPECT_LT((a.max_torque - b.max_torque).norm(), 1e-12);
+  }
+  std::printf("[ serial_chain vs haptic6r (%s) ] %d samples: %d both reachable, %d same configuration, %d a farther "
+              "one, %d reachable only in closed form\n",
+              GetParam(), scene.size(), both_reachable, same, closer, missed);
+  EXPECT_GT(both_reachable, scene.size() / 4);
+  EXPECT_GE(same, both_reachable * 95 / 100);
+  EXPECT_LE(missed, scene.size() / 100);
+}
+
+INSTANTIATE_TEST_SUITE_P(Forms, SerialChainHaptic6R, ::testing::Values("dh", "urdf"));
