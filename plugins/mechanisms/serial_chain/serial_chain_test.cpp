@@ -37,7 +37,7 @@ Json haptic6r_urdf_options() {
   o.erase("dh_file");
   o["urdf"] = "serial_chain/haptic6r.urdf";
   o["base_link"] = "base_link";
-  o["tip_link"] = "end_effector";
+  o["tip_link"] = "ee_link";
   return o;
 }
 
