@@ -87,4 +87,10 @@ class ChainTemplate {
   std::shared_ptr<const Impl> impl_;
 };
 
+/// Resolves a chain-file option of the serial_chain mechanism: absolute, relative to the current
+/// directory, or to hapsyn's share directory (source tree, then install tree; e.g.
+/// "serial_chain/ur5_like.urdf"). \throws Error("serial_chain", "options.<option> = ...") when
+/// no such file exists.
+std::string resolve_serial_chain_file(const std::string& option_name, const std::string& value);
+
 }  // namespace hapsyn::plugins
