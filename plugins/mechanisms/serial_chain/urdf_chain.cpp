@@ -6,6 +6,7 @@
 
 #include <hapsyn/error.hpp>
 
+#include <cassert>
 #include <cmath>
 #include <cstddef>
 #include <fstream>
@@ -20,6 +21,8 @@
 #include <urdf_parser/urdf_parser.h>
 
 #include <algorithm>
+#include <array>
+#include <map>
 #include <mutex>
 #endif
 
@@ -70,15 +73,49 @@ std::string read_text(const std::string& path) {
   return text.str();
 }
 
-// urdfdom reports only "Error parsing XML" through console_bridge; TinyXML (its parser) knows
-// the line and column.
-void check_xml(const std::string& path, const std::string& text) {
+// A joint's <origin> as the file writes it: x, y, z, roll, pitch, yaw.
+using Origin = std::array<double, 6>;
+
+// Parses the numbers of an attribute ("0 0.5 1"); false when it has not exactly three.
+bool three_numbers(const char* text, double* out) {
+  std::istringstream in(text);
+  for (int k = 0; k < 3; ++k) {
+    if (!(in >> out[k])) return false;
+  }
+  std::string rest;
+  return !(in >> rest);
+}
+
+// The XML pass: TinyXML (urdfdom's own parser) names the line and column of an XML error, which
+// urdfdom reports only as "Error parsing XML"; and the joints' origins as written, because
+// urdfdom keeps a quaternion whose getRPY() snaps pitches within 0.99999 of +-90 deg (the nominal
+// parameters would be off by up to ~4 mrad).
+std::map<std::string, Origin> read_xml_origins(const std::string& path, const std::string& text) {
   TiXmlDocument doc;
   doc.Parse(text.c_str());
   if (doc.Error()) {
     throw Error(kSerialChainName, path + ": not valid XML: line " + std::to_string(doc.ErrorRow()) + ", column " +
                                       std::to_string(doc.ErrorCol()) + ": " + doc.ErrorDesc());
   }
+  std::map<std::string, Origin> origins;
+  const TiXmlElement* robot = doc.FirstChildElement("robot");
+  if (!robot) return origins;  // urdfdom names the problem
+  for (const TiXmlElement* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
+    const char* name = j->Attribute("name");
+    if (!name) continue;
+    Origin o{};
+    if (const TiXmlElement* origin = j->FirstChildElement("origin")) {
+      const char* xyz = origin->Attribute("xyz");
+      const char* rpy = origin->Attribute("rpy");
+      if ((xyz && !three_numbers(xyz, o.data())) || (rpy && !three_numbers(rpy, o.data() + 3))) {
+        throw Error(kSerialChainName, path + ": line " + std::to_string(origin->Row()) + ": joint \"" + name +
+                                          "\" origin = xyz \"" + (xyz ? xyz : "") + "\" rpy \"" + (rpy ? rpy : "") +
+                                          "\": must be three numbers each");
+      }
+    }
+    origins[name] = o;
+  }
+  return origins;
 }
 
 // Collects urdfdom's console_bridge messages (it logs why it refuses a file, then returns null).
@@ -208,18 +245,15 @@ std::optional<UrdfInertial> inertial_of(const urdf::Link& link) {
   return u;
 }
 
-void add_origin_parameters(const urdf::Joint& j, std::vector<ChainParameter>& parameters) {
-  const urdf::Pose& p = j.parent_to_joint_origin_transform;
-  double roll = 0.0, pitch = 0.0, yaw = 0.0;
-  p.rotation.getRPY(roll, pitch, yaw);
+void add_origin_parameters(const urdf::Joint& j, const Origin& o, std::vector<ChainParameter>& parameters) {
   const struct {
     const char* key;
     const char* what;
     const char* unit;
     double value;
-  } items[] = {{"x", "origin x", "m", p.position.x},       {"y", "origin y", "m", p.position.y},
-               {"z", "origin z", "m", p.position.z},       {"roll", "origin roll (about x)", "rad", roll},
-               {"pitch", "origin pitch (about y)", "rad", pitch}, {"yaw", "origin yaw (about z)", "rad", yaw}};
+  } items[] = {{"x", "origin x", "m", o[0]},           {"y", "origin y", "m", o[1]},
+               {"z", "origin z", "m", o[2]},           {"roll", "origin roll (about x)", "rad", o[3]},
+               {"pitch", "origin pitch (about y)", "rad", o[4]}, {"yaw", "origin yaw (about z)", "rad", o[5]}};
   for (const auto& item : items) {
     ChainParameter c;
     c.name = j.name + ":" + item.key;
@@ -242,13 +276,15 @@ ChainParameter mass_parameter(const UrdfInertial& in) {
 
 // Reads the path's joints into steps and declares the parameters in path order.
 UrdfPath read_path(const std::string& path, const std::string& base_link, const std::string& tip_link,
-                   const std::vector<urdf::JointConstSharedPtr>& joints,
-                   const urdf::ModelInterface& model, std::vector<ChainParameter>& parameters) {
+                   const std::vector<urdf::JointConstSharedPtr>& joints, const urdf::ModelInterface& model,
+                   const std::map<std::string, Origin>& origins, std::vector<ChainParameter>& parameters) {
   UrdfPath p;
   for (const urdf::JointConstSharedPtr& j : joints) {
     UrdfStep step = step_of(path, *j);
     step.origin_parameter = static_cast<int>(parameters.size());
-    add_origin_parameters(*j, parameters);
+    const auto origin = origins.find(j->name);
+    assert(origin != origins.end());  // urdfdom read the same joints
+    add_origin_parameters(*j, origin == origins.end() ? Origin{} : origin->second, parameters);
     if (step.moving) ++p.dof;
     step.child = inertial_of(*model.getLink(j->child_link_name));
     // A link before the first moving joint rides on the base: it has no dynamics, no parameter.
@@ -313,14 +349,14 @@ void build_chain(const UrdfPath& p, const double* values, Chain& out) {
 
 ChainTemplate ChainTemplate::from_urdf(const std::string& path, const std::string& base_link, const std::string& tip_link) {
   const std::string text = read_text(path);
-  check_xml(path, text);
+  const std::map<std::string, Origin> origins = read_xml_origins(path, text);
   const urdf::ModelInterfaceSharedPtr model = parse_urdf(path, text);
   const urdf::LinkConstSharedPtr base = find_link(*model, path, "base_link", base_link);
   const urdf::LinkConstSharedPtr tip = find_link(*model, path, "tip_link", tip_link);
   const std::vector<urdf::JointConstSharedPtr> joints = joints_between(path, base, tip);
   ChainTemplate t;
   t.source_ = path;
-  auto shared = std::make_shared<const UrdfPath>(read_path(path, base_link, tip_link, joints, *model, t.parameters_));
+  auto shared = std::make_shared<const UrdfPath>(read_path(path, base_link, tip_link, joints, *model, origins, t.parameters_));
   auto impl = std::make_shared<Impl>();
   impl->dof = shared->dof;
   impl->build = [shared](const double* values, const double*, Chain& out) { build_chain(*shared, values, out); };
