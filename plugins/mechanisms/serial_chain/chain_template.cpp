@@ -57,8 +57,11 @@ Eigen::Matrix3d parallel_axis(double m, const Eigen::Vector3d& r) {
 }
 
 void add_part(ChainBody& body, double m, const Eigen::Vector3d& c, const Eigen::Matrix3d& inertia) {
-  // A massless part adds nothing (and would make the combined com 0/0 on an empty body).
-  if (m <= 0.0) return;
+  // A massless part adds only its rotational inertia (the com would be 0/0 on an empty body).
+  if (m <= 0.0) {
+    body.inertia += inertia;
+    return;
+  }
   const double total = body.mass + m;
   const Eigen::Vector3d com = (body.mass * body.com + m * c) / total;
   body.inertia = body.inertia + parallel_axis(body.mass, body.com - com) + inertia + parallel_axis(m, c - com);
