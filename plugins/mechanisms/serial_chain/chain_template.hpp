@@ -36,6 +36,7 @@ struct ChainParameter {
 /// a solid cylinder end effector centred at the tip with its axis along the tip's z. The same
 /// parts as Haptic6RModel::rebuild (plugins/mechanisms/haptic6r). Joint origins are taken at
 /// q = 0 (a prismatic joint's travel does not stretch a tube); a zero-length link has no tube.
+struct FennelMassModel {
   std::vector<double> motor_mass;    ///< n motor masses [kg] (before motor_mass_factor)
   double motor_mass_factor = 1.2;    ///< [-]
   double link_density = 4.0;         ///< [kg/m]
