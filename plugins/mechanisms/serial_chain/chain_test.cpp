@@ -1005,3 +1005,11 @@ TEST(ChainTemplate, DhErrorsNameTheFileThePathTheValueAndTheRule) {
                                                    "\"j\", \"theta\": 0, \"d\": 1e999, \"a\": 0, \"alpha\": 0}]}");
   expect_error([&] { ChainTemplate::from_dh_file(huge); }, {huge, "not valid JSON", "number overflow parsing '1e999'"});
 }
+
+TEST(ChainTemplate, ChainFilesResolveInTheShareDirectory) {
+  const std::string path = resolve_serial_chain_file("chain_file", "serial_chain/ur5_like_dh.json");
+  EXPECT_TRUE(std::ifstream(path).good()) << path;
+  EXPECT_EQ(ChainTemplate::from_dh_file(path).dof(), 6);
+  expect_error([] { resolve_serial_chain_file("chain_file", "serial_chain/nope.urdf"); },
+               {"serial_chain: options.chain_file = \"serial_chain/nope.urdf\""});
+}
