@@ -557,7 +557,6 @@ TEST(ChainTemplate, FixedJointsFoldLikeKdlFixedSegments) {
   const ChainTemplate t = ChainTemplate::from_urdf(write_file("folded.urdf", folded_urdf()), "world", "tip");
   ASSERT_EQ(t.dof(), 3);
   const Chain c = nominal_chain(t);
-  auto rpy = [](double r, double p, double y) { return KDL::Frame(KDL::Rotation::RPY(r, p, y)); };
   auto frame = [&](double x, double y, double z, double r, double p, double w) {
     return KDL::Frame(KDL::Rotation::RPY(r, p, w), KDL::Vector(x, y, z));
   };
@@ -567,7 +566,6 @@ TEST(ChainTemplate, FixedJointsFoldLikeKdlFixedSegments) {
   auto moving = [&](const KDL::Frame& origin, const KDL::Vector& axis, KDL::Joint::JointType type) {
     return KDL::Joint(origin.p, origin.M * axis, type);
   };
-  (void)rpy;
   KDL::Chain k;
   k.addSegment(KDL::Segment(KDL::Joint(KDL::Joint::None), frame(0, 0, 0.1, 0, 0, 0.3),
                             inertial(frame(0, 0, 0.01, 0, 0, 0), 5.0, 0.1, 0, 0, 0.1, 0, 0.2)));
