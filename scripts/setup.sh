@@ -8,7 +8,7 @@ packages=(
   libeigen3-dev libboost-dev libboost-filesystem-dev
   libpagmo-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libnlopt-cxx-dev liborocos-kdl-dev
+  libnlopt-cxx-dev liborocos-kdl-dev liburdfdom-dev libtinyxml-dev
   gnuplot-nox
 )
 # Extra packages requested through the environment (e.g. HAPSYN_EXTRA_PACKAGES="gnuplot").

@@ -3,12 +3,13 @@
 /// A chain file (URDF or DH / modified-DH table in JSON) read once, with the named scalar
 /// parameters a design may set, and the Chain (chain.hpp) it gives for a set of parameter values.
 ///
-/// Parameter names (docs/design.md, "serial chains"): "<joint>:x|y|z|roll|pitch|yaw" (a URDF
+/// Parameter names: "<joint>:x|y|z|roll|pitch|yaw" (a URDF
 /// joint origin: metres, radians), "<joint>:a|d|alpha|theta" (a DH row, named by the row's
 /// "joint"; angles in the table's angle unit), a DH table's own named lengths ("l1"),
-/// "<link>:mass" (a URDF link or DH row body; its inertia scales with it) and "mass_scale"
-/// (every mass and inertia). ':' keeps the names free of '.', which problem-file paths and
-/// --set use as a separator.
+/// "<link>:mass" (a URDF link whose inertial rides on a moving body) or "<joint>:mass" (a DH row's
+/// body; its inertia scales with it, its com stays) and "mass_scale" (every mass and inertia).
+/// ':' keeps the names free of '.', which problem-file paths and --set use as a separator. The
+/// full rules, and the DH table format, are in share/serial_chain/README.md.
 #include "chain.hpp"
 
 #include <memory>
@@ -32,7 +33,9 @@ struct ChainParameter {
 /// mass at each joint frame's origin carried by the body before it (joint 1's motor sits on the
 /// base and has no effect), a thin-walled tube of linear density `link_density` from each joint
 /// frame's origin to the next one's (the last to the tip) carried by the body between them, and
-/// a solid cylinder end effector centred at the tip with its axis along the tip's z.
+/// a solid cylinder end effector centred at the tip with its axis along the tip's z. The same
+/// parts as Haptic6RModel::rebuild (plugins/mechanisms/haptic6r). Joint origins are taken at
+/// q = 0 (a prismatic joint's travel does not stretch a tube); a zero-length link has no tube.
 struct FennelMassModel {
   std::vector<double> motor_mass;    ///< n motor masses [kg] (before motor_mass_factor)
   double motor_mass_factor = 1.2;    ///< [-]
@@ -48,18 +51,25 @@ struct FennelMassModel {
 class ChainTemplate {
  public:
   /// Reads a URDF file (urdfdom) and extracts the path from `base_link` to `tip_link`: fixed
-  /// joints fold into the next moving joint's origin (their child links' inertials into the
-  /// body before them), revolute / continuous / prismatic joints become ChainJoints with the
-  /// URDF's limits (continuous: unlimited), everything off the path (other branches,
-  /// transmissions, gazebo tags, meshes) is ignored. Gravity -9.81 along the base's z.
-  /// \throws Error("serial_chain", "<file>: ...") naming the file and, where urdfdom says it,
-  ///         the line: a file that does not parse, a missing base or tip link (with the links it
-  ///         has), a tip that is not below the base, a floating or planar joint on the path,
-  ///         fewer than 1 or more than kMaxChainJoints moving joints.
+  /// joints fold into the next moving joint's origin (after the last one: into T_tip), their
+  /// child links' inertials into the body before them (parallel-axis theorem; inertials riding on
+  /// the base have no effect); revolute / continuous / prismatic joints become ChainJoints with
+  /// the URDF's limits (continuous: unlimited position), everything off the path (other
+  /// branches, transmissions, gazebo tags, meshes) is ignored. Gravity -9.81 along the base's z.
+  /// The origins' parameters are the `<origin>` values as written (not urdfdom's quaternion).
+  /// \throws Error("serial_chain", "<file>: ...") naming the file: a file that cannot be read,
+  ///         is not XML (with TinyXML's line and column) or that urdfdom refuses (with its
+  ///         console_bridge messages), a missing base or tip link (with the links it has and a
+  ///         did-you-mean), a tip that is not below the base, a floating or planar joint or a
+  ///         mimic joint on the path, fewer than 1 or more than kMaxChainJoints moving joints;
+  ///         and, in a build without urdfdom (HAPSYN_WITH_URDFDOM=OFF), always.
   static ChainTemplate from_urdf(const std::string& path, const std::string& base_link, const std::string& tip_link);
 
-  /// Reads a DH or modified-DH table (JSON, format "hapsyn-dh", docs/design.md).
-  /// \throws Error("serial_chain", "<file>: <json path> = <value>: <rule>").
+  /// Reads a DH or modified-DH table (JSON, format "hapsyn-dh" version 1, documented in
+  /// share/serial_chain/README.md).
+  /// \throws Error("serial_chain", "<file>: <json path> = <value>: <rule>"): a wrong shape or
+  ///         type, an unknown key (with a did-you-mean), a missing required key, a reference to
+  ///         an unknown named length, bad units, lower > upper, a negative mass or length, ...
   static ChainTemplate from_dh_file(const std::string& path);
 
   /// The parameters, in a fixed order (the file's order): the layout of instantiate's values.
@@ -74,7 +84,8 @@ class ChainTemplate {
   /// then come from the file's inertials.
   const FennelMassModel* fennel_mass_model() const;
 
-  /// Builds the chain for parameter values (parameters().size() values, in their units).
+  /// Builds the chain for parameter values (parameters().size() values, in their units), into
+  /// `out` (cleared first).
   /// \param motor_mass n motor masses [kg] replacing the file's (from an actuator table), or
   ///        null; used only with the Fennel mass model.
   /// Allocates (once per design); throws nothing for values within the hard limits.
@@ -86,5 +97,11 @@ class ChainTemplate {
   std::vector<ChainParameter> parameters_;
   std::shared_ptr<const Impl> impl_;
 };
+
+/// Resolves a chain-file option of the serial_chain mechanism: absolute, relative to the current
+/// directory, or to hapsyn's share directory (source tree, then install tree; e.g.
+/// "serial_chain/ur5_like.urdf"). \throws Error("serial_chain", "options.<option> = ...") when
+/// no such file exists.
+std::string resolve_serial_chain_file(const std::string& option_name, const std::string& value);
 
 }  // namespace hapsyn::plugins
