@@ -297,7 +297,8 @@ TEST(ChainIk, ConvergesWhenTheOnlySolutionHasAJointExactlyAtItsLimit) {
   const Outcome out = solve(phantom, position_task(), target, {0.0, 0.3, 1.2});
   ASSERT_EQ(out.status, IkStatus::kConverged);
   EXPECT_TRUE(inside_limits(phantom, out.q));
-  EXPECT_NEAR(out.q[2], phantom.joints[2].lower, 1e-9);
+  // Near-stretched elbow: |p| changes by only ~0.02 m/rad, so 1e-10 m allows ~5e-9 rad.
+  EXPECT_NEAR(out.q[2], phantom.joints[2].lower, 1e-8);
 }
 
 TEST(ChainIk, ConvergesWithAZeroLengthLink) {
