@@ -120,12 +120,15 @@ Eigen::Vector3d rotation_vector(const Eigen::Matrix3d& r) {
 }
 
 // The rotation vector of the shortest rotation carrying unit a onto unit b (pi u1 when they
-// are exactly opposite: any axis orthogonal to b does).
+// are exactly opposite: any axis orthogonal to b does). Its direction a x b is made orthogonal
+// to b explicitly: near opposite axes |a x b| is rounding noise with no direction of its own.
 Eigen::Vector3d axis_rotation(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& u1) {
   const Eigen::Vector3d c = a.cross(b);
-  const double s = c.norm(), d = a.dot(b);
-  if (s > 0.0) return c * (std::atan2(s, d) / s);
-  return d >= 0.0 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(kPi * u1);
+  const double angle = std::atan2(c.norm(), a.dot(b));
+  const Eigen::Vector3d direction = c - c.dot(b) * b;
+  const double length = direction.norm();
+  if (length > 0.0) return direction * (angle / length);
+  return angle > kPi / 2 ? Eigen::Vector3d(kPi * u1) : Eigen::Vector3d::Zero();
 }
 
 // The task error with a given kAxis basis (u1, u2 orthogonal to the target's axis).

@@ -157,6 +157,7 @@ TEST(ChainIk, SolvesRandomReachableTargetsForEveryChainAndTaskKind) {
   expect_solves_random_targets("fennel axis", fennel_6r(), axis_task(2), all_chains()[4].home, 100);
   expect_solves_random_targets("fennel position", fennel_6r(), position_task(), all_chains()[4].home, 100);
   expect_solves_random_targets("iiwa position+axis", iiwa_7r(), axis_task(2), all_chains()[5].home, 100);
+  expect_solves_random_targets("scara position (redundant)", scara_rrpr(), position_task(), all_chains()[6].home, 100);
 }
 
 TEST(ChainIk, SucceedsOnAtLeast99_5PercentOf2000RandomReachablePosesPerChain) {
@@ -354,6 +355,27 @@ TEST(ChainIk, ConvergesWhenTheOnlySolutionHasAJointExactlyAtItsLimit) {
   EXPECT_TRUE(inside_limits(phantom, out.q));
   // Near-stretched elbow: |p| changes by only ~0.02 m/rad, so 1e-10 m allows ~5e-9 rad.
   EXPECT_NEAR(out.q[2], phantom.joints[2].lower, 1e-8);
+}
+
+TEST(ChainIk, TurnsAnAxisAroundFromExactlyOpposite) {
+  // UR5, position + tool z axis: the start's axis is the target's reversed (q5 + pi), where
+  // a x b = 0 although the axes are pi apart: the error must say pi, and the IK converge.
+  const Chain chain = ur5();
+  for (int k = 0; k < 10; ++k) {
+    const std::vector<double> q = random_q(chain, k);
+    const Eigen::Isometry3d target = fk(chain, q.data());
+    std::vector<double> start = q;
+    start[4] += kPi;
+    const Eigen::Isometry3d flipped = fk(chain, start.data());
+    ASSERT_NEAR(flipped.linear().col(2).dot(target.linear().col(2)), -1.0, 1e-12);
+    EXPECT_NEAR(task_residual(axis_task(2), flipped, target).orientation, kPi, 1e-6);
+    IkScratch scratch;
+    std::vector<double> out(6);
+    EXPECT_EQ(solve_ik_from(chain, axis_task(2), IkSettings(), target, start.data(), out.data(), scratch),
+              IkStatus::kConverged)
+        << k;
+    EXPECT_TRUE(task_residual(axis_task(2), fk(chain, out.data()), target).within(IkSettings()));
+  }
 }
 
 TEST(ChainIk, ConvergesWithAZeroLengthLink) {

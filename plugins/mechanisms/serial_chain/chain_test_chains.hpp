@@ -144,6 +144,18 @@ inline Chain iiwa_7r() {
                     translation(0, 0, 0.045));
 }
 
+/// SCARA-like RRPR: two yaw joints (links 0.4, 0.3 m), a vertical prismatic joint in
+/// [-0.25, 0] m, a yaw wrist: 4 DOF reaching x, y, z and yaw (full pose: 6 consistent rows).
+inline Chain scara_rrpr() {
+  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
+  ChainJoint slide = revolute(translation(0.3, 0, 0), z, -0.25, 0.0);
+  slide.type = ChainJointType::kPrismatic;
+  return make_chain({revolute(translation(0, 0, 0.3), z, deg(-150), deg(150)),
+                     revolute(translation(0.4, 0, 0), z, deg(-140), deg(140)), slide,
+                     revolute(Eigen::Isometry3d::Identity(), z)},
+                    translation(0, 0, -0.05));
+}
+
 /// A chain, the task it is solved for and its home posture.
 struct TestChain {
   std::string name;
@@ -156,15 +168,16 @@ inline IkTask position_task() { return IkTask{true, IkTask::Orientation::kNone, 
 inline IkTask full_task() { return IkTask{true, IkTask::Orientation::kFull, 2}; }
 inline IkTask axis_task(int axis = 2) { return IkTask{true, IkTask::Orientation::kAxis, axis}; }
 
-/// Every test chain with its natural task (3R: position; 6R / 7R: full pose; planar 3R: full
-/// pose, an over-determined but consistent task).
+/// Every test chain with its natural task (3R: position; 6R / 7R: full pose; planar 3R and
+/// SCARA: full pose, an over-determined but consistent task).
 inline std::vector<TestChain> all_chains() {
   return {{"planar_2r", planar_2r(), position_task(), {0.3, 1.0}},
           {"planar_3r", planar_3r(), full_task(), {0.3, 0.8, 0.6}},
           {"phantom_3r", phantom_3r(), position_task(), {0.0, 0.3, 1.2}},
           {"ur5", ur5(), full_task(), {0.0, -1.2, 1.5, -1.9, -1.57, 0.0}},
           {"fennel_6r", fennel_6r(), full_task(), {0.0, deg(90), 0.0, deg(90), deg(90), 0.0}},
-          {"iiwa_7r", iiwa_7r(), full_task(), {0.0, 0.5, 0.0, -1.2, 0.0, 0.8, 0.0}}};
+          {"iiwa_7r", iiwa_7r(), full_task(), {0.0, 0.5, 0.0, -1.2, 0.0, 0.8, 0.0}},
+          {"scara_rrpr", scara_rrpr(), full_task(), {0.0, 0.5, -0.1, 0.0}}};
 }
 
 }  // namespace hapsyn::plugins::test_chains
