@@ -39,6 +39,7 @@ constexpr double kMuFloor = 1e-12;  // damping floor when J^T J vanishes (zero-r
 constexpr double kMuMax = 1e16;     // damping beyond which a run has stalled
 constexpr double kMaxStep = 1.0;    // largest joint step per iteration [rad or reach]
 constexpr double kStepStall = 1e-14;  // relative step (and relative cost reduction) of a stall
+constexpr double kNullspaceDone = 1e-6;  // self-motion step [rad or reach] below which home is reached
 
 // --- joints ---------------------------------------------------------------------------------
 
@@ -336,7 +337,7 @@ void move_toward_home(const Problem& p, const double* home, double* q, IkScratch
     IkResidual unused;
     evaluate(p, q, s, s.error, unused);
     const double largest = nullspace_direction(p, q, home, s);
-    if (largest < 1e-9) return;  // home's projection on the self-motion manifold reached
+    if (largest < kNullspaceDone) return;  // home's projection on the self-motion reached
     const double scale = gain * std::min(1.0, kMaxStep / largest);
     for (int i = 0; i < p.n; ++i) moved[i] = q[i] + scale * s.step(i) / p.joint_scale(i);
     double moved_distance = 0.0;

@@ -293,7 +293,7 @@ TEST(ChainIk, MovesARedundantSolutionAlongItsSelfMotionTowardHome) {
     sum_with += da;
     sum_without += db;
   }
-  EXPECT_LT(sum_with, 0.9 * sum_without);
+  EXPECT_LT(sum_with, 0.95 * sum_without);  // ~0.88 with the default settings
 }
 
 TEST(ChainIk, ConvergesOrFailsCleanlyAtTheReachBoundary) {
