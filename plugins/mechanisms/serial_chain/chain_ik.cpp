@@ -18,8 +18,9 @@
 //   full progress; the rest of the step is clamped. Continuous revolute joints are wrapped.
 // - The step is capped at kMaxStep (1 rad, or one reach for a prismatic joint): far from the
 //   solution the Gauss-Newton step of an ill-conditioned Jacobian is meaningless in size.
-// - Determinism: no clock, no threads, no unordered containers; restarts come from splitmix64
-//   seeded by (seed, index), so every platform with IEEE doubles gives the same starts.
+// - Determinism: no clock, no threads, no unordered containers, no state between calls;
+//   restarts come from splitmix64 seeded by (seed, index), so every platform with IEEE doubles
+//   gives the same starts (the last bits of an answer still depend on libm and FMA contraction).
 // - Allocation: every matrix has a fixed capacity (IkScratch); nothing here allocates.
 #include "chain_ik.hpp"
 
