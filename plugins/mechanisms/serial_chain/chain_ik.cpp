@@ -310,6 +310,29 @@ RunEnd run(const Problem& p, double* q, bool limited, IkScratch& s, double* cost
 
 // --- self-motion toward home (redundant chains) ----------------------------------------------
 
+// A run stops as soon as the error is within the tolerances; a few more nearly undamped
+// Gauss-Newton steps (quadratic convergence) take a converged solution to rounding level, so
+// that what is computed at it (Jacobian, inertia, metrics) does not carry the tolerance's 1e-10
+// and two solvers of the same configuration agree to their rounding. Only improvements are kept.
+void polish(const Problem& p, double* q, IkScratch& s) {
+  IkResidual residual, trial_residual;
+  double cost = evaluate(p, q, s, s.error, residual);
+  for (int iteration = 0; iteration < 3 && cost > 0.0; ++iteration) {
+    scaled_jacobian(p, s);
+    s.normal.noalias() = s.task_jacobian.transpose() * s.task_jacobian;
+    s.gradient.noalias() = s.task_jacobian.transpose() * s.error;
+    damped_step(p, q, std::max(1e-14 * s.normal.diagonal().maxCoeff(), kMuFloor), true, s);
+    for (int i = 0; i < p.n; ++i) {
+      s.trial[static_cast<std::size_t>(i)] = project(joint(p.chain, i), q[i] + s.step(i) / p.joint_scale(i));
+    }
+    const double trial_cost = evaluate(p, s.trial.data(), s, s.trial_error, trial_residual);
+    if (!(trial_cost < cost)) break;
+    std::copy_n(s.trial.data(), p.n, q);
+    s.error = s.trial_error;
+    cost = trial_cost;
+  }
+}
+
 // The null-space component N (home - q) of the scaled task Jacobian at scratch.frames, in
 // internal units, into scratch.step; returns its largest magnitude.
 double nullspace_direction(const Problem& p, const double* q, const double* home, IkScratch& s) {
@@ -466,6 +489,7 @@ IkStatus solve_ik(const Chain& chain, const IkTask& task, const IkSettings& sett
     }
     if (pick_first) {
       std::copy_n(candidate, n, q);
+      polish(p, q, scratch);
       return IkStatus::kConverged;
     }
     if (redundant) move_toward_home(p, home, candidate, scratch);
@@ -478,6 +502,7 @@ IkStatus solve_ik(const Chain& chain, const IkTask& task, const IkSettings& sett
   }
   if (found) {
     std::copy_n(scratch.closest.data(), n, q);
+    polish(p, q, scratch);
     return IkStatus::kConverged;
   }
   // Nothing converged inside the limits: is the pose reachable at all?

@@ -34,8 +34,10 @@ struct SerialChainIkOptions {
         .maximum(1e-3)
         .unit("rad");
     d.add(&SerialChainIkOptions::max_iterations, "max_iterations", 100, "Iteration budget per start.").range(1, 10000);
-    d.add(&SerialChainIkOptions::restarts, "restarts", 6,
-          "Deterministic pseudo-random starts inside the joint limits tried after 'home'.")
+    d.add(&SerialChainIkOptions::restarts, "restarts", 8,
+          "Deterministic pseudo-random starts inside the joint limits tried after 'home'. More find the "
+          "configuration closest to home more often (the haptic 6R: 95 % of a workspace's poses with 8, all with "
+          "24) at a proportional cost.")
         .range(0, 1000);
     d.add(&SerialChainIkOptions::seed, "seed", 1, "Seed of the restarts' starts (not the study's seed: the model is "
                                                     "the same in every run).")

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iomanip>
 #include <random>
 
 using namespace hapsyn;
@@ -91,8 +92,8 @@ TEST(LinearConstraints, ParsesSumsCoefficientsAndChains) {
                                           names, "serial_chain", "options.constraints");
   ASSERT_EQ(g.size(), 4u);
   const double p[5] = {0.3, 0.5, 3, 2, 2};
-  EXPECT_DOUBLE_EQ(g[0].evaluate(p), 0.3 + 0.5 - 0.9);
-  EXPECT_DOUBLE_EQ(g[1].evaluate(p), 0.1 - (2 * 0.3 - 0.5 * 0.5));
+  EXPECT_NEAR(g[0].evaluate(p), 0.3 + 0.5 - 0.9, 1e-15);
+  EXPECT_NEAR(g[1].evaluate(p), 0.1 - (2 * 0.3 - 0.5 * 0.5), 1e-15);
   EXPECT_DOUBLE_EQ(g[2].evaluate(p), 2 - 3);  // size[1] - size[0] <= 0
   EXPECT_DOUBLE_EQ(g[3].evaluate(p), 0.0);
   EXPECT_EQ(g[2].name, "constraints[2].0");
@@ -256,10 +257,27 @@ TEST(SerialChain, ClassifiesUnreachableSingularAndLimitSamplesNeverNaN) {
 
 // The acceptance cross-check: the haptic 6R as a serial_chain (DH table and URDF) against the
 // closed-form haptic6r, sample by sample, on a human-arm workspace.
+// With `restarts` pseudo-random IK starts; the share of samples where both pick the same
+// configuration is returned.
+double compare_with_haptic6r(Json options, int restarts, const char* form);
+
 class SerialChainHaptic6R : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(SerialChainHaptic6R, AgreesWithTheClosedFormWhereBothPickTheSameConfiguration) {
   const Json options = std::string(GetParam()) == "dh" ? haptic6r_dh_options() : haptic6r_urdf_options();
+  EXPECT_GE(compare_with_haptic6r(options, 8, GetParam()), 0.95);
+}
+
+// The selection differs only because the numerical IK does not see every solution: with enough
+// starts it finds the closed form's closest one on every sample of the workspace.
+TEST(SerialChainHaptic6RSelection, EnoughRestartsPickTheClosedFormsConfigurationEverywhere) {
+  EXPECT_EQ(compare_with_haptic6r(haptic6r_dh_options(), 24, "dh, 24 restarts"), 1.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Forms, SerialChainHaptic6R, ::testing::Values("dh", "urdf"));
+
+double compare_with_haptic6r(Json options, int restarts, const char* form) {
+  options["ik"]["restarts"] = restarts;
   const SerialChain chain = serial_chain(options);
   const Haptic6R closed(make_options<Haptic6ROptions>(Json{{"selection", "closest_to_home"}}));
   const std::vector<double> closed_design = {0.45, 0.45, 0.65, 0.55, 0.15, 3, 3, 2, 2, 1, 1, 2, 2, 3, 2, 3, 3};
@@ -272,6 +290,7 @@ TEST_P(SerialChainHaptic6R, AgreesWithTheClosedFormWhereBothPickTheSameConfigura
   const auto cs = chain.make_scratch();
   const auto hs = closed.make_scratch();
   int same = 0, both_reachable = 0, closer = 0, missed = 0;
+  double max_generic = 0, max_closed = 0;
   for (int i = 0; i < scene.size(); ++i) {
     SampleQuantities a, b;
     a.scene = b.scene = &scene;
@@ -282,13 +301,23 @@ TEST_P(SerialChainHaptic6R, AgreesWithTheClosedFormWhereBothPickTheSameConfigura
     if (a.status != SampleStatus::kReachable || b.status != SampleStatus::kReachable) continue;
     ++both_reachable;
     const JointVector& home = chain.setup().home;
-    // The closed form sees every solution, so the generic one is never strictly closer to home.
-    EXPECT_GE(home_distance(a.q, home), home_distance(b.q, home) - 1e-9) << "sample " << i;
     if (wrapped_distance(a.q, b.q) > 1e-6) {
+      // The closed form sees every solution, so a different generic pick is never closer to home.
+      EXPECT_GE(home_distance(a.q, home), home_distance(b.q, home)) << "sample " << i;
       ++closer;
       continue;
     }
+    {
+      const Chain& c = static_cast<const SerialChainModel&>(*chain_model).chain();
+      ChainFrames fa, fb;
+      chain_frames(c, a.q.data(), fa);
+      chain_frames(c, b.q.data(), fb);
+      const Eigen::Isometry3d t = static_cast<const SerialChainModel&>(*chain_model).target(scene.pose(i), 7);
+      max_generic = std::max(max_generic, (fa.tip.translation() - t.translation()).norm() + (fa.tip.linear() - t.linear()).norm());
+      max_closed = std::max(max_closed, (fb.tip.translation() - t.translation()).norm() + (fb.tip.linear() - t.linear()).norm());
+    }
     ++same;
+    EXPECT_LT(wrapped_distance(a.q, b.q), 1e-9) << "sample " << i;
     EXPECT_LT((a.jacobian - b.jacobian).norm(), 1e-9 * (1 + b.jacobian.norm())) << "sample " << i;
     EXPECT_LT((a.inertia - b.inertia).norm(), 1e-9 * (1 + b.inertia.norm())) << "sample " << i;
     EXPECT_LT((a.gravity - b.gravity).norm(), 1e-9 * (1 + b.gravity.norm())) << "sample " << i;
@@ -296,11 +325,10 @@ TEST_P(SerialChainHaptic6R, AgreesWithTheClosedFormWhereBothPickTheSameConfigura
     EXPECT_LT((a.max_torque - b.max_torque).norm(), 1e-12);
   }
   std::printf("[ serial_chain vs haptic6r (%s) ] %d samples: %d both reachable, %d same configuration, %d a farther "
-              "one, %d reachable only in closed form\n",
-              GetParam(), scene.size(), both_reachable, same, closer, missed);
+              "one, %d reachable only in closed form; largest pose residual %.3g (closed form %.3g)\n",
+              form, scene.size(), both_reachable, same, closer, missed, max_generic, max_closed);
   EXPECT_GT(both_reachable, scene.size() / 4);
-  EXPECT_GE(same, both_reachable * 95 / 100);
+  EXPECT_LT(max_generic, 1e-13);
   EXPECT_LE(missed, scene.size() / 100);
+  return both_reachable > 0 ? static_cast<double>(same) / both_reachable : 0.0;
 }
-
-INSTANTIATE_TEST_SUITE_P(Forms, SerialChainHaptic6R, ::testing::Values("dh", "urdf"));
