@@ -59,6 +59,8 @@ std::string samples_csv(const Problem& problem, const SampleRecords& records) {
   for (int c = 0; c < samples.dimension(); ++c) {
     csv << "," << (static_cast<std::size_t>(c) < samples.coordinates.size() ? samples.coordinates[static_cast<std::size_t>(c)] : "c" + std::to_string(c));
   }
+  const bool weighted = !samples.weights.empty();
+  if (weighted) csv << ",weight";
   csv << ",status";
   for (const MetricEntry& m : problem.metrics()) {
     for (const LocalValue& l : m.metric->locals()) csv << "," << m.plugin << "." << l.name;
@@ -67,6 +69,7 @@ std::string samples_csv(const Problem& problem, const SampleRecords& records) {
   for (int i = 0; i < samples.size(); ++i) {
     csv << i;
     for (int c = 0; c < samples.dimension(); ++c) csv << "," << samples.poses(i, c);
+    if (weighted) csv << "," << samples.weights[static_cast<std::size_t>(i)];
     csv << "," << records.status[static_cast<std::size_t>(i)];
     for (Eigen::Index c = 0; c < records.locals.cols(); ++c) {
       csv << ",";

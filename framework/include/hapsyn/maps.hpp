@@ -21,7 +21,8 @@ struct SampleRecords {
 /// Evaluates `full_design` (all components) sample by sample. \throws Error as Problem::evaluate.
 SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full_design);
 
-/// samples.csv: sample, the scene coordinates, status, then <metric>.<local> per metric.
+/// samples.csv: sample, the scene coordinates, `weight` when the scene has SampleSet::weights,
+/// status, then <metric>.<local> per metric (local values as computed, before weighting).
 std::string samples_csv(const Problem& problem, const SampleRecords& records);
 
 /// Every objective's value per workspace position: the samples at one position (one lattice
