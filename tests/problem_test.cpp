@@ -414,3 +414,44 @@ TEST(WeightedSamples, SamplesCsvHasAWeightColumnOnlyWithWeights) {
       hapsyn::samples_csv(*without, hapsyn::record_samples(*without, without->full_design(kGood.data())));
   EXPECT_EQ(plain_csv.substr(0, plain_csv.find('\n')), "sample,x,y,status,metric.x");
 }
+
+namespace {
+// An averaging metric over a scene attribute "value", dividing by the sample count.
+class MeanValue final : public hapsyn::Metric {
+ public:
+  void local(const hapsyn::SampleQuantities& q, double* out) const override { out[0] = q.attribute_row(0)[0]; }
+  hapsyn::Needs needs() const override { return 0; }
+  std::vector<std::string> scene_attributes() const override { return {"value"}; }
+  std::vector<hapsyn::LocalValue> locals() const override { return {{"value", hapsyn::Reduction::kSum, ""}}; }
+  double combine(const double* reduced, int samples) const override { return samples > 0 ? reduced[0] / samples : 0.0; }
+};
+}  // namespace
+
+TEST(WeightedSamples, PositionMapsAreEachPositionsWeightedMean) {
+  // Two positions with three and two samples; the values and weights differ within a position.
+  const std::string path =
+      (boost::filesystem::temp_directory_path() / boost::filesystem::unique_path("hapsyn-maps-%%%%-%%%%.csv")).string();
+  const double rows[5][4] = {{0.0, 0.0, 1.0, 2.0}, {0.0, 0.0, 4.0, 1.0}, {0.0, 0.0, 10.0, 1.0},
+                             {0.02, 0.01, 3.0, 0.0}, {0.02, 0.01, 5.0, 0.0}};  // x, y, value, weight
+  {
+    std::ofstream out(path);
+    out << "x,y,value,weight\n";
+    for (const auto& r : rows) out << r[0] << "," << r[1] << "," << r[2] << "," << r[3] << "\n";
+  }
+  hapsyn::SceneRequest request;
+  request.attributes = {"value"};
+  auto samples = std::make_shared<hapsyn::SampleSet>(
+      hapsyn::test::registry().create_scene("point_list", Json{{"file", path}}, "scene")->build(request));
+  std::remove(path.c_str());
+  samples->cache_bounds();
+  const auto problem = problem_over(samples, std::make_shared<MeanValue>());
+  const hapsyn::PositionMaps maps =
+      hapsyn::position_maps(*problem, hapsyn::record_samples(*problem, problem->full_design(kGood.data())));
+  ASSERT_EQ(maps.position.size(), 2u);
+  // By hand: (2 * 1 + 1 * 4 + 1 * 10) / 4 at the first position; all weights 0 at the second:
+  // the plain mean (3 + 5) / 2.
+  EXPECT_NEAR(maps.values(0, 0), (2.0 * 1 + 1.0 * 4 + 1.0 * 10) / 4, 1e-15);
+  EXPECT_NEAR(maps.values(1, 0), (3.0 + 5.0) / 2, 1e-15);
+  // The whole scene: the weighted mean over all samples (the zero weights count for nothing).
+  EXPECT_NEAR(value_of(*problem), (2.0 * 1 + 1.0 * 4 + 1.0 * 10) / 4, 1e-15);
+}

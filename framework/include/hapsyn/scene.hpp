@@ -57,10 +57,11 @@ struct SampleSet {
   /// so a combine() that divides sums by the sample count, or by another sum-reduced count,
   /// yields sum_i w_i v_i / sum_i w_i without knowing about weights. Min/max reductions ignore
   /// the weights: a worst case is a worst case. Equal weights (all the same value) are exactly
-  /// the unweighted study. On a subset of the samples (culling, position maps), a combine()
+  /// the unweighted study. On a subset of the samples (culling, a chunk), a combine()
   /// that divides by another sum-reduced local (coverage, mean_isotropy) still gives the
   /// subset's weighted mean; one that divides by the sample count gives it scaled by the
-  /// scene's mean weight over the subset's mean weight.
+  /// scene's mean weight over the subset's mean weight. Position maps (hapsyn/maps.hpp) weight
+  /// each position's samples by their own weights.
   std::vector<double> weights;
   /// What the scene reports about itself (e.g. build time, cache file, counts); copied into
   /// result.json under "scene" and printed by `hapsyn scene`.
