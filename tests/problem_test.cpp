@@ -2,6 +2,11 @@
 // and the central checks of plugin input and output.
 #include "test_support.hpp"
 
+#include <hapsyn/maps.hpp>
+
+#include <Eigen/SVD>
+#include <boost/filesystem.hpp>
+
 #include <cmath>
 #include <limits>
 #include <random>
@@ -213,4 +218,240 @@ TEST(Problem, FixedChunksMakeAveragingMetricsIndependentOfTheThreadCount) {
   hapsyn::EvalOptions sequential;
   sequential.subset = &subset;
   EXPECT_NEAR(study.problem->evaluate(x.data(), *ws, sequential).objectives[0], part.objectives[0], 1e-12);
+}
+
+// ---- Per-sample weights (SampleSet::weights) --------------------------------------------------
+
+namespace {
+
+// An averaging metric dividing its sum by the sample count: the mean x coordinate [m].
+class MeanX final : public hapsyn::Metric {
+ public:
+  void local(const hapsyn::SampleQuantities& q, double* out) const override { out[0] = q.scene->pose(q.sample)[0]; }
+  hapsyn::Needs needs() const override { return 0; }
+  std::vector<hapsyn::LocalValue> locals() const override { return {{"x", hapsyn::Reduction::kSum, "m"}}; }
+  double combine(const double* reduced, int samples) const override { return samples > 0 ? reduced[0] / samples : 0.0; }
+};
+
+// An averaging metric dividing by another sum (the examples/mean_isotropy metric): the mean of
+// sigma_min(J) / sigma_max(J) over the reachable samples.
+class MeanIsotropy final : public hapsyn::Metric {
+ public:
+  void local(const hapsyn::SampleQuantities& q, double* out) const override {
+    if (q.status != hapsyn::SampleStatus::kReachable) {
+      out[0] = out[1] = 0.0;
+      return;
+    }
+    const Eigen::Matrix2d j = q.jacobian;
+    const Eigen::Vector2d s = Eigen::JacobiSVD<Eigen::Matrix2d>(j).singularValues();
+    out[0] = s(1) / s(0);
+    out[1] = 1.0;
+  }
+  std::vector<hapsyn::LocalValue> locals() const override {
+    return {{"isotropy", hapsyn::Reduction::kSum, ""}, {"reachable", hapsyn::Reduction::kSum, ""}};
+  }
+  double combine(const double* reduced, int) const override { return reduced[1] > 0.0 ? reduced[0] / reduced[1] : 0.0; }
+};
+
+// Five planar positions in the five-bar's workspace and their weights (one of them 0).
+const std::vector<std::array<double, 3>> kWeighted = {
+    {-0.04, -0.03, 1.0}, {0.0, 0.0, 3.0}, {0.045, 0.02, 0.0}, {0.01, 0.05, 0.5}, {-0.02, 0.035, 2.5}};
+
+// A point_list file of kWeighted (the weight column only when `weights`), removed on destruction.
+struct PointFile {
+  explicit PointFile(bool weights, const std::vector<std::array<double, 3>>& rows = kWeighted) {
+    path = (boost::filesystem::temp_directory_path() / boost::filesystem::unique_path("hapsyn-weights-%%%%-%%%%.csv")).string();
+    std::ofstream out(path);
+    out.precision(17);
+    out << (weights ? "x,y,weight\n" : "x,y\n");
+    for (const auto& r : rows) {
+      out << r[0] << "," << r[1];
+      if (weights) out << "," << r[2];
+      out << "\n";
+    }
+  }
+  ~PointFile() { std::remove(path.c_str()); }
+  std::string path;
+};
+
+std::shared_ptr<hapsyn::SampleSet> point_list_samples(const std::string& path) {
+  auto samples = std::make_shared<hapsyn::SampleSet>(
+      hapsyn::test::registry().create_scene("point_list", Json{{"file", path}}, "scene")->build({}));
+  samples->cache_bounds();
+  return samples;
+}
+
+// The five-bar over `samples` with one metric, on the test study's design space.
+std::shared_ptr<hapsyn::Problem> problem_over(std::shared_ptr<const hapsyn::SampleSet> samples,
+                                              std::shared_ptr<const hapsyn::Metric> metric) {
+  const hapsyn::Study base = hapsyn::load_study(fivebar_study(), hapsyn::test::registry());
+  auto mechanism = hapsyn::test::registry().create_mechanism("fivebar", Json{{"rho", 1.08}}, "mechanism");
+  hapsyn::Objective objective;
+  objective.name = "metric";
+  return std::make_shared<hapsyn::Problem>("fivebar", mechanism, std::move(samples),
+                                           std::vector<hapsyn::MetricEntry>{{"metric", std::move(metric)}},
+                                           std::vector<hapsyn::Objective>{objective}, base.problem->design_space());
+}
+
+double value_of(const hapsyn::Problem& problem) {
+  auto ws = problem.make_eval_scratch();
+  const hapsyn::Evaluation& e = problem.evaluate(kGood.data(), *ws);
+  EXPECT_EQ(e.status, EvalStatus::kFeasible);
+  return e.objectives[0];
+}
+
+}  // namespace
+
+TEST(WeightedSamples, AveragingMetricDividingByTheSampleCountIsTheWeightedMean) {
+  const PointFile file(true);
+  const auto samples = point_list_samples(file.path);
+  ASSERT_EQ(samples->weights.size(), kWeighted.size());
+  // By hand, from the file's own numbers: sum w x / sum w.
+  double wx = 0.0, w = 0.0;
+  for (const auto& r : kWeighted) {
+    wx += r[2] * r[0];
+    w += r[2];
+  }
+  const auto problem = problem_over(samples, std::make_shared<MeanX>());
+  EXPECT_NEAR(value_of(*problem), wx / w, 1e-15);
+  // Differs from the unweighted mean, which the same scene without weights gives.
+  double x = 0.0;
+  for (const auto& r : kWeighted) x += r[0];
+  const PointFile plain(false);
+  EXPECT_NEAR(value_of(*problem_over(point_list_samples(plain.path), std::make_shared<MeanX>())), x / 5, 1e-15);
+  EXPECT_GT(std::abs(wx / w - x / 5), 1e-3);
+}
+
+TEST(WeightedSamples, MeanIsotropyIsTheWeightedMeanOfThePerSampleValues) {
+  const PointFile weighted(true), plain(false);
+  const auto unweighted_problem = problem_over(point_list_samples(plain.path), std::make_shared<MeanIsotropy>());
+  // The per-sample local values, recorded independently of any reduction.
+  const hapsyn::SampleRecords records =
+      hapsyn::record_samples(*unweighted_problem, unweighted_problem->full_design(kGood.data()));
+  double numerator = 0.0, denominator = 0.0;
+  for (std::size_t i = 0; i < kWeighted.size(); ++i) {
+    ASSERT_EQ(records.status[i], "reachable") << i;
+    numerator += kWeighted[i][2] * records.locals(static_cast<Eigen::Index>(i), 0);
+    denominator += kWeighted[i][2] * records.locals(static_cast<Eigen::Index>(i), 1);
+  }
+  const auto problem = problem_over(point_list_samples(weighted.path), std::make_shared<MeanIsotropy>());
+  const double value = value_of(*problem);
+  EXPECT_NEAR(value, numerator / denominator, 1e-14);
+  EXPECT_GT(std::abs(value - value_of(*unweighted_problem)), 1e-6);  // the weights matter here
+  // Chunked parallel evaluation merges the weighted sums to the same value.
+  hapsyn::Problem::ParallelOptions options;
+  options.chunks = 3;
+  EXPECT_NEAR(problem->evaluate_parallel(kGood.data(), 2, options).objectives[0], value, 1e-14);
+}
+
+TEST(WeightedSamples, EqualWeightsGiveExactlyTheUnweightedValue) {
+  const PointFile plain(false);
+  const auto unweighted = point_list_samples(plain.path);
+  for (double weight : {0.1, 1.0, 7.0, 1e-3}) {
+    std::vector<std::array<double, 3>> rows = kWeighted;
+    for (auto& r : rows) r[2] = weight;  // 0.1 five times does not sum to exactly 0.5
+    const PointFile file(true, rows);
+    const auto samples = point_list_samples(file.path);
+    for (const auto& metric : std::vector<std::shared_ptr<const hapsyn::Metric>>{std::make_shared<MeanX>(),
+                                                                                 std::make_shared<MeanIsotropy>()}) {
+      EXPECT_EQ(value_of(*problem_over(samples, metric)), value_of(*problem_over(unweighted, metric))) << weight;
+    }
+  }
+}
+
+TEST(WeightedSamples, MinAndMaxReductionsIgnoreTheWeights) {
+  const PointFile weighted(true), plain(false);
+  for (const char* metric : {"gii", "gdi"}) {
+    Json doc = fivebar_study("evaluate");
+    doc["objectives"] = Json::array({{{"metric", metric}}});
+    doc["design"] = {{"l0", {{"value", kGood[0]}}}, {"l1", {{"value", kGood[1]}}}, {"l2", {{"value", kGood[2]}}},
+                     {"r", {{"value", kGood[3]}}}};
+    doc["scene"] = {{"plugin", "point_list"}, {"options", {{"file", weighted.path}}}};
+    const hapsyn::Study a = hapsyn::load_study(doc, hapsyn::test::registry());
+    doc["scene"]["options"]["file"] = plain.path;
+    const hapsyn::Study b = hapsyn::load_study(doc, hapsyn::test::registry());
+    ASSERT_FALSE(a.problem->samples().weights.empty());
+    auto wa = a.problem->make_eval_scratch(), wb = b.problem->make_eval_scratch();
+    const std::vector<double> none;
+    const hapsyn::Evaluation ea = a.problem->evaluate(none.data(), *wa);
+    const hapsyn::Evaluation eb = b.problem->evaluate(none.data(), *wb);
+    ASSERT_EQ(ea.status, EvalStatus::kFeasible);
+    EXPECT_EQ(ea.objectives, eb.objectives) << metric;
+    EXPECT_EQ(ea.critical_samples, eb.critical_samples) << metric;
+  }
+}
+
+TEST(WeightedSamples, UnusableWeightsAreRefusedCentrally) {
+  const PointFile plain(false);
+  const auto samples = point_list_samples(plain.path);
+  const auto refused = [&](const std::vector<double>& weights) {
+    auto copy = std::make_shared<hapsyn::SampleSet>(*samples);
+    copy->weights = weights;
+    return hapsyn::test::error_of([&] { problem_over(copy, std::make_shared<MeanX>()); });
+  };
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(refused({1, 2, 3}),
+            "problem: scene: weights has 3 entries for 5 samples (one per sample, or none for equal weights)");
+  EXPECT_EQ(refused({1, 2, -3, 4, 5}), "problem: scene: weights[2] = -3.0: must be finite and >= 0");
+  EXPECT_EQ(refused({1, nan, 1, 1, 1}), "problem: scene: weights[1] = nan: must be finite and >= 0");
+  EXPECT_EQ(refused({1, 1, 1, 1, inf}), "problem: scene: weights[4] = inf: must be finite and >= 0");
+  EXPECT_EQ(refused({0, 0, 0, 0, 0}),
+            "problem: scene: weights sum to 0.0: the sum must be finite and > 0 (at least one weight > 0)");
+  EXPECT_EQ(refused({1e308, 1e308, 0, 0, 0}),
+            "problem: scene: weights sum to inf: the sum must be finite and > 0 (at least one weight > 0)");
+  EXPECT_EQ(refused({}), "(no error)");
+}
+
+TEST(WeightedSamples, SamplesCsvHasAWeightColumnOnlyWithWeights) {
+  const PointFile weighted(true), plain(false);
+  const auto with = problem_over(point_list_samples(weighted.path), std::make_shared<MeanX>());
+  const std::string csv = hapsyn::samples_csv(*with, hapsyn::record_samples(*with, with->full_design(kGood.data())));
+  EXPECT_EQ(csv.substr(0, csv.find('\n')), "sample,x,y,weight,status,metric.x");
+  EXPECT_EQ(csv.substr(csv.find('\n') + 1, csv.find('\n', csv.find('\n') + 1) - csv.find('\n') - 1),
+            "0,-0.04,-0.03,1,reachable,-0.04");
+  const auto without = problem_over(point_list_samples(plain.path), std::make_shared<MeanX>());
+  const std::string plain_csv =
+      hapsyn::samples_csv(*without, hapsyn::record_samples(*without, without->full_design(kGood.data())));
+  EXPECT_EQ(plain_csv.substr(0, plain_csv.find('\n')), "sample,x,y,status,metric.x");
+}
+
+namespace {
+// An averaging metric over a scene attribute "value", dividing by the sample count.
+class MeanValue final : public hapsyn::Metric {
+ public:
+  void local(const hapsyn::SampleQuantities& q, double* out) const override { out[0] = q.attribute_row(0)[0]; }
+  hapsyn::Needs needs() const override { return 0; }
+  std::vector<std::string> scene_attributes() const override { return {"value"}; }
+  std::vector<hapsyn::LocalValue> locals() const override { return {{"value", hapsyn::Reduction::kSum, ""}}; }
+  double combine(const double* reduced, int samples) const override { return samples > 0 ? reduced[0] / samples : 0.0; }
+};
+}  // namespace
+
+TEST(WeightedSamples, PositionMapsAreEachPositionsWeightedMean) {
+  // Two positions with three and two samples; the values and weights differ within a position.
+  const std::string path =
+      (boost::filesystem::temp_directory_path() / boost::filesystem::unique_path("hapsyn-maps-%%%%-%%%%.csv")).string();
+  const double rows[5][4] = {{0.0, 0.0, 1.0, 2.0}, {0.0, 0.0, 4.0, 1.0}, {0.0, 0.0, 10.0, 1.0},
+                             {0.02, 0.01, 3.0, 0.0}, {0.02, 0.01, 5.0, 0.0}};  // x, y, value, weight
+  {
+    std::ofstream out(path);
+    out << "x,y,value,weight\n";
+    for (const auto& r : rows) out << r[0] << "," << r[1] << "," << r[2] << "," << r[3] << "\n";
+  }
+  hapsyn::SceneRequest request;
+  request.attributes = {"value"};
+  auto samples = std::make_shared<hapsyn::SampleSet>(
+      hapsyn::test::registry().create_scene("point_list", Json{{"file", path}}, "scene")->build(request));
+  std::remove(path.c_str());
+  samples->cache_bounds();
+  const auto problem = problem_over(samples, std::make_shared<MeanValue>());
+  const hapsyn::PositionMaps maps =
+      hapsyn::position_maps(*problem, hapsyn::record_samples(*problem, problem->full_design(kGood.data())));
+  ASSERT_EQ(maps.position.size(), 2u);
+  // By hand: (2 * 1 + 1 * 4 + 1 * 10) / 4 at the first position; all weights 0 at the second:
+  // the plain mean (3 + 5) / 2.
+  EXPECT_NEAR(maps.values(0, 0), (2.0 * 1 + 1.0 * 4 + 1.0 * 10) / 4, 1e-15);
+  EXPECT_NEAR(maps.values(1, 0), (3.0 + 5.0) / 2, 1e-15);
+  // The whole scene: the weighted mean over all samples (the zero weights count for nothing).
+  EXPECT_NEAR(value_of(*problem), (2.0 * 1 + 1.0 * 4 + 1.0 * 10) / 4, 1e-15);
 }

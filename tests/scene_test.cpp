@@ -88,3 +88,27 @@ TEST(SceneLattice, HumanArmDeclaresItsLatticeAsItsLatticeIndexAttribute) {
     EXPECT_EQ(set.lattice->index_of_sample[static_cast<std::size_t>(i)], static_cast<long long>(index(i, 0))) << i;
   }
 }
+
+// ---- Per-sample weights: the central check and the exported CSV ------------------------------
+
+TEST(SceneWeights, CheckWeightsNamesTheComponentAndTheRule) {
+  SampleSet s = lattice_scene();
+  EXPECT_EQ(error_of([&] { hapsyn::check_weights(s, "toy"); }), "(no error)");  // none: all 1
+  s.weights = {0.0, 2.0, 0.5};
+  EXPECT_EQ(error_of([&] { hapsyn::check_weights(s, "toy"); }), "(no error)");  // a zero weight is allowed
+  s.weights = {1.0, -1e-300, 1.0};
+  EXPECT_EQ(error_of([&] { hapsyn::check_weights(s, "toy"); }), "toy: scene: weights[1] = -1e-300: must be finite and >= 0");
+  s.weights = {1.0};
+  EXPECT_EQ(error_of([&] { hapsyn::check_weights(s, "toy"); }),
+            "toy: scene: weights has 1 entries for 3 samples (one per sample, or none for equal weights)");
+}
+
+TEST(SceneWeights, SceneCsvEndsWithAWeightColumnWhenWeightsArePresent) {
+  SampleSet s;
+  s.coordinates = {"x", "y"};
+  s.poses = SampleSet::RowMatrix::Zero(2, 2);
+  s.poses(1, 0) = 0.5;
+  EXPECT_EQ(hapsyn::scene_csv(s), "x,y\n0,0\n0.5,0\n");
+  s.weights = {0.25, 3.0};
+  EXPECT_EQ(hapsyn::scene_csv(s), "x,y,weight\n0,0,0.25\n0.5,0,3\n");
+}

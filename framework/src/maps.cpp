@@ -59,6 +59,8 @@ std::string samples_csv(const Problem& problem, const SampleRecords& records) {
   for (int c = 0; c < samples.dimension(); ++c) {
     csv << "," << (static_cast<std::size_t>(c) < samples.coordinates.size() ? samples.coordinates[static_cast<std::size_t>(c)] : "c" + std::to_string(c));
   }
+  const bool weighted = !samples.weights.empty();
+  if (weighted) csv << ",weight";
   csv << ",status";
   for (const MetricEntry& m : problem.metrics()) {
     for (const LocalValue& l : m.metric->locals()) csv << "," << m.plugin << "." << l.name;
@@ -67,6 +69,7 @@ std::string samples_csv(const Problem& problem, const SampleRecords& records) {
   for (int i = 0; i < samples.size(); ++i) {
     csv << i;
     for (int c = 0; c < samples.dimension(); ++c) csv << "," << samples.poses(i, c);
+    if (weighted) csv << "," << samples.weights[static_cast<std::size_t>(i)];
     csv << "," << records.status[static_cast<std::size_t>(i)];
     for (Eigen::Index c = 0; c < records.locals.cols(); ++c) {
       csv << ",";
@@ -141,6 +144,25 @@ PositionMaps position_maps(const Problem& problem, const SampleRecords& records)
                                                                  : -std::numeric_limits<double>::infinity();
     }
   }
+  // With weights, a group's sum-reduced locals are scaled by w_i n_g / W_g (n_g samples, W_g
+  // their weight): the group's weighted mean, whether combine() divides by the sample count or
+  // by another sum. A group whose weights are equal, or all 0, is reduced unweighted.
+  std::vector<double> scale(static_cast<std::size_t>(samples.size()), 1.0);
+  if (!samples.weights.empty()) {
+    std::vector<double> weight_sum(groups, 0.0), first(groups, -1.0);
+    std::vector<char> equal(groups, 1);
+    for (std::size_t i = 0; i < scale.size(); ++i) {
+      const std::size_t g = static_cast<std::size_t>(group[i]);
+      const double w = samples.weights[i];
+      if (first[g] < 0.0) first[g] = w;
+      equal[g] = equal[g] && w == first[g];
+      weight_sum[g] += w;
+    }
+    for (std::size_t i = 0; i < scale.size(); ++i) {
+      const std::size_t g = static_cast<std::size_t>(group[i]);
+      if (!equal[g] && weight_sum[g] > 0.0) scale[i] = samples.weights[i] * maps.samples[g] / weight_sum[g];
+    }
+  }
   std::vector<char> undefined(groups * problem.metrics().size(), 0);
   for (int i = 0; i < samples.size(); ++i) {
     const std::size_t g = static_cast<std::size_t>(group[static_cast<std::size_t>(i)]);
@@ -151,7 +173,7 @@ PositionMaps position_maps(const Problem& problem, const SampleRecords& records)
     for (std::size_t k = 0; k < total; ++k) {
       double& r = reduced[g * total + k];
       const double v = records.locals(i, static_cast<Eigen::Index>(k));
-      r = reduction[k] == Reduction::kSum ? r + v : reduction[k] == Reduction::kMin ? std::min(r, v) : std::max(r, v);
+      r = reduction[k] == Reduction::kSum ? r + v * scale[static_cast<std::size_t>(i)] : reduction[k] == Reduction::kMin ? std::min(r, v) : std::max(r, v);
     }
   }
   maps.values.resize(static_cast<Eigen::Index>(groups), static_cast<Eigen::Index>(problem.objectives().size()));

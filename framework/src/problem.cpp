@@ -16,6 +16,18 @@ std::string format_design(const Problem& problem, const Eigen::VectorXd& full) {
   return problem.design_to_json(full).dump();
 }
 
+// The factor w_i N / W of each sample's sum-reduced local values (see SampleSet::weights); empty
+// when the weights are absent or all equal, so that equal weights are the unweighted study bit for
+// bit (N copies of w need not sum to exactly N w). W is summed in sample order: deterministic.
+std::vector<double> weighted_sum_scale(const std::vector<double>& weights) {
+  if (std::all_of(weights.begin(), weights.end(), [&](double w) { return w == weights.front(); })) return {};
+  const double total = std::accumulate(weights.begin(), weights.end(), 0.0);
+  const double n = static_cast<double>(weights.size());
+  std::vector<double> scale(weights.size());
+  for (std::size_t i = 0; i < weights.size(); ++i) scale[i] = weights[i] * n / total;
+  return scale;
+}
+
 bool better(Reduction r, double value, int index, double current, int current_index) {
   switch (r) {
     case Reduction::kMin: return value < current || (value == current && index < current_index);
@@ -38,6 +50,8 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
   assert(mechanism_ && samples_);
   if (samples_->size() == 0) throw Error("problem", "scene: the scene has no samples");
   if (!samples_->poses.allFinite()) throw Error("problem", "scene: the scene's samples contain NaN or infinity");
+  check_weights(*samples_, "problem");
+  sample_scale_ = weighted_sum_scale(samples_->weights);
   mechanism_->check_scene(*samples_);
   if (objectives_.empty()) throw Error("problem", "objectives: at least one objective is required");
   for (const ConstraintDecl& c : mechanism_->constraints()) constraint_names_.push_back(c.name);
@@ -257,6 +271,8 @@ bool Problem::constraints_hold(EvalScratch& ws, Evaluation& out) const {
 }
 
 void Problem::accumulate_locals(int sample, EvalScratch& ws, bool keep_locals) const {
+  // The sample's weight factor for sum reductions (1 when unweighted: v * 1.0 is v exactly).
+  const double scale = sample_scale_.empty() ? 1.0 : sample_scale_[static_cast<std::size_t>(sample)];
   for (std::size_t m = 0; m < metrics_.size(); ++m) {
     const int begin = local_offset_[m];
     const int end = local_offset_[m + 1];
@@ -274,7 +290,7 @@ void Problem::accumulate_locals(int sample, EvalScratch& ws, bool keep_locals) c
       }
       const std::size_t ui = static_cast<std::size_t>(i);
       if (local_reduction_[ui] == Reduction::kSum) {
-        ws.accumulator[ui] += v;
+        ws.accumulator[ui] += v * scale;
       } else if (better(local_reduction_[ui], v, sample, ws.accumulator[ui], ws.argument[ui])) {
         ws.accumulator[ui] = v;
         ws.argument[ui] = sample;

@@ -50,4 +50,25 @@ void check_lattice(const SampleSet& samples, const std::string& scene) {
   }
 }
 
+void check_weights(const SampleSet& samples, const std::string& component) {
+  const std::vector<double>& w = samples.weights;
+  if (w.empty()) return;
+  const auto refuse = [&](const std::string& why) { throw Error(component, "scene: weights" + why); };
+  if (w.size() != static_cast<std::size_t>(samples.size())) {
+    refuse(" has " + std::to_string(w.size()) + " entries for " + std::to_string(samples.size()) +
+           " samples (one per sample, or none for equal weights)");
+  }
+  double sum = 0.0;
+  for (std::size_t i = 0; i < w.size(); ++i) {
+    if (!(w[i] >= 0.0) || !std::isfinite(w[i])) {
+      refuse("[" + std::to_string(i) + "] = " + render_value(Json(w[i])) + ": must be finite and >= 0");
+    }
+    sum += w[i];
+  }
+  // Finite weights can still overflow their sum; N / W must be a usable finite factor.
+  if (!(sum > 0.0) || !std::isfinite(sum)) {
+    refuse(" sum to " + render_value(Json(sum)) + ": the sum must be finite and > 0 (at least one weight > 0)");
+  }
+}
+
 }  // namespace hapsyn

@@ -58,6 +58,7 @@ BuiltScene build_scene_alone(const Json& problem, const Registry& registry, std:
   built.samples = plugin->build(request);
   built.build_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   check_lattice(built.samples, built.plugin);
+  check_weights(built.samples, built.plugin);
   return built;
 }
 
@@ -69,12 +70,15 @@ std::string scene_csv(const SampleSet& set) {
       text += "," + (values.cols() == 1 ? name : name + "[" + std::to_string(c) + "]");
     }
   }
+  const bool weighted = !set.weights.empty();
+  if (weighted) text += ",weight";
   text += "\n";
   for (int i = 0; i < set.size(); ++i) {
     for (int c = 0; c < set.dimension(); ++c) text += (c ? "," : "") + exact_number(set.pose(i)[c]);
     for (const auto& [name, values] : set.attributes) {
       for (Eigen::Index c = 0; c < values.cols(); ++c) text += "," + exact_number(values(i, c));
     }
+    if (weighted) text += "," + exact_number(set.weights[static_cast<std::size_t>(i)]);
     text += "\n";
   }
   return text;

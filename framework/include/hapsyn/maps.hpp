@@ -21,14 +21,18 @@ struct SampleRecords {
 /// Evaluates `full_design` (all components) sample by sample. \throws Error as Problem::evaluate.
 SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full_design);
 
-/// samples.csv: sample, the scene coordinates, status, then <metric>.<local> per metric.
+/// samples.csv: sample, the scene coordinates, `weight` when the scene has SampleSet::weights,
+/// status, then <metric>.<local> per metric (local values as computed, before weighting).
 std::string samples_csv(const Problem& problem, const SampleRecords& records);
 
 /// Every objective's value per workspace position: the samples at one position (one lattice
 /// point of a scene that declares a SampleLattice, such as human_arm, else equal x, y, z
 /// coordinates) are reduced as the metric reduces the whole scene and combined by
 /// Metric::combine. For the coverage metric this is the per-position J_x (reachable share of
-/// the human poses there), J_v, J_a, J_f.
+/// the human poses there), J_v, J_a, J_f. With SampleSet::weights, the sum-reduced locals of
+/// the samples at a position are scaled by w_i n / W (n samples there, W their weight), so an
+/// averaging objective is the position's weighted mean; a position whose weights are equal or
+/// all 0 is reduced unweighted.
 struct PositionMaps {
   std::vector<std::string> objectives;  ///< column names (the objectives' names)
   std::vector<Eigen::Vector3d> position;  ///< per position: x, y, z scene coordinates (0 when absent)

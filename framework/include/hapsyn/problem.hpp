@@ -91,8 +91,12 @@ struct EvalOptions {
 /// The study's problem. Immutable and shared by threads; per-thread state is an EvalScratch.
 class Problem {
  public:
-  /// \throws Error if a metric needs quantities the mechanism does not provide, or the scene is
-  ///         not one the mechanism serves, or an objective refers to a missing metric.
+  /// \throws Error if the scene has no samples, a non-finite one or unusable weights
+  ///         (check_weights), a metric needs quantities the mechanism does not provide, the
+  ///         scene is not one the mechanism serves, or an objective refers to a missing metric.
+  /// With SampleSet::weights, every Reduction::kSum local value of sample i is multiplied by
+  /// w_i N / W before it is summed, so averaging metrics give weighted means with no change to
+  /// their combine(); min/max reductions ignore the weights (a worst case is a worst case).
   Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> mechanism,
           std::shared_ptr<const SampleSet> samples, std::vector<MetricEntry> metrics,
           std::vector<Objective> objectives, DesignSpace space);
@@ -198,6 +202,9 @@ class Problem {
   std::vector<std::vector<const AttributeMatrix*>> metric_attributes_;  // per metric, see SampleQuantities::attributes
   std::vector<int> local_offset_;        // first local of metric m in the flat local array
   std::vector<Reduction> local_reduction_;
+  // Per sample, w_i N / W: the factor of its sum-reduced local values (SampleSet::weights);
+  // empty when the scene has no weights or equal ones.
+  std::vector<double> sample_scale_;
   bool worst_case_ = true;
   bool any_worst_case_ = false;
   Needs needs_ = 0;

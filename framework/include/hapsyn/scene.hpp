@@ -50,6 +50,19 @@ struct SampleSet {
   std::string unit = "m";                ///< unit of the position columns
   RowMatrix poses;                       ///< one sample per row
   std::map<std::string, RowMatrix> attributes;  ///< per-sample extras, one row per sample
+  /// Optional per-sample weights [-]: empty means every weight is 1; otherwise one entry per
+  /// sample, finite, >= 0, with a positive sum (checked centrally by check_weights when the
+  /// Problem is made). Averaging metrics then give weighted means: the evaluator multiplies every
+  /// Reduction::kSum local value of sample i by w_i N / W (N samples, W the sum of the weights),
+  /// so a combine() that divides sums by the sample count, or by another sum-reduced count,
+  /// yields sum_i w_i v_i / sum_i w_i without knowing about weights. Min/max reductions ignore
+  /// the weights: a worst case is a worst case. Equal weights (all the same value) are exactly
+  /// the unweighted study. On a subset of the samples (culling, a chunk), a combine()
+  /// that divides by another sum-reduced local (coverage, mean_isotropy) still gives the
+  /// subset's weighted mean; one that divides by the sample count gives it scaled by the
+  /// scene's mean weight over the subset's mean weight. Position maps (hapsyn/maps.hpp) weight
+  /// each position's samples by their own weights.
+  std::vector<double> weights;
   /// What the scene reports about itself (e.g. build time, cache file, counts); copied into
   /// result.json under "scene" and printed by `hapsyn scene`.
   Json info = Json::object();
@@ -77,6 +90,13 @@ struct SampleSet {
 ///         index lies outside [0, per_axis^3).
 void check_lattice(const SampleSet& samples, const std::string& scene);
 
+/// Checks a scene's per-sample weights (nothing to check when SampleSet::weights is empty).
+/// \param component the component named in the error (the Problem passes "problem")
+/// \throws Error("<component>: scene: weights ...") when there is not one weight per sample,
+///         a weight is NaN, infinite or negative ("weights[i] = v: must be finite and >= 0"), or
+///         the weights sum to zero.
+void check_weights(const SampleSet& samples, const std::string& component);
+
 /// What the scene must provide, derived from the study's metrics (e.g. the human ellipsoids
 /// are built only when a metric needs them).
 struct SceneRequest {
@@ -91,7 +111,7 @@ struct SceneRequest {
 /// thread, after the metrics are known. A scene never depends on the design.
 ///
 /// What the framework checks centrally, so a scene need not: the samples exist and are finite,
-/// a declared lattice is consistent with them (check_lattice), the mechanism serves them
+/// the weights, when given, are usable (check_weights), a declared lattice is consistent with them (check_lattice), the mechanism serves them
 /// (Mechanism::check_scene).
 class Scene {
  public:

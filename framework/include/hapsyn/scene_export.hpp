@@ -21,7 +21,8 @@ struct BuiltScene {
 };
 
 /// Builds the "scene" section ({"plugin", "options"}) of a problem document; every other
-/// section is ignored. The lattice declaration, if any, is checked (check_lattice).
+/// section is ignored. The lattice declaration, if any, is checked (check_lattice), and so are
+/// the weights, if any (check_weights, naming the scene plugin).
 /// \param threads    when given, sets options.threads if the scene's schema has that option
 /// \param attributes per-sample attributes to request (SceneRequest::attributes)
 /// \throws Error("problem", "scene ...") for a missing or malformed section, the registry's
@@ -30,7 +31,8 @@ BuiltScene build_scene_alone(const Json& problem, const Registry& registry, std:
                              const std::vector<std::string>& attributes);
 
 /// The samples as CSV: the pose columns (SampleSet::coordinates), then every attribute in
-/// alphabetical order, flattened as name[i] (name alone for a single column); numbers in their
+/// alphabetical order, flattened as name[i] (name alone for a single column), then a `weight`
+/// column when the scene has SampleSet::weights; numbers in their
 /// shortest exact form (they read back as the same doubles).
 std::string scene_csv(const SampleSet& samples);
 

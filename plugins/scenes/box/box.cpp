@@ -1,0 +1,104 @@
+#include "box.hpp"
+
+#include <hapsyn/error.hpp>
+
+#include <cmath>
+#include <string>
+
+namespace hapsyn::plugins {
+namespace {
+
+constexpr const char* kName = "box";
+constexpr const char* kAxes[3] = {"x", "y", "z"};
+
+std::string show(const Json& value) { return value.dump(); }
+
+}  // namespace
+
+Box::Box(const BoxOptions& options) : options_(options) {
+  const int dim = options_.dimension;
+  const std::size_t n = static_cast<std::size_t>(dim);
+  if (options_.center.size() != n) {
+    throw Error(kName, "options.center = " + show(Json(options_.center)) + ": must have " + std::to_string(dim) +
+                           " numbers (one per dimension)");
+  }
+  if (options_.size.size() != n) {
+    throw Error(kName, "options.size = " + show(Json(options_.size)) + ": must have " + std::to_string(dim) +
+                           " numbers (one per dimension)");
+  }
+  if (!options_.orientation.empty()) {
+    const std::string shown = "options.orientation = " + show(Json(options_.orientation));
+    if (options_.orientation.size() != 4) throw Error(kName, shown + ": must be empty or 4 numbers [qw, qx, qy, qz]");
+    if (dim != 3) throw Error(kName, shown + ": needs dimension 3 (a full pose is x, y, z, qw, qx, qy, qz)");
+    double norm = 0.0;
+    for (double q : options_.orientation) norm += q * q;
+    norm = std::sqrt(norm);
+    if (!(std::abs(norm - 1.0) <= 1e-6)) {
+      throw Error(kName, shown + ": must be a unit quaternion (norm " + show(Json(norm)) +
+                             " differs from 1 by more than 1e-6)");
+    }
+    for (double q : options_.orientation) orientation_.push_back(q / norm);
+  }
+  const double step = options_.step;
+  // Counted in double: a product of per-axis counts cannot overflow before it is compared.
+  double samples = 1.0;
+  per_axis_ = {1, 1, 1};
+  for (std::size_t a = 0; a < n; ++a) {
+    const double side = options_.size[a];
+    const std::string side_name = "size[" + std::to_string(a) + "] (" + show(Json(side)) + ")";
+    if (step > side) throw Error(kName, "options.step = " + show(Json(step)) + ": must be <= " + side_name);
+    const double ratio = side / step;
+    const double steps = std::round(ratio);
+    if (!(std::abs(ratio - steps) <= 1e-9 * ratio)) {
+      throw Error(kName, "options.step = " + show(Json(step)) + ": must divide " + side_name + " into whole steps");
+    }
+    samples *= steps + 1.0;
+  }
+  if (samples > static_cast<double>(kBoxMaxSamples)) {
+    std::string grid;
+    for (std::size_t a = 0; a < n; ++a) {
+      grid += (a ? " x " : "") + show(Json(std::round(options_.size[a] / step) + 1.0));
+    }
+    throw Error(kName, "options.step = " + show(Json(step)) + ": gives " + grid + " samples; at most " +
+                           std::to_string(kBoxMaxSamples) + " are allowed");
+  }
+  // Each count is now <= kBoxMaxSamples: it fits an int.
+  for (std::size_t a = 0; a < n; ++a) per_axis_[a] = static_cast<int>(std::round(options_.size[a] / step)) + 1;
+}
+
+SampleSet Box::build(const SceneRequest& request) const {
+  if (!request.attributes.empty()) {
+    throw Error(kName, "per-sample attribute '" + request.attributes.front() +
+                           "' requested: this scene provides none");
+  }
+  const int dim = options_.dimension;
+  SampleSet set;
+  for (int a = 0; a < dim; ++a) set.coordinates.push_back(kAxes[a]);
+  if (!orientation_.empty()) set.coordinates.insert(set.coordinates.end(), {"qw", "qx", "qy", "qz"});
+  set.unit = "m";
+  const Eigen::Index columns = static_cast<Eigen::Index>(set.coordinates.size());
+  set.poses.resize(static_cast<Eigen::Index>(sample_count()), columns);
+  // The abscissae of each axis once; the symmetric formula keeps the edges at c -+ size/2.
+  std::array<std::vector<double>, 3> axis;
+  for (int a = 0; a < dim; ++a) {
+    const int n = per_axis_[static_cast<std::size_t>(a)];
+    const double c = options_.center[static_cast<std::size_t>(a)], side = options_.size[static_cast<std::size_t>(a)];
+    const double denominator = 2.0 * (n - 1);
+    for (int j = 0; j < n; ++j) axis[static_cast<std::size_t>(a)].push_back(c + (2.0 * j - (n - 1)) / denominator * side);
+  }
+  Eigen::Index row = 0;
+  for (int iz = 0; iz < per_axis_[2]; ++iz) {
+    for (int iy = 0; iy < per_axis_[1]; ++iy) {
+      for (int ix = 0; ix < per_axis_[0]; ++ix, ++row) {
+        set.poses(row, 0) = axis[0][static_cast<std::size_t>(ix)];
+        set.poses(row, 1) = axis[1][static_cast<std::size_t>(iy)];
+        if (dim == 3) set.poses(row, 2) = axis[2][static_cast<std::size_t>(iz)];
+        for (std::size_t k = 0; k < orientation_.size(); ++k) set.poses(row, 3 + static_cast<Eigen::Index>(k)) = orientation_[k];
+      }
+    }
+  }
+  set.info = {{"per_axis", std::vector<int>(per_axis_.begin(), per_axis_.begin() + dim)}, {"samples", sample_count()}};
+  return set;
+}
+
+}  // namespace hapsyn::plugins
