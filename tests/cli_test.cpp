@@ -111,6 +111,28 @@ TEST(Cli, DescribeShowsOptionsDefaultsUnitsAndVariables) {
   EXPECT_NE(unknown.out.find("did you mean 'fivebar'"), std::string::npos) << unknown.out;
 }
 
+// A mechanism whose variables come from its options (serial_chain reads them from the chain
+// file) lists them with --options, and says how without.
+TEST(Cli, DescribeListsTheDesignVariablesOfGivenOptions) {
+  const Output plain = hapsyn_cli("describe serial_chain");
+  ASSERT_EQ(plain.code, 0) << plain.out;
+  EXPECT_NE(plain.out.find("design variables: depend on the options (with the defaults: problem: mechanism.options: "
+                           "serial_chain: options: give the chain as options.urdf or options.dh_file); list them with: "
+                           "hapsyn describe serial_chain --options '{...}'"),
+            std::string::npos)
+      << plain.out;
+  const Output urdf = hapsyn_cli(
+      "describe serial_chain --options '{\"urdf\": \"serial_chain/ur5_like.urdf\", \"base_link\": \"base_link\", "
+      "\"tip_link\": \"tool0\"}'");
+  ASSERT_EQ(urdf.code, 0) << urdf.out;
+  for (const char* s : {"elbow_joint:x real [-0.425, -0.425] m; limits [-inf, inf]", "upper_arm_link:mass", "mass_scale"}) {
+    EXPECT_NE(urdf.out.find(s), std::string::npos) << s << "\n" << urdf.out;
+  }
+  const Output bad = hapsyn_cli("describe serial_chain --options '{\"urdf\": \"serial_chain/ur5_like.urdf\"}'");
+  EXPECT_EQ(bad.code, 1);
+  EXPECT_NE(bad.out.find("options.base_link = \"\": a URDF chain needs base_link and tip_link"), std::string::npos) << bad.out;
+}
+
 TEST(Cli, UnwritableOutputDirectoryIsRefusedBeforeAnyWork) {
   const Output o = hapsyn_cli("run " + problem("fivebar-table2-best-gii.json") + " --out /proc/hapsyn-cannot-write");
   EXPECT_EQ(o.code, 1);

@@ -105,7 +105,41 @@ void describe_properties(const Json& schema, const std::string& prefix, std::ost
   }
 }
 
-int describe(const std::string& name, bool json, const hapsyn::Registry& registry) {
+// The design variables and constraints of a mechanism created with `options` (a JSON object's
+// text, "" for the defaults). A mechanism that cannot be created without options (serial_chain
+// needs its chain file) says so and how to ask, instead of failing the whole command.
+void describe_design(const std::string& name, const std::string& options, const hapsyn::Registry& registry) {
+  std::shared_ptr<hapsyn::Mechanism> mechanism;
+  try {
+    const Json o = options.empty() ? Json::object() : hapsyn::parse_problem_text(options, "--options");
+    mechanism = registry.create_mechanism(name, o, "mechanism");
+  } catch (const hapsyn::Error& e) {
+    if (!options.empty()) throw;
+    std::cout << "design variables: depend on the options (with the defaults: " << e.what()
+              << "); list them with: hapsyn describe " << name << " --options '{...}'\n";
+    return;
+  }
+  std::cout << "design variables (default bounds; hard limits):\n";
+  for (const hapsyn::VariableDecl& v : mechanism->variables()) {
+    auto list = [](const std::vector<double>& x) {
+      std::string s;
+      for (double d : x) s += (s.empty() ? "" : ", ") + format_number(d);
+      return x.size() == 1 ? s : "[" + s + "]";
+    };
+    std::cout << "  " << std::left << std::setw(6) << v.name << (v.size > 1 ? "[" + std::to_string(v.size) + "]" : "")
+              << (v.integer ? " integer" : " real") << " [" << list(v.default_lower) << ", " << list(v.default_upper)
+              << "] " << v.unit << "; limits [" << (v.hard_lower.empty() ? "-inf" : list(v.hard_lower)) << ", "
+              << (v.hard_upper.empty() ? "inf" : list(v.hard_upper)) << "]  "
+              << v.description << "\n";
+  }
+  const auto constraints = mechanism->constraints();
+  if (!constraints.empty()) {
+    std::cout << "design constraints (g <= 0):\n";
+    for (const auto& c : constraints) std::cout << "  " << c.name << ": " << c.description << "\n";
+  }
+}
+
+int describe(const std::string& name, bool json, const std::string& options, const hapsyn::Registry& registry) {
   const hapsyn::PluginRecord& r = registry.find(name);
   if (json) {
     std::cout << r.schema.dump(2) << "\n";
@@ -121,26 +155,7 @@ int describe(const std::string& name, bool json, const hapsyn::Registry& registr
   std::cout << "options:\n";
   if (!r.schema.contains("properties") || r.schema["properties"].empty()) std::cout << "  (none)\n";
   describe_properties(r.schema, "", std::cout);
-  if (r.kind == "mechanism") {
-    auto mechanism = registry.create_mechanism(name, Json::object(), "mechanism");
-    std::cout << "design variables (default bounds; hard limits):\n";
-    for (const hapsyn::VariableDecl& v : mechanism->variables()) {
-      auto list = [](const std::vector<double>& x) {
-        std::string s;
-        for (double d : x) s += (s.empty() ? "" : ", ") + format_number(d);
-        return x.size() == 1 ? s : "[" + s + "]";
-      };
-      std::cout << "  " << std::left << std::setw(6) << v.name << (v.size > 1 ? "[" + std::to_string(v.size) + "]" : "")
-                << (v.integer ? " integer" : " real") << " [" << list(v.default_lower) << ", " << list(v.default_upper)
-                << "] " << v.unit << "; limits [" << list(v.hard_lower) << ", " << list(v.hard_upper) << "]  "
-                << v.description << "\n";
-    }
-    const auto constraints = mechanism->constraints();
-    if (!constraints.empty()) {
-      std::cout << "design constraints (g <= 0):\n";
-      for (const auto& c : constraints) std::cout << "  " << c.name << ": " << c.description << "\n";
-    }
-  }
+  if (r.kind == "mechanism") describe_design(name, options, registry);
   return 0;
 }
 
@@ -239,6 +254,7 @@ struct Arguments {
   bool quiet = false, resume = false, force = false;
   std::string plugin_name;
   bool describe_json = false;
+  std::string describe_options;
   std::string csv_out, plot_dir;
   std::vector<std::string> scene_attributes;
   std::vector<std::string> vary, reference;
@@ -280,6 +296,8 @@ void define_study_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.describe = app.add_subcommand("describe", "Show a plugin's options, defaults and units");
   c.describe->add_option("name", a.plugin_name, "Plugin name")->required();
   c.describe->add_flag("--json", a.describe_json, "Print the options schema derived from the plugin's declarations");
+  c.describe->add_option("--options", a.describe_options,
+                         "A mechanism's options as a JSON object: list the design variables they give (e.g. a URDF's)");
 
   c.scene = app.add_subcommand("scene",
                                "Build a problem file's scene alone: summary, CSV export, reachability-density plots");
@@ -355,7 +373,7 @@ int dispatch(const Commands& c, Arguments& a, const hapsyn::Registry& registry) 
   if (*c.run) return run_command(a, c, registry);
   if (*c.validate) return validate_command(a, registry);
   if (*c.plugins) return list_plugins(registry);
-  if (*c.describe) return describe(a.plugin_name, a.describe_json, registry);
+  if (*c.describe) return describe(a.plugin_name, a.describe_json, a.describe_options, registry);
   if (*c.sweep) return sweep_command(a, registry);
   if (*c.compare) {
     if (c.compare->count("--seed") > 0) a.compare.seed = a.seed;
