@@ -49,12 +49,23 @@ void print_summary(const Json& result, std::ostream& out) {
   out << "status: " << result["status"].get<std::string>();
   if (!result["message"].get<std::string>().empty()) out << " (" << result["message"].get<std::string>() << ")";
   out << "\n";
+  // A component is fixed when its resolved bounds coincide. With free ones present, the fixed
+  // ones (a serial_chain has dozens: every parameter of its file) are counted, not listed.
+  auto is_fixed = [&](const std::string& name) {
+    const Json& entry = problem["design"].value(name, Json::object());
+    return entry.contains("lower") && entry.contains("upper") && entry["lower"] == entry["upper"];
+  };
+  std::size_t fixed = 0;
+  for (auto it = problem["design"].begin(); it != problem["design"].end(); ++it) fixed += is_fixed(it.key());
+  const bool skip_fixed = fixed < problem["design"].size();
   auto print_point = [&](const Json& point, const std::string& indent) {
     out << indent << "design:";
     for (auto it = point["design"].begin(); it != point["design"].end(); ++it) {
+      if (skip_fixed && is_fixed(it.key())) continue;
       const std::string unit = problem["design"][it.key()].value("unit", "");
       out << " " << it.key() << " = " << it.value().dump() << (unit.empty() ? "" : " " + unit);
     }
+    if (skip_fixed && fixed > 0) out << " (and " << fixed << " fixed: result.json)";
     out << "\n" << indent << "objectives:";
     for (auto it = point["objectives"].begin(); it != point["objectives"].end(); ++it) {
       out << " " << it.key() << " = " << format_number(it.value().get<double>());
