@@ -4,6 +4,7 @@
 #include "serial_chain.hpp"
 
 #include "haptic6r.hpp"
+#include "haptic6r_comparison.hpp"
 #include "test_support.hpp"
 
 #include <hapsyn/error.hpp>
@@ -19,72 +20,7 @@
 using namespace hapsyn;
 using namespace hapsyn::plugins;
 
-namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-
-// The haptic 6R as a DH table, with the haptic6r-evaluate design's actuators.
-Json haptic6r_dh_options() {
-  return Json{{"dh_file", "serial_chain/haptic6r_dh.json"},
-              {"actuator_file", "haptic6r/actuators_assumed.json"},
-              {"actuator_size", {3, 3, 2, 2, 1, 1}},
-              {"actuator_gear", {2, 2, 3, 2, 3, 3}},
-              {"home", {0, 90, 0, 90, 90, 0}}};
-}
-
-// The same manipulator as a URDF (its inertials are those of the same design).
-Json haptic6r_urdf_options() {
-  Json o = haptic6r_dh_options();
-  o.erase("dh_file");
-  o["urdf"] = "serial_chain/haptic6r.urdf";
-  o["base_link"] = "base_link";
-  o["tip_link"] = "ee_link";
-  return o;
-}
-
-SerialChain serial_chain(const Json& options) { return SerialChain(make_options<SerialChainOptions>(options)); }
-
-// The full design vector at the file's values (each variable's default bounds coincide).
-std::vector<double> nominal_design(const Mechanism& m) {
-  std::vector<double> d;
-  for (const VariableDecl& v : m.variables()) {
-    for (int i = 0; i < v.size; ++i) d.push_back(v.default_lower.size() == 1 ? v.default_lower[0] : v.default_lower[static_cast<std::size_t>(i)]);
-  }
-  return d;
-}
-
-SampleSet one_pose_scene(const Eigen::Isometry3d& t) {
-  SampleSet s;
-  s.coordinates = {"x", "y", "z", "qw", "qx", "qy", "qz"};
-  s.poses.resize(1, 7);
-  const Eigen::Quaterniond q(t.linear());
-  s.poses << t.translation().x(), t.translation().y(), t.translation().z(), q.w(), q.x(), q.y(), q.z();
-  return s;
-}
-
-SampleQuantities solve_one(const MechanismModel& model, const Mechanism& mech, const SampleSet& scene, int i,
-                           Needs needs = kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits) {
-  SampleQuantities q;
-  q.scene = &scene;
-  q.sample = i;
-  const auto scratch = mech.make_scratch();
-  model.solve(scene.pose(i), needs, *scratch, q);
-  return q;
-}
-
-double wrapped_distance(const JointVector& a, const JointVector& b) {
-  double m = 0.0;
-  for (int i = 0; i < a.size(); ++i) m = std::max(m, std::abs(std::remainder(a(i) - b(i), 2.0 * kPi)));
-  return m;
-}
-
-double home_distance(const JointVector& q, const JointVector& home) {
-  double s = 0.0;
-  for (int i = 0; i < q.size(); ++i) s += std::pow(std::remainder(q(i) - home(i), 2.0 * kPi), 2);
-  return s;
-}
-
-}  // namespace
+using namespace hapsyn::plugins::test_support;
 
 TEST(LinearConstraints, ParsesSumsCoefficientsAndChains) {
   const std::vector<std::string> names = {"l1", "l2", "size[0]", "size[1]", "size[2]"};
@@ -257,78 +193,18 @@ TEST(SerialChain, ClassifiesUnreachableSingularAndLimitSamplesNeverNaN) {
 
 // The acceptance cross-check: the haptic 6R as a serial_chain (DH table and URDF) against the
 // closed-form haptic6r, sample by sample, on a human-arm workspace.
-// With `restarts` pseudo-random IK starts; the share of samples where both pick the same
-// configuration is returned.
-double compare_with_haptic6r(Json options, int restarts, const char* form);
-
 class SerialChainHaptic6R : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(SerialChainHaptic6R, AgreesWithTheClosedFormWhereBothPickTheSameConfiguration) {
   const Json options = std::string(GetParam()) == "dh" ? haptic6r_dh_options() : haptic6r_urdf_options();
-  EXPECT_GE(compare_with_haptic6r(options, 8, GetParam()), 0.95);
+  EXPECT_GE(compare_with_haptic6r(options, 8, coarse_human_arm(), GetParam()).same_share(), 0.95);
 }
 
 // The selection differs only because the numerical IK does not see every solution: with enough
 // starts it finds the closed form's closest one on every sample of the workspace.
 TEST(SerialChainHaptic6RSelection, EnoughRestartsPickTheClosedFormsConfigurationEverywhere) {
-  EXPECT_EQ(compare_with_haptic6r(haptic6r_dh_options(), 24, "dh, 24 restarts"), 1.0);
+  EXPECT_EQ(compare_with_haptic6r(haptic6r_dh_options(), 24, coarse_human_arm(), "dh, 24 restarts").same_share(), 1.0);
 }
 
 INSTANTIATE_TEST_SUITE_P(Forms, SerialChainHaptic6R, ::testing::Values("dh", "urdf"));
 
-double compare_with_haptic6r(Json options, int restarts, const char* form) {
-  options["ik"]["restarts"] = restarts;
-  const SerialChain chain = serial_chain(options);
-  const Haptic6R closed(make_options<Haptic6ROptions>(Json{{"selection", "closest_to_home"}}));
-  const std::vector<double> closed_design = {0.45, 0.45, 0.65, 0.55, 0.15, 3, 3, 2, 2, 1, 1, 2, 2, 3, 2, 3, 3};
-  const auto chain_model = chain.build(nominal_design(chain).data());
-  const auto closed_model = closed.build(closed_design.data());
-  const auto scene_plugin = test::registry().create_scene(
-      "human_arm", Json{{"lattice_step", 0.2}, {"orientations", 101}, {"joint3_steps", 9}, {"cache", false}}, "scene");
-  const SampleSet scene = scene_plugin->build(SceneRequest{});
-  const Needs all = kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits;
-  const auto cs = chain.make_scratch();
-  const auto hs = closed.make_scratch();
-  int same = 0, both_reachable = 0, closer = 0, missed = 0;
-  double max_generic = 0, max_closed = 0;
-  for (int i = 0; i < scene.size(); ++i) {
-    SampleQuantities a, b;
-    a.scene = b.scene = &scene;
-    a.sample = b.sample = i;
-    chain_model->solve(scene.pose(i), all, *cs, a);
-    closed_model->solve(scene.pose(i), all, *hs, b);
-    if (b.status == SampleStatus::kReachable && a.status != SampleStatus::kReachable) ++missed;
-    if (a.status != SampleStatus::kReachable || b.status != SampleStatus::kReachable) continue;
-    ++both_reachable;
-    const JointVector& home = chain.setup().home;
-    if (wrapped_distance(a.q, b.q) > 1e-6) {
-      // The closed form sees every solution, so a different generic pick is never closer to home.
-      EXPECT_GE(home_distance(a.q, home), home_distance(b.q, home)) << "sample " << i;
-      ++closer;
-      continue;
-    }
-    {
-      const Chain& c = static_cast<const SerialChainModel&>(*chain_model).chain();
-      ChainFrames fa, fb;
-      chain_frames(c, a.q.data(), fa);
-      chain_frames(c, b.q.data(), fb);
-      const Eigen::Isometry3d t = static_cast<const SerialChainModel&>(*chain_model).target(scene.pose(i), 7);
-      max_generic = std::max(max_generic, (fa.tip.translation() - t.translation()).norm() + (fa.tip.linear() - t.linear()).norm());
-      max_closed = std::max(max_closed, (fb.tip.translation() - t.translation()).norm() + (fb.tip.linear() - t.linear()).norm());
-    }
-    ++same;
-    EXPECT_LT(wrapped_distance(a.q, b.q), 1e-9) << "sample " << i;
-    EXPECT_LT((a.jacobian - b.jacobian).norm(), 1e-9 * (1 + b.jacobian.norm())) << "sample " << i;
-    EXPECT_LT((a.inertia - b.inertia).norm(), 1e-9 * (1 + b.inertia.norm())) << "sample " << i;
-    EXPECT_LT((a.gravity - b.gravity).norm(), 1e-9 * (1 + b.gravity.norm())) << "sample " << i;
-    EXPECT_LT((a.max_velocity - b.max_velocity).norm(), 1e-12);
-    EXPECT_LT((a.max_torque - b.max_torque).norm(), 1e-12);
-  }
-  std::printf("[ serial_chain vs haptic6r (%s) ] %d samples: %d both reachable, %d same configuration, %d a farther "
-              "one, %d reachable only in closed form; largest pose residual %.3g (closed form %.3g)\n",
-              form, scene.size(), both_reachable, same, closer, missed, max_generic, max_closed);
-  EXPECT_GT(both_reachable, scene.size() / 4);
-  EXPECT_LT(max_generic, 1e-13);
-  EXPECT_LE(missed, scene.size() / 100);
-  return both_reachable > 0 ? static_cast<double>(same) / both_reachable : 0.0;
-}
