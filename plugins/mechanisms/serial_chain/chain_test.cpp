@@ -861,6 +861,27 @@ TEST(ChainTemplate, DhPrismaticJointMovesAlongZ) {
 // ---- ChainTemplate: errors ----
 
 #ifdef HAPSYN_HAVE_URDFDOM
+// A link that is the child of two joints closes a loop; urdfdom accepts the file, the chain
+// extraction must refuse it instead of walking the cycle forever.
+TEST(ChainTemplate, UrdfClosedLoopIsRefused) {
+  const std::string path = ::testing::TempDir() + "hapsyn_loop.urdf";
+  {
+    std::ofstream f(path);
+    f << "<robot name=\"loop\"><link name=\"a\"/><link name=\"b\"/><link name=\"c\"/>"
+         "<joint name=\"j1\" type=\"continuous\"><parent link=\"a\"/><child link=\"b\"/></joint>"
+         "<joint name=\"j2\" type=\"continuous\"><parent link=\"b\"/><child link=\"c\"/></joint>"
+         "<joint name=\"j3\" type=\"continuous\"><parent link=\"c\"/><child link=\"b\"/></joint></robot>";
+  }
+  std::string message;
+  try {
+    ChainTemplate::from_urdf(path, "a", "c");
+  } catch (const hapsyn::Error& e) {
+    message = e.what();
+  }
+  EXPECT_NE(message.find("is its own ancestor (a closed kinematic loop"), std::string::npos) << message;
+  std::remove(path.c_str());
+}
+
 TEST(ChainTemplate, UrdfErrorsNameTheFileAndTheProblem) {
   expect_error([] { ChainTemplate::from_urdf("/nonexistent/arm.urdf", "a", "b"); },
                {"serial_chain: /nonexistent/arm.urdf: cannot be read"});

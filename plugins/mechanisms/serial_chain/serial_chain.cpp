@@ -122,7 +122,13 @@ std::shared_ptr<SerialChainSetup> make_setup(const SerialChainOptions& o) {
   s->parameter_count = static_cast<int>(s->chain_template.parameters().size());
   const int n = s->chain_template.dof();
   if (!o.actuator_file.empty()) {
-    s->actuators = std::make_shared<const ActuatorTable>(read_actuator_table(find_data_file(kName, "actuator_file", o.actuator_file)));
+    const std::string file = find_data_file(kName, "actuator_file", o.actuator_file);
+    try {
+      s->actuators = std::make_shared<const ActuatorTable>(read_actuator_table(file));
+    } catch (const Error& e) {
+      // The table's reader is the haptic 6R's (the format is shared); the user configured serial_chain.
+      throw Error(kName, "options.actuator_file: " + std::string(e.what()).substr(e.component().size() + 2));
+    }
   } else if (!o.actuator_size.empty() || !o.actuator_gear.empty()) {
     throw Error(kName, "options.actuator_size / actuator_gear: only with an actuator_file");
   }

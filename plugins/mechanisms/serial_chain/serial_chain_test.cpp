@@ -112,17 +112,23 @@ TEST(SerialChain, OptionErrorsNameTheOptionTheValueAndTheRule) {
   Json codes = haptic6r_dh_options();
   codes["actuator_size"] = {3, 3, 2, 2, 1, 4};
   EXPECT_NE(error(codes).find("options.actuator_size[5] = 4: must be in 1..3"), std::string::npos);
+  Json table = haptic6r_dh_options();
+  table["actuator_file"] = "serial_chain/haptic6r_dh.json";  // a file of another format
+  EXPECT_NE(error(table).find("serial_chain: options.actuator_file: "), std::string::npos) << error(table);
+  EXPECT_NE(error(table).find("haptic6r_dh.json: format = \"hapsyn-dh\": must be"), std::string::npos) << error(table);
   Json missing = haptic6r_dh_options();
   missing["dh_file"] = "no/such.json";
   EXPECT_NE(error(missing).find("options.dh_file = \"no/such.json\": no such file"), std::string::npos);
 }
 
+#ifdef HAPSYN_HAVE_URDFDOM
 TEST(SerialChain, ThreeJointChainRefusesThePoseTask) {
   const std::string m = test::error_of([] {
     serial_chain(Json{{"urdf", "serial_chain/phantom_3r.urdf"}, {"base_link", "base_link"}, {"tip_link", "stylus_tip"}});
   });
   EXPECT_NE(m.find("options.task = \"pose\": matches 6 task rows, but the chain has only 3 joints"), std::string::npos) << m;
 }
+#endif  // HAPSYN_HAVE_URDFDOM
 
 TEST(SerialChain, SolvedSamplesReproduceTheTargetThroughBaseAndToolFrames) {
   Json o = haptic6r_dh_options();
@@ -206,5 +212,59 @@ TEST(SerialChainHaptic6RSelection, EnoughRestartsPickTheClosedFormsConfiguration
   EXPECT_EQ(compare_with_haptic6r(haptic6r_dh_options(), 24, coarse_human_arm(), "dh, 24 restarts").same_share(), 1.0);
 }
 
+#ifdef HAPSYN_HAVE_URDFDOM
 INSTANTIATE_TEST_SUITE_P(Forms, SerialChainHaptic6R, ::testing::Values("dh", "urdf"));
+#else
+INSTANTIATE_TEST_SUITE_P(Forms, SerialChainHaptic6R, ::testing::Values("dh"));
+#endif
 
+#ifdef HAPSYN_HAVE_URDFDOM
+// position_axis: a 5 x n task Jacobian (two angular rows orthogonal to the tip axis, then v), and
+// the IK matches the position and the axis direction but leaves the rotation about it free.
+TEST(SerialChain, PositionAxisTaskMatchesPositionAndAxisWithFiveRows) {
+  const SerialChain m = serial_chain(Json{{"urdf", "serial_chain/ur5_like.urdf"}, {"base_link", "base_link"},
+                                          {"tip_link", "tool0"}, {"task", "position_axis"}, {"task_axis", "z"}});
+  const auto design = nominal_design(m);
+  const auto model = m.build(design.data());
+  const auto& chain = static_cast<const SerialChainModel&>(*model).chain();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  int reached = 0;
+  for (int k = 0; k < 20; ++k) {
+    JointVector q(6);
+    for (int i = 0; i < 6; ++i) q(i) = u(rng);
+    ChainFrames f;
+    chain_frames(chain, q.data(), f);
+    Eigen::Isometry3d target = f.tip;
+    target.linear() = target.linear() * Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();  // roll about z: free
+    const SampleSet scene = one_pose_scene(target);
+    const SampleQuantities out = solve_one(*model, m, scene, 0, kNeedJacobian);
+    if (out.status != SampleStatus::kReachable) continue;
+    ++reached;
+    EXPECT_EQ(out.jacobian.rows(), 5);
+    EXPECT_EQ(out.jacobian.cols(), 6);
+    ChainFrames g;
+    chain_frames(chain, out.q.data(), g);
+    EXPECT_LT((g.tip.translation() - target.translation()).norm(), 1e-9);
+    EXPECT_LT((g.tip.linear().col(2) - target.linear().col(2)).norm(), 1e-9);
+  }
+  EXPECT_GE(reached, 18);
+}
+#endif  // HAPSYN_HAVE_URDFDOM
+
+// M = (J H^-1 J^T)^-1 equals J^-T H J^-1 for the square Jacobian of a 6-joint chain.
+TEST(SerialChain, EffectiveMassIsTheInverseOfJHinvJt) {
+  const SerialChain m = serial_chain(haptic6r_dh_options());
+  const auto design = nominal_design(m);
+  const auto model = m.build(design.data());
+  const auto& chain = static_cast<const SerialChainModel&>(*model).chain();
+  JointVector q(6);
+  q << 0.3, 1.2, -0.4, 1.0, 0.6, 0.2;
+  ChainFrames f;
+  chain_frames(chain, q.data(), f);
+  const SampleQuantities out = solve_one(*model, m, one_pose_scene(f.tip), 0, kNeedJacobian | kNeedInertia | kNeedEffectiveMass);
+  ASSERT_EQ(out.status, SampleStatus::kReachable);
+  const Eigen::MatrixXd j = out.jacobian, h = out.inertia;
+  const Eigen::MatrixXd expected = j.transpose().inverse() * h * j.inverse();
+  EXPECT_LT((Eigen::MatrixXd(out.effective_mass) - expected).norm(), 1e-9 * expected.norm());
+}

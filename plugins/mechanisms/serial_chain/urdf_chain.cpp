@@ -12,6 +12,7 @@
 #include <fstream>
 #include <optional>
 #include <sstream>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -168,7 +169,16 @@ std::vector<urdf::JointConstSharedPtr> joints_between(const std::string& path, c
                                                       const urdf::LinkConstSharedPtr& tip) {
   std::vector<urdf::JointConstSharedPtr> joints;
   std::string ancestry = tip->name;
+  std::set<std::string> visited;
   for (urdf::LinkConstSharedPtr link = tip; link != base; link = link->getParent()) {
+    // urdfdom accepts a link that is the child of two joints (a closed loop) and then links
+    // parents in a cycle: walking up would never end.
+    if (!visited.insert(link->name).second) {
+      throw Error(kSerialChainName, path + ": link \"" + link->name +
+                                        "\" is its own ancestor (a closed kinematic loop: some link is the child of two "
+                                        "joints); a serial chain must be a path in a tree (ancestors: " +
+                                        ancestry + ")");
+    }
     if (!link->parent_joint) {
       throw Error(kSerialChainName, path + ": tip_link = \"" + tip->name + "\": not below base_link \"" + base->name +
                                         "\" (its ancestors: " + ancestry + ")");
