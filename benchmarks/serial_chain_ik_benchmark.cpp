@@ -2,9 +2,9 @@
 //
 // The serial_chain IK (chain_ik.hpp) against KDL's ChainIkSolverPos_LMA and
 // ChainIkSolverPos_NR_JL (ChainFkSolverPos_recursive + ChainIkSolverVel_pinv), per pose, on
-// 10,000 random reachable poses (FK of seeded random in-limit q) of four test chains
-// (chain_test_chains.hpp): UR5-like 6R, Fennel haptic 6R (full pose), Phantom-like 3R (position
-// only) and a KUKA-iiwa-like 7R (full pose).
+// 10,000 random reachable poses (FK of seeded random in-limit q) of the three shipped URDFs
+// (share/serial_chain: ur5_like.urdf and haptic6r.urdf full pose, phantom_3r.urdf position only)
+// and a KUKA-iiwa-like 7R built in code (chain_test_chains.hpp; full pose).
 //   cold: from home, then the IK's 8 seeded restarts (ik_random_start, seed 1) until success;
 //         every solver gets the same starts in the same order (KDL stops at its own success)
 //   warm: the poses of a joint-space random walk (steps uniform in +-0.05 rad per joint), each
@@ -18,6 +18,7 @@
 #include "common.hpp"
 
 #include <chain_ik.hpp>
+#include <chain_template.hpp>
 #include <chain_test_chains.hpp>
 
 #include <benchmark/benchmark.h>
@@ -54,10 +55,24 @@ struct Case {
   bool nr_jl = true;  // NR_JL solves full poses only
 };
 
+// A shipped URDF (share/serial_chain) at its file's values, as the serial_chain mechanism reads it.
+Chain shipped(const char* file, const char* base, const char* tip) {
+  const ChainTemplate t =
+      ChainTemplate::from_urdf(std::string(HAPSYN_SOURCE_DIR) + "/share/serial_chain/" + file, base, tip);
+  std::vector<double> values;
+  for (const ChainParameter& p : t.parameters()) values.push_back(p.nominal);
+  Chain chain;
+  t.instantiate(values.data(), nullptr, chain);
+  return chain;
+}
+
+// The shipped chains; no 7-DOF file is shipped, so the redundant case is a KUKA-iiwa-like chain
+// built in code (chain_test_chains.hpp).
 std::vector<Case> cases() {
-  return {{"ur5", ur5(), full_task(), {0.0, -1.2, 1.5, -1.9, -1.57, 0.0}},
-          {"fennel_6r", fennel_6r(), full_task(), {0.0, deg(90), 0.0, deg(90), deg(90), 0.0}},
-          {"phantom_3r", phantom_3r(), position_task(), {0.0, 0.3, 1.2}, false},
+  return {{"ur5_like.urdf", shipped("ur5_like.urdf", "base_link", "tool0"), full_task(), {0.0, -1.2, 1.5, -1.9, -1.57, 0.0}},
+          {"haptic6r.urdf", shipped("haptic6r.urdf", "base_link", "ee_link"), full_task(),
+           {0.0, deg(90), 0.0, deg(90), deg(90), 0.0}},
+          {"phantom_3r.urdf", shipped("phantom_3r.urdf", "world", "stylus_tip"), position_task(), {0.0, 0.3, 0.0}, false},
           {"iiwa_7r", iiwa_7r(), full_task(), {0.0, 0.5, 0.0, -1.2, 0.0, 0.8, 0.0}}};
 }
 
