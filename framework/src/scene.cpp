@@ -71,4 +71,20 @@ void check_weights(const SampleSet& samples, const std::string& component) {
   }
 }
 
+std::vector<double> orientation_option(const std::vector<double>& orientation, int dimension, const std::string& scene) {
+  if (orientation.empty()) return {};
+  const std::string shown = "options.orientation = " + Json(orientation).dump();
+  if (orientation.size() != 4) throw Error(scene, shown + ": must be empty or 4 numbers [qw, qx, qy, qz]");
+  if (dimension != 3) throw Error(scene, shown + ": needs dimension 3 (a full pose is x, y, z, qw, qx, qy, qz)");
+  double norm = 0.0;
+  for (double q : orientation) norm += q * q;
+  norm = std::sqrt(norm);
+  if (!(std::abs(norm - 1.0) <= 1e-6)) {
+    throw Error(scene, shown + ": must be a unit quaternion (norm " + Json(norm).dump() + " differs from 1 by more than 1e-6)");
+  }
+  std::vector<double> out;
+  for (double q : orientation) out.push_back(q / norm);
+  return out;
+}
+
 }  // namespace hapsyn

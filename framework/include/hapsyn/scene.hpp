@@ -97,6 +97,13 @@ void check_lattice(const SampleSet& samples, const std::string& scene);
 ///         the weights sum to zero.
 void check_weights(const SampleSet& samples, const std::string& component);
 
+/// A scene option giving one orientation to every sample (box, disc): empty, or a unit
+/// quaternion [qw, qx, qy, qz] whose norm is 1 within 1e-6, returned normalised.
+/// \param scene the plugin, for the error; \param dimension the scene's position dimension
+/// \throws Error("<scene>: options.orientation = ...: <rule>") for another size, a norm off by
+///         more than 1e-6, or dimension != 3 (a pose is x, y, z, qw, qx, qy, qz).
+std::vector<double> orientation_option(const std::vector<double>& orientation, int dimension, const std::string& scene);
+
 /// What the scene must provide, derived from the study's metrics (e.g. the human ellipsoids
 /// are built only when a metric needs them).
 struct SceneRequest {

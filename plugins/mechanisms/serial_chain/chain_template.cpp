@@ -101,6 +101,15 @@ std::size_t edit_distance(const std::string& a, const std::string& b) {
 
 }  // namespace
 
+ChainParameter mass_scale_parameter() {
+  ChainParameter scale;
+  scale.name = "mass_scale";
+  scale.description = "factor on every mass and inertia of the chain";
+  scale.nominal = 1.0;
+  scale.hard_lower = 0.0;
+  return scale;
+}
+
 std::string did_you_mean(const std::string& name, const std::vector<std::string>& candidates) {
   const std::size_t limit = std::max<std::size_t>(2, name.size() / 3);
   const std::string* best = nullptr;

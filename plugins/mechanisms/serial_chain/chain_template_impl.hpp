@@ -46,6 +46,9 @@ void scale_body(ChainBody& body, double factor);
 void apply_fennel_mass_model(const FennelMassModel& model, const double* motor_mass, Chain& chain);
 
 /// ", did you mean \"x\"?" for the closest candidate (edit distance <= max(2, |name|/3)), else "".
+/// The "mass_scale" parameter every chain file has (factor on every mass and inertia, >= 0).
+ChainParameter mass_scale_parameter();
+
 std::string did_you_mean(const std::string& name, const std::vector<std::string>& candidates);
 /// A number as the messages print it (shortest round trip, e.g. 0.45, 1e-09, inf).
 std::string show_number(double x);

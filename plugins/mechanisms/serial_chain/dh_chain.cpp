@@ -378,13 +378,8 @@ DhTable read_table(const DhReader& r, const OrderedJson& doc, std::vector<ChainP
       }
     }
   }
-  ChainParameter scale;
-  scale.name = "mass_scale";
-  scale.description = "factor on every mass and inertia of the chain";
-  scale.nominal = 1.0;
-  scale.hard_lower = 0.0;
   t.mass_scale_parameter = static_cast<int>(parameters.size());
-  parameters.push_back(scale);
+  parameters.push_back(mass_scale_parameter());
   return t;
 }
 

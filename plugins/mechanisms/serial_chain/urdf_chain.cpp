@@ -309,13 +309,8 @@ UrdfPath read_path(const std::string& path, const std::string& base_link, const 
                                       "\" has " + std::to_string(p.dof) + " moving joints: must have 1 to " +
                                       std::to_string(kMaxChainJoints));
   }
-  ChainParameter scale;
-  scale.name = "mass_scale";
-  scale.description = "factor on every mass and inertia of the chain";
-  scale.nominal = 1.0;
-  scale.hard_lower = 0.0;
   p.mass_scale_parameter = static_cast<int>(parameters.size());
-  parameters.push_back(scale);
+  parameters.push_back(mass_scale_parameter());
   return p;
 }
 

@@ -30,19 +30,7 @@ Disc::Disc(const DiscOptions& options) : options_(options) {
     throw Error(kName, "options.center = " + show(Json(options_.center)) + ": must have " + std::to_string(dim) +
                            " numbers (one per dimension)");
   }
-  if (!options_.orientation.empty()) {
-    const std::string shown = "options.orientation = " + show(Json(options_.orientation));
-    if (options_.orientation.size() != 4) throw Error(kName, shown + ": must be empty or 4 numbers [qw, qx, qy, qz]");
-    if (dim != 3) throw Error(kName, shown + ": needs dimension 3 (a full pose is x, y, z, qw, qx, qy, qz)");
-    double norm = 0.0;
-    for (double q : options_.orientation) norm += q * q;
-    norm = std::sqrt(norm);
-    if (!(std::abs(norm - 1.0) <= 1e-6)) {
-      throw Error(kName, shown + ": must be a unit quaternion (norm " + show(Json(norm)) +
-                             " differs from 1 by more than 1e-6)");
-    }
-    for (double q : options_.orientation) orientation_.push_back(q / norm);
-  }
+  orientation_ = orientation_option(options_.orientation, dim, kName);
   const double step = options_.step;
   const double reach = options_.radius / step * (1.0 + 1e-9);  // in steps, with the boundary tolerance
   const std::string too_many = "options.step = " + show(Json(step)) + ": gives ";
