@@ -382,10 +382,10 @@ class Study:
         rows = free.reshape(1, -1) if single else free
         if rows.ndim != 2:
             raise Error(f"python: design: an array with {free.ndim} dimensions is neither one design nor a batch")
-        r = self._handle.evaluate(rows, threads)
         want_samples = samples or quantities is not None
         if want_samples and not single:
             raise Error("python: design: samples=True and quantities need one design, not a batch")
+        r = self._handle.evaluate(rows, threads)
         if not single:
             return r
         out: Dict[str, Any] = {

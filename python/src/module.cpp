@@ -61,6 +61,8 @@ PYBIND11_MODULE(_hapsyn, m) {
            py::arg("write_samples"), py::arg("progress"), "Runs the solver; returns result.json's text.")
       .def("evaluate", &StudyHandle::evaluate, py::arg("designs"), py::arg("threads"),
            "Evaluates rows of free design values.")
+      .def("time_evaluate", &StudyHandle::time_evaluate, py::arg("design"), py::arg("repeats"),
+           "Seconds per evaluation of one design, timed in C++ (benchmark baseline).")
       .def("evaluate_samples", &StudyHandle::evaluate_samples, py::arg("design"), py::arg("quantities"),
            "Per-sample statuses, local values and quantities of one design.")
       .def(

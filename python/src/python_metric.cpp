@@ -160,7 +160,7 @@ PythonMetric::PythonMetric(py::object object, std::string name, const std::strin
     batch_ = py::cast<int>(object_.attr("batch_size"));
     if (batch_ < 1) throw Error("problem", where + ".batch_size = " + std::to_string(batch_) + ": must be >= 1");
   }
-  combine_ = py::hasattr(object_, "combine") ? object_.attr("combine") : py::none();
+  combine_ = py::hasattr(object_, "combine") ? py::object(object_.attr("combine")) : py::object(py::none());
 }
 
 PythonMetric::~PythonMetric() {

@@ -368,6 +368,18 @@ py::dict StudyHandle::evaluate_samples(const py::array_t<double, py::array::c_st
   return d;
 }
 
+double StudyHandle::time_evaluate(const py::array_t<double, py::array::c_style | py::array::forcecast>& design,
+                                  int repeats) {
+  if (design.ndim() != 1 || design.shape(0) != static_cast<py::ssize_t>(study_->problem->dimension()) || repeats < 1) {
+    throw Error("python", "time_evaluate: one design and repeats >= 1");
+  }
+  py::gil_scoped_release release;
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < repeats; ++i) study_->problem->evaluate(design.data(), *scratch_);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / repeats;
+}
+
 py::dict StudyHandle::scene(py::object self) const {
   const SampleSet& s = study_->problem->samples();
   auto view = [&](const double* data, py::ssize_t rows, py::ssize_t cols) {

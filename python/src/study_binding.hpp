@@ -47,6 +47,10 @@ class StudyHandle {
   /// Per-sample records of one design (status, local values) and the requested quantities.
   pybind11::dict evaluate_samples(const pybind11::array_t<double, pybind11::array::c_style | pybind11::array::forcecast>& design,
                                   const std::vector<std::string>& quantities);
+  /// Seconds per Problem::evaluate of `design` over `repeats` calls, timed in C++ with one
+  /// scratch (the baseline of benchmarks/python_evaluate_benchmark.py).
+  double time_evaluate(const pybind11::array_t<double, pybind11::array::c_style | pybind11::array::forcecast>& design,
+                       int repeats);
   /// Free vector from {"variable": value or [values]} (every free component required).
   std::vector<double> free_from_json(const std::string& design_json) const;
 

@@ -50,9 +50,11 @@ def test_python_metric_over_designs_and_threads_equals_the_cpp_twin(plugin_dir):
                                rng.uniform(0, 0.6, 50)])
     for threads in (1, 3):
         b = study.evaluate(designs, threads=threads)
-        assert b["status"] == ["feasible"] * 50  # averaging metrics: every design feasible
-        np.testing.assert_allclose(b["objectives"][:, 1], b["objectives"][:, 0], rtol=0, atol=1e-12)
-    assert (b["objectives"][:, 0] > 0).sum() > 10
+        feasible = np.array(b["status"]) == "feasible"  # the rest violate the five-bar's constraints
+        assert feasible.sum() > 10
+        np.testing.assert_allclose(b["objectives"][feasible, 1], b["objectives"][feasible, 0], rtol=0, atol=1e-12)
+        assert np.isnan(b["objectives"][~feasible]).all()
+    assert (b["objectives"][feasible, 0] > 0).sum() > 10
 
 
 def test_local_batch_is_called_once_per_chunk():
@@ -72,15 +74,21 @@ def test_local_batch_is_called_once_per_chunk():
     np.testing.assert_array_equal(e["locals"][:, 1], reachable.astype(float))
 
 
-def test_a_worst_case_python_metric_equals_gii_under_culling():
-    cpp = hapsyn.load(CULLING, set=["threads=1"]).run()
+@pytest.mark.parametrize("polish", [False, True])
+def test_a_worst_case_python_metric_equals_gii_under_culling(polish):
+    # Culling prunes with partial (batched) reductions of the worst-case Python metric.
+    sets = ["threads=1", f"solver.options.polish={json.dumps(polish)}"]
+    cpp = hapsyn.load(CULLING, set=sets).run()
     problem = json.loads(CULLING.read_text())
     problem["objectives"] = [{"metric": "py_gii", "name": "gii"}]
-    problem["threads"] = 1
-    py = hapsyn.load(problem, metrics={"py_gii": PyGII()}).run()
+    py = hapsyn.load(problem, set=sets, metrics={"py_gii": PyGII()}).run()
     assert py.status == cpp.status == "converged"
-    assert py.best_design == cpp.best_design
     assert abs(py.best_objectives["gii"] - cpp.best_objectives["gii"]) <= 1e-12
+    if not polish:  # the grid optimum: the same design exactly
+        assert py.best_design == cpp.best_design
+    else:  # SQP from the same grid optimum, on values that differ in the last bits (NumPy's SVD)
+        for name, value in cpp.best_design.items():
+            assert abs(py.best_design[name] - value) <= 1e-9
 
 
 def test_python_metric_errors():
