@@ -178,3 +178,26 @@ def test_scene_is_a_zero_copy_view_that_keeps_the_study_alive():
     gc.collect()
     np.testing.assert_array_equal(samples, first)  # still valid: the view owns the study
     assert math.isclose(samples[:, 0].max() - samples[:, 0].min(), 0.1)
+
+
+def test_version_and_registered_metrics():
+    assert hapsyn.version() == hapsyn.__version__ and hapsyn.__version__.count(".") == 2
+    assert hapsyn.Error.__mro__[1] is ValueError
+
+    class M:
+        locals = [("v", "min", "")]
+        needs = []
+
+        def local_batch(self, q):
+            return np.ones(len(q["status"]))
+
+    hapsyn.register_metric("py_one", M)
+    try:
+        assert hapsyn.registered_metrics()["py_one"] is M
+        study = hapsyn.load(TABLE2, set=['objectives=[{"metric": "py_one"}]', "scene.options.step=0.01"])
+        assert study.evaluate([])["objectives"] == {"py_one": 1.0}
+    finally:
+        hapsyn.unregister_metric("py_one")
+    assert "py_one" not in hapsyn.registered_metrics()
+    with pytest.raises(TypeError, match="has no 'locals'"):
+        hapsyn.register_metric("bad", object())
