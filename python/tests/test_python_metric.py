@@ -110,6 +110,8 @@ def test_python_metric_errors():
         hapsyn.load(problem, metrics={"py": Raises}).evaluate([])
     with pytest.raises(ZeroDivisionError, match="inside the metric"):
         hapsyn.load(problem, metrics={"py": Raises}).run()
+    with pytest.raises(ZeroDivisionError, match="inside the metric"):  # raised on a worker thread
+        hapsyn.load(problem, metrics={"py": Raises}).evaluate([], threads=3)
 
     class BadReduction(PyMeanIsotropy):
         locals = [("isotropy", "mean", "")]
