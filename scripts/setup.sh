@@ -10,6 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libnlopt-cxx-dev liborocos-kdl-dev liburdfdom-dev libtinyxml-dev
   gnuplot-nox
+  python3-dev python3-numpy python3-pytest pybind11-dev
 )
 # Extra packages requested through the environment (e.g. HAPSYN_EXTRA_PACKAGES="gnuplot").
 if [[ -n "${HAPSYN_EXTRA_PACKAGES:-}" ]]; then

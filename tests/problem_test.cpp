@@ -7,6 +7,8 @@
 #include <Eigen/SVD>
 #include <boost/filesystem.hpp>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -454,4 +456,123 @@ TEST(WeightedSamples, PositionMapsAreEachPositionsWeightedMean) {
   EXPECT_NEAR(maps.values(1, 0), (3.0 + 5.0) / 2, 1e-15);
   // The whole scene: the weighted mean over all samples (the zero weights count for nothing).
   EXPECT_NEAR(value_of(*problem), (2.0 * 1 + 1.0 * 4 + 1.0 * 10) / 4, 1e-15);
+}
+
+// ---- Batched metrics (Metric::batch_size, local_batch) ------------------------------------------
+
+namespace {
+
+// A metric forwarding to another one, declaring a batch size: the evaluator must give exactly
+// the per-sample path's results (local_batch defaults to local() per sample).
+class Batched final : public hapsyn::Metric {
+ public:
+  Batched(std::shared_ptr<const hapsyn::Metric> inner, int batch) : inner_(std::move(inner)), batch_(batch) {}
+  void local(const hapsyn::SampleQuantities& q, double* out) const override { inner_->local(q, out); }
+  void local_batch(const hapsyn::SampleQuantities* const* q, int count, double* out) const override {
+    ++calls;
+    largest = std::max(largest.load(), count);
+    hapsyn::Metric::local_batch(q, count, out);
+  }
+  int batch_size() const override { return batch_; }
+  hapsyn::Needs needs() const override { return inner_->needs(); }
+  std::vector<std::string> scene_attributes() const override { return inner_->scene_attributes(); }
+  std::vector<hapsyn::LocalValue> locals() const override { return inner_->locals(); }
+  double combine(const double* reduced, int samples) const override { return inner_->combine(reduced, samples); }
+  hapsyn::Aggregation aggregation() const override { return inner_->aggregation(); }
+  mutable std::atomic<int> calls{0};
+  mutable std::atomic<int> largest{0};
+
+ private:
+  std::shared_ptr<const hapsyn::Metric> inner_;
+  int batch_;
+};
+
+// The study's problem with every metric wrapped in Batched (the study must outlive it).
+std::shared_ptr<hapsyn::Problem> batched(const hapsyn::Study& study, int batch,
+                                         std::vector<std::shared_ptr<Batched>>* wrappers = nullptr) {
+  const hapsyn::Problem& p = *study.problem;
+  std::vector<hapsyn::MetricEntry> metrics;
+  for (const hapsyn::MetricEntry& m : p.metrics()) {
+    auto b = std::make_shared<Batched>(m.metric, batch);
+    if (wrappers) wrappers->push_back(b);
+    metrics.push_back({m.plugin, b});
+  }
+  const std::shared_ptr<const hapsyn::Mechanism> mechanism(std::shared_ptr<const hapsyn::Mechanism>{}, &p.mechanism());
+  return std::make_shared<hapsyn::Problem>("fivebar", mechanism, std::make_shared<hapsyn::SampleSet>(p.samples()),
+                                           metrics, p.objectives(), p.design_space());
+}
+
+void expect_same(const hapsyn::Evaluation& a, const hapsyn::Evaluation& b, const std::string& what) {
+  EXPECT_EQ(a.status, b.status) << what;
+  EXPECT_EQ(a.failed_sample, b.failed_sample) << what;
+  EXPECT_EQ(a.failed_constraint, b.failed_constraint) << what;
+  if (a.status == EvalStatus::kFeasible) {
+    EXPECT_EQ(a.objectives, b.objectives) << what;  // bit for bit
+    EXPECT_EQ(a.reduced, b.reduced) << what;
+    EXPECT_EQ(a.critical_samples, b.critical_samples) << what;
+    EXPECT_EQ(a.score, b.score) << what;
+    EXPECT_EQ(a.samples_evaluated, b.samples_evaluated) << what;
+  }
+  if (a.status == EvalStatus::kPruned) {
+    EXPECT_EQ(a.critical_samples, b.critical_samples) << what;
+  }
+}
+
+}  // namespace
+
+TEST(BatchedMetric, GivesThePerSampleResultsBitForBitWithPruningSubsetsAndFailures) {
+  const auto study = study_with({"gii", "gdi"});
+  for (int batch : {1, 7, 64, 100000}) {
+    std::vector<std::shared_ptr<Batched>> wrappers;
+    const auto problem = batched(study, batch, &wrappers);
+    auto ws = study.problem->make_eval_scratch();
+    auto wb = problem->make_eval_scratch();
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    int statuses[4] = {0, 0, 0, 0};
+    int pruned_count = 0;
+    for (int trial = 0; trial < 200; ++trial) {
+      const std::vector<double> x = trial == 0 ? kGood
+                                               : std::vector<double>{0.3 * u(rng), 0.05 + 0.25 * u(rng),
+                                                                     0.05 + 0.25 * u(rng), 0.6 * u(rng)};
+      const hapsyn::Evaluation plain = study.problem->evaluate(x.data(), *ws);
+      expect_same(plain, problem->evaluate(x.data(), *wb), "full, batch " + std::to_string(batch));
+      ++statuses[static_cast<int>(plain.status)];
+      hapsyn::EvalOptions prune;
+      prune.prune_below = 1.2;  // GII + GDI of the good design is 1.40
+      const hapsyn::Evaluation pruned = study.problem->evaluate(x.data(), *ws, prune);
+      expect_same(pruned, problem->evaluate(x.data(), *wb, prune), "pruned, batch " + std::to_string(batch));
+      pruned_count += pruned.status == EvalStatus::kPruned ? 1 : 0;
+      std::vector<int> subset;
+      for (int s = 0; s < study.problem->samples().size(); s += 3) subset.push_back(s);
+      hapsyn::EvalOptions part;
+      part.subset = &subset;
+      expect_same(study.problem->evaluate(x.data(), *ws, part), problem->evaluate(x.data(), *wb, part),
+                  "subset, batch " + std::to_string(batch));
+    }
+    EXPECT_GT(statuses[static_cast<int>(EvalStatus::kFeasible)], 10);
+    EXPECT_GT(statuses[static_cast<int>(EvalStatus::kSampleFailed)], 10);
+    EXPECT_GT(statuses[static_cast<int>(EvalStatus::kConstraintViolated)], 10);
+    EXPECT_GT(pruned_count, 10);
+    EXPECT_LE(wrappers[0]->largest.load(), batch);
+    // Per-sample records (the SampleCallback) and the parallel path agree too.
+    const auto a = hapsyn::record_samples(*study.problem, study.problem->full_design(kGood.data()));
+    const auto b = hapsyn::record_samples(*problem, problem->full_design(kGood.data()));
+    EXPECT_EQ(a.status, b.status);
+    EXPECT_EQ(a.locals, b.locals);
+    expect_same(study.problem->evaluate_parallel(kGood.data(), 3), problem->evaluate_parallel(kGood.data(), 3),
+                "parallel, batch " + std::to_string(batch));
+  }
+}
+
+TEST(BatchedMetric, LocalBatchIsCalledOncePerChunkOfSamples) {
+  const auto study = study_with({"gii"});
+  std::vector<std::shared_ptr<Batched>> wrappers;
+  const auto problem = batched(study, 50, &wrappers);
+  auto ws = problem->make_eval_scratch();
+  const hapsyn::Evaluation& e = problem->evaluate(kGood.data(), *ws);
+  ASSERT_EQ(e.status, EvalStatus::kFeasible);
+  const int n = problem->samples().size();
+  EXPECT_EQ(wrappers[0]->calls.load(), (n + 49) / 50);
+  EXPECT_EQ(wrappers[0]->largest.load(), 50);
 }

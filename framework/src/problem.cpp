@@ -66,6 +66,7 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
                                  "' does not provide (need flags " + std::to_string(missing) + ")");
     }
     needs_ |= metric.needs();
+    batch_ = std::max(batch_, metric.batch_size());
     const bool wc = metric.aggregation() == Aggregation::kWorstCase;
     worst_case_ = worst_case_ && wc;
     any_worst_case_ = any_worst_case_ || wc;
@@ -134,6 +135,11 @@ std::unique_ptr<Problem::EvalScratch> Problem::make_eval_scratch() const {
   ws->g.resize(constraint_names_.size());
   for (std::size_t m = 0; m < metrics_.size(); ++m) {
     ws->nested_locals.emplace_back(static_cast<std::size_t>(local_offset_[m + 1] - local_offset_[m]));
+  }
+  if (batch_ > 0) {
+    ws->batch_quantities.resize(static_cast<std::size_t>(batch_));
+    for (const SampleQuantities& q : ws->batch_quantities) ws->batch_pointers.push_back(&q);
+    ws->batch_locals.resize(static_cast<std::size_t>(batch_) * local_reduction_.size());
   }
   ws->result.objectives.resize(objectives_.size());
   ws->objective_bound.resize(objectives_.size());
@@ -271,14 +277,20 @@ bool Problem::constraints_hold(EvalScratch& ws, Evaluation& out) const {
 }
 
 void Problem::accumulate_locals(int sample, EvalScratch& ws, bool keep_locals) const {
+  for (std::size_t m = 0; m < metrics_.size(); ++m) {
+    ws.quantities.attributes = metric_attributes_[m].data();
+    ws.quantities.attribute_count = static_cast<int>(metric_attributes_[m].size());
+    metrics_[m].metric->local(ws.quantities, ws.locals.data() + local_offset_[m]);
+  }
+  fold_locals(sample, ws, keep_locals);
+}
+
+void Problem::fold_locals(int sample, EvalScratch& ws, bool keep_locals) const {
   // The sample's weight factor for sum reductions (1 when unweighted: v * 1.0 is v exactly).
   const double scale = sample_scale_.empty() ? 1.0 : sample_scale_[static_cast<std::size_t>(sample)];
   for (std::size_t m = 0; m < metrics_.size(); ++m) {
     const int begin = local_offset_[m];
     const int end = local_offset_[m + 1];
-    ws.quantities.attributes = metric_attributes_[m].data();
-    ws.quantities.attribute_count = static_cast<int>(metric_attributes_[m].size());
-    metrics_[m].metric->local(ws.quantities, ws.locals.data() + begin);
     for (int i = begin; i < end; ++i) {
       const double v = ws.locals[static_cast<std::size_t>(i)];
       if (!std::isfinite(v)) {
@@ -369,6 +381,7 @@ const Evaluation& Problem::evaluate(const double* free_design, EvalScratch& ws, 
                                          [](const Objective& o) { return o.sense == Sense::kMaximize; });
   const std::vector<double>* front = options.prune_dominated_by;
   const bool prune_front = front && !front->empty() && worst_case_ && all_maximized;
+  if (batch_ > 0) return evaluate_batched(*model, ws, options, prune, prune_front);
   const std::vector<int>& indices = options.subset ? *options.subset : order_;
   for (const int sample : indices) {
     // Set before solve(): a mechanism may read the scene (its dimension, its attributes).
@@ -387,6 +400,72 @@ const Evaluation& Problem::evaluate(const double* free_design, EvalScratch& ws, 
     if ((prune_front && front_dominates(*front, ws)) ||
         (prune && score_bound(ws, out.samples_evaluated) < options.prune_below)) {
       mark_pruned(ws, out);
+      return out;
+    }
+  }
+  combine_objectives(ws, out);
+  return out;
+}
+
+// The per-sample loop of evaluate() for studies with a batched metric (Metric::batch_size()):
+// up to batch_ samples are solved, their local values computed with one local_batch() call per
+// metric, then reduced one by one exactly as the per-sample loop does (same order, same checks,
+// same pruning decisions after each sample). Kept apart so that the per-sample loop is untouched.
+const Evaluation& Problem::evaluate_batched(const MechanismModel& model, EvalScratch& ws, const EvalOptions& options,
+                                            bool prune, bool prune_front) const {
+  Evaluation& out = ws.result;
+  const std::vector<int>& indices = options.subset ? *options.subset : order_;
+  const std::size_t n = indices.size();
+  long long folded = 0;  // samples reduced so far (the per-sample loop's samples_evaluated)
+  for (std::size_t first = 0; first < n; first += static_cast<std::size_t>(batch_)) {
+    const int capacity = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(batch_), n - first));
+    int count = 0;
+    bool failed = false;
+    for (; count < capacity; ++count) {
+      const int sample = indices[first + static_cast<std::size_t>(count)];
+      SampleQuantities& q = ws.batch_quantities[static_cast<std::size_t>(count)];
+      q.sample = sample;
+      q.scene = samples_.get();
+      model.solve(samples_->pose(sample), needs_, *ws.scratch, q);
+      ++out.samples_evaluated;
+      if (q.status != SampleStatus::kReachable && any_worst_case_) {
+        failed = true;  // the samples before it are reduced first, as the per-sample loop would
+        break;
+      }
+    }
+    for (std::size_t m = 0; m < metrics_.size(); ++m) {
+      for (int i = 0; i < count; ++i) {
+        SampleQuantities& q = ws.batch_quantities[static_cast<std::size_t>(i)];
+        q.attributes = metric_attributes_[m].data();
+        q.attribute_count = static_cast<int>(metric_attributes_[m].size());
+      }
+      if (count > 0) {
+        metrics_[m].metric->local_batch(ws.batch_pointers.data(), count,
+                                        ws.batch_locals.data() + static_cast<std::size_t>(batch_) * local_offset_[m]);
+      }
+    }
+    for (int i = 0; i < count; ++i) {
+      const SampleQuantities& q = ws.batch_quantities[static_cast<std::size_t>(i)];
+      for (std::size_t m = 0; m < metrics_.size(); ++m) {
+        const int k = local_offset_[m + 1] - local_offset_[m];
+        const double* block = ws.batch_locals.data() + static_cast<std::size_t>(batch_) * local_offset_[m];
+        std::copy(block + i * k, block + (i + 1) * k, ws.locals.begin() + local_offset_[m]);
+      }
+      ws.quantities.status = q.status;  // for fold_locals' messages
+      fold_locals(q.sample, ws, options.on_sample != nullptr);
+      ++folded;
+      if (options.on_sample) (*options.on_sample)(q.sample, q, ws.nested_locals);
+      if ((prune_front && front_dominates(*options.prune_dominated_by, ws)) ||
+          (prune && score_bound(ws, folded) < options.prune_below)) {
+        mark_pruned(ws, out);
+        return out;
+      }
+    }
+    if (failed) {
+      const SampleQuantities& q = ws.batch_quantities[static_cast<std::size_t>(count)];
+      out.status = EvalStatus::kSampleFailed;
+      out.failed_sample = q.sample;
+      out.failed_status = q.status;
       return out;
     }
   }

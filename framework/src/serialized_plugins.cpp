@@ -41,6 +41,14 @@ class SerializedMetric final : public Metric {
     Lock lock(mutex_);
     return inner_->aggregation();
   }
+  int batch_size() const override {
+    Lock lock(mutex_);
+    return inner_->batch_size();
+  }
+  void local_batch(const SampleQuantities* const* q, int count, double* out) const override {
+    Lock lock(mutex_);
+    inner_->local_batch(q, count, out);
+  }
 
  private:
   std::shared_ptr<Metric> inner_;

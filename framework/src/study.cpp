@@ -6,8 +6,11 @@
 #include <hapsyn/schema.hpp>
 #include <hapsyn/study.hpp>
 
+#include "serialized_plugins.hpp"
+
 #include <boost/filesystem.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -63,20 +66,49 @@ void note_plugin(Study& study, const Registry& registry, const std::string& name
 
 // The metric and the objective of each entry of the "objectives" section (its options resolved
 // in place); the scene attributes the metrics need are added to `request`.
-void load_objectives(Json& objs, const Registry& registry, Study& study, std::vector<MetricEntry>& metrics,
-                     std::vector<Objective>& objectives, SceneRequest& request) {
+// An in-process metric (InProcessMetric): created by its factory, serialised when it says so, and
+// recorded among the study's plugins once.
+std::shared_ptr<Metric> create_in_process(const InProcessMetric& m, const Json& options, const std::string& path,
+                                          Study& study) {
+  std::shared_ptr<Metric> metric = m.create(options, path);
+  if (!metric) throw Error("problem", path + ".metric = \"" + m.name + "\": the metric's factory returned nothing");
+  if (m.thread_safety == ThreadSafety::kSerialized) metric = serialized(std::move(metric));
+  const bool known = std::any_of(study.plugins.begin(), study.plugins.end(),
+                                 [&](const PluginRecord& p) { return p.name == m.name && p.file == m.origin; });
+  if (!known) {
+    PluginRecord record;
+    record.name = m.name;
+    record.kind = "metric";
+    record.version = m.version;
+    record.description = m.description;
+    record.thread_safety = m.thread_safety;
+    record.file = m.origin;
+    study.plugins.push_back(record);
+  }
+  return metric;
+}
+
+void load_objectives(Json& objs, const Registry& registry, const std::vector<InProcessMetric>& in_process, Study& study,
+                     std::vector<MetricEntry>& metrics, std::vector<Objective>& objectives, SceneRequest& request) {
   std::set<std::string> objective_names;
   for (std::size_t i = 0; i < objs.size(); ++i) {
     const std::string path = "objectives[" + std::to_string(i) + "]";
     Json& o = objs[i];
     const std::string metric_name = o["metric"];
-    const PluginRecord& record = registry.find(metric_name);
-    if (record.kind != "metric") {
-      throw Error("problem", path + ".metric = \"" + metric_name + "\": '" + metric_name + "' is a " + record.kind +
-                                 " plugin, not a metric plugin");
+    const auto own = std::find_if(in_process.begin(), in_process.end(),
+                                  [&](const InProcessMetric& m) { return m.name == metric_name; });
+    std::shared_ptr<Metric> metric;
+    if (own != in_process.end()) {
+      metric = create_in_process(*own, o["options"], path, study);
+    } else {
+      const PluginRecord& record = registry.find(metric_name);
+      if (record.kind != "metric") {
+        throw Error("problem", path + ".metric = \"" + metric_name + "\": '" + metric_name + "' is a " + record.kind +
+                                   " plugin, not a metric plugin");
+      }
+      metric = registry.create_metric(metric_name, o["options"], path, &o["options"]);
+      note_plugin(study, registry, metric_name);
     }
-    std::shared_ptr<Metric> metric = registry.create_metric(metric_name, o["options"], path, &o["options"]);
-    note_plugin(study, registry, metric_name);
     if (!o.contains("name")) o["name"] = metric_name;
     const std::string name = o["name"];
     if (!objective_names.insert(name).second) {
@@ -165,7 +197,7 @@ void load_indicators(const Json& resolved, const Problem& problem, Study& study)
 
 }  // namespace
 
-Study load_study(const Json& input, const Registry& registry) {
+Study load_study(const Json& input, const Registry& registry, const std::vector<InProcessMetric>& in_process) {
   if (!input.is_object()) throw Error("problem", "the problem must be a JSON object");
   Json without_design = input;
   without_design.erase("design");
@@ -191,7 +223,7 @@ Study load_study(const Json& input, const Registry& registry) {
   std::vector<MetricEntry> metrics;
   std::vector<Objective> objectives;
   SceneRequest request;
-  load_objectives(resolved["objectives"], registry, study, metrics, objectives, request);
+  load_objectives(resolved["objectives"], registry, in_process, study, metrics, objectives, request);
 
   // Solver (created before the scene is built: its options are checked before any work).
   study.solver_plugin = resolved["solver"]["plugin"];

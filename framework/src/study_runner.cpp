@@ -208,7 +208,8 @@ Json run_study(Study& study, const RunOptions& options) {
   SolverContext context;
   context.threads = run.threads;
   context.seed = run.seed;
-  context.progress = options.quiet ? nullptr : &std::cerr;
+  context.progress = options.quiet ? nullptr : options.progress ? options.progress : &std::cerr;
+  context.stop = options.stop;
   context.output_directory = run.out_dir;
   context.log = log ? &log : nullptr;
   context.checkpoint_file = run.checkpoint_file.string();

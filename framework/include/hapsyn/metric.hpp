@@ -81,6 +81,22 @@ class Metric {
   virtual double combine(const double* reduced, int samples) const { return reduced[0]; }
   /// kWorstCase when every reduction is min or max (the default rule), else kAveraging.
   virtual Aggregation aggregation() const;
+
+  /// Optional batch interface, for metrics whose per-call cost dwarfs a sample's (a metric
+  /// written in an interpreted language: hapsyn's Python binding). 0 (the default): the
+  /// evaluator calls local() once per sample, as always. B > 0: the evaluator solves up to B
+  /// samples of a design, then calls local_batch() once for them, then reduces them one by one
+  /// in the same order as the per-sample path (so the result is the same to the last bit for a
+  /// metric whose local_batch agrees with its local()). Read ONCE, at load.
+  virtual int batch_size() const { return 0; }
+  /// The local values of `count` samples (1 <= count <= batch_size()): q[i] is sample i's
+  /// quantities (as for local(), attributes resolved), out[i * locals().size() + j] its j-th
+  /// local value. Same rules as local() (worst-case metrics see reachable samples only), except
+  /// that it may allocate. Default: local() per sample.
+  virtual void local_batch(const SampleQuantities* const* q, int count, double* out) const {
+    const int k = static_cast<int>(locals().size());
+    for (int i = 0; i < count; ++i) local(*q[i], out + static_cast<long>(i) * k);
+  }
 };
 
 }  // namespace hapsyn

@@ -145,6 +145,11 @@ class Problem {
     std::vector<double> g;
     std::vector<std::vector<double>> nested_locals;  // for SampleCallback
     std::vector<double> objective_bound;             // per objective, for Pareto pruning
+    // Batched evaluation (a metric with Metric::batch_size() > 0), empty otherwise: the
+    // quantities of up to batch samples, pointers to them, and their flat local values.
+    std::vector<SampleQuantities> batch_quantities;
+    std::vector<const SampleQuantities*> batch_pointers;
+    std::vector<double> batch_locals;
     Evaluation result;
   };
   std::unique_ptr<EvalScratch> make_eval_scratch() const;
@@ -185,6 +190,9 @@ class Problem {
   // The steps of evaluate().
   bool constraints_hold(EvalScratch& ws, Evaluation& out) const;
   void accumulate_locals(int sample, EvalScratch& ws, bool keep_locals) const;
+  void fold_locals(int sample, EvalScratch& ws, bool keep_locals) const;
+  const Evaluation& evaluate_batched(const MechanismModel& model, EvalScratch& ws, const EvalOptions& options,
+                                     bool prune, bool prune_front) const;
   double score_bound(const EvalScratch& ws, long long samples) const;
   void mark_pruned(const EvalScratch& ws, Evaluation& out) const;
   void combine_objectives(const EvalScratch& ws, Evaluation& out) const;
@@ -208,6 +216,7 @@ class Problem {
   bool worst_case_ = true;
   bool any_worst_case_ = false;
   Needs needs_ = 0;
+  int batch_ = 0;  // largest Metric::batch_size(); 0 = the per-sample path only
 };
 
 }  // namespace hapsyn

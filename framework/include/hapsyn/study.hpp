@@ -9,6 +9,7 @@
 #include <hapsyn/registry.hpp>
 #include <hapsyn/solver.hpp>
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,6 +33,19 @@ struct Study {
   std::string reference_front_missing;
 };
 
+/// A metric made by the caller rather than loaded from a plugin file (hapsyn's Python binding:
+/// a metric class written in Python). An objective whose "metric" is `name` gets one from
+/// `create`, with the objective's "options" object as given (no schema: the factory checks them,
+/// throwing Error) and the objective's path ("objectives[i]") for messages; result.json lists
+/// it among the plugins with `file` = `origin`.
+struct InProcessMetric {
+  std::string name, version, description;
+  std::string origin = "in-process";
+  std::function<std::shared_ptr<Metric>(const Json& options, const std::string& json_path)> create;
+  /// kSerialized: the framework never calls two of its methods at once (see options.hpp).
+  ThreadSafety thread_safety = ThreadSafety::kSerialized;
+};
+
 /// Validates a problem document completely and builds the study; nothing runs. In order:
 /// the framework's own schema of a problem file (defaults filled in), the mechanism and its
 /// options, the "design" section against the mechanism's variables (build_design_space), each
@@ -44,6 +58,8 @@ struct Study {
 /// \param registry finds and creates the plugins; must outlive the study
 /// \throws Error naming the JSON path, the value and the rule (component "problem" for the
 ///         file's own rules, the plugin's name for its options), or a scene's lattice error.
-Study load_study(const Json& problem, const Registry& registry);
+/// \param in_process metrics known by name besides the registry's plugins (they take
+///        precedence over a plugin of the same name)
+Study load_study(const Json& problem, const Registry& registry, const std::vector<InProcessMetric>& in_process = {});
 
 }  // namespace hapsyn

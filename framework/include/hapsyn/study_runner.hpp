@@ -6,7 +6,9 @@
 #include <hapsyn/json.hpp>
 #include <hapsyn/study.hpp>
 
+#include <atomic>
 #include <cstdint>
+#include <ostream>
 #include <optional>
 #include <string>
 
@@ -23,6 +25,12 @@ struct RunOptions {
   /// Continue from the output directory's checkpoint.json (solvers that checkpoint); the seed
   /// is the checkpoint's unless given.
   bool resume = false;
+  /// Where progress lines go instead of stderr (not null; ignored when `quiet`), e.g. a stream
+  /// that hands them to a Python callback.
+  std::ostream* progress = nullptr;
+  /// Handed to the solver as SolverContext::stop: setting it asks the run to stop (status
+  /// "stopped", best so far). Null: no stop request possible.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 /// Runs a loaded study: solves, then writes result.json (atomically) and, for a best design,

@@ -1,0 +1,209 @@
+#include "python_metric.hpp"
+
+#include <hapsyn/error.hpp>
+#include <hapsyn/json.hpp>
+#include <hapsyn/scene.hpp>
+
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace py = pybind11;
+
+namespace hapsyn::python {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+struct QuantityName {
+  const char* name;
+  Needs need;
+};
+constexpr QuantityName kQuantities[] = {
+    {"jacobian", kNeedJacobian}, {"inertia", kNeedInertia},           {"effective_mass", kNeedEffectiveMass},
+    {"gravity", kNeedGravity},   {"max_velocity", kNeedActuatorLimits}, {"max_torque", kNeedActuatorLimits},
+};
+
+// count x rows x cols (or count x rows for vectors) from one member of each sample's quantities;
+// the shape is the largest a reachable sample has, NaN elsewhere (unreachable samples' members
+// hold whatever the mechanism left there and must not be read).
+template <class Get>
+py::array stack(const SampleQuantities* const* q, int count, bool matrix, Get get) {
+  Eigen::Index rows = 0, cols = 0;
+  for (int i = 0; i < count; ++i) {
+    if (q[i]->status != SampleStatus::kReachable) continue;
+    const auto& m = get(*q[i]);
+    rows = std::max(rows, m.rows());
+    cols = std::max(cols, m.cols());
+  }
+  std::vector<py::ssize_t> shape{count, static_cast<py::ssize_t>(rows)};
+  if (matrix) shape.push_back(static_cast<py::ssize_t>(cols));
+  py::array_t<double> out(shape);
+  double* data = out.mutable_data();
+  const Eigen::Index stride = rows * (matrix ? cols : 1);
+  std::fill(data, data + count * stride, kNaN);
+  for (int i = 0; i < count; ++i) {
+    if (q[i]->status != SampleStatus::kReachable) continue;
+    const auto& m = get(*q[i]);
+    double* row = data + i * stride;
+    for (Eigen::Index r = 0; r < m.rows(); ++r) {
+      for (Eigen::Index c = 0; c < m.cols(); ++c) row[matrix ? r * cols + c : r] = m(r, c);  // C order
+    }
+  }
+  return std::move(out);
+}
+
+Reduction reduction_of(const std::string& word, const std::string& where) {
+  if (word == "min") return Reduction::kMin;
+  if (word == "max") return Reduction::kMax;
+  if (word == "sum") return Reduction::kSum;
+  throw Error("problem", where + " = \"" + word + "\": must be one of \"min\", \"max\", \"sum\"");
+}
+
+}  // namespace
+
+Needs need_of(const std::string& quantity, const std::string& component, const std::string& json_path) {
+  std::string known;
+  for (const QuantityName& n : kQuantities) {
+    if (quantity == n.name) return n.need;
+    known += (known.empty() ? "" : ", ") + std::string(n.name);
+  }
+  throw Error(component, json_path + " = \"" + quantity + "\": unknown quantity (known: " + known + ")");
+}
+
+py::dict quantities_dict(const SampleQuantities* const* q, int count, Needs needs,
+                         const std::vector<std::string>& attributes) {
+  py::dict d;
+  py::array_t<long long> sample(count);
+  py::array_t<std::int8_t> status(count);
+  for (int i = 0; i < count; ++i) {
+    sample.mutable_at(i) = q[i]->sample;
+    status.mutable_at(i) = static_cast<std::int8_t>(q[i]->status);
+  }
+  d["sample"] = sample;
+  d["status"] = status;
+  const int dimension = count > 0 && q[0]->scene ? q[0]->scene->dimension() : 0;
+  py::array_t<double> pose(std::vector<py::ssize_t>{count, dimension});
+  for (int i = 0; i < count; ++i) {
+    const double* p = q[i]->scene->pose(q[i]->sample);
+    std::copy(p, p + dimension, pose.mutable_data() + i * dimension);
+  }
+  d["pose"] = pose;
+  d["q"] = stack(q, count, false, [](const SampleQuantities& s) -> const JointVector& { return s.q; });
+  if (needs & kNeedJacobian) {
+    d["jacobian"] = stack(q, count, true, [](const SampleQuantities& s) -> const TaskJointMatrix& { return s.jacobian; });
+  }
+  if (needs & kNeedInertia) {
+    d["inertia"] = stack(q, count, true, [](const SampleQuantities& s) -> const JointMatrix& { return s.inertia; });
+  }
+  if (needs & kNeedEffectiveMass) {
+    d["effective_mass"] =
+        stack(q, count, true, [](const SampleQuantities& s) -> const TaskMatrix& { return s.effective_mass; });
+  }
+  if (needs & kNeedGravity) {
+    d["gravity"] = stack(q, count, false, [](const SampleQuantities& s) -> const JointVector& { return s.gravity; });
+  }
+  if (needs & kNeedActuatorLimits) {
+    d["max_velocity"] =
+        stack(q, count, false, [](const SampleQuantities& s) -> const JointVector& { return s.max_velocity; });
+    d["max_torque"] = stack(q, count, false, [](const SampleQuantities& s) -> const JointVector& { return s.max_torque; });
+  }
+  py::dict attribute_arrays;
+  for (std::size_t k = 0; k < attributes.size(); ++k) {
+    const int kk = static_cast<int>(k);
+    const AttributeMatrix* m = count > 0 && q[0]->attributes && kk < q[0]->attribute_count ? q[0]->attributes[kk] : nullptr;
+    if (!m) continue;  // the scene lacks it: absent from the dict, as attribute_row() gives null
+    const Eigen::Index cols = m->cols();
+    py::array_t<double> a(std::vector<py::ssize_t>{count, static_cast<py::ssize_t>(cols)});
+    for (int i = 0; i < count; ++i) {
+      const double* row = q[i]->attribute_row(kk);
+      std::copy(row, row + cols, a.mutable_data() + i * cols);
+    }
+    attribute_arrays[py::str(attributes[k])] = a;
+  }
+  d["attributes"] = attribute_arrays;
+  return d;
+}
+
+PythonMetric::PythonMetric(py::object object, std::string name, const std::string& json_path)
+    : object_(std::move(object)), name_(std::move(name)) {
+  const std::string where = json_path.empty() ? name_ : json_path;
+  auto require = [&](const char* attribute) {
+    if (!py::hasattr(object_, attribute)) {
+      throw Error("problem", where + ": the Python metric '" + name_ + "' has no '" + attribute + "'");
+    }
+    return object_.attr(attribute);
+  };
+  const py::object locals = require("locals");
+  local_batch_ = require("local_batch");
+  int i = 0;
+  for (const py::handle item : locals) {
+    const std::string at = where + ".locals[" + std::to_string(i++) + "]";
+    const py::tuple t = py::cast<py::tuple>(item);
+    if (t.size() < 2 || t.size() > 3) throw Error("problem", at + ": must be (name, reduction[, unit])");
+    locals_.push_back(LocalValue{py::cast<std::string>(t[0]), reduction_of(py::cast<std::string>(t[1]), at + ".reduction"),
+                                 t.size() == 3 ? py::cast<std::string>(t[2]) : std::string()});
+  }
+  if (locals_.empty()) throw Error("problem", where + ".locals: the Python metric '" + name_ + "' declares no local values");
+  if (py::hasattr(object_, "needs")) {
+    int k = 0;
+    for (const py::handle n : object_.attr("needs")) {
+      needs_ |= need_of(py::cast<std::string>(n), "problem", where + ".needs[" + std::to_string(k++) + "]");
+    }
+  }
+  if (py::hasattr(object_, "scene_attributes")) attributes_ = py::cast<std::vector<std::string>>(object_.attr("scene_attributes"));
+  if (py::hasattr(object_, "batch_size")) {
+    batch_ = py::cast<int>(object_.attr("batch_size"));
+    if (batch_ < 1) throw Error("problem", where + ".batch_size = " + std::to_string(batch_) + ": must be >= 1");
+  }
+  combine_ = py::hasattr(object_, "combine") ? py::object(object_.attr("combine")) : py::object(py::none());
+}
+
+PythonMetric::~PythonMetric() {
+  // The last reference may go from any thread; Python objects are released with the GIL held.
+  py::gil_scoped_acquire gil;
+  local_batch_ = py::object();
+  combine_ = py::object();
+  object_ = py::object();
+}
+
+void PythonMetric::local(const SampleQuantities& q, double* out) const {
+  const SampleQuantities* one = &q;
+  local_batch(&one, 1, out);
+}
+
+void PythonMetric::local_batch(const SampleQuantities* const* q, int count, double* out) const {
+  // A Python exception travels as py::error_already_set up to the caller of the evaluation,
+  // where pybind11 raises it again as itself.
+  py::gil_scoped_acquire gil;
+  const py::object value = local_batch_(quantities_dict(q, count, needs_, attributes_));
+  const auto values = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(value);
+  const std::size_t k = locals_.size();
+  const bool shape_ok = values && ((values.ndim() == 2 && values.shape(0) == count && values.shape(1) == static_cast<py::ssize_t>(k)) ||
+                                   (values.ndim() == 1 && k == 1 && values.shape(0) == count));
+  if (!shape_ok) {
+    std::string shape = "not an array of numbers";
+    if (values) {
+      shape = "shape (";
+      for (py::ssize_t d = 0; d < values.ndim(); ++d) shape += (d ? ", " : "") + std::to_string(values.shape(d));
+      shape += ")";
+    }
+    throw Error(name_, "local_batch returned " + shape + " for " + std::to_string(count) + " samples: must be (" +
+                           std::to_string(count) + ", " + std::to_string(k) + ")" + (k == 1 ? " or (" + std::to_string(count) + ",)" : ""));
+  }
+  std::copy(values.data(), values.data() + count * static_cast<py::ssize_t>(k), out);
+}
+
+double PythonMetric::combine(const double* reduced, int samples) const {
+  if (combine_.is_none()) return reduced[0];
+  py::gil_scoped_acquire gil;
+  py::array_t<double> r(static_cast<py::ssize_t>(locals_.size()));
+  std::copy(reduced, reduced + locals_.size(), r.mutable_data());
+  return py::cast<double>(combine_(r, samples));
+}
+
+}  // namespace hapsyn::python

@@ -1,0 +1,134 @@
+"""Metrics written in Python: equal to their C++ twins, batched, errors."""
+import json
+
+import numpy as np
+import pytest
+
+import hapsyn
+from conftest import PROBLEMS, PyGII, PyMeanIsotropy
+
+GRID = PROBLEMS / "fivebar-gii-coarse.json"
+CULLING = PROBLEMS / "fivebar-gii-culling-coarse.json"
+
+
+def _example_study():
+    with open(hapsyn_example()) as f:
+        return json.load(f)
+
+
+def hapsyn_example():
+    from conftest import SOURCE_DIR
+    return SOURCE_DIR / "examples" / "mean_isotropy" / "study.json"
+
+
+@pytest.mark.parametrize("exponent", [1.0, 2.5])
+def test_python_mean_isotropy_equals_the_cpp_example(plugin_dir, exponent):
+    problem = _example_study()
+    problem["scene"]["options"]["step"] = 0.002
+    problem["objectives"] = [{"metric": "mean_isotropy", "options": {"exponent": exponent}},
+                             {"metric": "py_mean_isotropy", "options": {"exponent": exponent}}]
+    study = hapsyn.load(problem, plugin_path=plugin_dir, metrics={"py_mean_isotropy": PyMeanIsotropy})
+    result = study.run(threads=2)
+    cpp, py = result.best_objectives["mean_isotropy"], result.best_objectives["py_mean_isotropy"]
+    assert 0.5 < cpp < 1.0
+    assert abs(py - cpp) <= 1e-12
+    plugins = {p["name"]: p for p in result.to_dict()["plugins"]}
+    assert plugins["py_mean_isotropy"]["version"] == "python"
+    assert plugins["py_mean_isotropy"]["file"].startswith("python:")
+
+
+def test_python_metric_over_designs_and_threads_equals_the_cpp_twin(plugin_dir):
+    problem = json.loads(GRID.read_text())
+    problem["objectives"] = [{"metric": "mean_isotropy"}, {"metric": "py_mean_isotropy"}]
+    hapsyn.register_metric("py_mean_isotropy", PyMeanIsotropy)
+    try:
+        study = hapsyn.load(problem, plugin_path=plugin_dir)
+    finally:
+        hapsyn.unregister_metric("py_mean_isotropy")
+    rng = np.random.default_rng(1)
+    designs = np.column_stack([rng.uniform(0, 0.3, 50), rng.uniform(0.01, 0.3, 50), rng.uniform(0.01, 0.3, 50),
+                               rng.uniform(0, 0.6, 50)])
+    for threads in (1, 3):
+        b = study.evaluate(designs, threads=threads)
+        feasible = np.array(b["status"]) == "feasible"  # the rest violate the five-bar's constraints
+        assert feasible.sum() > 10
+        np.testing.assert_allclose(b["objectives"][feasible, 1], b["objectives"][feasible, 0], rtol=0, atol=1e-12)
+        assert np.isnan(b["objectives"][~feasible]).all()
+    assert (b["objectives"][feasible, 0] > 0).sum() > 10
+
+
+def test_local_batch_is_called_once_per_chunk():
+    problem = _example_study()
+    problem["objectives"] = [{"metric": "py"}]
+    metric = PyMeanIsotropy()
+    study = hapsyn.load(problem, metrics={"py": metric})
+    n = len(study.scene)
+    study.evaluate([])
+    assert metric.calls == 1 and metric.samples_seen == n
+    metric.batch_size = 50
+    study = hapsyn.load(problem, metrics={"py": metric})
+    metric.calls = metric.samples_seen = 0
+    e = study.evaluate([], samples=True)
+    assert metric.calls >= -(-n // 50) and metric.samples_seen >= n
+    reachable = e["sample_status"] == "reachable"
+    np.testing.assert_array_equal(e["locals"][:, 1], reachable.astype(float))
+
+
+@pytest.mark.parametrize("polish", [False, True])
+def test_a_worst_case_python_metric_equals_gii_under_culling(polish):
+    # Culling prunes with partial (batched) reductions of the worst-case Python metric.
+    sets = ["threads=1", f"solver.options.polish={json.dumps(polish)}"]
+    cpp = hapsyn.load(CULLING, set=sets).run()
+    problem = json.loads(CULLING.read_text())
+    problem["objectives"] = [{"metric": "py_gii", "name": "gii"}]
+    py = hapsyn.load(problem, set=sets, metrics={"py_gii": PyGII()}).run()
+    assert py.status == cpp.status == "converged"
+    assert abs(py.best_objectives["gii"] - cpp.best_objectives["gii"]) <= 1e-12
+    if not polish:  # the grid optimum: the same design exactly
+        assert py.best_design == cpp.best_design
+    else:  # SQP from the same grid optimum, on values that differ in the last bits (NumPy's SVD)
+        for name, value in cpp.best_design.items():
+            assert abs(py.best_design[name] - value) <= 1e-9
+
+
+def test_python_metric_errors():
+    problem = _example_study()
+    problem["objectives"] = [{"metric": "py"}]
+
+    class WrongShape(PyMeanIsotropy):
+        def local_batch(self, q):
+            return np.zeros((q["status"].shape[0], 3))
+
+    with pytest.raises(hapsyn.Error, match=r"^py: local_batch returned shape \(121, 3\) for 121 samples: must be \(121, 2\)$"):
+        hapsyn.load(problem, metrics={"py": WrongShape}).evaluate([])
+
+    class Raises(PyMeanIsotropy):
+        def local_batch(self, q):
+            raise ZeroDivisionError("inside the metric")
+
+    with pytest.raises(ZeroDivisionError, match="inside the metric"):
+        hapsyn.load(problem, metrics={"py": Raises}).evaluate([])
+    with pytest.raises(ZeroDivisionError, match="inside the metric"):
+        hapsyn.load(problem, metrics={"py": Raises}).run()
+    with pytest.raises(ZeroDivisionError, match="inside the metric"):  # raised on a worker thread
+        hapsyn.load(problem, metrics={"py": Raises}).evaluate([], threads=3)
+
+    class BadReduction(PyMeanIsotropy):
+        locals = [("isotropy", "mean", "")]
+
+    with pytest.raises(hapsyn.Error, match=r'objectives\[0\].locals\[0\].reduction = "mean": must be one of'):
+        hapsyn.load(problem, metrics={"py": BadReduction})
+
+    problem["objectives"][0]["options"] = {"exponentt": 2}
+    with pytest.raises(hapsyn.Error, match=r"problem: objectives\[0\].options = .*exponentt"):
+        hapsyn.load(problem, metrics={"py": PyMeanIsotropy})
+    with pytest.raises(hapsyn.Error, match="takes no options"):
+        hapsyn.load(problem, metrics={"py": PyMeanIsotropy()})
+
+    class NaNs(PyMeanIsotropy):
+        def local_batch(self, q):
+            return np.full((q["status"].shape[0], 2), np.nan)
+
+    problem["objectives"][0].pop("options")
+    with pytest.raises(hapsyn.Error, match=r"problem: metric 'py' returned nan for local value 0 at sample"):
+        hapsyn.load(problem, metrics={"py": NaNs}).evaluate([])
