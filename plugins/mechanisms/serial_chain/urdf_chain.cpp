@@ -101,9 +101,22 @@ std::map<std::string, Origin> read_xml_origins(const std::string& path, const st
   std::map<std::string, Origin> origins;
   const TiXmlElement* robot = doc.FirstChildElement("robot");
   if (!robot) return origins;  // urdfdom names the problem
+  // A link that is the child of two joints closes a loop. urdfdom accepts it and builds a cycle
+  // of shared pointers (never freed, and a parent walk that never ends): refuse it here, first.
+  std::map<std::string, std::string> parent_joint_of;
   for (const TiXmlElement* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
     const char* name = j->Attribute("name");
     if (!name) continue;
+    const TiXmlElement* child = j->FirstChildElement("child");
+    const char* child_link = child ? child->Attribute("link") : nullptr;
+    if (child_link) {
+      const auto [it, inserted] = parent_joint_of.emplace(child_link, name);
+      if (!inserted) {
+        throw Error(kSerialChainName, path + ": line " + std::to_string(j->Row()) + ": link \"" + child_link +
+                                          "\" is the child of joints \"" + it->second + "\" and \"" + name +
+                                          "\": a closed kinematic loop (a serial chain's file must be a tree)");
+      }
+    }
     Origin o{};
     if (const TiXmlElement* origin = j->FirstChildElement("origin")) {
       const char* xyz = origin->Attribute("xyz");
