@@ -63,7 +63,7 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
     if (missing != 0) {
       throw Error("problem", "objectives: metric '" + metrics_[m].plugin +
                                  "' needs quantities the mechanism '" + mechanism_plugin_ +
-                                 "' does not provide (need flags " + std::to_string(missing) + ")");
+                                 "' does not provide: " + need_names(missing));
     }
     needs_ |= metric.needs();
     batch_ = std::max(batch_, metric.batch_size());
@@ -82,6 +82,9 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
     metric_attributes_.push_back(std::move(attributes));
   }
   local_offset_.push_back(static_cast<int>(local_reduction_.size()));
+  // Accelerations and the velocity torque are computed at the joint rates: they imply them.
+  if (needs_ & (kNeedJointAcceleration | kNeedVelocityTorque)) needs_ |= kNeedJointVelocity;
+  resolve_demanded_motion();
   for (const Objective& o : objectives_) {
     if (o.metric < 0 || o.metric >= static_cast<int>(metrics_.size())) {
       throw Error("problem", "objective '" + o.name + "' refers to no metric");
@@ -112,6 +115,36 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
   std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) {
     return distance[static_cast<std::size_t>(a)] > distance[static_cast<std::size_t>(b)];
   });
+}
+
+// The demanded motion (twist, twist rate) is the scene's business; the metrics that need joint
+// rates or accelerations cannot work without it, so a scene lacking it is refused at load
+// rather than giving zero rates.
+void Problem::resolve_demanded_motion() {
+  const auto find = [&](const char* name) -> const AttributeMatrix* {
+    const auto it = samples_->attributes.find(name);
+    if (it == samples_->attributes.end()) return nullptr;
+    if (it->second.cols() != 6 || it->second.rows() != samples_->size() || !it->second.allFinite()) {
+      throw Error("problem", std::string("scene: attribute '") + name + "' must have 6 finite columns (omega, v) " +
+                                 "and one row per sample; it has " + std::to_string(it->second.cols()) + " columns and " +
+                                 std::to_string(it->second.rows()) + " rows");
+    }
+    return &it->second;
+  };
+  twist_ = find(kTwistAttribute);
+  twist_rate_ = find(kTwistRateAttribute);
+  const auto require = [&](Needs flag, const AttributeMatrix* attribute, const char* name) {
+    if (!(needs_ & flag) || attribute) return;
+    std::string metrics;
+    for (const MetricEntry& m : metrics_) {
+      if (m.metric->needs() & flag) metrics += (metrics.empty() ? "'" : ", '") + m.plugin + "'";
+    }
+    throw Error("problem", "objectives: metric " + metrics + " needs the demanded motion of each sample (" +
+                               need_names(flag) + "), but the scene has no '" + name +
+                               "' attribute: use a scene of recorded motion such as 'motion'");
+  };
+  require(kNeedJointVelocity | kNeedVelocityTorque, twist_, kTwistAttribute);
+  require(kNeedJointAcceleration, twist_rate_, kTwistRateAttribute);
 }
 
 std::shared_ptr<const Problem> Problem::with_objectives(std::vector<Objective> objectives) const {
@@ -385,8 +418,7 @@ const Evaluation& Problem::evaluate(const double* free_design, EvalScratch& ws, 
   const std::vector<int>& indices = options.subset ? *options.subset : order_;
   for (const int sample : indices) {
     // Set before solve(): a mechanism may read the scene (its dimension, its attributes).
-    ws.quantities.sample = sample;
-    ws.quantities.scene = samples_.get();
+    bind_sample(ws.quantities, sample);
     model->solve(samples_->pose(sample), needs_, *ws.scratch, ws.quantities);
     ++out.samples_evaluated;
     if (ws.quantities.status != SampleStatus::kReachable && any_worst_case_) {
@@ -424,8 +456,7 @@ const Evaluation& Problem::evaluate_batched(const MechanismModel& model, EvalScr
     for (; count < capacity; ++count) {
       const int sample = indices[first + static_cast<std::size_t>(count)];
       SampleQuantities& q = ws.batch_quantities[static_cast<std::size_t>(count)];
-      q.sample = sample;
-      q.scene = samples_.get();
+      bind_sample(q, sample);
       model.solve(samples_->pose(sample), needs_, *ws.scratch, q);
       ++out.samples_evaluated;
       if (q.status != SampleStatus::kReachable && any_worst_case_) {

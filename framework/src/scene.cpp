@@ -3,6 +3,7 @@
 
 #include <cassert>
 #include <cmath>
+#include <set>
 #include <string>
 
 namespace hapsyn {
@@ -46,6 +47,35 @@ void check_lattice(const SampleSet& samples, const std::string& scene) {
     if (index < 0 || index >= points) {
       refuse("index_of_sample[" + std::to_string(i) + "] = " + std::to_string(index) + ": must be in [0, " +
              std::to_string(points) + ")");
+    }
+  }
+}
+
+void check_groups(const SampleSet& samples, const std::string& scene) {
+  std::set<std::string> names;
+  for (std::size_t k = 0; k < samples.groups.size(); ++k) {
+    const SampleGrouping& g = samples.groups[k];
+    const std::string where = "groups[" + std::to_string(k) + "]";
+    const auto refuse = [&](const std::string& why) { throw Error(scene, where + why); };
+    if (g.name.empty()) refuse(".name is empty: every grouping needs a name");
+    if (!names.insert(g.name).second) refuse(".name = \"" + g.name + "\": two groupings have this name");
+    if (g.labels.empty()) refuse(" ('" + g.name + "') has no labels");
+    std::set<std::string> labels;
+    for (std::size_t i = 0; i < g.labels.size(); ++i) {
+      if (g.labels[i].empty()) refuse(".labels[" + std::to_string(i) + "] is empty");
+      if (!labels.insert(g.labels[i]).second) {
+        refuse(".labels[" + std::to_string(i) + "] = \"" + g.labels[i] + "\": listed twice");
+      }
+    }
+    if (g.of_sample.size() != static_cast<std::size_t>(samples.size())) {
+      refuse(".of_sample has " + std::to_string(g.of_sample.size()) + " entries for " +
+             std::to_string(samples.size()) + " samples (one per sample)");
+    }
+    for (std::size_t i = 0; i < g.of_sample.size(); ++i) {
+      if (g.of_sample[i] < 0 || g.of_sample[i] >= static_cast<int>(g.labels.size())) {
+        refuse(".of_sample[" + std::to_string(i) + "] = " + std::to_string(g.of_sample[i]) + ": must be in [0, " +
+               std::to_string(g.labels.size()) + ")");
+      }
     }
   }
 }

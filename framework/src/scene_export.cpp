@@ -58,6 +58,7 @@ BuiltScene build_scene_alone(const Json& problem, const Registry& registry, std:
   built.samples = plugin->build(request);
   built.build_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   check_lattice(built.samples, built.plugin);
+  check_groups(built.samples, built.plugin);
   check_weights(built.samples, built.plugin);
   return built;
 }

@@ -15,6 +15,18 @@ const char* to_string(SampleStatus status) {
   return "unknown";
 }
 
+std::string need_names(Needs needs) {
+  static const char* const kNames[] = {"jacobian", "inertia", "effective_mass", "gravity", "actuator_limits",
+                                       "joint_velocity", "joint_acceleration", "velocity_torque"};
+  std::string out;
+  for (unsigned bit = 0; bit < 32; ++bit) {
+    if (!(needs & (1u << bit))) continue;
+    if (!out.empty()) out += ", ";
+    out += bit < sizeof(kNames) / sizeof(kNames[0]) ? std::string(kNames[bit]) : "flag " + std::to_string(1u << bit);
+  }
+  return out.empty() ? "pose" : out;
+}
+
 const char* to_string(EvalStatus status) {
   switch (status) {
     case EvalStatus::kFeasible: return "feasible";

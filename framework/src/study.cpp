@@ -119,6 +119,11 @@ void load_objectives(Json& objs, const Registry& registry, const std::vector<InP
       throw Error("problem", path + ".weight = " + render_value(o["weight"]) + ": must be finite");
     }
     for (const std::string& a : metric->scene_attributes()) request.attributes.push_back(a);
+    // Joint rates and accelerations come from the sample's demanded motion: ask the scene for it.
+    if (metric->needs() & (kNeedJointVelocity | kNeedJointAcceleration | kNeedVelocityTorque)) {
+      request.attributes.push_back(kTwistAttribute);
+    }
+    if (metric->needs() & kNeedJointAcceleration) request.attributes.push_back(kTwistRateAttribute);
     Objective objective;
     objective.name = name;
     objective.metric = static_cast<int>(metrics.size());
@@ -144,6 +149,7 @@ std::shared_ptr<SampleSet> build_samples(Json& resolved, const Registry& registr
     throw Error("problem", std::string("scene.options: ") + e.what());
   }
   check_lattice(*samples, scene_name);
+  check_groups(*samples, scene_name);
   if (samples->size() > 0) samples->cache_bounds();
   return samples;
 }

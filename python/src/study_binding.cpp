@@ -338,8 +338,7 @@ py::dict StudyHandle::evaluate_samples(const py::array_t<double, py::array::c_st
       solved.resize(static_cast<std::size_t>(scene.size()));
       for (int i = 0; i < scene.size(); ++i) {
         SampleQuantities& q = solved[static_cast<std::size_t>(i)];
-        q.sample = i;
-        q.scene = &scene;
+        problem.bind_sample(q, i);
         model->solve(scene.pose(i), needs, *scratch, q);
       }
     }

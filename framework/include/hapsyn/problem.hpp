@@ -127,6 +127,15 @@ class Problem {
   /// samples first (far from the centroid), so infeasible designs and worst cases are met early;
   /// otherwise the scene's own order (cache-friendly; nothing to decide early). Deterministic.
   const std::vector<int>& sample_order() const { return order_; }
+  /// Prepares `q` for MechanismModel::solve of sample `sample`: sets q.sample, q.scene and, when
+  /// the scene carries the demanded motion, q.twist / q.twist_rate (else null). The evaluator
+  /// calls it before every solve(); a tool that calls solve() itself should too.
+  void bind_sample(SampleQuantities& q, int sample) const {
+    q.sample = sample;
+    q.scene = samples_.get();
+    q.twist = twist_ ? twist_->row(sample).data() : nullptr;
+    q.twist_rate = twist_rate_ ? twist_rate_->row(sample).data() : nullptr;
+  }
 
   /// Per-thread evaluation state (mechanism scratch, accumulators). Not shareable; its
   /// members are the evaluator's business.
@@ -198,6 +207,8 @@ class Problem {
   void combine_objectives(const EvalScratch& ws, Evaluation& out) const;
   bool front_dominates(const std::vector<double>& front, EvalScratch& eval_scratch) const;
 
+  void resolve_demanded_motion();
+
   std::string mechanism_plugin_;
   std::shared_ptr<const Mechanism> mechanism_;
   std::shared_ptr<const SampleSet> samples_;
@@ -216,6 +227,8 @@ class Problem {
   bool worst_case_ = true;
   bool any_worst_case_ = false;
   Needs needs_ = 0;
+  const AttributeMatrix* twist_ = nullptr;       // the scene's kTwistAttribute, when it has one
+  const AttributeMatrix* twist_rate_ = nullptr;  // the scene's kTwistRateAttribute
   int batch_ = 0;  // largest Metric::batch_size(); 0 = the per-sample path only
 };
 

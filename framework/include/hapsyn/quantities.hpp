@@ -4,6 +4,7 @@
 /// storage a mechanism fills (no heap allocation in the per-sample loop).
 #include <Eigen/Core>
 #include <cstdint>
+#include <string>
 
 namespace hapsyn {
 
@@ -18,6 +19,18 @@ enum Need : std::uint32_t {
   kNeedEffectiveMass = 1u << 2,   ///< end-effector effective mass M = J^-T D J^-1
   kNeedGravity = 1u << 3,         ///< gravity torque at the actuators
   kNeedActuatorLimits = 1u << 4,  ///< actuator velocity / torque limits
+  /// Joint rates qdot [rad/s or m/s] that realise the sample's demanded twist
+  /// (SampleQuantities::twist): J qdot = twist in the task rows (least squares / minimum norm
+  /// when J is not square). The scene must provide the "twist" attribute.
+  kNeedJointVelocity = 1u << 5,
+  /// Joint accelerations qddot that realise the demanded twist rate at those rates:
+  /// J qddot = twist_rate - Jdot qdot (same rule). Implies kNeedJointVelocity; the scene must
+  /// provide "twist_rate" too.
+  kNeedJointAcceleration = 1u << 6,
+  /// Velocity-dependent joint torque c(q, qdot) = C(q, qdot) qdot [N m or N] at the rates of
+  /// kNeedJointVelocity (Coriolis and centrifugal terms), so that the full inverse dynamics is
+  /// tau = inertia * qddot + velocity_torque + gravity. Implies kNeedJointVelocity.
+  kNeedVelocityTorque = 1u << 7,
 };
 using Needs = std::uint32_t;
 
@@ -29,6 +42,15 @@ enum class SampleStatus : std::uint8_t {
   kInvalid = 3,      ///< a solution exists but violates the working mode / joint limits
 };
 const char* to_string(SampleStatus status);
+
+/// The names of the flags in `needs`, comma-separated ("jacobian, inertia"), for messages.
+std::string need_names(Needs needs);
+
+/// The scene attributes that carry a sample's demanded motion (6 columns each, in the scene
+/// frame at the pose's point, rows (omega, v) like every twist in hapsyn): "twist" = (omega
+/// [rad/s], v [m/s]) and "twist_rate" = (d omega/dt [rad/s^2], dv/dt [m/s^2]).
+constexpr const char* kTwistAttribute = "twist";
+constexpr const char* kTwistRateAttribute = "twist_rate";
 
 /// Largest matrix a mechanism may fill (6-DOF spatial). Fixed capacity => no allocation.
 constexpr int kMaxDof = 8;
@@ -61,6 +83,11 @@ struct SampleQuantities {
     const AttributeMatrix* m = attributes[k];
     return m && sample < m->rows() ? m->row(sample).data() : nullptr;
   }
+  /// Set by the evaluator before solve() when the scene carries the demanded motion (see
+  /// kTwistAttribute): the sample's twist (omega, v) and twist rate, 6 values each, in the scene
+  /// frame; null otherwise. A mechanism reads them for kNeedJointVelocity / kNeedJointAcceleration.
+  const double* twist = nullptr;
+  const double* twist_rate = nullptr;
   JointVector q;                  ///< joint angles of the chosen configuration [rad]
   TaskJointMatrix jacobian;       ///< J: task velocity [m/s] per actuator rate [rad/s]
   JointMatrix inertia;            ///< D [kg m^2] in actuated coordinates
@@ -68,6 +95,9 @@ struct SampleQuantities {
   JointVector gravity;            ///< gravity torque [N m]
   JointVector max_velocity;       ///< actuator velocity limits [rad/s]
   JointVector max_torque;         ///< actuator torque limits [N m]
+  JointVector joint_velocity;     ///< qdot realising `twist` [rad/s or m/s] (kNeedJointVelocity)
+  JointVector joint_acceleration; ///< qddot realising `twist_rate` (kNeedJointAcceleration)
+  JointVector velocity_torque;    ///< C(q, qdot) qdot [N m or N] (kNeedVelocityTorque)
 };
 
 }  // namespace hapsyn

@@ -40,6 +40,17 @@ struct SampleLattice {
   std::string candidates = "samples";
 };
 
+/// A partition of a scene's samples into labelled groups (the recording, the subject, the
+/// activity a sample comes from). For a scene that declares groupings, `hapsyn run` reports
+/// every objective per group (each group's samples reduced and combined as the whole scene is),
+/// with the mean and standard deviation across the groups (result.json "groups", groups.csv).
+/// Checked centrally by check_groups after Scene::build.
+struct SampleGrouping {
+  std::string name;                 ///< what a group is, e.g. "subject"; unique within a scene
+  std::vector<std::string> labels;  ///< the groups' names, distinct, e.g. {"S01", "S02"}
+  std::vector<int> of_sample;       ///< per sample: its group, an index into labels
+};
+
 /// The samples of a scene. Each sample is a row of `poses` (e.g. (x, y) [m] for a planar
 /// scene), optionally with named per-sample attributes (e.g. the human's ellipsoid axes).
 struct SampleSet {
@@ -66,6 +77,8 @@ struct SampleSet {
   /// What the scene reports about itself (e.g. build time, cache file, counts); copied into
   /// result.json under "scene" and printed by `hapsyn scene`.
   Json info = Json::object();
+  /// Groupings of the samples (see SampleGrouping), coarse or fine in any order; usually empty.
+  std::vector<SampleGrouping> groups;
   /// Set by scenes whose samples sit on a cubic lattice (see SampleLattice); empty otherwise.
   std::optional<SampleLattice> lattice;
 
@@ -89,6 +102,12 @@ struct SampleSet {
 ///         candidates_per_point < 1, index_of_sample does not hold one entry per sample, or an
 ///         index lies outside [0, per_axis^3).
 void check_lattice(const SampleSet& samples, const std::string& scene);
+
+/// Checks a scene's groupings (nothing to check without any).
+/// \throws Error("<scene>: groups[k] ...") for an empty or repeated name, no labels, a repeated
+///         or empty label, of_sample not holding one entry per sample, or an entry outside
+///         [0, labels.size()).
+void check_groups(const SampleSet& samples, const std::string& scene);
 
 /// Checks a scene's per-sample weights (nothing to check when SampleSet::weights is empty).
 /// \param component the component named in the error (the Problem passes "problem")
