@@ -5,6 +5,7 @@
 // error, 3 unexpected internal error.
 #include <hapsyn/compare.hpp>
 #include <hapsyn/error.hpp>
+#include <hapsyn/groups.hpp>
 #include <hapsyn/output_files.hpp>
 #include <hapsyn/plot.hpp>
 #include <hapsyn/problem_file.hpp>
@@ -84,6 +85,8 @@ void print_summary(const Json& result, std::ostream& out) {
   if (result["statistics"].is_object() && result["statistics"].contains("report")) {
     for (const Json& line : result["statistics"]["report"]) out << line.get<std::string>() << "\n";
   }
+  // Objectives per subject, activity, ... (scenes of recorded motion).
+  if (result.contains("groups")) out << "per group of samples (best design):\n" << hapsyn::groups_text(result["groups"]);
   out << "evaluations: " << result["evaluations"]["designs"] << " designs, " << result["evaluations"]["samples"]
       << " sample solves; wall time " << format_number(result["wall_time_s"].get<double>()) << " s\n";
   out << "result: " << result["output_directory"].get<std::string>() << "/result.json\n";

@@ -10,12 +10,20 @@ namespace hapsyn {
 
 namespace fs = boost::filesystem;
 
-std::string find_data_file(const std::string& component, const std::string& option, const std::string& value) {
+namespace {
+bool usable(const fs::path& p, bool directory_too) {
+  boost::system::error_code ec;
+  return fs::is_regular_file(p, ec) || (directory_too && fs::is_directory(p, ec));
+}
+
+std::string find_data(const std::string& component, const std::string& option, const std::string& value,
+                      bool directory_too) {
   const std::string shown = "options." + option + " = " + Json(value).dump();
-  if (value.empty()) throw Error(component, shown + ": must name a file");
+  const std::string what = directory_too ? "file or folder" : "file";
+  if (value.empty()) throw Error(component, shown + ": must name a " + what);
   const fs::path p(value);
   if (p.is_absolute()) {
-    if (!fs::is_regular_file(p)) throw Error(component, shown + ": no such file");
+    if (!usable(p, directory_too)) throw Error(component, shown + ": no such " + what);
     return p.string();
   }
   // The source tree's share/ serves the build tree; the installed copy serves an installation.
@@ -23,11 +31,19 @@ std::string find_data_file(const std::string& component, const std::string& opti
                                             fs::path(HAPSYN_INSTALL_SHARE_DIR) / p};
   std::string tried;
   for (const fs::path& c : candidates) {
-    boost::system::error_code ec;
-    if (fs::is_regular_file(c, ec)) return fs::absolute(c).lexically_normal().string();
+    if (usable(c, directory_too)) return fs::absolute(c).lexically_normal().string();
     tried += (tried.empty() ? "" : ", ") + c.string();
   }
-  throw Error(component, shown + ": no such file (tried " + tried + ")");
+  throw Error(component, shown + ": no such " + what + " (tried " + tried + ")");
+}
+}  // namespace
+
+std::string find_data_file(const std::string& component, const std::string& option, const std::string& value) {
+  return find_data(component, option, value, false);
+}
+
+std::string find_data_path(const std::string& component, const std::string& option, const std::string& value) {
+  return find_data(component, option, value, true);
 }
 
 }  // namespace hapsyn

@@ -80,6 +80,72 @@ std::string samples_csv(const Problem& problem, const SampleRecords& records) {
   return csv.str();
 }
 
+Eigen::MatrixXd grouped_objective_values(const Problem& problem, const SampleRecords& records,
+                                         const std::vector<int>& group, const std::vector<int>& samples_per_group) {
+  // Per group and metric: reduce the locals as the evaluator does, then combine.
+  const SampleSet& samples = problem.samples();
+  const std::size_t groups = samples_per_group.size();
+  std::vector<int> offset;
+  std::vector<Reduction> reduction;
+  for (const MetricEntry& m : problem.metrics()) {
+    offset.push_back(static_cast<int>(reduction.size()));
+    for (const LocalValue& l : m.metric->locals()) reduction.push_back(l.reduction);
+  }
+  const std::size_t total = reduction.size();
+  std::vector<double> reduced(groups * total);
+  for (std::size_t g = 0; g < groups; ++g) {
+    for (std::size_t k = 0; k < total; ++k) {
+      reduced[g * total + k] = reduction[k] == Reduction::kSum   ? 0.0
+                               : reduction[k] == Reduction::kMin ? std::numeric_limits<double>::infinity()
+                                                                 : -std::numeric_limits<double>::infinity();
+    }
+  }
+  // With weights, a group's sum-reduced locals are scaled by w_i n_g / W_g (n_g samples, W_g
+  // their weight): the group's weighted mean, whether combine() divides by the sample count or
+  // by another sum. A group whose weights are equal, or all 0, is reduced unweighted.
+  std::vector<double> scale(static_cast<std::size_t>(samples.size()), 1.0);
+  if (!samples.weights.empty()) {
+    std::vector<double> weight_sum(groups, 0.0), first(groups, -1.0);
+    std::vector<char> equal(groups, 1);
+    for (std::size_t i = 0; i < scale.size(); ++i) {
+      const std::size_t g = static_cast<std::size_t>(group[i]);
+      const double w = samples.weights[i];
+      if (first[g] < 0.0) first[g] = w;
+      equal[g] = equal[g] && w == first[g];
+      weight_sum[g] += w;
+    }
+    for (std::size_t i = 0; i < scale.size(); ++i) {
+      const std::size_t g = static_cast<std::size_t>(group[i]);
+      if (!equal[g] && weight_sum[g] > 0.0) scale[i] = samples.weights[i] * samples_per_group[g] / weight_sum[g];
+    }
+  }
+  std::vector<char> undefined(groups * problem.metrics().size(), 0);
+  for (int i = 0; i < samples.size(); ++i) {
+    const std::size_t g = static_cast<std::size_t>(group[static_cast<std::size_t>(i)]);
+    if (!records.has_locals[static_cast<std::size_t>(i)]) {
+      for (std::size_t m = 0; m < problem.metrics().size(); ++m) undefined[g * problem.metrics().size() + m] = 1;
+      continue;
+    }
+    for (std::size_t k = 0; k < total; ++k) {
+      double& r = reduced[g * total + k];
+      const double v = records.locals(i, static_cast<Eigen::Index>(k));
+      r = reduction[k] == Reduction::kSum ? r + v * scale[static_cast<std::size_t>(i)] : reduction[k] == Reduction::kMin ? std::min(r, v) : std::max(r, v);
+    }
+  }
+  Eigen::MatrixXd values(static_cast<Eigen::Index>(groups), static_cast<Eigen::Index>(problem.objectives().size()));
+  for (std::size_t g = 0; g < groups; ++g) {
+    for (std::size_t o = 0; o < problem.objectives().size(); ++o) {
+      const std::size_t m = static_cast<std::size_t>(problem.objectives()[o].metric);
+      const bool bad = undefined[g * problem.metrics().size() + m] != 0;
+      values(static_cast<Eigen::Index>(g), static_cast<Eigen::Index>(o)) =
+          bad ? std::numeric_limits<double>::quiet_NaN()
+              : problem.metrics()[m].metric->combine(&reduced[g * total + static_cast<std::size_t>(offset[m])],
+                                                     samples_per_group[g]);
+    }
+  }
+  return values;
+}
+
 PositionMaps position_maps(const Problem& problem, const SampleRecords& records) {
   const SampleSet& samples = problem.samples();
   PositionMaps maps;
@@ -127,66 +193,7 @@ PositionMaps position_maps(const Problem& problem, const SampleRecords& records)
     ++maps.samples[static_cast<std::size_t>(g)];
   }
 
-  // Per group and metric: reduce the locals as the evaluator does, then combine.
-  const std::size_t groups = maps.position.size();
-  std::vector<int> offset;
-  std::vector<Reduction> reduction;
-  for (const MetricEntry& m : problem.metrics()) {
-    offset.push_back(static_cast<int>(reduction.size()));
-    for (const LocalValue& l : m.metric->locals()) reduction.push_back(l.reduction);
-  }
-  const std::size_t total = reduction.size();
-  std::vector<double> reduced(groups * total);
-  for (std::size_t g = 0; g < groups; ++g) {
-    for (std::size_t k = 0; k < total; ++k) {
-      reduced[g * total + k] = reduction[k] == Reduction::kSum   ? 0.0
-                               : reduction[k] == Reduction::kMin ? std::numeric_limits<double>::infinity()
-                                                                 : -std::numeric_limits<double>::infinity();
-    }
-  }
-  // With weights, a group's sum-reduced locals are scaled by w_i n_g / W_g (n_g samples, W_g
-  // their weight): the group's weighted mean, whether combine() divides by the sample count or
-  // by another sum. A group whose weights are equal, or all 0, is reduced unweighted.
-  std::vector<double> scale(static_cast<std::size_t>(samples.size()), 1.0);
-  if (!samples.weights.empty()) {
-    std::vector<double> weight_sum(groups, 0.0), first(groups, -1.0);
-    std::vector<char> equal(groups, 1);
-    for (std::size_t i = 0; i < scale.size(); ++i) {
-      const std::size_t g = static_cast<std::size_t>(group[i]);
-      const double w = samples.weights[i];
-      if (first[g] < 0.0) first[g] = w;
-      equal[g] = equal[g] && w == first[g];
-      weight_sum[g] += w;
-    }
-    for (std::size_t i = 0; i < scale.size(); ++i) {
-      const std::size_t g = static_cast<std::size_t>(group[i]);
-      if (!equal[g] && weight_sum[g] > 0.0) scale[i] = samples.weights[i] * maps.samples[g] / weight_sum[g];
-    }
-  }
-  std::vector<char> undefined(groups * problem.metrics().size(), 0);
-  for (int i = 0; i < samples.size(); ++i) {
-    const std::size_t g = static_cast<std::size_t>(group[static_cast<std::size_t>(i)]);
-    if (!records.has_locals[static_cast<std::size_t>(i)]) {
-      for (std::size_t m = 0; m < problem.metrics().size(); ++m) undefined[g * problem.metrics().size() + m] = 1;
-      continue;
-    }
-    for (std::size_t k = 0; k < total; ++k) {
-      double& r = reduced[g * total + k];
-      const double v = records.locals(i, static_cast<Eigen::Index>(k));
-      r = reduction[k] == Reduction::kSum ? r + v * scale[static_cast<std::size_t>(i)] : reduction[k] == Reduction::kMin ? std::min(r, v) : std::max(r, v);
-    }
-  }
-  maps.values.resize(static_cast<Eigen::Index>(groups), static_cast<Eigen::Index>(problem.objectives().size()));
-  for (std::size_t g = 0; g < groups; ++g) {
-    for (std::size_t o = 0; o < problem.objectives().size(); ++o) {
-      const std::size_t m = static_cast<std::size_t>(problem.objectives()[o].metric);
-      const bool bad = undefined[g * problem.metrics().size() + m] != 0;
-      maps.values(static_cast<Eigen::Index>(g), static_cast<Eigen::Index>(o)) =
-          bad ? std::numeric_limits<double>::quiet_NaN()
-              : problem.metrics()[m].metric->combine(&reduced[g * total + static_cast<std::size_t>(offset[m])],
-                                                     maps.samples[g]);
-    }
-  }
+  maps.values = grouped_objective_values(problem, records, group, maps.samples);
   return maps;
 }
 

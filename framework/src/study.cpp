@@ -45,7 +45,9 @@ const char* const kProblemSchema = R"json({
         "directory": {"type": "string", "description": "Output directory (default results/<name>)"},
         "samples_csv": {"type": "boolean", "description": "Write samples.csv for the best design", "default": true},
         "maps": {"type": "boolean", "description": "Write maps.csv: every objective per workspace position for the best design", "default": true},
-        "plots": {"type": "boolean", "description": "Render the position maps with gnuplot (map_<objective>.png)", "default": false}}},
+        "plots": {"type": "boolean", "description": "Render the position maps with gnuplot (map_<objective>.png), and timeline.png for scenes of recorded motion", "default": false},
+        "groups": {"type": "boolean", "description": "For scenes that group their samples (subject, activity, trajectory): every objective per group with the mean and standard deviation across groups, in result.json and groups.csv", "default": true},
+        "timeline": {"type": "string", "description": "With plots: the trajectory drawn in timeline.png (every objective on each sample along time); default the scene's first trajectory"}}},
     "indicators": {"type": "object", "description": "Front-quality indicators written into result.json", "properties": {
         "reference_front": {"type": "string", "description": "result.json of a study whose front is the reference (IGD, GD, domination gaps)"},
         "reference_point": {"type": "array", "items": {"type": "number"}, "description": "Hypervolume reference point, one value per objective (natural units), worse than every front point"}}},
@@ -136,6 +138,23 @@ void load_objectives(Json& objs, const Registry& registry, const std::vector<InP
 
 // The scene's samples: the plugin created (options resolved in place) and built with what the
 // metrics request; its lattice declaration checked and its bounding box cached.
+// output.timeline names a trajectory of the scene: checked at load, not after the solve.
+void check_timeline_option(const Json& resolved, const SampleSet& samples) {
+  if (!resolved.contains("output") || !resolved["output"].contains("timeline")) return;
+  const std::string label = resolved["output"]["timeline"];
+  std::string known;
+  for (const SampleGrouping& g : samples.groups) {
+    if (g.name != "trajectory") continue;
+    for (const std::string& l : g.labels) {
+      if (l == label) return;
+      known += (known.empty() ? "" : ", ") + l;
+    }
+  }
+  throw Error("problem", "output.timeline = \"" + label + "\": " +
+                             (known.empty() ? std::string("the scene has no trajectories (only scenes of recorded motion do)")
+                                            : "no trajectory of that name (the scene has: " + known + ")"));
+}
+
 std::shared_ptr<SampleSet> build_samples(Json& resolved, const Registry& registry, Study& study,
                                          const SceneRequest& request) {
   const std::string scene_name = resolved["scene"]["plugin"];
@@ -150,6 +169,7 @@ std::shared_ptr<SampleSet> build_samples(Json& resolved, const Registry& registr
   }
   check_lattice(*samples, scene_name);
   check_groups(*samples, scene_name);
+  check_timeline_option(resolved, *samples);
   if (samples->size() > 0) samples->cache_bounds();
   return samples;
 }

@@ -1,6 +1,7 @@
 // Running a loaded study: output-directory guards, seed, run log, the solver call, and the
 // result files, each a named step of run_study.
 #include <hapsyn/error.hpp>
+#include <hapsyn/groups.hpp>
 #include <hapsyn/maps.hpp>
 #include <hapsyn/output_files.hpp>
 #include <hapsyn/parallel.hpp>
@@ -161,6 +162,25 @@ void add_indicators(const Study& study, const SolverResult& result, double wall,
   doc["indicators"] = indicators;
 }
 
+// groups.csv, result.json's "groups" and, with plots, timeline.png of the best design.
+void write_group_files(const Study& study, const SampleRecords& records, const std::string& out_dir, Json& doc) {
+  const std::vector<GroupTable> tables = group_tables(*study.problem, records);
+  write_file_atomically((fs::path(out_dir) / "groups.csv").string(), groups_csv(tables));
+  doc["files"]["groups"] = "groups.csv";
+  doc["groups"] = groups_json(tables);
+  const Json& output = study.resolved["output"];
+  if (!output.value("plots", false)) return;
+  const SampleSet& samples = study.problem->samples();
+  for (const SampleGrouping& g : samples.groups) {
+    if (g.name != "trajectory") continue;
+    const std::string label = output.value("timeline", g.labels.front());
+    std::string message;
+    const std::string png = plot_timeline(*study.problem, records, g.name, label, out_dir, message);
+    if (!png.empty()) doc["files"]["timeline"] = png;
+    if (!message.empty()) doc["plot_message"] = message;
+  }
+}
+
 // samples.csv, maps.csv and the map plots of the best design, as the options and the file ask;
 // each file written is named in doc["files"].
 void write_best_design_files(const Study& study, const SolverResult& result, const RunOptions& options,
@@ -169,8 +189,10 @@ void write_best_design_files(const Study& study, const SolverResult& result, con
   const Json& output = study.resolved["output"];
   const bool want_samples = options.write_samples && output.value("samples_csv", true);
   const bool want_maps = options.write_samples && output.value("maps", true);
-  if (!result.best || !(want_samples || want_maps)) return;
+  const bool want_groups = options.write_samples && output.value("groups", true) && !study.problem->samples().groups.empty();
+  if (!result.best || !(want_samples || want_maps || want_groups)) return;
   const SampleRecords records = record_samples(*study.problem, result.best->design);
+  if (want_groups) write_group_files(study, records, out_dir, doc);
   if (want_samples) {
     write_file_atomically((fs::path(out_dir) / "samples.csv").string(), samples_csv(*study.problem, records));
     doc["files"]["samples"] = "samples.csv";

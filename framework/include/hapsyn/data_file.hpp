@@ -14,4 +14,8 @@ namespace hapsyn {
 /// \throws Error("<component>: options.<option> = \"<value>\": no such file (tried ...)")
 std::string find_data_file(const std::string& component, const std::string& option, const std::string& value);
 
+/// As find_data_file, but a folder is accepted too (a data set of several files).
+/// \throws Error("<component>: options.<option> = \"<value>\": no such file or folder (tried ...)")
+std::string find_data_path(const std::string& component, const std::string& option, const std::string& value);
+
 }  // namespace hapsyn

@@ -25,6 +25,15 @@ SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full
 /// status, then <metric>.<local> per metric (local values as computed, before weighting).
 std::string samples_csv(const Problem& problem, const SampleRecords& records);
 
+/// Every objective's value per group of samples: group[i] in [0, G) is sample i's group,
+/// samples_per_group[g] the count of group g (G entries). Each group's locals are reduced as the
+/// evaluator reduces the whole scene and combined by Metric::combine; with SampleSet::weights,
+/// its sum-reduced locals are scaled by w_i n_g / W_g (the group's weighted mean; a group whose
+/// weights are equal or all 0 is reduced unweighted). \returns G x objectives; NaN where a
+/// metric has no locals for a sample of the group (a worst-case metric met an unreachable one).
+Eigen::MatrixXd grouped_objective_values(const Problem& problem, const SampleRecords& records,
+                                         const std::vector<int>& group, const std::vector<int>& samples_per_group);
+
 /// Every objective's value per workspace position: the samples at one position (one lattice
 /// point of a scene that declares a SampleLattice, such as human_arm, else equal x, y, z
 /// coordinates) are reduced as the metric reduces the whole scene and combined by
