@@ -121,11 +121,8 @@ void load_objectives(Json& objs, const Registry& registry, const std::vector<InP
       throw Error("problem", path + ".weight = " + render_value(o["weight"]) + ": must be finite");
     }
     for (const std::string& a : metric->scene_attributes()) request.attributes.push_back(a);
-    // Joint rates and accelerations come from the sample's demanded motion: ask the scene for it.
-    if (metric->needs() & (kNeedJointVelocity | kNeedJointAcceleration | kNeedVelocityTorque)) {
-      request.attributes.push_back(kTwistAttribute);
-    }
-    if (metric->needs() & kNeedJointAcceleration) request.attributes.push_back(kTwistRateAttribute);
+    // The demanded motion (twist, twist_rate) that joint rates need is not requested here: a
+    // scene of motion always carries it, and the Problem names the way out when a scene lacks it.
     Objective objective;
     objective.name = name;
     objective.metric = static_cast<int>(metrics.size());
