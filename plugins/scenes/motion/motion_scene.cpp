@@ -31,7 +31,7 @@ Eigen::Matrix3d rotation_option(const std::vector<std::vector<double>>& rows, co
   const double orthogonality = (c.transpose() * c - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   if (!(orthogonality <= 1e-6) || !(c.determinant() > 0.0)) {
     std::ostringstream s;
-    s << "options." << key << " = " << Json(rows).dump()
+    s << "options." << key << " = " << render_value(Json(rows))
       << ": must be a rotation matrix (orthonormal, det +1); max |C^T C - I| = " << orthogonality
       << ", det = " << c.determinant();
     throw Error(kName, s.str());

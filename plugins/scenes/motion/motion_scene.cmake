@@ -1,0 +1,6 @@
+target_sources(hapsyn_motion_model PRIVATE ${CMAKE_CURRENT_LIST_DIR}/motion_scene.cpp)
+hapsyn_add_plugin(motion SOURCES ${CMAKE_CURRENT_LIST_DIR}/plugin.cpp LIBRARIES hapsyn_motion_model)
+if(HAPSYN_BUILD_TESTS)
+  hapsyn_add_test(motion_scene_test ${CMAKE_CURRENT_LIST_DIR}/motion_scene_test.cpp LIBRARIES hapsyn_motion_model)
+  add_dependencies(motion_scene_test hapsyn_plugin_motion)
+endif()
