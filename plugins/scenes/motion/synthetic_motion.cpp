@@ -285,7 +285,7 @@ void check_options(const SyntheticOptions& o) {
 }
 
 std::string subject_name(int index) {
-  char name[8];
+  char name[16];
   std::snprintf(name, sizeof name, "S%02d", index + 1);
   return name;
 }
