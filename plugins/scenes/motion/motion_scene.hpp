@@ -9,7 +9,8 @@
 ///     of the human arm model: p_S = C p_rec, R_P^S = C R_hand^rec H (C = recording_rotation,
 ///     H = hand_rotation);
 ///  2. resample to a uniform rate (slerp for orientations) when the time stamps are not uniform
-///     within 1e-6 relative, or when the option `rate` asks for another rate;
+///     within 1e-3 sampling intervals of the uniform grid (motion::is_uniform), or when the
+///     option `rate` asks for another rate;
 ///  3. differentiate (motion_signal.hpp: differentiate): zero-phase Butterworth low-pass
 ///     (order `filter_order`, `cutoff`) of the pose, numerical derivative, the same filter again
 ///     after each differentiation; angular velocity and acceleration from the filtered rotation;

@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <cassert>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -195,9 +196,17 @@ Eigen::MatrixXd derivative(const Eigen::MatrixXd& x, double dt) {
 
 bool is_uniform(const Eigen::VectorXd& time, double relative_tolerance) {
   if (time.size() < 3) return true;
-  const Eigen::VectorXd dt = time.tail(time.size() - 1) - time.head(time.size() - 1);
-  const double mean = dt.mean();
-  return (dt.array() - mean).abs().maxCoeff() <= relative_tolerance * std::abs(mean);
+  // Deviation of each stamp from the grid, not of each step: time stamps printed with a few
+  // decimals (0.008333, 0.016667, ...) round every stamp by up to half a unit, which a step
+  // criterion would double and mistake for jitter.
+  const double dt = mean_step(time);
+  const Eigen::VectorXd grid = Eigen::VectorXd::LinSpaced(time.size(), time(0), time(time.size() - 1));
+  return (time - grid).cwiseAbs().maxCoeff() <= relative_tolerance * std::abs(dt);
+}
+
+double mean_step(const Eigen::VectorXd& time) {
+  assert(time.size() >= 2);
+  return (time(time.size() - 1) - time(0)) / static_cast<double>(time.size() - 1);
 }
 
 double median_rate(const Eigen::VectorXd& time) {

@@ -77,9 +77,16 @@ struct Uniform {
   Eigen::MatrixXd quaternions;  ///< m x 4 unit (w, x, y, z), or 0 x 4 when none were given
 };
 
-/// True when the spacing of `time` is uniform: max_i |dt_i - mean dt| <= relative_tolerance mean dt
-/// (always true for fewer than 3 samples).
-bool is_uniform(const Eigen::VectorXd& time, double relative_tolerance = 1e-6);
+/// True when every time stamp lies within relative_tolerance * dt of the uniform grid from the
+/// first to the last stamp (dt = mean_step(time)); always true for fewer than 3 samples. The
+/// default 1e-3 accepts stamps rounded when printed (6 decimals at 120 Hz: 6e-5 dt) and treats
+/// real clock jitter (a 1 ms jitter at 120 Hz is 0.12 dt) as non-uniform. Treating such stamps
+/// as the grid moves a sample by at most 1e-3 dt: 8 um at 1 m/s and 120 Hz.
+bool is_uniform(const Eigen::VectorXd& time, double relative_tolerance = 1e-3);
+
+/// The mean sampling interval (t_last - t_first) / (n - 1) [s] (n >= 2): the step of the grid
+/// a uniform recording is taken to lie on.
+double mean_step(const Eigen::VectorXd& time);
 
 /// 1 / (median of the differences time[i+1] - time[i]) [Hz] (the mean of the two middle ones for
 /// an even count).

@@ -415,9 +415,15 @@ TEST(MotionSignal, IsUniformAndMedianRate) {
   EXPECT_TRUE(motion::is_uniform(uniform));
   EXPECT_NEAR(motion::median_rate(uniform), 100.0, 1e-9);
   Eigen::VectorXd jittered = uniform;
-  jittered(50) += 1e-4;  // steps 0.0101 and 0.0099: 1 % off
+  jittered(50) += 1e-4;  // one stamp 1 % of a step off the grid
   EXPECT_FALSE(motion::is_uniform(jittered));
   EXPECT_TRUE(motion::is_uniform(jittered, 0.02));
+  // Stamps of a 120 Hz recording printed with 6 decimals are the grid, rounded: uniform.
+  Eigen::VectorXd printed(1201);
+  for (Eigen::Index i = 0; i < printed.size(); ++i) printed(i) = std::round(i / 120.0 * 1e6) / 1e6;
+  EXPECT_FALSE(motion::is_uniform(printed, 1e-5));  // the stamps are up to 5e-7 s = 6e-5 dt off
+  EXPECT_TRUE(motion::is_uniform(printed));
+  EXPECT_NEAR(1.0 / motion::mean_step(printed), 120.0, 1e-9);
   EXPECT_NEAR(motion::median_rate(jittered), 100.0, 1e-9);
   EXPECT_NEAR(motion::median_rate(Eigen::Vector4d(0.0, 0.1, 0.3, 0.6)), 1.0 / 0.2, 1e-9);  // steps 0.1, 0.2, 0.3
   EXPECT_NEAR(motion::median_rate(Eigen::Vector3d(0.0, 0.1, 0.4)), 1.0 / 0.2, 1e-9);       // mean of 0.1 and 0.3
