@@ -209,4 +209,24 @@ TEST_F(MotionValidation, ASceneWithoutMotionIsRefusedWithTheWayOut) {
             std::string::npos);
 }
 
+TEST_F(MotionValidation, ABadRecordingStopsTheRunBeforeAnythingIsWritten) {
+  const std::string folder = data(1.0);
+  // One NaN row in the second subject's drinking recording.
+  const fs::path bad = fs::path(folder) / "S02" / "drinking.csv";
+  std::ofstream(bad.string(), std::ios::app) << "99,nan,0,0,1,0,0,0\n";
+  Json doc = {{"name", "bad-recording"},
+              {"mechanism", {{"plugin", "haptic6r"}}},
+              {"scene", {{"plugin", "motion"}, {"options", {{"path", folder}}}}},
+              {"design", kDesign},
+              {"objectives", {{{"metric", "motion_feasibility"}}}},
+              {"solver", {{"plugin", "evaluate"}}}};
+  const fs::path problem = dir_ / "bad.json", out = dir_ / "out";
+  std::ofstream(problem.string()) << doc.dump();
+  const hapsyn::test::Output o = hapsyn::test::hapsyn_cli("run " + problem.string() + " --out " + out.string());
+  EXPECT_EQ(o.code, 2) << o.out;
+  EXPECT_NE(o.out.find(bad.string() + ":"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("nan"), std::string::npos) << o.out;
+  EXPECT_FALSE(fs::exists(out)) << "the failed run wrote " << out;
+}
+
 }  // namespace
