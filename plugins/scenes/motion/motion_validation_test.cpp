@@ -223,7 +223,7 @@ TEST_F(MotionValidation, ABadRecordingStopsTheRunBeforeAnythingIsWritten) {
   const fs::path problem = dir_ / "bad.json", out = dir_ / "out";
   std::ofstream(problem.string()) << doc.dump();
   const hapsyn::test::Output o = hapsyn::test::hapsyn_cli("run " + problem.string() + " --out " + out.string());
-  EXPECT_EQ(o.code, 2) << o.out;
+  EXPECT_EQ(o.code, 1) << o.out;  // bad input
   EXPECT_NE(o.out.find(bad.string() + ":"), std::string::npos) << o.out;
   EXPECT_NE(o.out.find("nan"), std::string::npos) << o.out;
   EXPECT_FALSE(fs::exists(out)) << "the failed run wrote " << out;
