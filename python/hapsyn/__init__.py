@@ -115,7 +115,9 @@ def register_metric(name: str, metric: Any) -> None:
     - ``locals``: list of ``(name, reduction, unit)``; reduction ``"min"``, ``"max"`` or ``"sum"``
       (as a C++ metric's ``locals()``).
     - ``needs``: list of quantity names the mechanism must compute: ``"jacobian"``,
-      ``"inertia"``, ``"effective_mass"``, ``"gravity"``, ``"max_velocity"``/``"max_torque"``.
+      ``"inertia"``, ``"effective_mass"``, ``"gravity"``, ``"max_velocity"``/``"max_torque"``,
+      ``"joint_velocity"``, ``"joint_acceleration"``, ``"velocity_torque"`` (the last three need a
+      scene with the demanded motion: ``twist`` / ``twist_rate`` attributes).
     - ``local_batch(q) -> array``: the local values of a chunk of samples, shape
       ``(n, len(locals))`` (or ``(n,)`` for one local). ``q`` is a dict of NumPy arrays over the
       chunk: ``sample`` (indices), ``status`` (0 reachable, 1 unreachable, 2 singular,

@@ -26,6 +26,8 @@ struct QuantityName {
 constexpr QuantityName kQuantities[] = {
     {"jacobian", kNeedJacobian}, {"inertia", kNeedInertia},           {"effective_mass", kNeedEffectiveMass},
     {"gravity", kNeedGravity},   {"max_velocity", kNeedActuatorLimits}, {"max_torque", kNeedActuatorLimits},
+    {"joint_velocity", kNeedJointVelocity}, {"joint_acceleration", kNeedJointAcceleration},
+    {"velocity_torque", kNeedVelocityTorque},
 };
 
 // count x rows x cols (or count x rows for vectors) from one member of each sample's quantities;
@@ -111,6 +113,18 @@ py::dict quantities_dict(const SampleQuantities* const* q, int count, Needs need
     d["max_velocity"] =
         stack(q, count, false, [](const SampleQuantities& s) -> const JointVector& { return s.max_velocity; });
     d["max_torque"] = stack(q, count, false, [](const SampleQuantities& s) -> const JointVector& { return s.max_torque; });
+  }
+  if (needs & kNeedJointVelocity) {
+    d["joint_velocity"] =
+        stack(q, count, false, [](const SampleQuantities& s) -> const JointVector& { return s.joint_velocity; });
+  }
+  if (needs & kNeedJointAcceleration) {
+    d["joint_acceleration"] =
+        stack(q, count, false, [](const SampleQuantities& s) -> const JointVector& { return s.joint_acceleration; });
+  }
+  if (needs & kNeedVelocityTorque) {
+    d["velocity_torque"] =
+        stack(q, count, false, [](const SampleQuantities& s) -> const JointVector& { return s.velocity_torque; });
   }
   py::dict attribute_arrays;
   for (std::size_t k = 0; k < attributes.size(); ++k) {

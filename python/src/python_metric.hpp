@@ -47,7 +47,8 @@ class PythonMetric final : public Metric {
 };
 
 /// The Need flag of a quantity name ("jacobian", "inertia", "effective_mass", "gravity",
-/// "max_velocity", "max_torque"; "max_velocity" and "max_torque" both mean kNeedActuatorLimits).
+/// "max_velocity", "max_torque", "joint_velocity", "joint_acceleration", "velocity_torque";
+/// "max_velocity" and "max_torque" both mean kNeedActuatorLimits).
 /// \throws Error("<component>: <json_path> = \"x\": unknown quantity (known: ...)").
 Needs need_of(const std::string& quantity, const std::string& component, const std::string& json_path);
 

@@ -93,6 +93,9 @@ def test_quantities_are_per_sample_arrays_that_reproduce_the_metric(study):
         study.evaluate(DESIGN, quantities=["jacobians"])
     with pytest.raises(hapsyn.Error, match="^python: quantities: the mechanism 'fivebar' does not provide gravity$"):
         study.evaluate(DESIGN, quantities=["jacobian", "gravity"])
+    with pytest.raises(hapsyn.Error, match="^python: quantities: the mechanism 'fivebar' does not provide joint_velocity, "
+                                           "velocity_torque$"):  # known names, not provided by the five-bar
+        study.evaluate(DESIGN, quantities=["joint_velocity", "velocity_torque"])
     with pytest.raises(hapsyn.Error, match="need one design"):
         study.evaluate(np.zeros((2, 4)), samples=True)
 

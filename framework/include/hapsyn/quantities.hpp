@@ -21,7 +21,10 @@ enum Need : std::uint32_t {
   kNeedActuatorLimits = 1u << 4,  ///< actuator velocity / torque limits
   /// Joint rates qdot [rad/s or m/s] that realise the sample's demanded twist
   /// (SampleQuantities::twist): J qdot = twist in the task rows (least squares / minimum norm
-  /// when J is not square). The scene must provide the "twist" attribute.
+  /// when J is not square). A mechanism whose J is in another frame or at another point than
+  /// the scene's pose carries the twist there first (serial_chain: base frame, tip point). The
+  /// scene must provide the "twist" attribute. hapsyn/chain_motion.hpp has the building blocks
+  /// for serial chains (Jdot qdot, C(q, qdot) qdot, the allocation-free solve).
   kNeedJointVelocity = 1u << 5,
   /// Joint accelerations qddot that realise the demanded twist rate at those rates:
   /// J qddot = twist_rate - Jdot qdot (same rule). Implies kNeedJointVelocity; the scene must

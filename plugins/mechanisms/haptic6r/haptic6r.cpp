@@ -110,6 +110,9 @@ void Haptic6R::check_scene(const SampleSet& scene) const {
   }
 }
 
-Needs Haptic6R::provides() const { return kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits; }
+Needs Haptic6R::provides() const {
+  return kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits | kNeedJointVelocity | kNeedJointAcceleration |
+         kNeedVelocityTorque;
+}
 
 }  // namespace hapsyn::plugins

@@ -30,6 +30,13 @@
 ///   (l5 from the wrist point to E), outer diameter tube_outer_diameter, wall tube_wall; the end
 ///   effector a solid cylinder (ee_mass, ee_diameter, ee_length) centred at E, axis z_E.
 ///   Gravity -gravity e_z in B; gravity torque = the joint torque that holds the arm static.
+/// - Demanded motion (kNeedJointVelocity / kNeedJointAcceleration / kNeedVelocityTorque, for a
+///   reachable sample only): the sample's twist and twist rate are those of E in B (the scene
+///   frame), rows (omega, v), like J. qdot = J^-1 twist, qddot = J^-1 (twist_rate - Jdot qdot)
+///   (LU of the 6 x 6 J), c = C(q, qdot) qdot by Newton-Euler on the same bodies as H and the
+///   gravity torque (hapsyn/chain_motion.hpp), so tau = H qddot + c + gravity is the full inverse
+///   dynamics. Without a twist (solve() outside the evaluator) these outputs are NaN. Computed
+///   only when asked for: the other flags run the same code as before.
 #include <hapsyn/mechanism.hpp>
 #include <hapsyn/options.hpp>
 
@@ -278,7 +285,8 @@ class Haptic6R final : public Mechanism {
   void evaluate_constraints(const double* design, const SampleSet& scene, double* g) const override;
   /// Requires 7 pose coordinates (x, y, z, qw, qx, qy, qz).
   void check_scene(const SampleSet& scene) const override;
-  /// kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits.
+  /// kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits | kNeedJointVelocity |
+  /// kNeedJointAcceleration | kNeedVelocityTorque.
   Needs provides() const override;
 
   const Haptic6RSetup& setup() const { return setup_; }

@@ -158,4 +158,10 @@ template <typename InertiaMatrix, typename GravityVector>
   }
 }
 
+// The demanded motion at the chain's configuration (kNeedJointVelocity, kNeedJointAcceleration,
+// kNeedVelocityTorque, whichever `needs` holds): qdot = J^-1 twist, qddot = J^-1 (twist_rate -
+// Jdot qdot) and c = C(q, qdot) qdot from the same bodies as dynamics_from(). Out of line
+// (haptic6r_motion.cpp): only samples that ask for it pay for it. Allocation-free.
+void joint_motion(const Chain& c, const std::array<Haptic6RBody, 6>& bodies, Needs needs, SampleQuantities& out);
+
 }  // namespace hapsyn::plugins::haptic6r_chain

@@ -323,7 +323,8 @@ void Haptic6RModel::solve_sample(const double* pose, Needs needs, SampleQuantiti
     return;
   }
   out.status = SampleStatus::kReachable;
-  if (needs & (kNeedJacobian | kNeedInertia | kNeedGravity)) {
+  constexpr Needs kMotion = kNeedJointVelocity | kNeedJointAcceleration | kNeedVelocityTorque;
+  if (needs & (kNeedJacobian | kNeedInertia | kNeedGravity | kMotion)) {
     haptic6r_chain::Chain f;
     haptic6r_chain::chain_from(trig[static_cast<std::size_t>(chosen)], d_, a_, ca_, sa_, f);
     if (needs & kNeedJacobian) {
@@ -338,6 +339,7 @@ void Haptic6RModel::solve_sample(const double* pose, Needs needs, SampleQuantiti
                                     (needs & kNeedInertia) ? &out.inertia : nullptr,
                                     (needs & kNeedGravity) ? &out.gravity : nullptr);
     }
+    if (needs & kMotion) haptic6r_chain::joint_motion(f, bodies_, needs, out);
   }
   if (needs & kNeedActuatorLimits) {
     out.max_velocity = max_velocity_;

@@ -18,6 +18,7 @@
 #ifdef HAPSYN_HAVE_KDL
 #include <kdl/chain.hpp>
 #include <kdl/chaindynparam.hpp>
+#include <kdl/chainidsolver_recursive_newton_euler.hpp>
 #include <kdl/chainjnttojacsolver.hpp>
 #endif
 
@@ -223,19 +224,28 @@ TEST(Haptic6R, InertiaAndGravityMatchIndependentEnergy) {
 }
 
 #ifdef HAPSYN_HAVE_KDL
+namespace {
+// The same chain and mass model for KDL: one RotZ segment per DH row, body i in DH frame i + 1
+// (KDL's segment tip frame); KDL's joint angle is q_i + theta_offset_i.
+KDL::Chain kdl_chain(const Haptic6RModel& model) {
+  KDL::Chain chain;
+  for (int i = 0; i < 6; ++i) {
+    const Eigen::Vector4d row = model.dh_row(i);  // offset, d, a, alpha
+    const Haptic6RBody& b = model.bodies()[static_cast<std::size_t>(i)];
+    const KDL::RotationalInertia ic(b.inertia(0, 0), b.inertia(1, 1), b.inertia(2, 2), b.inertia(0, 1),
+                                    b.inertia(0, 2), b.inertia(1, 2));
+    chain.addSegment(KDL::Segment(KDL::Joint(KDL::Joint::RotZ), KDL::Frame::DH(row(2), row(3), row(1), 0.0),
+                                  KDL::RigidBodyInertia(b.mass, KDL::Vector(b.com.x(), b.com.y(), b.com.z()), ic)));
+  }
+  return chain;
+}
+}  // namespace
+
 TEST(Haptic6R, JacobianInertiaAndGravityMatchKdl) {
   std::mt19937 rng(5);
   for (int d = 0; d < 5; ++d) {
     Fixture f(d == 0 ? paper_like_design() : random_design(rng));
-    KDL::Chain chain;
-    for (int i = 0; i < 6; ++i) {
-      const Eigen::Vector4d row = f.model.dh_row(i);  // offset, d, a, alpha
-      const Haptic6RBody& b = f.model.bodies()[static_cast<std::size_t>(i)];
-      const KDL::RotationalInertia ic(b.inertia(0, 0), b.inertia(1, 1), b.inertia(2, 2), b.inertia(0, 1),
-                                      b.inertia(0, 2), b.inertia(1, 2));
-      chain.addSegment(KDL::Segment(KDL::Joint(KDL::Joint::RotZ), KDL::Frame::DH(row(2), row(3), row(1), 0.0),
-                                    KDL::RigidBodyInertia(b.mass, KDL::Vector(b.com.x(), b.com.y(), b.com.z()), ic)));
-    }
+    const KDL::Chain chain = kdl_chain(f.model);
     KDL::ChainDynParam dyn(chain, KDL::Vector(0, 0, -9.81));
     KDL::ChainJntToJacSolver jac_solver(chain);
     for (int k = 0; k < 20; ++k) {
@@ -264,6 +274,150 @@ TEST(Haptic6R, JacobianInertiaAndGravityMatchKdl) {
   }
 }
 #endif
+
+#ifdef HAPSYN_HAVE_KDL
+// The full inverse dynamics of solve()'s demanded motion, tau = H qddot + c + g, against KDL's
+// recursive Newton-Euler on the same chain with gravity, at random reachable configurations,
+// joint rates and accelerations.
+TEST(Haptic6R, FullInverseDynamicsMatchesKdlRecursiveNewtonEuler) {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  auto scratch = std::make_unique<MechanismScratch>();
+  double worst = 0.0;
+  int checked = 0;
+  for (int d = 0; d < 5; ++d) {
+    Fixture f(d == 0 ? paper_like_design() : random_design(rng));
+    const KDL::Chain chain = kdl_chain(f.model);
+    KDL::ChainIdSolver_RNE rne(chain, KDL::Vector(0, 0, -f.setup.options.gravity));
+    for (int k = 0; k < 40; ++k) {
+      const auto row = pose_row(f.model.forward(random_q(rng)));
+      Vector6d twist, twist_rate;
+      for (int r = 0; r < 6; ++r) {
+        twist(r) = u(rng);
+        twist_rate(r) = 3.0 * u(rng);
+      }
+      SampleQuantities out;
+      out.twist = twist.data();
+      out.twist_rate = twist_rate.data();
+      f.model.solve(row.data(),
+                    kNeedInertia | kNeedGravity | kNeedJointVelocity | kNeedJointAcceleration | kNeedVelocityTorque,
+                    *scratch, out);
+      if (out.status != SampleStatus::kReachable) continue;
+      ++checked;
+      const Vector6d tau = out.inertia * out.joint_acceleration + out.velocity_torque + out.gravity;
+      KDL::JntArray kq(6), kqd(6), kqdd(6), ktau(6);
+      for (unsigned i = 0; i < 6; ++i) {
+        kq(i) = out.q(i) + f.model.dh_row(static_cast<int>(i))(0);
+        kqd(i) = out.joint_velocity(i);
+        kqdd(i) = out.joint_acceleration(i);
+      }
+      KDL::Wrenches wrenches(chain.getNrOfSegments(), KDL::Wrench::Zero());
+      ASSERT_EQ(rne.CartToJnt(kq, kqd, kqdd, wrenches, ktau), 0);
+      Vector6d expected;
+      for (int i = 0; i < 6; ++i) expected(i) = ktau(static_cast<unsigned>(i));
+      const double error = (tau - expected).norm() / expected.norm();
+      worst = std::max(worst, error);
+      EXPECT_LT(error, 1e-9) << tau.transpose() << "\n" << expected.transpose();
+    }
+  }
+  EXPECT_GT(checked, 150);
+  std::printf("haptic6r tau = H qddot + c + g vs KDL RNE: worst relative error %.3g over %d samples\n", worst, checked);
+}
+#endif
+
+namespace {
+// The end-effector acceleration (d omega/dt, dv/dt) in B at t = 0 along q(t) = q + qdot t +
+// qddot t^2 / 2 from the forward kinematics alone, by second central differences: dv/dt from
+// the position, d omega/dt = vee(skew(Rddot R^T)) (Rdot Rdot^T, the rest of d/dt (Rdot R^T), is
+// symmetric).
+Vector6d acceleration_by_differences(const Haptic6RModel& model, const Vector6d& q, const Vector6d& qdot,
+                                     const Vector6d& qddot, double h) {
+  const auto at = [&](double t) { return model.forward(Vector6d(q + qdot * t + 0.5 * qddot * t * t)); };
+  const Eigen::Isometry3d p = at(h), o = at(0.0), m = at(-h);
+  const Eigen::Matrix3d a = (p.linear() - 2.0 * o.linear() + m.linear()) / (h * h) * o.linear().transpose();
+  const Eigen::Matrix3d skew = 0.5 * (a - a.transpose());
+  Vector6d out;
+  out << skew(2, 1), skew(0, 2), skew(1, 0), (p.translation() - 2.0 * o.translation() + m.translation()) / (h * h);
+  return out;
+}
+}  // namespace
+
+// solve()'s joint rates realise the twist (J qdot = twist) and its accelerations the twist
+// rate: the end-effector acceleration along the joint trajectory, differentiated numerically
+// from the forward kinematics, is twist_rate (so the Jdot qdot term is right).
+TEST(Haptic6R, JointRatesAndAccelerationsRealiseTheDemandedMotion) {
+  std::mt19937 rng(22);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  auto scratch = std::make_unique<MechanismScratch>();
+  double worst_rate = 0.0, worst_acceleration = 0.0;
+  int checked = 0;
+  for (int d = 0; d < 5; ++d) {
+    Fixture f(d == 0 ? paper_like_design() : random_design(rng));
+    for (int k = 0; k < 40; ++k) {
+      const auto row = pose_row(f.model.forward(random_q(rng)));
+      Vector6d twist, twist_rate;
+      for (int r = 0; r < 6; ++r) {
+        twist(r) = 0.5 * u(rng);
+        twist_rate(r) = u(rng);
+      }
+      SampleQuantities out;
+      out.twist = twist.data();
+      out.twist_rate = twist_rate.data();
+      f.model.solve(row.data(), kNeedJacobian | kNeedJointVelocity | kNeedJointAcceleration, *scratch, out);
+      if (out.status != SampleStatus::kReachable) continue;
+      const double rate_error = (out.jacobian * out.joint_velocity - twist).norm();
+      worst_rate = std::max(worst_rate, rate_error);
+      EXPECT_LT(rate_error, 1e-10);
+      // Near a singularity the rates are large and the differences inaccurate: skip those.
+      if (out.joint_velocity.norm() > 5.0 || out.joint_acceleration.norm() > 50.0) continue;
+      ++checked;
+      const Vector6d numeric = acceleration_by_differences(f.model, Vector6d(out.q), Vector6d(out.joint_velocity),
+                                                           Vector6d(out.joint_acceleration), 1e-4);
+      const double error = (numeric - twist_rate).norm() / twist_rate.norm();
+      worst_acceleration = std::max(worst_acceleration, error);
+      EXPECT_LT(error, 1e-5) << numeric.transpose() << "\n" << twist_rate.transpose();
+    }
+  }
+  EXPECT_GT(checked, 100);
+  std::printf("haptic6r: |J qdot - twist| <= %.3g; FK acceleration vs twist_rate: worst relative %.3g (%d samples)\n",
+              worst_rate, worst_acceleration, checked);
+}
+
+// The demanded-motion outputs are computed only when asked for, each on its own flag.
+TEST(Haptic6R, DemandedMotionOnlyWhenAskedFor) {
+  Fixture f(paper_like_design());
+  auto scratch = std::make_unique<MechanismScratch>();
+  Vector6d q;
+  q << 0.3, 1.0, -0.5, 1.2, 1.0, 0.2;
+  const auto row = pose_row(f.model.forward(q));
+  Vector6d twist, twist_rate;
+  twist << 0.1, -0.2, 0.3, 0.05, 0.1, -0.1;
+  twist_rate << 0.5, 0.2, -0.1, 0.3, -0.2, 0.4;
+  SampleQuantities out;
+  out.twist = twist.data();
+  out.twist_rate = twist_rate.data();
+  out.joint_velocity.setConstant(6, 7.0);
+  out.joint_acceleration.setConstant(6, 7.0);
+  out.velocity_torque.setConstant(6, 7.0);
+  f.model.solve(row.data(), kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits, *scratch, out);
+  ASSERT_EQ(out.status, SampleStatus::kReachable);
+  EXPECT_EQ(out.joint_velocity(0), 7.0);
+  EXPECT_EQ(out.joint_acceleration(0), 7.0);
+  EXPECT_EQ(out.velocity_torque(0), 7.0);
+  f.model.solve(row.data(), kNeedJointVelocity, *scratch, out);
+  EXPECT_NE(out.joint_velocity(0), 7.0);
+  EXPECT_EQ(out.joint_acceleration(0), 7.0);
+  EXPECT_EQ(out.velocity_torque(0), 7.0);
+  f.model.solve(row.data(), kNeedJointVelocity | kNeedVelocityTorque, *scratch, out);
+  EXPECT_EQ(out.joint_acceleration(0), 7.0);
+  EXPECT_NE(out.velocity_torque(0), 7.0);
+  EXPECT_TRUE(out.velocity_torque.allFinite());
+  // Without a twist (outside the evaluator) the rates are NaN, not silently zero.
+  out.twist = nullptr;
+  f.model.solve(row.data(), kNeedJointVelocity, *scratch, out);
+  EXPECT_TRUE(std::isnan(out.joint_velocity(0)));
+  EXPECT_TRUE(haptic6r().provides() & kNeedVelocityTorque);
+}
 
 TEST(Haptic6R, ExtremesAreFiniteOrClassifiedNeverNaN) {
   auto scratch = std::make_unique<MechanismScratch>();
@@ -423,7 +577,8 @@ TEST(Haptic6R, DesignSpaceAndConstraints) {
   d[9] = 3;  // s5 = 3 > s4 = 2
   mech.evaluate_constraints(d.data(), empty, g);
   EXPECT_EQ(g[3], 1.0);
-  EXPECT_EQ(mech.provides(), kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits);
+  EXPECT_EQ(mech.provides(), kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits | kNeedJointVelocity |
+                                 kNeedJointAcceleration | kNeedVelocityTorque);
   // build_in reuses the scratch.
   auto scratch = mech.make_scratch();
   const MechanismModel* m1 = mech.build_in(paper_like_design().data(), *scratch);

@@ -14,6 +14,7 @@
 /// - Twists and Jacobian rows are ordered (omega, v): the geometric Jacobian of the tip point in
 ///   the base frame [rad/s; m/s per joint rate].
 /// - Units SI: m, rad, kg, kg m^2; a prismatic joint's coordinate is in m.
+#include <hapsyn/chain_motion.hpp>
 #include <hapsyn/quantities.hpp>
 
 #include <Eigen/Core>
@@ -81,5 +82,13 @@ void chain_inertia(const Chain& chain, const ChainFrames& frames, JointMatrix& i
 /// Gravity torque tau_g (n): the joint torques [N m or N] that hold the chain static against
 /// chain.gravity (tau_g = -sum_i J_com_i^T m_i g). Allocation-free.
 void chain_gravity(const Chain& chain, const ChainFrames& frames, JointVector& gravity);
+
+/// The joints at the frames of chain_frames for hapsyn/chain_motion.hpp (n values): joint i's
+/// axis in the base frame through joint frame i's origin (after its motion). Allocation-free.
+void chain_world_joints(const Chain& chain, const ChainFrames& frames, WorldJoint* out);
+
+/// The bodies (n values) in the base frame at the frames of chain_frames: the same mass model as
+/// chain_inertia and chain_gravity, so that tau = H qddot + velocity_torque + gravity holds.
+void chain_world_bodies(const Chain& chain, const ChainFrames& frames, WorldBody* out);
 
 }  // namespace hapsyn::plugins

@@ -11,6 +11,8 @@
 // The holding torque against gravity g is the negated generalized force of the weights of C_j:
 //   revolute j:  -z_j . ((h - M o_j) x g),   prismatic j:  -z_j . (M g).
 // O(n^2) after one O(n) sweep from the tip; no allocation (the matrices have fixed capacity).
+// chain_world_joints / chain_world_bodies hand the same axes and bodies to hapsyn/chain_motion.hpp
+// for the velocity terms.
 #include "chain.hpp"
 
 #include <array>
@@ -92,6 +94,27 @@ void chain_gravity(const Chain& chain, const ChainFrames& frames, JointVector& g
     const WorldAxis a = world_axis(chain, frames, j);
     const Eigen::Vector3d weight = mass * chain.gravity;
     gravity(j) = a.revolute ? -a.z.dot((moment - mass * a.o).cross(chain.gravity)) : -a.z.dot(weight);
+  }
+}
+
+void chain_world_joints(const Chain& chain, const ChainFrames& frames, WorldJoint* out) {
+  for (int i = 0; i < chain.dof(); ++i) {
+    // On a revolute axis the origin is any point of it; for a prismatic joint it moves with the
+    // body, as chain_motion.hpp wants.
+    const WorldAxis a = world_axis(chain, frames, i);
+    out[i].axis = a.z;
+    out[i].origin = a.o;
+    out[i].prismatic = !a.revolute;
+  }
+}
+
+void chain_world_bodies(const Chain& chain, const ChainFrames& frames, WorldBody* out) {
+  for (int i = 0; i < chain.dof(); ++i) {
+    const ChainBody& b = chain.bodies[static_cast<std::size_t>(i)];
+    const Eigen::Isometry3d& f = frames.joint[static_cast<std::size_t>(i)];
+    out[i].mass = b.mass;
+    out[i].com = f * b.com;
+    out[i].inertia = f.linear() * b.inertia * f.linear().transpose();
   }
 }
 

@@ -4,6 +4,7 @@
 // singular and degenerate cases, and allocation-freedom.
 #include "chain_ik.hpp"
 #include "chain_test_chains.hpp"
+#include "serial_chain.hpp"
 
 #include <haptic6r.hpp>
 #include <hapsyn/options.hpp>
@@ -28,6 +29,29 @@ std::atomic<long> g_allocations{0};
 }
 [[gnu::noinline]] void operator delete(void* p) noexcept { std::free(p); }
 [[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+// Eigen's heap goes to malloc, not operator new: counted too where the C library allows it
+// (glibc, and not under a sanitizer, which owns malloc).
+#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
+#define HAPSYN_COUNT_MALLOC 1
+namespace {
+std::atomic<long> g_mallocs{0};
+}  // namespace
+extern "C" void* __libc_malloc(std::size_t);
+extern "C" void* __libc_realloc(void*, std::size_t);
+extern "C" void* __libc_calloc(std::size_t, std::size_t);
+extern "C" void* malloc(std::size_t size) {
+  g_mallocs.fetch_add(1, std::memory_order_relaxed);
+  return __libc_malloc(size);
+}
+extern "C" void* realloc(void* p, std::size_t size) {
+  g_mallocs.fetch_add(1, std::memory_order_relaxed);
+  return __libc_realloc(p, size);
+}
+extern "C" void* calloc(std::size_t count, std::size_t size) {
+  g_mallocs.fetch_add(1, std::memory_order_relaxed);
+  return __libc_calloc(count, size);
+}
+#endif
 
 namespace hapsyn::plugins {
 namespace {
@@ -465,6 +489,42 @@ TEST(ChainIk, DoesNotAllocate) {
     EXPECT_EQ(g_allocations.load() - before, 0) << c.name;
   }
 }
+
+#ifdef HAPSYN_COUNT_MALLOC
+// The mechanism's whole per-sample solve(), with every quantity including the demanded motion,
+// for a square (pose), a redundant (position) and the position_axis task: no malloc at all.
+TEST(SerialChainModel, SolveWithEveryQuantityDoesNotAllocate) {
+  const Needs all = kNeedJacobian | kNeedInertia | kNeedEffectiveMass | kNeedGravity | kNeedJointVelocity |
+                    kNeedJointAcceleration | kNeedVelocityTorque;
+  const Json cases[] = {
+      {{"dh_file", "serial_chain/haptic6r_dh.json"}, {"base_rpy", {10, -20, 30}}, {"tool_xyz", {0, 0, 0.05}}},
+      {{"dh_file", "serial_chain/ur5_like_dh.json"}, {"task", "position"}},
+      {{"dh_file", "serial_chain/ur5_like_dh.json"}, {"task", "position_axis"}}};
+  for (const Json& options : cases) {
+    const SerialChain mechanism(make_options<SerialChainOptions>(options));
+    std::vector<double> design;
+    for (const VariableDecl& v : mechanism.variables()) {
+      design.insert(design.end(), static_cast<std::size_t>(v.size), v.default_lower[0]);
+    }
+    const auto model = mechanism.build(design.data());
+    const auto scratch = mechanism.make_scratch();
+    const Chain& chain = static_cast<const SerialChainModel&>(*model).chain();
+    const Eigen::Isometry3d tip = fk(chain, random_q(chain, 1).data());
+    const Eigen::Isometry3d sample = mechanism.setup().base_from_scene.inverse() * tip * mechanism.setup().sample_to_tip.inverse();
+    const Eigen::Quaterniond r(sample.linear());
+    const double pose[7] = {sample.translation().x(), sample.translation().y(), sample.translation().z(), r.w(), r.x(), r.y(), r.z()};
+    const double twist[6] = {0.1, -0.2, 0.3, 0.05, 0.1, -0.1}, twist_rate[6] = {0.5, 0.2, -0.1, 0.3, -0.2, 0.4};
+    SampleQuantities out;
+    out.twist = twist;
+    out.twist_rate = twist_rate;
+    const long before = g_mallocs.load();
+    model->solve(pose, all, *scratch, out);
+    EXPECT_EQ(g_mallocs.load() - before, 0) << options.dump();
+    EXPECT_EQ(out.status, SampleStatus::kReachable) << options.dump();
+    EXPECT_TRUE(out.joint_acceleration.allFinite() && out.velocity_torque.allFinite());
+  }
+}
+#endif
 
 }  // namespace
 }  // namespace hapsyn::plugins

@@ -4,6 +4,7 @@
 #include "chain.hpp"
 #include "chain_template.hpp"
 #include "haptic6r.hpp"
+#include "serial_chain.hpp"
 
 #include "test_support.hpp"
 
@@ -13,7 +14,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <functional>
 #include <random>
@@ -23,6 +26,7 @@
 #ifdef HAPSYN_HAVE_KDL
 #include <kdl/chain.hpp>
 #include <kdl/chaindynparam.hpp>
+#include <kdl/chainidsolver_recursive_newton_euler.hpp>
 #include <kdl/chainjnttojacsolver.hpp>
 #endif
 
@@ -318,7 +322,110 @@ KdlState kdl_state(const KDL::Chain& k, const Eigen::Vector3d& gravity, const st
   return s;
 }
 
+// KDL's recursive Newton-Euler: tau for q, qdot, qddot under `gravity`.
+Eigen::VectorXd kdl_torque(const KDL::Chain& k, const Eigen::Vector3d& gravity, const double* q, const double* qdot,
+                           const double* qddot) {
+  const unsigned n = k.getNrOfJoints();
+  KDL::JntArray kq(n), kqd(n), kqdd(n), tau(n);
+  for (unsigned i = 0; i < n; ++i) {
+    kq(i) = q[i];
+    kqd(i) = qdot[i];
+    kqdd(i) = qddot[i];
+  }
+  KDL::ChainIdSolver_RNE rne(k, kdl_vector(gravity));
+  KDL::Wrenches wrenches(k.getNrOfSegments(), KDL::Wrench::Zero());
+  EXPECT_GE(rne.CartToJnt(kq, kqd, kqdd, wrenches, tau), 0);
+  return tau.data;
+}
+
 }  // namespace
+
+// tau = H qddot + c + g with c from hapsyn/chain_motion.hpp on chain_world_joints / _bodies,
+// against KDL's recursive Newton-Euler, on the shipped files and random chains with prismatic
+// joints, oblique axes and full inertias.
+TEST(Chain, FullInverseDynamicsMatchesKdlRecursiveNewtonEuler) {
+  double worst = 0.0;
+  for (const auto& [name, chain] : test_chains()) {
+    SCOPED_TRACE(name);
+    const KDL::Chain k = kdl_chain(chain);
+    const int n = chain.dof();
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<double> u(-2.0, 2.0);
+    for (int sample = 0; sample < 20; ++sample) {
+      const std::vector<double> q = random_q(n, rng);
+      Eigen::VectorXd qdot(n), qddot(n);
+      for (int i = 0; i < n; ++i) {
+        qdot(i) = u(rng);
+        qddot(i) = u(rng);
+      }
+      const State s = state_at(chain, q);
+      std::array<WorldJoint, kMaxChainJoints> joints;
+      std::array<WorldBody, kMaxChainJoints> bodies;
+      chain_world_joints(chain, s.frames, joints.data());
+      chain_world_bodies(chain, s.frames, bodies.data());
+      Eigen::VectorXd c(n);
+      velocity_torque(joints.data(), bodies.data(), n, qdot.data(), c.data());
+      const Eigen::VectorXd tau = Eigen::MatrixXd(s.inertia) * qddot + c + Eigen::VectorXd(s.gravity);
+      const Eigen::VectorXd expected = kdl_torque(k, chain.gravity, q.data(), qdot.data(), qddot.data());
+      const double error = (tau - expected).norm() / (1.0 + expected.norm());
+      worst = std::max(worst, error);
+      EXPECT_LT(error, 1e-9) << tau.transpose() << "\n" << expected.transpose();
+    }
+  }
+  std::printf("chain: tau = H qddot + c + g vs KDL RNE: worst relative error %.3g\n", worst);
+}
+
+// The same through the serial_chain plugin's solve(): its joint rates and accelerations for a
+// random demanded motion, base and tool frames, every task; the torque of its H, c and g is KDL's.
+TEST(Chain, PluginsDemandedMotionTorqueMatchesKdl) {
+  double worst = 0.0;
+  int checked = 0;
+  for (const char* task : {"pose", "position", "position_axis"}) {
+    Json o{{"dh_file", task == std::string("pose") ? "serial_chain/haptic6r_dh.json" : "serial_chain/ur5_like_dh.json"},
+           {"task", task}, {"base_xyz", {0.1, -0.2, 0.3}}, {"base_rpy", {10, -20, 30}},
+           {"tool_xyz", {0.02, 0.0, 0.05}}, {"tool_rpy", {0, 30, 45}}};
+    const SerialChain m(make_options<SerialChainOptions>(o));
+    std::vector<double> design;
+    for (const VariableDecl& v : m.variables()) design.insert(design.end(), static_cast<std::size_t>(v.size), v.default_lower[0]);
+    const auto model = m.build(design.data());
+    const Chain& chain = static_cast<const SerialChainModel&>(*model).chain();
+    const KDL::Chain k = kdl_chain(chain);
+    const auto scratch = m.make_scratch();
+    std::mt19937 rng(19);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    for (int sample = 0; sample < 20; ++sample) {
+      ChainFrames f;
+      const std::vector<double> q0 = random_q(chain.dof(), rng);
+      chain_frames(chain, q0.data(), f);
+      // The scene pose of P whose target is this tip pose: T_S^P = T_S^B T_B^E T_E^P.
+      const Eigen::Isometry3d p = m.setup().base_from_scene.inverse() * f.tip * m.setup().sample_to_tip.inverse();
+      const Eigen::Quaterniond rot(p.linear());
+      const double pose[7] = {p.translation().x(), p.translation().y(), p.translation().z(), rot.w(), rot.x(), rot.y(), rot.z()};
+      double twist[6], twist_rate[6];
+      for (int r = 0; r < 6; ++r) {
+        twist[r] = u(rng);
+        twist_rate[r] = u(rng);
+      }
+      SampleQuantities out;
+      out.twist = twist;
+      out.twist_rate = twist_rate;
+      model->solve(pose, kNeedInertia | kNeedGravity | kNeedJointVelocity | kNeedJointAcceleration | kNeedVelocityTorque,
+                   *scratch, out);
+      if (out.status != SampleStatus::kReachable) continue;
+      ++checked;
+      const Eigen::VectorXd tau = Eigen::MatrixXd(out.inertia) * Eigen::VectorXd(out.joint_acceleration) +
+                                  Eigen::VectorXd(out.velocity_torque) + Eigen::VectorXd(out.gravity);
+      const Eigen::VectorXd expected =
+          kdl_torque(k, chain.gravity, out.q.data(), out.joint_velocity.data(), out.joint_acceleration.data());
+      const double error = (tau - expected).norm() / (1.0 + expected.norm());
+      worst = std::max(worst, error);
+      EXPECT_LT(error, 1e-9) << task << "\n" << tau.transpose() << "\n" << expected.transpose();
+    }
+  }
+  EXPECT_GT(checked, 40);
+  std::printf("serial_chain solve(): tau = H qddot + c + g vs KDL RNE: worst relative error %.3g (%d samples)\n", worst,
+              checked);
+}
 
 TEST(Chain, JacobianInertiaAndGravityMatchKdl) {
   for (const auto& [name, chain] : test_chains()) {

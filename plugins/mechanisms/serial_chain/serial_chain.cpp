@@ -233,7 +233,8 @@ void SerialChain::check_scene(const SampleSet& scene) const {
 }
 
 Needs SerialChain::provides() const {
-  Needs n = kNeedJacobian | kNeedInertia | kNeedEffectiveMass | kNeedGravity;
+  Needs n = kNeedJacobian | kNeedInertia | kNeedEffectiveMass | kNeedGravity | kNeedJointVelocity |
+            kNeedJointAcceleration | kNeedVelocityTorque;
   if (setup_->actuators) return n | kNeedActuatorLimits;
   Chain nominal;
   setup_->chain_template.instantiate(nominal_values(setup_->chain_template).data(), nullptr, nominal);

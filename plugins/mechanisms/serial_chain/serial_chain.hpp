@@ -13,6 +13,19 @@
 /// - Classification: IK converged inside the limits -> kReachable, or kSingular when the
 ///   scaled task Jacobian's sigma_min / sigma_max < singularity_tolerance; converged only
 ///   outside the limits -> kInvalid; no convergence -> kUnreachable. Never a NaN.
+/// - Demanded motion (kNeedJointVelocity / kNeedJointAcceleration / kNeedVelocityTorque, every
+///   task, reachable samples only): the sample's twist and twist rate are those of P in S; they
+///   are carried to E in B like the target (rotated by R_B^S; v_E = v_P + omega x r, a_E = a_P +
+///   domega x r + omega x (omega x r) with r from P to E; r does not turn for a 3-coordinate
+///   sample, which has no orientation), then given the task Jacobian's rows: pose all six,
+///   position the v rows, position_axis (u1, u2) . omega and v. qdot solves J qdot = those rows
+///   (LU, or minimum norm for a redundant chain), qddot solves J qddot = the rows of (twist_rate
+///   - Jdot qdot), where for position_axis the angular part gains lambda (omega x a), lambda =
+///   a . (omega_chain - omega), a the tip axis: the chain's spin about a is free, and the axis's
+///   second derivative omega_dot x a + omega x (omega x a) is matched, not the spin's
+///   (serial_chain_model.cpp). c = C(q, qdot) qdot by Newton-Euler on the bodies of the inertia
+///   and gravity torque (hapsyn/chain_motion.hpp). Without a twist (solve() outside the
+///   evaluator) these outputs are NaN.
 #include "chain.hpp"
 #include "chain_ik.hpp"
 #include "chain_template.hpp"
@@ -31,6 +44,15 @@
 namespace hapsyn::plugins {
 
 struct ActuatorTable;
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+/// A sample's demanded motion carried to the tip point E in the base frame B (see the file
+/// comment), rows (omega, v): what J qdot and J qddot + Jdot qdot must give.
+struct DemandedMotion {
+  Vector6d twist;       ///< [rad/s; m/s]
+  Vector6d twist_rate;  ///< [rad/s^2; m/s^2]; NaN without a twist rate
+};
 
 /// What the plugin resolves once from its options: the chain file read, the actuator table,
 /// the frames, the home posture, the constraints. Shared by every model (const).
@@ -71,10 +93,24 @@ class SerialChainModel final : public MechanismModel {
   const JointVector& max_torque() const { return max_torque_; }      ///< [N m or N]
   /// T_B^E wanted for a scene sample (dimension 3 or 7).
   Eigen::Isometry3d target(const double* pose, int dimension) const;
+  /// The sample's twist (and twist rate, may be null), 6 values each of P in S, as a motion of
+  /// E in B for the target `goal` = target(pose, dimension). Allocation-free.
+  DemandedMotion demanded_motion(const double* pose, int dimension, const Eigen::Isometry3d& goal, const double* twist,
+                                 const double* twist_rate) const;
+  /// position_axis: what the angular acceleration must gain for the tip axis `axis` (unit, B)
+  /// to follow the demanded one to second order when the chain's angular velocity
+  /// `omega_chain` differs from the demanded `omega` by a spin about the axis:
+  /// (axis . (omega_chain - omega)) (omega x axis).
+  static Eigen::Vector3d axis_rate_term(const Eigen::Vector3d& axis, const Eigen::Vector3d& omega,
+                                        const Eigen::Vector3d& omega_chain);
 
  private:
   void fill_quantities(const ChainFrames& frames, const TaskJointMatrix& jacobian, Needs needs,
                        SampleQuantities& out) const;
+  // kNeedJointVelocity, kNeedJointAcceleration, kNeedVelocityTorque at s.frames, s.task and
+  // s.geometric of a reachable sample.
+  void fill_motion(const double* pose, int dimension, const Eigen::Isometry3d& goal, SerialChainScratch& s,
+                   Needs needs, SampleQuantities& out) const;
 
   const SerialChainSetup* setup_;
   std::uint64_t id_;  ///< unique per model, for the warm start (an address may be reused)
@@ -99,8 +135,9 @@ class SerialChain final : public Mechanism {
   void evaluate_constraints(const double* design, const SampleSet& scene, double* g) const override;
   /// 3 coordinates (x, y, z) for the position task, 7 (x, y, z, qw, qx, qy, qz) for any task.
   void check_scene(const SampleSet& scene) const override;
-  /// Jacobian, inertia, effective mass, gravity; actuator limits when a table is given or the
-  /// file gives every joint's velocity and effort limits.
+  /// Jacobian, inertia, effective mass, gravity, joint velocity, joint acceleration, velocity
+  /// torque; actuator limits when a table is given or the file gives every joint's velocity and
+  /// effort limits.
   Needs provides() const override;
 
   const SerialChainSetup& setup() const { return *setup_; }

@@ -4,11 +4,15 @@
 
 #include "haptic6r.hpp"  // ActuatorTable
 
+#include <hapsyn/chain_motion.hpp>
+
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <Eigen/SVD>
+#include <array>
 #include <atomic>
 #include <cmath>
+#include <limits>
 
 namespace hapsyn::plugins {
 
@@ -17,6 +21,15 @@ namespace {
 std::uint64_t next_model_id() {
   static std::atomic<std::uint64_t> counter{0};
   return ++counter;
+}
+
+constexpr Needs kMotion = kNeedJointVelocity | kNeedJointAcceleration | kNeedVelocityTorque;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// The task rows (task_jacobian's selection and projection) of one geometric 6-vector (omega, v).
+void task_rows(const IkTask& task, const Eigen::Isometry3d& tip, const Vector6d& geometric, TaskJointMatrix& out) {
+  TaskJointMatrix column = geometric;
+  task_jacobian(task, tip, column, out);
 }
 
 }  // namespace
@@ -99,6 +112,67 @@ void SerialChainModel::solve(const double* pose, Needs needs, MechanismScratch& 
   }
   out.status = SampleStatus::kReachable;
   fill_quantities(s.frames, s.task, needs, out);
+  if (needs & kMotion) fill_motion(pose, dimension, goal, s, needs, out);
+}
+
+DemandedMotion SerialChainModel::demanded_motion(const double* pose, int dimension, const Eigen::Isometry3d& goal,
+                                                 const double* twist, const double* twist_rate) const {
+  const Eigen::Matrix3d& r = setup_->base_from_scene.linear();
+  const Eigen::Vector3d lever = goal.translation() - setup_->base_from_scene * Eigen::Vector3d(pose[0], pose[1], pose[2]);
+  DemandedMotion m;
+  m.twist.head<3>() = r * Eigen::Vector3d(twist[0], twist[1], twist[2]);
+  // A position sample has no orientation: its target E does not turn about P.
+  const Eigen::Vector3d w = dimension == 7 ? Eigen::Vector3d(m.twist.head<3>()) : Eigen::Vector3d::Zero();
+  m.twist.tail<3>() = r * Eigen::Vector3d(twist[3], twist[4], twist[5]) + w.cross(lever);
+  if (twist_rate) {
+    m.twist_rate.head<3>() = r * Eigen::Vector3d(twist_rate[0], twist_rate[1], twist_rate[2]);
+    const Eigen::Vector3d dw = dimension == 7 ? Eigen::Vector3d(m.twist_rate.head<3>()) : Eigen::Vector3d::Zero();
+    m.twist_rate.tail<3>() =
+        r * Eigen::Vector3d(twist_rate[3], twist_rate[4], twist_rate[5]) + dw.cross(lever) + w.cross(w.cross(lever));
+  } else {
+    m.twist_rate.setConstant(kNaN);
+  }
+  return m;
+}
+
+void SerialChainModel::fill_motion(const double* pose, int dimension, const Eigen::Isometry3d& goal,
+                                   SerialChainScratch& s, Needs needs, SampleQuantities& out) const {
+  const int n = chain_.dof();
+  std::array<WorldJoint, kMaxChainJoints> joints;
+  chain_world_joints(chain_, s.frames, joints.data());
+  out.joint_velocity.resize(n);
+  if (!out.twist) {  // outside the evaluator (Problem refuses a scene without the twist)
+    out.joint_velocity.setConstant(kNaN);
+  } else {
+    const DemandedMotion demand = demanded_motion(pose, dimension, goal, out.twist, out.twist_rate);
+    TaskJointMatrix rows;
+    task_rows(setup_->task, s.frames.tip, demand.twist, rows);
+    JointRateSolver solver;
+    solver.compute(s.task);
+    solver.solve(rows.data(), out.joint_velocity);
+    if (needs & kNeedJointAcceleration) {
+      Vector6d rate;
+      jacobian_rate_times_rate(joints.data(), n, s.frames.tip.translation(), out.joint_velocity.data(), rate.data());
+      Vector6d wanted = demand.twist_rate - rate;
+      if (setup_->task.orientation == IkTask::Orientation::kAxis) {
+        wanted.head<3>() += axis_rate_term(s.frames.tip.linear().col(setup_->task.axis), demand.twist.head<3>(),
+                                           s.geometric.topRows<3>() * out.joint_velocity);
+      }
+      task_rows(setup_->task, s.frames.tip, wanted, rows);
+      solver.solve(rows.data(), out.joint_acceleration);
+    }
+  }
+  if (needs & kNeedVelocityTorque) {
+    std::array<WorldBody, kMaxChainJoints> bodies;
+    chain_world_bodies(chain_, s.frames, bodies.data());
+    out.velocity_torque.resize(n);
+    velocity_torque(joints.data(), bodies.data(), n, out.joint_velocity.data(), out.velocity_torque.data());
+  }
+}
+
+Eigen::Vector3d SerialChainModel::axis_rate_term(const Eigen::Vector3d& axis, const Eigen::Vector3d& omega,
+                                                 const Eigen::Vector3d& omega_chain) {
+  return axis.dot(omega_chain - omega) * omega.cross(axis);
 }
 
 void SerialChainModel::fill_quantities(const ChainFrames& frames, const TaskJointMatrix& jacobian, Needs needs,

@@ -268,3 +268,217 @@ TEST(SerialChain, EffectiveMassIsTheInverseOfJHinvJt) {
   const Eigen::MatrixXd expected = j.transpose().inverse() * h * j.inverse();
   EXPECT_LT((Eigen::MatrixXd(out.effective_mass) - expected).norm(), 1e-9 * expected.norm());
 }
+
+// ---- The demanded motion: joint rates, accelerations and the velocity torque ----
+
+namespace {
+
+Eigen::Matrix3d rotation_exp(const Eigen::Vector3d& v) {
+  const double angle = v.norm();
+  return angle > 0.0 ? Eigen::AngleAxisd(angle, v / angle).toRotationMatrix() : Eigen::Matrix3d::Identity();
+}
+
+Eigen::Vector3d vee_of_skew(const Eigen::Matrix3d& m) {
+  const Eigen::Matrix3d s = 0.5 * (m - m.transpose());
+  return Eigen::Vector3d(s(2, 1), s(0, 2), s(1, 0));
+}
+
+// First and second time derivatives at t = 0 of a pose trajectory, by central differences:
+// (omega, v) and (d omega/dt, a) of its origin, and of its unit axis `axis` (a_dot, a_ddot).
+struct PoseDerivatives {
+  Vector6d twist, twist_rate;
+  Eigen::Vector3d axis_rate, axis_acceleration;
+};
+
+template <class Trajectory>
+PoseDerivatives differentiate(const Trajectory& at, int axis, double h) {
+  const Eigen::Isometry3d p = at(h), o = at(0.0), m = at(-h);
+  const Eigen::Matrix3d rdot = (p.linear() - m.linear()) / (2.0 * h);
+  const Eigen::Matrix3d rddot = (p.linear() - 2.0 * o.linear() + m.linear()) / (h * h);
+  PoseDerivatives d;
+  d.twist << vee_of_skew(rdot * o.linear().transpose()), (p.translation() - m.translation()) / (2.0 * h);
+  // d/dt (Rdot R^T) = Rddot R^T + Rdot Rdot^T, whose second term is symmetric.
+  d.twist_rate << vee_of_skew(rddot * o.linear().transpose()),
+      (p.translation() - 2.0 * o.translation() + m.translation()) / (h * h);
+  d.axis_rate = rdot.col(axis);
+  d.axis_acceleration = rddot.col(axis);
+  return d;
+}
+
+struct MotionCase {
+  const char* name;
+  Json options;
+  int dimension;
+};
+
+std::vector<MotionCase> motion_cases() {
+  const auto with_frames = [](Json o) {
+    o["base_xyz"] = {0.1, -0.2, 0.3};
+    o["base_rpy"] = {10, -20, 30};
+    o["tool_xyz"] = {0.02, -0.01, 0.05};
+    o["tool_rpy"] = {15, 30, 45};
+    return o;
+  };
+  Json pose = haptic6r_dh_options();
+  Json ur5{{"dh_file", "serial_chain/ur5_like_dh.json"}};
+  Json position = ur5, axis = ur5;
+  position["task"] = "position";
+  axis["task"] = "position_axis";
+  axis["task_axis"] = "y";
+  return {{"pose", with_frames(pose), 7},
+          {"pose without frames", pose, 7},
+          {"position (redundant), poses", with_frames(position), 7},
+          {"position (redundant), positions", with_frames(position), 3},
+          {"position_axis", with_frames(axis), 7}};
+}
+
+}  // namespace
+
+// The joint rates realise the twist in the task rows (J qdot = the demanded twist carried to E
+// in B), and along q(t) = q + qdot t + qddot t^2 / 2 the tip follows the target of the demanded
+// scene motion P(t) (origin p + v t + a t^2 / 2, rotation exp(omega t + domega t^2 / 2) R) to
+// second order in every row the task matches: both differentiated numerically, the chain's
+// from the forward kinematics, the target's from SerialChainModel::target(). This checks the
+// frames (base, tool), the Jdot qdot term, and position_axis's spin term.
+TEST(SerialChain, JointRatesAndAccelerationsRealiseTheDemandedMotionInEveryTask) {
+  for (const MotionCase& c : motion_cases()) {
+    SCOPED_TRACE(c.name);
+    const SerialChain m = serial_chain(c.options);
+    const auto design = nominal_design(m);
+    const auto model_ptr = m.build(design.data());
+    const auto& model = static_cast<const SerialChainModel&>(*model_ptr);
+    const Chain& chain = model.chain();
+    const SerialChainSetup& setup = m.setup();
+    const auto scratch = m.make_scratch();
+    const Eigen::Isometry3d scene_from_base = setup.base_from_scene.inverse();
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int checked = 0;
+    double worst_rate = 0.0, worst_acceleration = 0.0;
+    for (int k = 0; k < 40; ++k) {
+      JointVector q0(chain.dof());
+      for (int i = 0; i < chain.dof(); ++i) q0(i) = 2.5 * u(rng);
+      ChainFrames f;
+      chain_frames(chain, q0.data(), f);
+      // The sample whose target is this tip pose.
+      Eigen::Isometry3d p0 = scene_from_base * f.tip * setup.sample_to_tip.inverse();
+      if (c.dimension == 3) {
+        p0.translation() = scene_from_base * f.tip.translation() - setup.sample_to_tip.translation();
+        p0.linear().setIdentity();
+      }
+      Vector6d twist, twist_rate;
+      for (int r = 0; r < 6; ++r) {
+        twist(r) = 0.4 * u(rng);
+        twist_rate(r) = u(rng);
+      }
+      const auto sample_at = [&](double t) {
+        Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
+        p.linear() = rotation_exp(twist.head<3>() * t + 0.5 * twist_rate.head<3>() * t * t) * p0.linear();
+        p.translation() = p0.translation() + twist.tail<3>() * t + 0.5 * twist_rate.tail<3>() * t * t;
+        return p;
+      };
+      const auto row_of = [&](const Eigen::Isometry3d& p) {
+        const Eigen::Quaterniond r(p.linear());
+        return std::array<double, 7>{p.translation().x(), p.translation().y(), p.translation().z(), r.w(), r.x(), r.y(), r.z()};
+      };
+      const auto row = row_of(p0);
+      SampleSet scene;
+      scene.coordinates = c.dimension == 7 ? std::vector<std::string>{"x", "y", "z", "qw", "qx", "qy", "qz"}
+                                           : std::vector<std::string>{"x", "y", "z"};
+      scene.poses = Eigen::Map<const Eigen::RowVectorXd>(row.data(), c.dimension);
+      SampleQuantities out;
+      out.scene = &scene;
+      out.sample = 0;
+      out.twist = twist.data();
+      out.twist_rate = twist_rate.data();
+      model.solve(row.data(), kNeedJacobian | kNeedJointVelocity | kNeedJointAcceleration, *scratch, out);
+      if (out.status != SampleStatus::kReachable) continue;
+      // J qdot = the task rows of the demanded twist at E in B.
+      const DemandedMotion demand = model.demanded_motion(row.data(), c.dimension, model.target(row.data(), c.dimension),
+                                                          twist.data(), twist_rate.data());
+      TaskJointMatrix demanded_rows;
+      task_jacobian(setup.task, model.target(row.data(), c.dimension), TaskJointMatrix(demand.twist), demanded_rows);
+      const double rate_error = (out.jacobian * out.joint_velocity - demanded_rows).norm();
+      worst_rate = std::max(worst_rate, rate_error);
+      EXPECT_LT(rate_error, 1e-10);
+      // Near a singularity the rates are large and the differences inaccurate: skip those.
+      if (out.joint_velocity.norm() > 5.0 || out.joint_acceleration.norm() > 50.0) continue;
+      ++checked;
+      const double h = 1e-4;
+      const PoseDerivatives chain_motion = differentiate(
+          [&](double t) {
+            JointVector q = out.q + out.joint_velocity * t + 0.5 * out.joint_acceleration * t * t;
+            ChainFrames g;
+            chain_frames(chain, q.data(), g);
+            return g.tip;
+          },
+          setup.task.axis, h);
+      const PoseDerivatives target_motion = differentiate(
+          [&](double t) { return model.target(row_of(sample_at(t)).data(), c.dimension); }, setup.task.axis, h);
+      // The rows the task matches: v and a always; omega and d omega/dt for pose; the axis's
+      // first and second derivatives for position_axis.
+      double rate = (chain_motion.twist.tail<3>() - target_motion.twist.tail<3>()).norm();
+      double acceleration = (chain_motion.twist_rate.tail<3>() - target_motion.twist_rate.tail<3>()).norm();
+      if (setup.task.orientation == IkTask::Orientation::kFull) {
+        rate += (chain_motion.twist.head<3>() - target_motion.twist.head<3>()).norm();
+        acceleration += (chain_motion.twist_rate.head<3>() - target_motion.twist_rate.head<3>()).norm();
+      } else if (setup.task.orientation == IkTask::Orientation::kAxis) {
+        rate += (chain_motion.axis_rate - target_motion.axis_rate).norm();
+        acceleration += (chain_motion.axis_acceleration - target_motion.axis_acceleration).norm();
+        // Not vacuous: the spin about the axis is free, and differs.
+        EXPECT_GT((chain_motion.twist.head<3>() - target_motion.twist.head<3>()).norm(), 1e-6);
+      }
+      worst_acceleration = std::max(worst_acceleration, acceleration / (1.0 + target_motion.twist_rate.norm()));
+      EXPECT_LT(rate, 1e-6 * (1.0 + target_motion.twist.norm())) << chain_motion.twist.transpose() << "\n"
+                                                                << target_motion.twist.transpose();
+      EXPECT_LT(acceleration, 1e-5 * (1.0 + target_motion.twist_rate.norm()))
+          << chain_motion.twist_rate.transpose() << "\n" << target_motion.twist_rate.transpose();
+    }
+    EXPECT_GE(checked, 15);
+    std::printf("serial_chain %s: |J qdot - twist rows| <= %.3g; FD acceleration worst relative %.3g (%d samples)\n", c.name,
+                worst_rate, worst_acceleration, checked);
+  }
+}
+
+// The demanded-motion outputs only when asked for, each on its own flag; NaN without a twist.
+TEST(SerialChain, DemandedMotionOnlyWhenAskedFor) {
+  const SerialChain m = serial_chain(haptic6r_dh_options());
+  EXPECT_TRUE(m.provides() & kNeedJointVelocity);
+  EXPECT_TRUE(m.provides() & kNeedJointAcceleration);
+  EXPECT_TRUE(m.provides() & kNeedVelocityTorque);
+  const auto design = nominal_design(m);
+  const auto model = m.build(design.data());
+  const auto& chain = static_cast<const SerialChainModel&>(*model).chain();
+  JointVector q(6);
+  q << 0.3, 1.2, -0.4, 1.0, 0.6, 0.2;
+  ChainFrames f;
+  chain_frames(chain, q.data(), f);
+  const SampleSet scene = one_pose_scene(f.tip);
+  const double twist[6] = {0.1, -0.2, 0.3, 0.05, 0.1, -0.1}, twist_rate[6] = {0.5, 0.2, -0.1, 0.3, -0.2, 0.4};
+  SampleQuantities out;
+  out.scene = &scene;
+  out.sample = 0;
+  out.twist = twist;
+  out.twist_rate = twist_rate;
+  out.joint_velocity.setConstant(6, 7.0);
+  out.joint_acceleration.setConstant(6, 7.0);
+  out.velocity_torque.setConstant(6, 7.0);
+  const auto scratch = m.make_scratch();
+  model->solve(scene.pose(0), kNeedJacobian | kNeedInertia | kNeedEffectiveMass | kNeedGravity | kNeedActuatorLimits,
+               *scratch, out);
+  ASSERT_EQ(out.status, SampleStatus::kReachable);
+  EXPECT_EQ(out.joint_velocity(0), 7.0);
+  EXPECT_EQ(out.joint_acceleration(0), 7.0);
+  EXPECT_EQ(out.velocity_torque(0), 7.0);
+  model->solve(scene.pose(0), kNeedJointVelocity, *scratch, out);
+  EXPECT_NE(out.joint_velocity(0), 7.0);
+  EXPECT_EQ(out.joint_acceleration(0), 7.0);
+  EXPECT_EQ(out.velocity_torque(0), 7.0);
+  model->solve(scene.pose(0), kNeedJointVelocity | kNeedVelocityTorque, *scratch, out);
+  EXPECT_EQ(out.joint_acceleration(0), 7.0);
+  EXPECT_NE(out.velocity_torque(0), 7.0);
+  EXPECT_TRUE(out.velocity_torque.allFinite());
+  out.twist = nullptr;
+  model->solve(scene.pose(0), kNeedJointVelocity, *scratch, out);
+  EXPECT_TRUE(std::isnan(out.joint_velocity(0)));
+}
