@@ -119,6 +119,13 @@ const std::vector<Activity>& activities() {
         {{10, 55, 45, 135, -30, 20, -10}, 0.8, 0},
         {{10, 35, 20, 60, -30, 10, -10}, 2.0, 0.4},   // cup back on the table
         {home, 1.0, 0.3}}},
+      {"side_reach",
+       {{home, 0, 0.3},
+        {{80, 20, -25, 20, 0, 0, -10}, 1.8, 0.5},  // a shelf out to the side, arm abducted
+        {home, 1.7, 0.3},
+        {{60, 50, 30, 40, 0, 0, -10}, 1.5, 0.4},   // forward and out
+        {{80, 20, -25, 20, 0, 0, -10}, 1.4, 0.4},  // back to the shelf
+        {home, 1.6, 0.3}}},
   };
   return list;
 }

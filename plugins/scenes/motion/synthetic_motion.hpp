@@ -1,6 +1,7 @@
 #pragma once
 /// \file
-/// Synthetic human arm motion: activities of daily living (reaching, wiping, lifting, drinking)
+/// Synthetic human arm motion: activities of daily living (reaching, wiping, lifting, drinking,
+/// side_reach)
 /// performed by the 7-DOF arm of Fennel et al. 2022 (human_arm.hpp), written in the
 /// "hapsyn-motion" CSV format and as BVH. The data are made, not recorded: joint-space keyframes
 /// with per-subject perturbations, joined by quintic (minimum-jerk) rest-to-rest segments whose
@@ -58,7 +59,7 @@ struct SyntheticOptions {
 /// have measured. All matrices have one row per sample.
 struct SyntheticTrajectory {
   std::string subject;   ///< "S01", ...
-  std::string activity;  ///< "reaching", "wiping", "lifting", "drinking"
+  std::string activity;  ///< "reaching", "wiping", "lifting", "drinking", "side_reach"
   double arm_scale = 1;  ///< segment-length factor of this subject's arm (scaled_arm)
   bool jittered = false; ///< time stamps jittered around the nominal 1/rate_hz grid
   double rate_hz = 120;  ///< [Hz] nominal sampling rate (the BVH frame time is its inverse)

@@ -48,13 +48,13 @@ Vector7d row7(const Eigen::MatrixXd& M, Eigen::Index k) { return M.row(k).transp
 // ------------------------------------------------------------------ the motion ----
 
 TEST(SyntheticMotion, SubjectsActivitiesAndDurations) {
-  ASSERT_EQ(data().size(), 24u);
-  const std::vector<std::string> activities{"reaching", "wiping", "lifting", "drinking"};
+  ASSERT_EQ(data().size(), 30u);
+  const std::vector<std::string> activities{"reaching", "wiping", "lifting", "drinking", "side_reach"};
   EXPECT_EQ(synthetic_activities(), activities);
   for (std::size_t i = 0; i < data().size(); ++i) {
     const SyntheticTrajectory& t = data()[i];
-    EXPECT_EQ(t.subject, "S0" + std::to_string(i / 4 + 1));
-    EXPECT_EQ(t.activity, activities[i % 4]);
+    EXPECT_EQ(t.subject, "S0" + std::to_string(i / 5 + 1));
+    EXPECT_EQ(t.activity, activities[i % 5]);
     EXPECT_GE(t.path.duration(), 10.0 - 1e-9) << t.subject << " " << t.activity;
     EXPECT_LE(t.path.duration(), 12.0) << t.subject << " " << t.activity;
     EXPECT_EQ(t.time.size(), static_cast<Eigen::Index>(std::floor(t.path.duration() * 120 + 1e-9)) + 1);
@@ -181,7 +181,7 @@ TEST(SyntheticMotion, SameSeedSameTextOtherSeedOtherText) {
   const auto b = make_synthetic_motion(arm(), o);
   o.seed = 2023;
   const auto c = make_synthetic_motion(arm(), o);
-  ASSERT_EQ(a.size(), 8u);
+  ASSERT_EQ(a.size(), 10u);
   for (std::size_t i = 0; i < a.size(); ++i) {
     const HumanArmData subject = scaled_arm(arm(), a[i].arm_scale);
     EXPECT_EQ(motion_csv(a[i]), motion_csv(b[i]));
@@ -201,7 +201,7 @@ TEST(SyntheticMotion, SubjectArmScales) {
     EXPECT_LE(s, 1.10);
     for (double other : scales) EXPECT_NE(s, other);
     scales.push_back(s);
-    EXPECT_EQ(data()[4 * i].arm_scale, s);
+    EXPECT_EQ(data()[5 * i].arm_scale, s);
   }
   const HumanArmData a = scaled_arm(arm(), 0.95);
   for (int i = 0; i < 7; ++i) {
