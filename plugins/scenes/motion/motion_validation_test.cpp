@@ -35,7 +35,7 @@ const Json kDesign = {{"l", {{"value", {0.45, 0.45, 0.65, 0.55, 0.15}}}},
                       {"s", {{"value", {3, 3, 2, 2, 1, 1}}}},
                       {"r", {{"value", {2, 2, 3, 2, 3, 3}}}}};
 
-// Two subjects' noise-free synthetic motion (exact poses, uniform time stamps).
+// Two subjects' noise-free synthetic seated motion (exact poses, uniform time stamps).
 const std::vector<SyntheticTrajectory>& trajectories() {
   static const std::vector<SyntheticTrajectory> t = [] {
     const hapsyn::plugins::HumanArmData arm = hapsyn::plugins::load_human_arm(
@@ -44,7 +44,13 @@ const std::vector<SyntheticTrajectory>& trajectories() {
     o.subjects = 2;
     o.position_noise_m = 0.0;
     o.orientation_noise_deg = 0.0;
-    return hapsyn::plugins::motion::make_synthetic_motion(arm, o);
+    // The seated activities: inside the capability of the design below (side_reach leaves its
+    // workspace on purpose).
+    std::vector<SyntheticTrajectory> all = hapsyn::plugins::motion::make_synthetic_motion(arm, o), seated;
+    for (SyntheticTrajectory& trajectory : all) {
+      if (trajectory.activity != "side_reach") seated.push_back(std::move(trajectory));
+    }
+    return seated;
   }();
   return t;
 }
