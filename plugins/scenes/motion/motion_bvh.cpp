@@ -3,6 +3,7 @@
 #include "motion_recording.hpp"
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/json.hpp>
 
 #include <Eigen/Geometry>
 
@@ -62,26 +63,6 @@ bool finite_number(const char* begin, const char* end, double& value) {
   return stop == end && std::isfinite(value);
 }
 
-std::string lower(std::string text) {
-  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
-  return text;
-}
-
-// Edit distance, for "did you mean".
-std::size_t distance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diagonal = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t above = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diagonal = above;
-    }
-  }
-  return row[b.size()];
-}
 
 class BvhReader {
  public:
@@ -254,16 +235,13 @@ class BvhReader {
     for (std::size_t i = 0; i < joints_.size(); ++i) {
       if (joints_[i].name == name) return static_cast<int>(i);
     }
-    std::string list, close;
-    std::size_t best = 3;  // a close name is at most 2 edits away, or contains the name
+    std::string list;
+    std::vector<std::string> names;
     for (const Joint& j : joints_) {
       list += (list.empty() ? "" : ", ") + j.name;
-      const std::size_t d = lower(j.name).find(lower(name)) != std::string::npos ? 0 : distance(lower(j.name), lower(name));
-      if (d < best) {
-        best = d;
-        close = j.name;
-      }
+      names.push_back(j.name);
     }
+    const std::string close = nearest_name(name, names);
     file_.fail_file(role + " joint " + detail::quoted(name) + " not found" +
                     (close.empty() ? "" : " (did you mean " + detail::quoted(close) + "?)") + ": the file's joints are " +
                     list);
