@@ -21,29 +21,8 @@
 
 using namespace hapsyn;
 
-// Counts heap allocations, Eigen's included (it calls malloc, not operator new), so that
-// "allocation-free" is asserted. glibc only, and not under a sanitizer (which owns malloc).
-#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
-#define HAPSYN_COUNT_MALLOC 1
-namespace {
-std::atomic<long> g_mallocs{0};
-}  // namespace
-extern "C" void* __libc_malloc(std::size_t);
-extern "C" void* __libc_realloc(void*, std::size_t);
-extern "C" void* __libc_calloc(std::size_t, std::size_t);
-extern "C" void* malloc(std::size_t size) {
-  g_mallocs.fetch_add(1, std::memory_order_relaxed);
-  return __libc_malloc(size);
-}
-extern "C" void* realloc(void* p, std::size_t size) {
-  g_mallocs.fetch_add(1, std::memory_order_relaxed);
-  return __libc_realloc(p, size);
-}
-extern "C" void* calloc(std::size_t count, std::size_t size) {
-  g_mallocs.fetch_add(1, std::memory_order_relaxed);
-  return __libc_calloc(count, size);
-}
-#endif
+// Eigen's heap goes to malloc, not operator new: counted too (see malloc_counter.hpp).
+#include "malloc_counter.hpp"
 
 namespace {
 

@@ -1,9 +1,12 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/scene.hpp>
 
+#include <Eigen/LU>
+
 #include <cassert>
 #include <cmath>
 #include <set>
+#include <sstream>
 #include <string>
 
 namespace hapsyn {
@@ -20,6 +23,24 @@ void SampleSet::cache_bounds() {
   assert(poses.cols() <= 16 && "SampleSet::Corner holds at most 16 pose coordinates");
   cached_lower_ = poses.colwise().minCoeff().transpose();
   cached_upper_ = poses.colwise().maxCoeff().transpose();
+}
+
+Eigen::Matrix3d rotation_option(const std::vector<std::vector<double>>& rows, const std::string& key,
+                                const std::string& scene) {
+  assert(rows.size() == 3 && rows[0].size() == 3 && rows[1].size() == 3 && rows[2].size() == 3);
+  Eigen::Matrix3d c;
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) c(r, k) = rows[static_cast<std::size_t>(r)][static_cast<std::size_t>(k)];
+  }
+  const double orthogonality = (c.transpose() * c - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (!(orthogonality <= 1e-6) || !(c.determinant() > 0.0)) {
+    std::ostringstream s;
+    s << "options." << key << " = " << render_value(Json(rows))
+      << ": must be a rotation matrix (orthonormal, det +1); max |C^T C - I| = " << orthogonality
+      << ", det = " << c.determinant();
+    throw Error(scene, s.str());
+  }
+  return c;
 }
 
 void check_lattice(const SampleSet& samples, const std::string& scene) {

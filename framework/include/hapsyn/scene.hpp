@@ -123,6 +123,14 @@ void check_weights(const SampleSet& samples, const std::string& component);
 ///         more than 1e-6, or dimension != 3 (a pose is x, y, z, qw, qx, qy, qz).
 std::vector<double> orientation_option(const std::vector<double>& orientation, int dimension, const std::string& scene);
 
+/// A scene option giving a rotation matrix as 3 rows of 3 (human_arm's C_S_B, motion's
+/// recording_rotation): the declarations fix the shape, this checks the rest.
+/// \param key the option's name, \param scene the plugin, for the error
+/// \throws Error("<scene>: options.<key> = <rows>: must be a rotation matrix (orthonormal, det +1);
+///         max |C^T C - I| = ..., det = ...") when max |C^T C - I| > 1e-6 or det <= 0.
+Eigen::Matrix3d rotation_option(const std::vector<std::vector<double>>& rows, const std::string& key,
+                                const std::string& scene);
+
 /// What the scene must provide, derived from the study's metrics (e.g. the human ellipsoids
 /// are built only when a metric needs them).
 struct SceneRequest {

@@ -29,29 +29,8 @@ std::atomic<long> g_allocations{0};
 }
 [[gnu::noinline]] void operator delete(void* p) noexcept { std::free(p); }
 [[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-// Eigen's heap goes to malloc, not operator new: counted too where the C library allows it
-// (glibc, and not under a sanitizer, which owns malloc).
-#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
-#define HAPSYN_COUNT_MALLOC 1
-namespace {
-std::atomic<long> g_mallocs{0};
-}  // namespace
-extern "C" void* __libc_malloc(std::size_t);
-extern "C" void* __libc_realloc(void*, std::size_t);
-extern "C" void* __libc_calloc(std::size_t, std::size_t);
-extern "C" void* malloc(std::size_t size) {
-  g_mallocs.fetch_add(1, std::memory_order_relaxed);
-  return __libc_malloc(size);
-}
-extern "C" void* realloc(void* p, std::size_t size) {
-  g_mallocs.fetch_add(1, std::memory_order_relaxed);
-  return __libc_realloc(p, size);
-}
-extern "C" void* calloc(std::size_t count, std::size_t size) {
-  g_mallocs.fetch_add(1, std::memory_order_relaxed);
-  return __libc_calloc(count, size);
-}
-#endif
+// Eigen's heap goes to malloc, not operator new: counted too (see malloc_counter.hpp).
+#include "malloc_counter.hpp"
 
 namespace hapsyn::plugins {
 namespace {

@@ -49,24 +49,6 @@ namespace {
 
 Eigen::Vector3d vector3(const std::vector<double>& v) { return Eigen::Vector3d(v[0], v[1], v[2]); }
 
-// A declared 3 x 3 option (rows) as a rotation; the declarations fix its shape, this checks
-// what they cannot: orthonormal with determinant +1.
-Eigen::Matrix3d rotation_option(const std::vector<std::vector<double>>& rows, const char* key) {
-  Eigen::Matrix3d C;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) C(r, c) = rows[r][c];
-  }
-  const double orthogonality = (C.transpose() * C - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-  if (!(orthogonality <= 1e-6) || !(C.determinant() > 0.0)) {
-    std::ostringstream s;
-    s << "options." << key << " = " << show(Json(rows))
-      << ": must be a rotation matrix (orthonormal, det +1); max |C^T C - I| = " << orthogonality
-      << ", det = " << C.determinant();
-    throw Error(kName, s.str());
-  }
-  return C;
-}
-
 // The lattice size depends on two options together, which no single declaration can bound.
 void check_lattice_size(double lattice_step, double lattice_extent) {
   const double per_axis = 2.0 * std::floor(lattice_extent / lattice_step + 1e-9) + 1.0;
@@ -100,8 +82,8 @@ HumanArmSceneOptions resolve_human_arm_scene_options(const HumanArmOptions& opti
   o.orientations = options.orientations;
   o.joint3_steps = options.joint3_steps;
   o.x_S_B = vector3(options.x_S_B);
-  o.C_S_B = rotation_option(options.C_S_B, "C_S_B");
-  o.C_E_P = rotation_option(options.C_E_P, "C_E_P");
+  o.C_S_B = rotation_option(options.C_S_B, "C_S_B", kName);
+  o.C_E_P = rotation_option(options.C_E_P, "C_E_P", kName);
   o.x_E_P = vector3(options.x_E_P);
   o.cache = options.cache;
   o.cache_directory = options.cache_directory;

@@ -385,14 +385,8 @@ class BvhReader {
   }
 
   Recording recording() const {
-    const Eigen::Index n = static_cast<Eigen::Index>(lines_.size());
-    Recording r;
-    r.file = file_.path();
+    Recording r = detail::recording_of(file_.path(), times_, positions_, quaternions_, lines_);
     r.subject = r.activity = std::filesystem::path(file_.path()).stem().string();
-    r.time = Eigen::Map<const Eigen::VectorXd>(times_.data(), n);
-    r.position = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(positions_.data(), n, 3);
-    r.quaternion = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>>(quaternions_.data(), n, 4);
-    r.line = lines_;
     return r;
   }
 

@@ -254,9 +254,7 @@ class CsvReader {
   }
 
   Recording recording() const {
-    const Eigen::Index n = static_cast<Eigen::Index>(lines_.size());
-    Recording r;
-    r.file = file_.path();
+    Recording r = detail::recording_of(file_.path(), times_, positions_, quaternions_, lines_);
     const std::string stem = fs::path(file_.path()).stem().string();
     const auto label = [&](const char* key, const std::string& fallback) {
       const auto it = keys_.find(key);
@@ -264,10 +262,6 @@ class CsvReader {
     };
     r.subject = label("subject", fallback_subject_);
     r.activity = label("activity", "");
-    r.time = Eigen::Map<const Eigen::VectorXd>(times_.data(), n);
-    r.position = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(positions_.data(), n, 3);
-    r.quaternion = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>>(quaternions_.data(), n, 4);
-    r.line = lines_;
     return r;
   }
 
@@ -338,6 +332,20 @@ void TextFile::fail_at(int line, const std::string& what) const {
 }
 
 void TextFile::fail_file(const std::string& what) const { throw Error(kComponent, path_ + ": " + what); }
+
+Recording recording_of(const std::string& file, const std::vector<double>& times, const std::vector<double>& positions,
+                       const std::vector<double>& quaternions, const std::vector<int>& lines) {
+  const Eigen::Index n = static_cast<Eigen::Index>(lines.size());
+  using Rows3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  using Rows4 = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
+  Recording r;
+  r.file = file;
+  r.time = Eigen::Map<const Eigen::VectorXd>(times.data(), n);
+  r.position = Eigen::Map<const Rows3>(positions.data(), n, 3);
+  r.quaternion = Eigen::Map<const Rows4>(quaternions.data(), n, 4);
+  r.line = lines;
+  return r;
+}
 
 std::string quoted(const std::string& text) {
   // Messages stay short and printable whatever the file holds.

@@ -179,6 +179,11 @@ class TextFile {
 /// `text` in double quotes, with JSON escapes (for messages).
 std::string quoted(const std::string& text);
 
+/// The rows a reader collected (times [s]; positions 3 and quaternions 4 per row, row-major;
+/// lines) as a Recording of `file`; labels are left to the caller.
+Recording recording_of(const std::string& file, const std::vector<double>& times, const std::vector<double>& positions,
+                       const std::vector<double>& quaternions, const std::vector<int>& lines);
+
 /// The Recording of `path` by its extension; `subject` replaces the stem as the fallback subject
 /// when not empty (a CSV header subject still wins).
 Recording read_file(const std::string& path, const BvhOptions& bvh, const std::string& subject);

@@ -21,24 +21,6 @@ using RowMatrix = SampleSet::RowMatrix;
 
 const std::vector<std::vector<double>> kIdentityRows = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
 
-// A declared 3 x 3 option (rows) as a rotation: the declarations fix its shape, this checks
-// what they cannot (orthonormal, determinant +1).
-Eigen::Matrix3d rotation_option(const std::vector<std::vector<double>>& rows, const char* key) {
-  Eigen::Matrix3d c;
-  for (int r = 0; r < 3; ++r) {
-    for (int k = 0; k < 3; ++k) c(r, k) = rows[r][k];
-  }
-  const double orthogonality = (c.transpose() * c - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-  if (!(orthogonality <= 1e-6) || !(c.determinant() > 0.0)) {
-    std::ostringstream s;
-    s << "options." << key << " = " << render_value(Json(rows))
-      << ": must be a rotation matrix (orthonormal, det +1); max |C^T C - I| = " << orthogonality
-      << ", det = " << c.determinant();
-    throw Error(kName, s.str());
-  }
-  return c;
-}
-
 Eigen::Vector3d vector3(const std::vector<double>& v) { return Eigen::Vector3d(v[0], v[1], v[2]); }
 
 // One recording after steps 1-4 of the method (motion_scene.hpp), in the shoulder frame S.
@@ -115,10 +97,10 @@ void MotionOptions::declare(OptionDeclarations<MotionOptions>& d) {
 
 MotionScene::MotionScene(const MotionOptions& options) : options_(options) {
   path_ = find_data_path(kName, "path", options.path);
-  recording_rotation_ = rotation_option(options.recording_rotation, "recording_rotation");
-  hand_rotation_ = rotation_option(options.hand_rotation, "hand_rotation");
-  C_S_B_ = rotation_option(options.C_S_B, "C_S_B");
-  C_E_P_ = rotation_option(options.C_E_P, "C_E_P");
+  recording_rotation_ = rotation_option(options.recording_rotation, "recording_rotation", kName);
+  hand_rotation_ = rotation_option(options.hand_rotation, "hand_rotation", kName);
+  C_S_B_ = rotation_option(options.C_S_B, "C_S_B", kName);
+  C_E_P_ = rotation_option(options.C_E_P, "C_E_P", kName);
   x_S_B_ = vector3(options.x_S_B);
   x_E_P_ = vector3(options.x_E_P);
 }
