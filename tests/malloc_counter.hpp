@@ -8,7 +8,17 @@
 #include <atomic>
 #include <cstddef>
 
-#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
+// GCC names a sanitizer build by __SANITIZE_ADDRESS__ / __SANITIZE_THREAD__, clang by
+// __has_feature: either way the sanitizer's malloc must stay in place.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define HAPSYN_MALLOC_OWNED_BY_SANITIZER 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || __has_feature(memory_sanitizer)
+#define HAPSYN_MALLOC_OWNED_BY_SANITIZER 1
+#endif
+#endif
+
+#if defined(__GLIBC__) && !defined(HAPSYN_MALLOC_OWNED_BY_SANITIZER)
 #define HAPSYN_COUNT_MALLOC 1
 namespace {
 std::atomic<long> g_mallocs{0};
