@@ -17,6 +17,7 @@ namespace hapsyn::plugins {
 
 namespace {
 constexpr const char* kName = "motion";
+constexpr double kMaxSamplesPerRecording = 5e7;  // 2.8 GB of pose and derivative data
 using RowMatrix = SampleSet::RowMatrix;
 
 const std::vector<std::vector<double>> kIdentityRows = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
@@ -62,7 +63,7 @@ void MotionOptions::declare(OptionDeclarations<MotionOptions>& d) {
   d.add(&O::rate, "rate", 0.0,
         "Sampling rate the recordings are brought to; 0 keeps each recording's own rate (its median rate when the "
         "time stamps jitter). Resampling interpolates positions linearly and orientations by slerp.")
-      .minimum(0)
+      .range(0, 100000)
       .unit("Hz");
   d.add(&O::filter, "filter", true,
         "Low-pass the pose and each derivative (zero-phase Butterworth). Off only for noise-free analytic data.");
@@ -73,7 +74,7 @@ void MotionOptions::declare(OptionDeclarations<MotionOptions>& d) {
   d.add(&O::trim, "trim", 0.0,
         "Seconds dropped at both ends of every recording after filtering, where the filter and the one-sided "
         "derivatives have their edge error (about 1 / cutoff).")
-      .minimum(0)
+      .range(0, 86400)
       .unit("s");
   d.add(&O::stride, "stride", 1, "Keep every stride-th sample after processing (a cheaper, coarser validation).")
       .range(1, 1000000);
@@ -127,6 +128,17 @@ Processed process(const motion::Recording& r, const MotionOptions& o, const Eige
   // rounding: 4e-5 at 6 decimals and 120 Hz, scaling every derivative by as much).
   const double own_rate = uniform ? 1.0 / motion::mean_step(s.time) : motion::median_rate(s.time);
   const double rate = o.rate > 0.0 ? o.rate : own_rate;
+  // A resampled recording must stay a size a study can hold (a typo in `rate` would ask for
+  // billions of samples).
+  const double resampled = (s.time(s.time.size() - 1) - s.time(0)) * rate + 1.0;
+  if (!uniform || o.rate > 0.0) {
+    if (!(resampled <= kMaxSamplesPerRecording)) {
+      std::ostringstream m;
+      m << r.file << ": resampling " << (s.time(s.time.size() - 1) - s.time(0)) << " s at " << rate << " Hz gives "
+        << resampled << " samples: at most " << kMaxSamplesPerRecording << " per recording (lower options.rate)";
+      throw Error(kName, m.str());
+    }
+  }
   Eigen::VectorXd time = uniform ? Eigen::VectorXd::LinSpaced(s.time.size(), s.time(0), s.time(s.time.size() - 1))
                                  : s.time;
   Eigen::MatrixXd position = s.position, quaternion = s.quaternion;

@@ -249,6 +249,11 @@ TEST_F(MotionScenes, BadOptionsAreRefusedWithTheRule) {
   EXPECT_THAT(error_of([&] { build({{"path", file}, {"cutoff", 70}}); }),
               HasSubstr("options.cutoff = 70 Hz: must be below half the sampling rate of " + file + " (120 Hz)"));
   EXPECT_THAT(error_of([&] { build({{"path", file}, {"stride", 0}}); }), HasSubstr("scene.options.stride"));
+  EXPECT_THAT(error_of([&] { build({{"path", file}, {"trim", 1e300}}); }), HasSubstr("scene.options.trim"));
+  EXPECT_THAT(error_of([&] { build({{"path", file}, {"rate", 1e300}}); }), HasSubstr("scene.options.rate"));
+  const std::string long_file = write("long.csv", "time,x,y,z,qw,qx,qy,qz\n0,0,0,0,1,0,0,0\n1000,0,0,0,1,0,0,0\n");
+  EXPECT_THAT(error_of([&] { build({{"path", long_file}, {"rate", 100000}}); }),
+              HasSubstr(long_file + ": resampling 1000 s at 100000 Hz gives 1e+08 samples: at most 5e+07"));
 }
 
 TEST_F(MotionScenes, UnknownAttributeIsRefused) {
