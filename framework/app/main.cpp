@@ -19,7 +19,11 @@
 
 #include <boost/filesystem.hpp>
 
+#include <signal.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <iomanip>
 #include <iostream>
@@ -29,6 +33,33 @@
 namespace {
 
 using hapsyn::Json;
+
+// ---- graceful stop: SIGINT, SIGTERM and SIGUSR1 (which SLURM sends before a time limit) ----
+
+// Set by the first signal; solvers poll it, write their checkpoint and return "stopped".
+std::atomic<bool> stop_requested{false};
+
+// Async-signal-safe: an atomic store and write(2). A second signal ends the process at once
+// (exit status 128 + signal, as a shell reports a killed job).
+extern "C" void on_stop_signal(int signal_number) {
+  if (stop_requested.exchange(true)) {
+    static const char kNow[] = "\nhapsyn: second signal: stopping now, without writing results\n";
+    [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, kNow, sizeof kNow - 1);
+    ::_exit(128 + signal_number);
+  }
+  static const char kFirst[] =
+      "\nhapsyn: stop requested: finishing the current step, writing the checkpoint and the best so far "
+      "(signal again to stop at once)\n";
+  [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, kFirst, sizeof kFirst - 1);
+}
+
+void install_stop_handlers() {
+  struct sigaction action {};
+  action.sa_handler = on_stop_signal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESTART;
+  for (int s : {SIGINT, SIGTERM, SIGUSR1}) ::sigaction(s, &action, nullptr);
+}
 
 hapsyn::Study load(const std::string& file, const std::vector<std::string>& sets, const hapsyn::Registry& registry) {
   Json doc = hapsyn::read_problem_file(file);
@@ -357,6 +388,7 @@ int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& r
   options.quiet = a.quiet;
   options.resume = a.resume;
   options.force = a.force;
+  options.stop = &stop_requested;
   print_summary(hapsyn::run_study(study, options), std::cout);
   return 0;
 }
@@ -379,11 +411,15 @@ int sweep_command(const Arguments& a, const hapsyn::Registry& registry) {
   options.threads = a.threads;
   options.seed = a.sweep_seed;
   options.quiet = !a.sweep_progress;
+  options.stop = &stop_requested;
   print_sweep(hapsyn::run_sweep(doc, options, registry), std::cout);
   return 0;
 }
 
 int dispatch(const Commands& c, Arguments& a, const hapsyn::Registry& registry) {
+  // Only the commands that run studies stop gracefully; the others keep the default (Ctrl-C ends
+  // them at once, which loses nothing).
+  if (*c.run || *c.sweep || *c.compare) install_stop_handlers();
   if (*c.run) return run_command(a, c, registry);
   if (*c.validate) return validate_command(a, registry);
   if (*c.plugins) return list_plugins(registry);
@@ -391,6 +427,7 @@ int dispatch(const Commands& c, Arguments& a, const hapsyn::Registry& registry) 
   if (*c.sweep) return sweep_command(a, registry);
   if (*c.compare) {
     if (c.compare->count("--seed") > 0) a.compare.seed = a.seed;
+    a.compare.stop = &stop_requested;
     hapsyn::print_compare(hapsyn::run_compare(a.compare, registry), std::cout);
     return 0;
   }

@@ -7,6 +7,7 @@
 #include <hapsyn/json.hpp>
 #include <hapsyn/registry.hpp>
 
+#include <atomic>
 #include <cstdint>
 #include <optional>
 #include <ostream>
@@ -22,6 +23,9 @@ struct CompareOptions {
   int threads = 0;
   std::optional<std::uint64_t> seed;
   bool plots = true;                   ///< write the gnuplot plots (needs gnuplot)
+  /// Setting it asks the runs to stop (each run's solver returns "stopped"; no further run
+  /// starts). Null: no stop request possible.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 /// Runs each study into <out>/<study name>/ (a study is validated just before it runs, so a

@@ -48,7 +48,10 @@ struct SolverContext {
   std::uint64_t seed = 0;           ///< for stochastic solvers
   std::ostream* progress = nullptr; ///< progress lines (stderr), nullptr = quiet
   std::string output_directory;     ///< where the solver may write extra files
-  const std::atomic<bool>* stop = nullptr;  ///< set when the user asks to stop (may be null)
+  /// Set when the user asks to stop (SIGINT, SIGTERM or SIGUSR1 in `hapsyn run`; may be null).
+  /// A solver polls stop_requested() between units of work (a design, a block, a generation),
+  /// writes its checkpoint and returns kStopped with its best so far.
+  const std::atomic<bool>* stop = nullptr;
   /// The run's log (run.log in the output directory; null when there is none). Solvers write
   /// their progress lines here too, also with --quiet.
   std::ostream* log = nullptr;
@@ -58,6 +61,9 @@ struct SolverContext {
   /// Continue from checkpoint_file when it exists (`hapsyn run --resume`); a solver without
   /// checkpoints starts over.
   bool resume = false;
+
+  /// True once a stop was requested (see `stop`).
+  bool stop_requested() const { return stop != nullptr && stop->load(std::memory_order_relaxed); }
 };
 
 /// Solver plugin: the one pure virtual is solve(); everything else has a default.

@@ -6,6 +6,7 @@
 #include <hapsyn/pareto.hpp>  // inverted_generational_distance
 #include <hapsyn/registry.hpp>
 
+#include <atomic>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -31,6 +32,9 @@ struct SweepOptions {
   int threads = 0;
   std::optional<std::uint64_t> seed;
   bool quiet = true;  ///< no solver progress lines
+  /// Setting it asks the runs to stop (each run's solver returns "stopped"; no further run
+  /// starts). Null: no stop request possible.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 /// Runs the grid of combinations (and the reference when it is not one of them), writes

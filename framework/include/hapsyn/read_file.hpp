@@ -1,0 +1,26 @@
+#pragma once
+/// \file
+/// Reading a whole input file safely: only regular files (a FIFO, a device such as /dev/zero or
+/// a directory is refused before it is opened for reading, so nothing blocks or fills memory),
+/// and only up to a stated size.
+#include <cstdint>
+#include <string>
+
+namespace hapsyn {
+
+/// Returns the content of the regular file `path`.
+/// \param component  who reads it, the prefix of the error ("problem", "checkpoint", "human_arm")
+/// \param what       what the file is, for the message ("problem file", "checkpoint", "cache")
+/// \param max_bytes  the largest size accepted [bytes]
+/// \throws Error("<component>: cannot read <what> <path>: <reason>") when it does not exist or
+///         cannot be read; Error("<component>: <what> <path> is not a regular file (a FIFO,
+///         device or directory)"); Error("<component>: <what> <path> is <n> bytes, more than
+///         the <max> this reader accepts").
+std::string read_regular_file(const std::string& path, const std::string& component, const std::string& what,
+                              std::uint64_t max_bytes);
+
+/// True when `path` exists and is not a regular file (after following symbolic links): a FIFO,
+/// a socket, a device or a directory. Cheap; for callers that want to refuse before opening.
+bool exists_but_not_regular(const std::string& path);
+
+}  // namespace hapsyn
