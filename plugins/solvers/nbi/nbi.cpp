@@ -3,6 +3,7 @@
 #include "shared/minmax_sqp.hpp"
 #include "shared/sub_solver.hpp"
 
+#include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/pareto.hpp>
 
@@ -71,34 +72,13 @@ struct ShadowOptima {
   std::vector<std::vector<double>> values;  // natural units, all objectives
 };
 
-// Fills `shadows` and stats["shadows"] (and "shadow_seconds"). Returns false, with the result's
-// status and message set, when one of them is not found.
-bool find_shadow_optima(const Problem& problem, const Solver& shadow_solver, const SolverContext& context,
-                        ShadowOptima& shadows, SolverResult& result, Json& stats) {
-  const std::size_t m = problem.objectives().size();
-  Json records = Json::array();
-  const auto t_shadow = Clock::now();
-  for (std::size_t i = 0; i < m; ++i) {
-    const auto t0 = Clock::now();
-    const SolverResult r = run_sub_solver(shadow_solver, *single_objective_problem(problem, i), context);
-    result.design_evaluations += r.design_evaluations;
-    result.sample_evaluations += r.sample_evaluations;
-    std::vector<double> values;
-    if (!r.best || !evaluate_full_design(problem, r.best->design, context.threads, values, result.sample_evaluations)) {
-      result.status = r.status == SolverStatus::kStopped ? SolverStatus::kStopped : SolverStatus::kInfeasible;
-      result.message = "shadow optimum of objective '" + problem.objectives()[i].name + "' not found: " + r.message;
-      stats["shadows"] = records;
-      return false;
-    }
-    shadows.designs.push_back(r.best->design);
-    shadows.values.push_back(values);
-    records.push_back({{"objective", problem.objectives()[i].name}, {"design", problem.design_to_json(r.best->design)},
-                       {"objectives", values}, {"status", to_string(r.status)}, {"seconds", seconds_since(t0)},
-                       {"design_evaluations", r.design_evaluations}, {"sample_evaluations", r.sample_evaluations}});
+ShadowOptima shadow_optima(const std::vector<FinishedSubproblem>& shadows) {
+  ShadowOptima s;
+  for (const FinishedSubproblem& f : shadows) {
+    s.designs.push_back(f.point->design);
+    s.values.push_back(f.point->objectives);
   }
-  stats["shadows"] = records;
-  stats["shadow_seconds"] = seconds_since(t_shadow);
-  return true;
+  return s;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -107,8 +87,14 @@ bool find_shadow_optima(const Problem& problem, const Solver& shadow_solver, con
 struct Chim {
   std::vector<std::vector<double>> phibar;  // Phibar_ij = 1 - Ft_i(x_j*): the CHIM's corners
   std::vector<double> normal;               // d = -n = Phibar e
-  bool degenerate = false;                  // the shadow optima coincide: no direction to go
+  // Objectives whose payoff row has no spread (U_i - N_i ~ 0 relative to |U_i|, |N_i|): the
+  // same value at every shadow optimum, so Ft_i is undefined.
+  std::vector<std::size_t> degenerate_objectives;
 };
+
+// No spread relative to the magnitude (exactly 0 when both are 0): below double rounding of
+// the objective's own values, far below any trade-off.
+constexpr double kDegenerateSpread = 1e-9;
 
 // Sets the normalization of `sub` (sign, nadir, scale) from the shadow optima and returns the
 // CHIM; records stats["payoff"] and stats["quasi_normal"].
@@ -132,9 +118,13 @@ Chim normalize(const Problem& problem, const ShadowOptima& shadows, Subproblem& 
     payoff.push_back(row);
     sub.scale[i] = utopia[i] - sub.nadir[i] > 0 ? utopia[i] - sub.nadir[i] : 1.0;
   }
+  Chim chim;
+  for (std::size_t i = 0; i < m; ++i) {
+    const double magnitude = std::max(std::abs(utopia[i]), std::abs(sub.nadir[i]));
+    if (!(utopia[i] - sub.nadir[i] > kDegenerateSpread * magnitude)) chim.degenerate_objectives.push_back(i);
+  }
   stats["payoff"] = payoff;  // payoff[i][j] = objective i at shadow optimum j (natural units)
   // Phibar_ij = 1 - Ft_i(x_j*): 0 on the diagonal (when the shadow is exact), the CHIM's corners.
-  Chim chim;
   chim.phibar.assign(m, std::vector<double>(m));
   for (std::size_t i = 0; i < m; ++i) {
     for (std::size_t j = 0; j < m; ++j) chim.phibar[i][j] = 1.0 - sub.normalized(i, shadows.values[j][i]);
@@ -144,7 +134,6 @@ Chim normalize(const Problem& problem, const ShadowOptima& shadows, Subproblem& 
     for (std::size_t j = 0; j < m; ++j) chim.normal[i] += chim.phibar[i][j];
   }
   stats["quasi_normal"] = chim.normal;
-  chim.degenerate = std::all_of(chim.normal.begin(), chim.normal.end(), [](double v) { return v <= 0.0; });
   return chim;
 }
 
@@ -193,18 +182,19 @@ const Solved& nearest_solved(const std::vector<Solved>& solved, const std::vecto
   return *start;
 }
 
-// What the subproblems gave: every candidate front point (the shadow optima first) and a
-// record per subproblem.
-struct SubproblemSweep {
-  std::vector<SolutionPoint> candidates;
-  Json records = Json::array();
-  bool stopped = false;
-};
+// The interior points of the simplex grid (the others are the shadow optima), in grid order:
+// one subproblem each.
+std::vector<std::vector<double>> interior_points(const std::vector<std::vector<double>>& grid) {
+  std::vector<std::vector<double>> interior;
+  for (const std::vector<double>& beta : grid) {
+    if (std::count_if(beta.begin(), beta.end(), [](double b) { return b > 0; }) > 1) interior.push_back(beta);
+  }
+  return interior;
+}
 
-// Runs every interior grid point's subproblem, each warm-started from the nearest solved point.
-SubproblemSweep solve_subproblems(const Problem& problem, const NbiOptions& options, const ShadowOptima& shadows,
-                                  const Chim& chim, Subproblem& sub, const std::vector<std::vector<double>>& grid,
-                                  const SolverContext& context, SolverResult& result) {
+// One subproblem: the SQP from the nearest solved point, then the full evaluation of its design.
+FinishedSubproblem solve_subproblem(const Problem& problem, const NbiOptions& options, const Chim& chim, Subproblem& sub,
+                                    const std::vector<double>& beta, const std::vector<Solved>& solved) {
   const std::size_t m = problem.objectives().size();
   const DesignSpace& space = problem.design_space();
   std::vector<double> lower(space.free_size()), upper(space.free_size());
@@ -213,47 +203,30 @@ SubproblemSweep solve_subproblems(const Problem& problem, const NbiOptions& opti
     lower[k] = c.lower;
     upper[k] = c.upper;
   }
-  const SqpSettings settings = sqp_settings(options, problem);
-  std::vector<Solved> solved;
-  SubproblemSweep sweep;
-  for (std::size_t j = 0; j < m; ++j) {
-    std::vector<double> beta(m, 0.0);
-    beta[j] = 1.0;
-    solved.push_back({beta, free_design(space, shadows.designs[j])});
-    sweep.candidates.push_back({shadows.designs[j], shadows.values[j], problem.score(shadows.values[j])});
+  const auto t0 = Clock::now();
+  // a = 1 - Phibar beta; d = Phibar e.
+  sub.a.assign(m, 1.0);
+  for (std::size_t i = 0; i < m; ++i) {
+    for (std::size_t k = 0; k < m; ++k) sub.a[i] -= chim.phibar[i][k] * beta[k];
   }
-  for (const std::vector<double>& beta : grid) {
-    if (std::count_if(beta.begin(), beta.end(), [](double b) { return b > 0; }) <= 1) continue;  // a shadow point
-    if (context.stop && context.stop->load()) {
-      sweep.stopped = true;
-      break;
+  sub.d = chim.normal;
+  const std::vector<double> x0 = nearest_solved(solved, beta).x;
+  const SqpOutcome sqp = run_minmax_sqp(problem, x0, lower, upper, sqp_settings(options, problem), nbi_goal(sub));
+  FinishedSubproblem f;
+  f.design_evaluations = sqp.evaluations;
+  f.sample_evaluations = sqp.samples;
+  f.record = {{"beta", beta}, {"status", sqp.status}, {"t", sqp.x.empty() ? Json(nullptr) : Json(sqp.merit)},
+              {"design_evaluations", sqp.evaluations}, {"rounds", sqp.rounds}};
+  if (!sqp.x.empty()) {
+    std::vector<double> values;
+    const Eigen::VectorXd full = problem.full_design(sqp.x.data());
+    if (evaluate_full_design(problem, full, 1, values, f.sample_evaluations)) {
+      f.point = SolutionPoint{full, values, problem.score(values)};
+      f.record["objectives"] = values;
     }
-    if (chim.degenerate) break;
-    const auto t0 = Clock::now();
-    // a = 1 - Phibar beta; d = Phibar e.
-    sub.a.assign(m, 1.0);
-    for (std::size_t i = 0; i < m; ++i) {
-      for (std::size_t k = 0; k < m; ++k) sub.a[i] -= chim.phibar[i][k] * beta[k];
-    }
-    sub.d = chim.normal;
-    const std::vector<double> x0 = nearest_solved(solved, beta).x;
-    const SqpOutcome sqp = run_minmax_sqp(problem, x0, lower, upper, settings, nbi_goal(sub));
-    result.design_evaluations += sqp.evaluations;
-    result.sample_evaluations += sqp.samples;
-    Json record = {{"beta", beta}, {"status", sqp.status}, {"t", sqp.x.empty() ? Json(nullptr) : Json(sqp.merit)},
-                   {"design_evaluations", sqp.evaluations}, {"rounds", sqp.rounds}, {"seconds", seconds_since(t0)}};
-    if (!sqp.x.empty()) {
-      std::vector<double> values;
-      const Eigen::VectorXd full = problem.full_design(sqp.x.data());
-      if (evaluate_full_design(problem, full, 1, values, result.sample_evaluations)) {
-        sweep.candidates.push_back({full, values, problem.score(values)});
-        record["objectives"] = values;
-        solved.push_back({beta, sqp.x});
-      }
-    }
-    sweep.records.push_back(record);
   }
-  return sweep;
+  f.record["seconds"] = seconds_since(t0);
+  return f;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -302,39 +275,226 @@ void NbiSolver::check(const Problem& problem) const {
   }
 }
 
+namespace {
+
+// What one solve() call has done: the finished shadow optima and subproblems (what the
+// checkpoint keeps), and the cost of a subproblem interrupted by a stop request.
+struct NbiProgress {
+  std::vector<FinishedSubproblem> shadows, subproblems;
+  long long interrupted_designs = 0, interrupted_samples = 0;
+  double seconds_before = 0.0;  // elapsed in the runs before a resume
+  Json resumed = nullptr;       // statistics.resumed
+};
+
+// The checkpoint's finished work, checked against this study (each claimed point was
+// re-evaluated by read_subproblem_checkpoint).
+void resume(const Problem& problem, const SolverContext& context, const std::string& fingerprint,
+            const std::vector<std::vector<double>>& interior, NbiProgress& progress) {
+  const std::size_t m = problem.objectives().size();
+  std::optional<SubproblemCheckpoint> checkpoint = read_subproblem_checkpoint(
+      problem, context, "nbi", fingerprint, {{"shadows", m}, {"subproblems", interior.size()}});
+  if (!checkpoint) return;
+  progress.shadows = std::move(checkpoint->lists["shadows"]);
+  progress.subproblems = std::move(checkpoint->lists["subproblems"]);
+  for (std::size_t i = 0; i < progress.shadows.size(); ++i) {
+    const std::string where = "shadows[" + std::to_string(i) + "]";
+    if (!progress.shadows[i].point) throw bad_checkpoint(context, where + ": no design (a shadow optimum is a design)");
+    if (progress.shadows[i].record.value("objective", Json()) != problem.objectives()[i].name) {
+      throw bad_checkpoint(context, where + ".record.objective = " + progress.shadows[i].record.value("objective", Json()).dump() +
+                                        ": this study's objective " + std::to_string(i) + " is '" +
+                                        problem.objectives()[i].name + "'");
+    }
+  }
+  if (!progress.subproblems.empty() && progress.shadows.size() < m) {
+    throw bad_checkpoint(context, "subproblems: " + std::to_string(progress.subproblems.size()) + " finished with only " +
+                                      std::to_string(progress.shadows.size()) + " of " + std::to_string(m) +
+                                      " shadow optima (the subproblems come after all of them)");
+  }
+  for (std::size_t k = 0; k < progress.subproblems.size(); ++k) {
+    if (progress.subproblems[k].record.value("beta", Json()) != Json(interior[k])) {
+      throw bad_checkpoint(context, "subproblems[" + std::to_string(k) + "].record.beta = " +
+                                        progress.subproblems[k].record.value("beta", Json()).dump() +
+                                        ": this study's grid point " + std::to_string(k) + " is " + Json(interior[k]).dump());
+    }
+  }
+  progress.seconds_before = checkpoint->seconds;
+  progress.resumed = {{"checkpoint", context.checkpoint_file},
+                      {"shadows", progress.shadows.size()},
+                      {"subproblems", progress.subproblems.size()},
+                      {"recheck_sample_evaluations", checkpoint->recheck_samples}};
+  solver_line(context, "nbi: resuming from " + context.checkpoint_file + ": " + std::to_string(progress.shadows.size()) +
+                           " of " + std::to_string(m) + " shadow optima and " +
+                           std::to_string(progress.subproblems.size()) + " of " + std::to_string(interior.size()) +
+                           " subproblems finished");
+}
+
+// Every candidate front point so far: the shadow optima, then the subproblems' designs.
+std::vector<SolutionPoint> candidates_of(const NbiProgress& progress) {
+  std::vector<SolutionPoint> candidates;
+  for (const auto* list : {&progress.shadows, &progress.subproblems}) {
+    for (const FinishedSubproblem& f : *list) {
+      if (f.point) candidates.push_back(*f.point);
+    }
+  }
+  return candidates;
+}
+
+Json records_of(const std::vector<FinishedSubproblem>& list, double& seconds) {
+  Json records = Json::array();
+  seconds = 0.0;
+  for (const FinishedSubproblem& f : list) {
+    records.push_back(f.record);
+    seconds += f.record.value("seconds", 0.0);
+  }
+  return records;
+}
+
+// "objective 'a' has" or "objectives 'a', 'b' have", with their payoff rows.
+std::string degenerate_message(const Problem& problem, const Chim& chim, const Json& payoff) {
+  std::string names, rows;
+  for (std::size_t i : chim.degenerate_objectives) {
+    names += (names.empty() ? "'" : ", '") + problem.objectives()[i].name + "'";
+    rows += (rows.empty() ? "" : ", ") + payoff[i].dump();
+  }
+  const bool several = chim.degenerate_objectives.size() > 1;
+  return std::string("NBI: ") + (several ? "objectives " : "objective ") + names + (several ? " have" : " has") +
+         " the same value at every shadow optimum (payoff " + (several ? "rows " : "row ") + rows +
+         "): constant, or never in conflict with the others at their optima, so NBI cannot normalize " +
+         (several ? "them" : "it") + " (utopia - nadir = 0) and its front would be degenerate; remove " +
+         (several ? "them" : "it") + " from \"objectives\" (or optimize " + (several ? "them" : "it") +
+         " alone), or use nsga2 or weighted_sum, which need no normalization";
+}
+
+}  // namespace
+
 SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& context) const {
   const auto t_start = Clock::now();
   SolverResult result;
   Json stats = Json::object();
   const Solver* shadow_solver = sub_solver_for_solve(options_.shadow_solver, "nbi", "shadow solver", result);
   if (!shadow_solver) return result;
-
-  ShadowOptima shadows;
-  if (!find_shadow_optima(problem, *shadow_solver, context, shadows, result, stats)) {
-    result.statistics = stats;
-    return result;
-  }
-  Subproblem sub;
-  const Chim chim = normalize(problem, shadows, sub, stats);
   const std::size_t m = problem.objectives().size();
   const std::vector<std::vector<double>> grid = simplex_grid(static_cast<int>(m), options_.points - 1);
-  const auto t_sub = Clock::now();
-  const SubproblemSweep sweep = solve_subproblems(problem, options_, shadows, chim, sub, grid, context, result);
-  stats["subproblems"] = sweep.records;
-  stats["subproblem_seconds"] = seconds_since(t_sub);
-  stats["grid_points"] = grid.size();
+  const std::vector<std::vector<double>> interior = interior_points(grid);
+  const std::string fingerprint = study_fingerprint(problem, OptionDeclarations<NbiOptions>::to_json(options_));
 
-  result.front = front_of(problem, sweep.candidates, options_.filter_dominated);
-  stats["candidates"] = sweep.candidates.size();
-  stats["filtered_out"] = sweep.candidates.size() - result.front.size();
-  stats["seconds"] = seconds_since(t_start);
-  result.statistics = stats;
+  NbiProgress progress;
+  resume(problem, context, fingerprint, interior, progress);
+  const auto elapsed = [&] { return progress.seconds_before + seconds_since(t_start); };
+  const auto checkpoint = [&] {
+    write_subproblem_checkpoint(context, "nbi", fingerprint,
+                                {{"shadows", &progress.shadows}, {"subproblems", &progress.subproblems}}, elapsed());
+  };
+  // The result from what has been done (the counts of every finished unit and of an interrupted
+  // one), with `status` and `message`.
+  const auto finish = [&](SolverStatus status, const std::string& message, bool with_front) {
+    result.design_evaluations = progress.interrupted_designs;
+    result.sample_evaluations = progress.interrupted_samples;
+    for (const auto* list : {&progress.shadows, &progress.subproblems}) {
+      for (const FinishedSubproblem& f : *list) {
+        result.design_evaluations += f.design_evaluations;
+        result.sample_evaluations += f.sample_evaluations;
+      }
+    }
+    double shadow_seconds = 0.0, subproblem_seconds = 0.0;
+    stats["shadows"] = records_of(progress.shadows, shadow_seconds);
+    stats["shadow_seconds"] = shadow_seconds;
+    stats["subproblems"] = records_of(progress.subproblems, subproblem_seconds);
+    stats["subproblem_seconds"] = subproblem_seconds;
+    stats["grid_points"] = grid.size();
+    const std::vector<SolutionPoint> candidates = candidates_of(progress);
+    if (with_front) result.front = front_of(problem, candidates, options_.filter_dominated);
+    stats["candidates"] = candidates.size();
+    stats["filtered_out"] = with_front ? candidates.size() - result.front.size() : 0;
+    if (!progress.resumed.is_null()) stats["resumed"] = progress.resumed;
+    stats["seconds"] = elapsed();
+    result.statistics = stats;
+    result.status = status;
+    result.message = message;
+    return result;
+  };
+  const auto stopped = [&](const std::string& where) {
+    checkpoint();
+    return finish(SolverStatus::kStopped,
+                  "NBI stopped on request " + where + "; the front is that of the points found so far" +
+                      checkpoint_note(context),
+                  true);
+  };
+
+  // 1. Shadow optima.
+  for (std::size_t i = progress.shadows.size(); i < m; ++i) {
+    const std::string where = "after " + std::to_string(i) + " of " + std::to_string(m) + " shadow optima";
+    if (context.stop_requested()) return stopped(where);
+    const auto t0 = Clock::now();
+    const SolverResult r = run_sub_solver(*shadow_solver, *single_objective_problem(problem, i), context);
+    if (r.status == SolverStatus::kStopped) {
+      progress.interrupted_designs += r.design_evaluations;
+      progress.interrupted_samples += r.sample_evaluations;
+      return stopped(where + " (the shadow solver of objective '" + problem.objectives()[i].name + "' was interrupted)");
+    }
+    FinishedSubproblem f;
+    f.design_evaluations = r.design_evaluations;
+    f.sample_evaluations = r.sample_evaluations;
+    std::vector<double> values;
+    if (!r.best || !evaluate_full_design(problem, r.best->design, context.threads, values, f.sample_evaluations)) {
+      progress.interrupted_designs += f.design_evaluations;
+      progress.interrupted_samples += f.sample_evaluations;
+      return finish(SolverStatus::kInfeasible,
+                    "shadow optimum of objective '" + problem.objectives()[i].name + "' not found: " + r.message, false);
+    }
+    f.point = SolutionPoint{r.best->design, values, problem.score(values)};
+    f.record = {{"objective", problem.objectives()[i].name}, {"design", problem.design_to_json(r.best->design)},
+                {"objectives", values}, {"status", to_string(r.status)}, {"seconds", seconds_since(t0)},
+                {"design_evaluations", f.design_evaluations}, {"sample_evaluations", f.sample_evaluations}};
+    progress.shadows.push_back(std::move(f));
+    checkpoint();
+  }
+
+  // 2. Payoff matrix and CHIM; a degenerate one ends here.
+  Subproblem sub;
+  const ShadowOptima shadows = shadow_optima(progress.shadows);
+  const Chim chim = normalize(problem, shadows, sub, stats);
+  if (chim.degenerate_objectives.size() == m) {
+    // Every objective has its best value at every shadow optimum: one design is best in all of
+    // them; the front is that one point (no trade-off to draw).
+    return finish(SolverStatus::kConverged,
+                  "NBI: the objectives do not conflict: every shadow optimum has the same objective values, so the "
+                  "front is one point and no subproblem was solved (check that these are the objectives meant)",
+                  true);
+  }
+  if (!chim.degenerate_objectives.empty()) {
+    return finish(SolverStatus::kFailed, degenerate_message(problem, chim, stats["payoff"]), false);
+  }
+
+  // 3. One subproblem per interior grid point, warm-started from the nearest solved point.
+  std::vector<Solved> solved;
+  for (std::size_t j = 0; j < m; ++j) {
+    std::vector<double> beta(m, 0.0);
+    beta[j] = 1.0;
+    solved.push_back({beta, free_design(problem.design_space(), shadows.designs[j])});
+  }
+  for (std::size_t k = 0; k < progress.subproblems.size(); ++k) {
+    const FinishedSubproblem& f = progress.subproblems[k];
+    if (f.point) solved.push_back({interior[k], free_design(problem.design_space(), f.point->design)});
+  }
+  for (std::size_t k = progress.subproblems.size(); k < interior.size(); ++k) {
+    if (context.stop_requested()) {
+      return stopped("after " + std::to_string(k) + " of " + std::to_string(interior.size()) +
+                     " subproblems (all shadow optima found)");
+    }
+    FinishedSubproblem f = solve_subproblem(problem, options_, chim, sub, interior[k], solved);
+    if (f.point) solved.push_back({interior[k], free_design(problem.design_space(), f.point->design)});
+    progress.subproblems.push_back(std::move(f));
+    checkpoint();
+  }
+
+  // 4. The front.
   std::ostringstream message;
-  message << "NBI: " << result.front.size() << " non-dominated points of " << sweep.candidates.size() << " ("
-          << m << " shadow optima, " << sweep.records.size() << " subproblems)";
-  if (chim.degenerate) message << "; the shadow optima coincide, the front is one point";
+  const std::size_t candidates = candidates_of(progress).size();
+  finish(SolverStatus::kConverged, "", true);
+  message << "NBI: " << result.front.size() << " non-dominated points of " << candidates << " (" << m
+          << " shadow optima, " << progress.subproblems.size() << " subproblems)";
   result.message = message.str();
-  result.status = sweep.stopped ? SolverStatus::kStopped : SolverStatus::kConverged;
   return result;
 }
 

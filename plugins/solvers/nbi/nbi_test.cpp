@@ -5,9 +5,18 @@
 #include "analytic_problems.hpp"
 #include "test_support.hpp"
 
+#include <hapsyn/checkpoint.hpp>
 #include <hapsyn/pareto.hpp>
 
+#include <boost/filesystem.hpp>
+
+#include <unistd.h>
+
+#include <atomic>
 #include <cmath>
+#include <fstream>
+#include <functional>
+#include <iostream>
 
 using hapsyn::Json;
 using hapsyn::test::expect_error;
@@ -171,4 +180,203 @@ TEST(Nbi, FiveBarFrontIsNotDominatedByExhaustiveSearch) {
     EXPECT_LE(gap[0], 0.002) << p.objectives[0] << ", " << p.objectives[1];
     EXPECT_LE(gap[1], 0.002) << p.objectives[0] << ", " << p.objectives[1];
   }
+}
+
+// ---- stop, checkpoint, resume; degenerate payoff matrices ----
+
+namespace {
+
+// The two-objective problem with its first objective's local calls counted: `stop` is set at
+// call `stop_after` (one thread: the same point of the run every time).
+struct Counter {
+  std::atomic<long long> calls{0};
+  long long stop_after = -1;
+  std::atomic<bool> stop{false};
+};
+std::shared_ptr<hapsyn::Problem> counted_problem(Counter& c) {
+  return hapsyn::test::analytic_problem(
+      {{0.0, 1.0}, {-1.0, 1.0}}, 0.05, {-1.0, 0.0, 1.0},
+      {[&c](const double* x, const double*) {
+         if (++c.calls == c.stop_after) c.stop = true;
+         return x[0] - 0.1 * x[1] * x[1];
+       },
+       [](const double* x, const double* s) {
+         return hapsyn::test::two_objective_h(x[0]) - 0.5 * (x[1] - 0.3 * s[0]) * (x[1] - 0.3 * s[0]);
+       }});
+}
+
+std::string temp_file(const std::string& name) {
+  return (boost::filesystem::temp_directory_path() / (name + "-" + std::to_string(::getpid()) + ".json")).string();
+}
+
+const Json kNbiOptions = {{"points", 6},
+                          {"shadow_solver", {{"plugin", "culling"}, {"options", {{"start_points", 3}, {"progress_interval", 1e9}}}}}};
+
+hapsyn::SolverResult run_nbi(const hapsyn::Problem& problem, const std::string& checkpoint, bool resume,
+                             const std::atomic<bool>* stop) {
+  const auto nbi = hapsyn::test::registry().create_solver("nbi", kNbiOptions, "solver");
+  nbi->check(problem);
+  hapsyn::SolverContext context;
+  context.threads = 1;
+  context.seed = 5;
+  context.checkpoint_file = checkpoint;
+  context.resume = resume;
+  context.stop = stop;
+  return nbi->solve(problem, context);
+}
+
+// The same front, counts and per-subproblem records (times aside) as `expected`.
+void expect_same_result(const hapsyn::SolverResult& got, const hapsyn::SolverResult& expected) {
+  EXPECT_EQ(got.status, expected.status) << got.message;
+  EXPECT_EQ(got.message, expected.message);
+  ASSERT_EQ(got.front.size(), expected.front.size());
+  for (std::size_t i = 0; i < got.front.size(); ++i) {
+    EXPECT_EQ(got.front[i].design, expected.front[i].design) << i;
+    EXPECT_EQ(got.front[i].objectives, expected.front[i].objectives) << i;
+  }
+  EXPECT_EQ(got.design_evaluations, expected.design_evaluations);
+  EXPECT_EQ(got.sample_evaluations, expected.sample_evaluations);
+  for (const char* list : {"shadows", "subproblems"}) {
+    Json a = got.statistics[list], b = expected.statistics[list];
+    for (Json* records : {&a, &b}) {
+      for (Json& r : *records) r.erase("seconds");
+    }
+    EXPECT_EQ(a, b) << list;
+  }
+}
+
+// Rewrites a checkpoint's state and its checksum as the framework computes it.
+void edit_checkpoint(const std::string& file, const std::function<void(Json& state)>& edit) {
+  std::ifstream in(file);
+  Json c = Json::parse(in);
+  edit(c["state"]);
+  c.erase("checksum");
+  c["checksum"] = hapsyn::fnv1a_hex(c.dump());
+  std::ofstream(file) << c.dump();
+}
+
+}  // namespace
+
+TEST(Nbi, StopMidRunGivesThePointsSoFarAndResumeGivesTheUninterruptedResult) {
+  Counter full;
+  const auto reference = run_nbi(*counted_problem(full), "", false, nullptr);
+  ASSERT_EQ(reference.status, hapsyn::SolverStatus::kConverged) << reference.message;
+  const long long total = full.calls;
+  bool stopped_in_shadows = false, stopped_in_subproblems = false;
+  for (double fraction : {0.02, 0.4, 0.7, 0.85}) {
+    SCOPED_TRACE(fraction);
+    const std::string file = temp_file("hapsyn-nbi-stop");
+    boost::filesystem::remove(file);
+    Counter c;
+    c.stop_after = static_cast<long long>(fraction * static_cast<double>(total));
+    const auto stopped = run_nbi(*counted_problem(c), file, false, &c.stop);
+    ASSERT_EQ(stopped.status, hapsyn::SolverStatus::kStopped) << stopped.message;
+    EXPECT_NE(stopped.message.find("NBI stopped on request after"), std::string::npos) << stopped.message;
+    EXPECT_NE(stopped.message.find("checkpoint " + file + " written: `hapsyn run --resume` continues"), std::string::npos)
+        << stopped.message;
+    ASSERT_TRUE(boost::filesystem::exists(file));
+    const std::size_t shadows = stopped.statistics["shadows"].size(), subs = stopped.statistics["subproblems"].size();
+    EXPECT_LT(shadows + subs, 2u + 4u);
+    (shadows < 2 ? stopped_in_shadows : stopped_in_subproblems) = true;
+    std::cerr << "stop at " << fraction << ": " << shadows << " shadows, " << subs << " subproblems\n";
+    EXPECT_EQ(stopped.statistics["candidates"].get<std::size_t>(), shadows + subs);
+    if (shadows + subs > 0) {
+      EXPECT_FALSE(stopped.front.empty());
+    }
+    Counter again;
+    const auto resumed = run_nbi(*counted_problem(again), file, true, nullptr);
+    expect_same_result(resumed, reference);
+    EXPECT_EQ(resumed.statistics["resumed"]["shadows"].get<std::size_t>(), shadows);
+    EXPECT_EQ(resumed.statistics["resumed"]["subproblems"].get<std::size_t>(), subs);
+    boost::filesystem::remove(file);
+  }
+  EXPECT_TRUE(stopped_in_shadows);
+  EXPECT_TRUE(stopped_in_subproblems);
+}
+
+TEST(Nbi, EditedOrForeignCheckpointIsRefused) {
+  const std::string file = temp_file("hapsyn-nbi-edit");
+  boost::filesystem::remove(file);
+  Counter c;
+  ASSERT_EQ(run_nbi(*counted_problem(c), file, false, nullptr).status, hapsyn::SolverStatus::kConverged);
+  const std::string original = [&] {
+    std::ifstream in(file);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  const auto refused = [&](const std::function<void(Json&)>& edit, std::initializer_list<std::string> fragments) {
+    std::ofstream(file) << original;
+    edit_checkpoint(file, edit);
+    Counter again;
+    expect_error([&] { run_nbi(*counted_problem(again), file, true, nullptr); }, fragments);
+  };
+  refused([](Json& s) { s["shadows"][1]["objectives"][0] = s["shadows"][1]["objectives"][0].get<double>() + 1e-9; },
+          {"checkpoint: " + file + ": shadows[1]: the design re-evaluates to objectives [",
+           "the checkpoint claims [", "; delete it, or run without --resume"});
+  refused([](Json& s) { s["subproblems"][2]["objectives"][1] = 0.9; },
+          {"subproblems[2]: the design re-evaluates to objectives"});
+  refused([](Json& s) { s["shadows"][0]["record"]["objective"] = "f2"; },
+          {"shadows[0].record.objective = \"f2\": this study's objective 0 is 'f1'"});
+  refused([](Json& s) { s["shadows"][1]["design"] = nullptr, s["shadows"][1]["objectives"] = nullptr; },
+          {"shadows[1]: no design (a shadow optimum is a design)"});
+  refused([](Json& s) { s["shadows"].erase(1); },
+          {"subproblems: 4 finished with only 1 of 2 shadow optima (the subproblems come after all of them)"});
+  refused([](Json& s) { s["subproblems"][0]["record"]["beta"] = {0.5, 0.5}; },
+          {"subproblems[0].record.beta = [0.5,0.5]: this study's grid point 0 is [0.8,0.2]"});
+  refused([](Json& s) { s["subproblems"].push_back(s["subproblems"][0]); },
+          {"subproblems: 5 finished subproblems, this study has 4"});
+  // Another study (other options) is refused by the framework's fingerprint.
+  std::ofstream(file) << original;
+  const auto other = hapsyn::test::registry().create_solver("nbi", {{"points", 5}}, "solver");
+  hapsyn::SolverContext context;
+  context.checkpoint_file = file;
+  context.resume = true;
+  context.seed = 5;
+  Counter again;
+  expect_error([&] { other->solve(*counted_problem(again), context); }, {"written for another study"});
+  boost::filesystem::remove(file);
+}
+
+TEST(Nbi, ConstantObjectiveFailsNamingItAndWhatToDo) {
+  const auto problem = hapsyn::test::analytic_problem(
+      {{0.0, 1.0}, {-1.0, 1.0}}, 0.05, {-1.0, 0.0, 1.0},
+      {[](const double* x, const double*) { return x[0] - 0.1 * x[1] * x[1]; },
+       [](const double*, const double*) { return 0.5; }});
+  const auto result = solve_nbi(*problem, {{"points", 5}});
+  EXPECT_EQ(result.status, hapsyn::SolverStatus::kFailed);
+  for (const std::string fragment :
+       {"NBI: objective 'f2' has the same value at every shadow optimum (payoff row [0.5,0.5])",
+        "NBI cannot normalize it (utopia - nadir = 0) and its front would be degenerate",
+        "remove it from \"objectives\"", "or use nsga2 or weighted_sum"}) {
+    EXPECT_NE(result.message.find(fragment), std::string::npos) << result.message << "\nmissing: " << fragment;
+  }
+  EXPECT_TRUE(result.front.empty());
+  EXPECT_EQ(result.statistics["subproblems"].size(), 0u);
+  EXPECT_EQ(result.statistics["shadows"].size(), 2u);
+}
+
+TEST(Nbi, SeveralDegenerateObjectivesAreAllNamed) {
+  const auto problem = hapsyn::test::analytic_problem(
+      {{0.0, 1.0}, {-1.0, 1.0}}, 0.05, {0.0},
+      {[](const double* x, const double*) { return x[0]; }, [](const double*, const double*) { return -2.0; },
+       [](const double*, const double*) { return 0.0; }});
+  const auto result = solve_nbi(*problem, {{"points", 4}});
+  EXPECT_EQ(result.status, hapsyn::SolverStatus::kFailed);
+  EXPECT_NE(result.message.find("objectives 'f2', 'f3' have the same value at every shadow optimum (payoff rows "
+                                "[-2.0,-2.0,-2.0], [0.0,0.0,0.0])"),
+            std::string::npos)
+      << result.message;
+}
+
+TEST(Nbi, ObjectivesWithOneCommonOptimumGiveOnePointAndSaySo) {
+  const auto problem = hapsyn::test::analytic_problem(
+      {{0.0, 1.0}, {-1.0, 1.0}}, 0.05, {0.0},
+      {[](const double* x, const double*) { return -(x[0] - 0.5) * (x[0] - 0.5) - x[1] * x[1]; },
+       [](const double* x, const double*) { return -2 * (x[0] - 0.5) * (x[0] - 0.5) - 3 * x[1] * x[1]; }});
+  const auto result = solve_nbi(*problem, {{"points", 5}});
+  ASSERT_EQ(result.status, hapsyn::SolverStatus::kConverged) << result.message;
+  EXPECT_EQ(result.front.size(), 1u);
+  EXPECT_NE(result.message.find("the objectives do not conflict: every shadow optimum has the same objective values"),
+            std::string::npos)
+      << result.message;
+  EXPECT_EQ(result.statistics["subproblems"].size(), 0u);
 }

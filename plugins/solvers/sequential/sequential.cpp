@@ -2,6 +2,7 @@
 
 #include "shared/sub_solver.hpp"
 
+#include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 
 #include <chrono>
@@ -44,51 +45,102 @@ SolverResult SequentialSolver::solve(const Problem& problem, const SolverContext
   if (!solver) return result;
   const std::size_t k = free_index(problem);
   const auto first = single_objective_problem(problem, 0);
-  const long long values = problem.design_space().grid_count(k);
-  const bool larger_is_better = problem.objectives()[1].sense == Sense::kMaximize;
-  const bool first_larger_is_better = problem.objectives()[0].sense == Sense::kMaximize;
-  Json per_value = Json::array();
-  std::optional<SolutionPoint> chosen;
+  const std::size_t values = static_cast<std::size_t>(problem.design_space().grid_count(k));
+  const std::string fingerprint = study_fingerprint(problem, OptionDeclarations<SequentialOptions>::to_json(options_));
+
+  // The values a checkpoint has finished (their designs re-evaluated on reading).
+  std::vector<FinishedSubproblem> finished;
+  double seconds_before = 0.0;
+  Json resumed = nullptr;
+  if (std::optional<SubproblemCheckpoint> checkpoint =
+          read_subproblem_checkpoint(problem, context, "sequential", fingerprint, {{"finished", values}})) {
+    finished = std::move(checkpoint->lists["finished"]);
+    for (std::size_t i = 0; i < finished.size(); ++i) {
+      const double v = problem.design_space().grid_value(k, static_cast<long long>(i));
+      if (finished[i].record.value("value", Json()) != Json(v)) {
+        throw bad_checkpoint(context, "finished[" + std::to_string(i) + "].record.value = " +
+                                          finished[i].record.value("value", Json()).dump() + ": this study's value " +
+                                          std::to_string(i) + " of " + options_.variable + " is " + Json(v).dump());
+      }
+    }
+    seconds_before = checkpoint->seconds;
+    resumed = {{"checkpoint", context.checkpoint_file},
+               {"finished", finished.size()},
+               {"recheck_sample_evaluations", checkpoint->recheck_samples}};
+    solver_line(context, "sequential: resuming from " + context.checkpoint_file + ": " + std::to_string(finished.size()) +
+                             " of " + std::to_string(values) + " values of " + options_.variable + " finished");
+  }
+  const auto elapsed = [&] { return seconds_before + std::chrono::duration<double>(Clock::now() - t_start).count(); };
+
   bool stopped = false;
-  for (long long i = 0; i < values; ++i) {
-    if (context.stop && context.stop->load()) {
+  for (std::size_t i = finished.size(); i < values; ++i) {
+    if (context.stop_requested()) {
       stopped = true;
       break;
     }
-    const double v = problem.design_space().grid_value(k, i);
+    const auto t0 = Clock::now();
+    const double v = problem.design_space().grid_value(k, static_cast<long long>(i));
     const SolverResult r = run_sub_solver(*solver, *fixed_component_problem(*first, k, v), context);
-    result.design_evaluations += r.design_evaluations;
-    result.sample_evaluations += r.sample_evaluations;
-    Json record = {{"value", v}, {"status", to_string(r.status)}};
-    std::vector<double> objectives;
-    if (r.best && evaluate_full_design(problem, r.best->design, context.threads, objectives, result.sample_evaluations)) {
-      record["design"] = problem.design_to_json(r.best->design);
-      record["objectives"] = objectives;
-      const auto better = [&](const std::vector<double>& a, const std::vector<double>& b) {
-        const double s2 = larger_is_better ? 1.0 : -1.0, s1 = first_larger_is_better ? 1.0 : -1.0;
-        if (s2 * a[1] != s2 * b[1]) return s2 * a[1] > s2 * b[1];
-        return s1 * a[0] > s1 * b[0];  // ties on the second: the better first objective
-      };
-      if (!chosen || better(objectives, chosen->objectives)) {
-        chosen = SolutionPoint{r.best->design, objectives, problem.score(objectives)};
-      }
+    if (r.status == SolverStatus::kStopped) {
+      // Its best is not this value's optimum: the value is run again on --resume.
+      result.design_evaluations += r.design_evaluations;
+      result.sample_evaluations += r.sample_evaluations;
+      stopped = true;
+      break;
     }
-    per_value.push_back(record);
+    FinishedSubproblem f;
+    f.design_evaluations = r.design_evaluations;
+    f.sample_evaluations = r.sample_evaluations;
+    f.record = {{"value", v}, {"status", to_string(r.status)}};
+    std::vector<double> objectives;
+    if (r.best && evaluate_full_design(problem, r.best->design, context.threads, objectives, f.sample_evaluations)) {
+      f.point = SolutionPoint{r.best->design, objectives, problem.score(objectives)};
+      f.record["design"] = problem.design_to_json(r.best->design);
+      f.record["objectives"] = objectives;
+    }
+    f.record["seconds"] = std::chrono::duration<double>(Clock::now() - t0).count();
+    finished.push_back(std::move(f));
+    write_subproblem_checkpoint(context, "sequential", fingerprint, {{"finished", &finished}}, elapsed());
+  }
+  if (stopped) write_subproblem_checkpoint(context, "sequential", fingerprint, {{"finished", &finished}}, elapsed());
+
+  // The best second objective among the per-value designs (ties: the better first objective),
+  // in value order.
+  const double s2 = problem.objectives()[1].sense == Sense::kMaximize ? 1.0 : -1.0;
+  const double s1 = problem.objectives()[0].sense == Sense::kMaximize ? 1.0 : -1.0;
+  const auto better = [&](const std::vector<double>& a, const std::vector<double>& b) {
+    if (s2 * a[1] != s2 * b[1]) return s2 * a[1] > s2 * b[1];
+    return s1 * a[0] > s1 * b[0];
+  };
+  Json per_value = Json::array();
+  std::optional<SolutionPoint> chosen;
+  for (const FinishedSubproblem& f : finished) {
+    result.design_evaluations += f.design_evaluations;
+    result.sample_evaluations += f.sample_evaluations;
+    per_value.push_back(f.record);
+    if (f.point && (!chosen || better(f.point->objectives, chosen->objectives))) chosen = f.point;
   }
   result.statistics = {{"variable", options_.variable},
                        {"per_value", per_value},
                        {"sub_solver", sub_solver_json(options_.sub_solver)},
-                       {"seconds", std::chrono::duration<double>(Clock::now() - t_start).count()}};
-  if (!chosen) {
-    result.status = stopped ? SolverStatus::kStopped : SolverStatus::kInfeasible;
-    result.message = "no value of " + options_.variable + " gave a feasible design";
-    return result;
-  }
+                       {"seconds", elapsed()}};
+  if (!resumed.is_null()) result.statistics["resumed"] = resumed;
   result.best = chosen;
-  result.status = stopped ? SolverStatus::kStopped : SolverStatus::kConverged;
   std::ostringstream message;
-  message << "sequential: best " << problem.objectives()[0].name << " for each of " << per_value.size()
-          << " values of " << options_.variable << ", then the best " << problem.objectives()[1].name << " among them";
+  if (stopped) {
+    message << "sequential stopped on request after " << finished.size() << " of " << values << " values of "
+            << options_.variable << "; "
+            << (chosen ? "the best is that of the finished values" : "none of the finished values gave a feasible design")
+            << checkpoint_note(context);
+    result.status = SolverStatus::kStopped;
+  } else if (!chosen) {
+    message << "no value of " << options_.variable << " gave a feasible design";
+    result.status = SolverStatus::kInfeasible;
+  } else {
+    message << "sequential: best " << problem.objectives()[0].name << " for each of " << per_value.size()
+            << " values of " << options_.variable << ", then the best " << problem.objectives()[1].name << " among them";
+    result.status = SolverStatus::kConverged;
+  }
   result.message = message.str();
   return result;
 }

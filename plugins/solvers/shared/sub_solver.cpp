@@ -1,8 +1,16 @@
 #include "sub_solver.hpp"
 
+#include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 
+#include <algorithm>
+#include <ostream>
+
 namespace hapsyn::plugins {
+
+namespace {
+constexpr int kFullDesignChunks = 16;
+}  // namespace
 
 const Solver* sub_solver_for_solve(const SubSolver& sub_solver, const std::string& component, const std::string& role,
                                    SolverResult& result) {
@@ -53,6 +61,9 @@ std::shared_ptr<const Problem> fixed_component_problem(const Problem& problem, s
 SolverResult run_sub_solver(const Solver& solver, const Problem& problem, const SolverContext& parent) {
   SolverContext context = parent;
   context.progress = nullptr;
+  // The parent checkpoints its finished subproblems; the sub-solver writes none of its own.
+  context.checkpoint_file.clear();
+  context.resume = false;
   return solver.solve(problem, context);
 }
 
@@ -61,12 +72,156 @@ bool evaluate_full_design(const Problem& problem, const Eigen::VectorXd& full, i
   const DesignSpace& space = problem.design_space();
   std::vector<double> x(space.free_size());
   for (std::size_t k = 0; k < x.size(); ++k) x[k] = full[space.free_indices()[k]];
-  const Evaluation e = problem.evaluate_parallel(x.data(), threads);
+  // A fixed chunk count: the values (averaging metrics too) do not depend on the thread count,
+  // so a resumed run re-evaluates a checkpoint's points to the same bits.
+  Problem::ParallelOptions parallel;
+  parallel.chunks = kFullDesignChunks;
+  const Evaluation e = problem.evaluate_parallel(x.data(), threads, parallel);
   samples += e.samples_evaluated;
   objectives.clear();
   if (e.status != EvalStatus::kFeasible) return false;
   objectives = e.objectives;
   return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Subproblem checkpoints.
+
+namespace {
+
+Json point_design_json(const std::optional<SolutionPoint>& point) {
+  if (!point) return nullptr;
+  Json design = Json::array();
+  for (Eigen::Index i = 0; i < point->design.size(); ++i) design.push_back(point->design[i]);
+  return design;
+}
+
+bool is_count(const Json& v) { return v.is_number_integer() && v.get<long long>() >= 0; }
+
+bool is_number_array(const Json& v, std::size_t size) {
+  return v.is_array() && v.size() == size && std::all_of(v.begin(), v.end(), [](const Json& x) { return x.is_number(); });
+}
+
+// One entry of a list, its shape checked and its point re-evaluated.
+FinishedSubproblem read_entry(const Problem& problem, const SolverContext& context, const Json& entry,
+                              const std::string& where, long long& recheck_samples) {
+  if (!entry.is_object()) throw bad_checkpoint(context, where + ": not an object");
+  FinishedSubproblem f;
+  if (!entry.contains("record") || !entry["record"].is_object()) {
+    throw bad_checkpoint(context, where + ".record: missing or not an object");
+  }
+  f.record = entry["record"];
+  for (const char* key : {"design_evaluations", "sample_evaluations"}) {
+    if (!entry.contains(key) || !is_count(entry[key])) {
+      throw bad_checkpoint(context, where + "." + key + ": missing or not a count (an integer >= 0)");
+    }
+  }
+  f.design_evaluations = entry["design_evaluations"].get<long long>();
+  f.sample_evaluations = entry["sample_evaluations"].get<long long>();
+  const Json design = entry.value("design", Json());
+  const Json claimed = entry.value("objectives", Json());
+  if (design.is_null() && claimed.is_null()) return f;  // an infeasible subproblem: nothing to check
+  const std::size_t n = problem.design_space().components().size(), m = problem.objectives().size();
+  if (!is_number_array(design, n)) {
+    throw bad_checkpoint(context, where + ".design = " + design.dump() + ": must be " + std::to_string(n) +
+                                      " numbers (the full design)");
+  }
+  if (!is_number_array(claimed, m)) {
+    throw bad_checkpoint(context, where + ".objectives = " + claimed.dump() + ": must be " + std::to_string(m) +
+                                      " numbers (one per objective)");
+  }
+  // The design as the problem would build it from its free components: an edited fixed
+  // component shows here.
+  const DesignSpace& space = problem.design_space();
+  std::vector<double> x(space.free_size());
+  for (std::size_t k = 0; k < x.size(); ++k) x[k] = design[static_cast<std::size_t>(space.free_indices()[k])].get<double>();
+  const Eigen::VectorXd full = problem.full_design(x.data());
+  for (std::size_t i = 0; i < n; ++i) {
+    if (full[static_cast<Eigen::Index>(i)] != design[i].get<double>()) {
+      throw bad_checkpoint(context, where + ".design[" + std::to_string(i) + "] = " + design[i].dump() + ": " +
+                                        space.components()[i].name + " is fixed at " +
+                                        Json(full[static_cast<Eigen::Index>(i)]).dump() + " in this study");
+    }
+  }
+  std::vector<double> values;
+  bool feasible = false;
+  try {
+    feasible = evaluate_full_design(problem, full, context.threads, values, recheck_samples);
+  } catch (const Error& e) {  // out of bounds, not finite: the framework's checks
+    throw bad_checkpoint(context, where + ".design = " + design.dump() + ": cannot be evaluated (" + e.what() + ")");
+  }
+  if (!feasible) {
+    throw bad_checkpoint(context, where + ": the design is not feasible, the checkpoint claims objectives " + claimed.dump());
+  }
+  // Evaluation is deterministic (bit-identical at any thread count): any difference is an edit.
+  for (std::size_t i = 0; i < m; ++i) {
+    if (values[i] != claimed[i].get<double>()) {
+      throw bad_checkpoint(context, where + ": the design re-evaluates to objectives " + Json(values).dump() +
+                                        ", the checkpoint claims " + claimed.dump());
+    }
+  }
+  f.point = SolutionPoint{full, values, problem.score(values)};
+  return f;
+}
+
+}  // namespace
+
+void write_subproblem_checkpoint(const SolverContext& context, const std::string& solver, const std::string& fingerprint,
+                                 const std::map<std::string, const std::vector<FinishedSubproblem>*>& lists,
+                                 double seconds) {
+  if (context.checkpoint_file.empty()) return;
+  Json state = Json::object();
+  for (const auto& [name, list] : lists) {
+    Json entries = Json::array();
+    for (const FinishedSubproblem& f : *list) {
+      entries.push_back({{"record", f.record},
+                         {"design", point_design_json(f.point)},
+                         {"objectives", f.point ? Json(f.point->objectives) : Json(nullptr)},
+                         {"design_evaluations", f.design_evaluations},
+                         {"sample_evaluations", f.sample_evaluations}});
+    }
+    state[name] = entries;
+  }
+  state["seconds"] = seconds;
+  write_checkpoint(context, solver, fingerprint, state);
+}
+
+std::optional<SubproblemCheckpoint> read_subproblem_checkpoint(const Problem& problem, const SolverContext& context,
+                                                               const std::string& solver, const std::string& fingerprint,
+                                                               const std::map<std::string, std::size_t>& limits) {
+  const std::optional<Json> state = read_checkpoint(context, solver, fingerprint);
+  if (!state) {
+    if (context.resume) solver_line(context, solver + ": no checkpoint to resume from; starting from the beginning");
+    return std::nullopt;
+  }
+  SubproblemCheckpoint checkpoint;
+  if (!state->contains("seconds") || !(*state)["seconds"].is_number() || !((*state)["seconds"].get<double>() >= 0.0)) {
+    throw bad_checkpoint(context, "seconds: missing or not a number >= 0");
+  }
+  checkpoint.seconds = (*state)["seconds"].get<double>();
+  for (const auto& [name, limit] : limits) {
+    if (!state->contains(name) || !(*state)[name].is_array()) throw bad_checkpoint(context, "no \"" + name + "\" array");
+    const Json& entries = (*state)[name];
+    if (entries.size() > limit) {
+      throw bad_checkpoint(context, name + ": " + std::to_string(entries.size()) + " finished subproblems, this study has " +
+                                        std::to_string(limit));
+    }
+    std::vector<FinishedSubproblem>& list = checkpoint.lists[name];
+    for (std::size_t i = 0; i < entries.size(); ++i) {
+      list.push_back(read_entry(problem, context, entries[i], name + "[" + std::to_string(i) + "]", checkpoint.recheck_samples));
+    }
+  }
+  return checkpoint;
+}
+
+void solver_line(const SolverContext& context, const std::string& line) {
+  if (context.progress) *context.progress << line << "\n";
+  if (context.log) *context.log << line << "\n";
+}
+
+std::string checkpoint_note(const SolverContext& context) {
+  if (context.checkpoint_file.empty()) return "; no checkpoint (no checkpoint file in this context)";
+  return "; checkpoint " + context.checkpoint_file + " written: `hapsyn run --resume` continues from there";
 }
 
 }  // namespace hapsyn::plugins

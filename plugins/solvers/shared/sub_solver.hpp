@@ -7,7 +7,9 @@
 #include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
 
+#include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,12 +38,64 @@ std::shared_ptr<const Problem> reweighted_problem(const Problem& problem, const 
 /// The problem with free design component `free_index` fixed at `value` (within its bounds).
 std::shared_ptr<const Problem> fixed_component_problem(const Problem& problem, std::size_t free_index, double value);
 
-/// Runs `solver` on `problem` with the parent's threads, seed and stop flag, quietly.
+/// Runs `solver` on `problem` with the parent's threads, seed, stop flag and log, quietly, and
+/// without a checkpoint: the sub-solver's checkpoint_file is empty and resume false, because the
+/// parent checkpoints at subproblem granularity (an interrupted subproblem is run again on
+/// --resume) and the sub-solver must not overwrite the parent's file.
 SolverResult run_sub_solver(const Solver& solver, const Problem& problem, const SolverContext& parent);
 
-/// Evaluates a full design over every sample with `problem`'s objectives (all of them).
+/// Evaluates a full design over every sample with `problem`'s objectives (all of them), in a
+/// fixed number of sample chunks: the values do not depend on `threads`.
 /// Returns false (and leaves `objectives` empty) when the design is not feasible.
 bool evaluate_full_design(const Problem& problem, const Eigen::VectorXd& full_design, int threads,
                           std::vector<double>& objectives, long long& samples);
+
+// ---------------------------------------------------------------------------------------------
+// Checkpoints of the solvers that run subproblems one after the other (nbi, weighted_sum,
+// sequential): the finished subproblems, each with its statistics record, its design, its
+// objective values and its evaluation counts. A resumed run skips them and gives exactly the
+// result of an uninterrupted run with the same seed.
+
+/// One finished subproblem (a shadow optimum, a weight vector, a value of the variable, an NBI
+/// grid point), as the parent's result and checkpoint keep it.
+struct FinishedSubproblem {
+  Json record = Json::object();         ///< its entry in the parent's statistics (result.json)
+  std::optional<SolutionPoint> point;   ///< the design it found, with all objectives (none: infeasible)
+  long long design_evaluations = 0;     ///< what it cost, its final full evaluation included
+  long long sample_evaluations = 0;
+};
+
+/// The finished subproblems of a checkpoint, by list name (e.g. "finished", or nbi's "shadows"
+/// and "subproblems"), and the run's elapsed seconds when it was written.
+struct SubproblemCheckpoint {
+  std::map<std::string, std::vector<FinishedSubproblem>> lists;
+  double seconds = 0.0;
+  long long recheck_samples = 0;  ///< samples spent re-evaluating the claimed points on resume
+};
+
+/// Writes the checkpoint of `solver` (nothing without a checkpoint file): `lists` and `seconds`.
+/// \throws Error("output", ...) when it cannot be written.
+void write_subproblem_checkpoint(const SolverContext& context, const std::string& solver, const std::string& fingerprint,
+                                 const std::map<std::string, const std::vector<FinishedSubproblem>*>& lists,
+                                 double seconds);
+
+/// The checkpoint to resume from (nullopt: start over; a line saying so goes to the progress and
+/// the log when context.resume is set). Every claimed point is re-evaluated on `problem` (one
+/// design evaluation per finished subproblem, cheap against a subproblem): a point that is not
+/// feasible or whose objective values differ from the claimed ones is refused, as is a list
+/// longer than `limits` allows or an entry of the wrong shape.
+/// \throws Error("checkpoint", "<file>: <what is wrong>; delete it, or run without --resume"):
+///         read_checkpoint's checks, then "<list>[<i>].<field>: ..." for a bad entry and
+///         "<list>[<i>]: the design re-evaluates to <values>, the checkpoint claims <values>".
+std::optional<SubproblemCheckpoint> read_subproblem_checkpoint(const Problem& problem, const SolverContext& context,
+                                                               const std::string& solver, const std::string& fingerprint,
+                                                               const std::map<std::string, std::size_t>& limits);
+
+/// A line for the progress stream and the run log (either may be null).
+void solver_line(const SolverContext& context, const std::string& line);
+
+/// What a stopped parent says about its checkpoint: "; checkpoint <file> written: `hapsyn run
+/// --resume` continues from there" or "; no checkpoint (no checkpoint file in this context)".
+std::string checkpoint_note(const SolverContext& context);
 
 }  // namespace hapsyn::plugins

@@ -2,6 +2,7 @@
 
 #include "shared/sub_solver.hpp"
 
+#include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/pareto.hpp>
 
@@ -52,27 +53,71 @@ SolverResult WeightedSumSolver::solve(const Problem& problem, const SolverContex
   const Solver* solver = sub_solver_for_solve(options_.sub_solver, "weighted_sum", "sub-solver", result);
   if (!solver) return result;
   const std::size_t m = problem.objectives().size();
-  std::vector<SolutionPoint> points;
-  Json runs = Json::array();
+  const std::vector<std::vector<double>> all_weights = weight_vectors(m);
+  const std::string fingerprint = study_fingerprint(problem, OptionDeclarations<WeightedSumOptions>::to_json(options_));
+
+  // The weight vectors a checkpoint has finished (their designs re-evaluated on reading).
+  std::vector<FinishedSubproblem> finished;
+  double seconds_before = 0.0;
+  Json resumed = nullptr;
+  if (std::optional<SubproblemCheckpoint> checkpoint =
+          read_subproblem_checkpoint(problem, context, "weighted_sum", fingerprint, {{"finished", all_weights.size()}})) {
+    finished = std::move(checkpoint->lists["finished"]);
+    for (std::size_t k = 0; k < finished.size(); ++k) {
+      if (finished[k].record.value("weights", Json()) != Json(all_weights[k])) {
+        throw bad_checkpoint(context, "finished[" + std::to_string(k) + "].record.weights = " +
+                                          finished[k].record.value("weights", Json()).dump() + ": this study's weight vector " +
+                                          std::to_string(k) + " is " + Json(all_weights[k]).dump());
+      }
+    }
+    seconds_before = checkpoint->seconds;
+    resumed = {{"checkpoint", context.checkpoint_file},
+               {"finished", finished.size()},
+               {"recheck_sample_evaluations", checkpoint->recheck_samples}};
+    solver_line(context, "weighted_sum: resuming from " + context.checkpoint_file + ": " + std::to_string(finished.size()) +
+                             " of " + std::to_string(all_weights.size()) + " weight vectors finished");
+  }
+  const auto elapsed = [&] { return seconds_before + std::chrono::duration<double>(Clock::now() - t_start).count(); };
+
   bool stopped = false;
-  for (const std::vector<double>& w : weight_vectors(m)) {
-    if (context.stop && context.stop->load()) {
+  for (std::size_t k = finished.size(); k < all_weights.size() && !stopped; ++k) {
+    if (context.stop_requested()) {
       stopped = true;
       break;
     }
+    const std::vector<double>& w = all_weights[k];
     const auto t0 = Clock::now();
     const SolverResult r = run_sub_solver(*solver, *reweighted_problem(problem, w), context);
-    result.design_evaluations += r.design_evaluations;
-    result.sample_evaluations += r.sample_evaluations;
-    Json run = {{"weights", w}, {"status", to_string(r.status)}, {"seconds", 0.0}};
-    std::vector<double> values;
-    if (r.best && evaluate_full_design(problem, r.best->design, context.threads, values, result.sample_evaluations)) {
-      points.push_back({r.best->design, values, problem.score(values)});
-      run["design"] = problem.design_to_json(r.best->design);
-      run["objectives"] = values;
+    if (r.status == SolverStatus::kStopped) {
+      // Its best is not this weight's optimum: the weight is run again on --resume.
+      result.design_evaluations += r.design_evaluations;
+      result.sample_evaluations += r.sample_evaluations;
+      stopped = true;
+      break;
     }
-    run["seconds"] = std::chrono::duration<double>(Clock::now() - t0).count();
-    runs.push_back(run);
+    FinishedSubproblem f;
+    f.design_evaluations = r.design_evaluations;
+    f.sample_evaluations = r.sample_evaluations;
+    f.record = {{"weights", w}, {"status", to_string(r.status)}};
+    std::vector<double> values;
+    if (r.best && evaluate_full_design(problem, r.best->design, context.threads, values, f.sample_evaluations)) {
+      f.point = SolutionPoint{r.best->design, values, problem.score(values)};
+      f.record["design"] = problem.design_to_json(r.best->design);
+      f.record["objectives"] = values;
+    }
+    f.record["seconds"] = std::chrono::duration<double>(Clock::now() - t0).count();
+    finished.push_back(std::move(f));
+    write_subproblem_checkpoint(context, "weighted_sum", fingerprint, {{"finished", &finished}}, elapsed());
+  }
+  if (stopped) write_subproblem_checkpoint(context, "weighted_sum", fingerprint, {{"finished", &finished}}, elapsed());
+
+  std::vector<SolutionPoint> points;
+  Json runs = Json::array();
+  for (const FinishedSubproblem& f : finished) {
+    result.design_evaluations += f.design_evaluations;
+    result.sample_evaluations += f.sample_evaluations;
+    runs.push_back(f.record);
+    if (f.point) points.push_back(*f.point);
   }
   std::vector<Sense> senses;
   for (const Objective& o : problem.objectives()) senses.push_back(o.sense);
@@ -84,18 +129,21 @@ SolverResult WeightedSumSolver::solve(const Problem& problem, const SolverContex
     return (senses[0] == Sense::kMaximize ? 1.0 : -1.0) * (a.objectives[0] - b.objectives[0]) > 0;
   });
   result.statistics = {{"runs", runs}, {"designs_found", points.size()}, {"distinct_non_dominated", keep.size()},
-                       {"sub_solver", sub_solver_json(options_.sub_solver)},
-                       {"seconds", std::chrono::duration<double>(Clock::now() - t_start).count()}};
+                       {"sub_solver", sub_solver_json(options_.sub_solver)}, {"seconds", elapsed()}};
+  if (!resumed.is_null()) result.statistics["resumed"] = resumed;
   std::ostringstream message;
-  message << "weighted sums: " << runs.size() << " weight vectors gave " << keep.size()
-          << " distinct non-dominated points";
-  result.message = message.str();
-  if (points.empty()) {
-    result.status = stopped ? SolverStatus::kStopped : SolverStatus::kInfeasible;
-    result.message += " (no weight found a feasible design)";
+  if (stopped) {
+    message << "weighted sums stopped on request after " << finished.size() << " of " << all_weights.size()
+            << " weight vectors; the front is that of the finished ones (" << keep.size() << " distinct non-dominated points)"
+            << checkpoint_note(context);
+    result.status = SolverStatus::kStopped;
   } else {
-    result.status = stopped ? SolverStatus::kStopped : SolverStatus::kConverged;
+    message << "weighted sums: " << runs.size() << " weight vectors gave " << keep.size()
+            << " distinct non-dominated points";
+    if (points.empty()) message << " (no weight found a feasible design)";
+    result.status = points.empty() ? SolverStatus::kInfeasible : SolverStatus::kConverged;
   }
+  result.message = message.str();
   return result;
 }
 
