@@ -6,10 +6,18 @@
 #include "analytic_problems.hpp"
 #include "test_support.hpp"
 
+#include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 
+#include <boost/filesystem.hpp>
+
+#include <unistd.h>
+
 #include <atomic>
+#include <fstream>
+#include <functional>
 #include <iostream>
+#include <sstream>
 
 namespace {
 
@@ -163,4 +171,160 @@ TEST(SubSolver, EvaluateFullDesignGivesEveryObjectiveOverEverySample) {
   // f2 = h(x0) - 0.5 (|x1| + 0.3)^2: the worst sample is s = -1.
   EXPECT_DOUBLE_EQ(objectives[1], hapsyn::test::two_objective_h(0.4) - 0.5 * 0.5 * 0.5);
   EXPECT_EQ(samples, 5 + 3);  // added to the count: three samples
+}
+
+// ---- the checkpoints of solvers that run subproblems ----
+
+namespace {
+
+std::string temp_file(const std::string& name) {
+  return (boost::filesystem::temp_directory_path() / (name + "-" + std::to_string(::getpid()) + ".json")).string();
+}
+
+// A finished subproblem with the design (0.4, 0.2) of `problem`, evaluated.
+hapsyn::plugins::FinishedSubproblem finished_at(const hapsyn::Problem& problem, double x0, double x1) {
+  hapsyn::plugins::FinishedSubproblem f;
+  Eigen::VectorXd design(2);
+  design << x0, x1;
+  std::vector<double> values;
+  long long samples = 0;
+  EXPECT_TRUE(hapsyn::plugins::evaluate_full_design(problem, design, 1, values, samples));
+  f.point = hapsyn::SolutionPoint{design, values, problem.score(values)};
+  f.record = {{"k", 1}};
+  f.design_evaluations = 7;
+  f.sample_evaluations = 9;
+  return f;
+}
+
+hapsyn::SolverContext checkpoint_context(const std::string& file) {
+  hapsyn::SolverContext context;
+  context.checkpoint_file = file;
+  context.resume = true;
+  context.seed = 2;
+  return context;
+}
+
+// The two-objective problem whose every sample is unreachable for x0 > 0.5.
+class HalfReachable : public hapsyn::Mechanism {
+ public:
+  class Model : public hapsyn::MechanismModel {
+   public:
+    explicit Model(const double* design) : x0_(design[0]), x1_(design[1]) {}
+    void solve(const double*, hapsyn::Needs, hapsyn::MechanismScratch&, hapsyn::SampleQuantities& out) const override {
+      out.status = x0_ > 0.5 ? hapsyn::SampleStatus::kUnreachable : hapsyn::SampleStatus::kReachable;
+      out.q.resize(2);
+      out.q << x0_, x1_;
+    }
+
+   private:
+    double x0_, x1_;
+  };
+  std::unique_ptr<const hapsyn::MechanismModel> build(const double* design) const override {
+    return std::make_unique<Model>(design);
+  }
+  hapsyn::Needs provides() const override { return hapsyn::kNeedJacobian; }
+};
+
+std::shared_ptr<hapsyn::Problem> half_reachable_problem() {
+  const auto base = hapsyn::test::two_objective_problem();
+  auto samples = std::make_shared<hapsyn::SampleSet>(base->samples());
+  std::vector<hapsyn::MetricEntry> metrics = base->metrics();
+  return std::make_shared<hapsyn::Problem>("half", std::make_shared<HalfReachable>(), samples, metrics,
+                                           base->objectives(), base->design_space());
+}
+
+}  // namespace
+
+TEST(SubSolver, RunSubSolverHandsTheSubSolverNoCheckpoint) {
+  const auto problem = hapsyn::test::two_objective_problem();
+  const RecordingSolver recording;
+  hapsyn::SolverContext parent;
+  parent.checkpoint_file = "parent-checkpoint.json";
+  parent.resume = true;
+  hapsyn::plugins::run_sub_solver(recording, *problem, parent);
+  EXPECT_EQ(recording.seen_context.checkpoint_file, "");
+  EXPECT_FALSE(recording.seen_context.resume);
+}
+
+TEST(SubSolver, FinishedSubproblemsRoundTripThroughTheCheckpointWithTheirPointsRechecked) {
+  const auto problem = hapsyn::test::two_objective_problem();
+  const std::string file = temp_file("hapsyn-subproblem-roundtrip");
+  std::vector<hapsyn::plugins::FinishedSubproblem> finished = {finished_at(*problem, 0.4, 0.2), {}};
+  finished[1].record = {{"k", 2}};  // an infeasible one: no point
+  finished[1].design_evaluations = 3;
+  const hapsyn::SolverContext context = checkpoint_context(file);
+  hapsyn::plugins::write_subproblem_checkpoint(context, "test", "fp", {{"finished", &finished}}, 12.5);
+  const auto read = hapsyn::plugins::read_subproblem_checkpoint(*problem, context, "test", "fp", {{"finished", 2}});
+  ASSERT_TRUE(read);
+  EXPECT_EQ(read->seconds, 12.5);
+  EXPECT_EQ(read->recheck_samples, 3);  // one design over three samples
+  const auto& list = read->lists.at("finished");
+  ASSERT_EQ(list.size(), 2u);
+  EXPECT_EQ(list[0].record, finished[0].record);
+  ASSERT_TRUE(list[0].point);
+  EXPECT_EQ(list[0].point->design, finished[0].point->design);
+  EXPECT_EQ(list[0].point->objectives, finished[0].point->objectives);
+  EXPECT_EQ(list[0].design_evaluations, 7);
+  EXPECT_EQ(list[0].sample_evaluations, 9);
+  EXPECT_FALSE(list[1].point);
+  EXPECT_EQ(list[1].design_evaluations, 3);
+  boost::filesystem::remove(file);
+}
+
+TEST(SubSolver, WithoutACheckpointTheSolverStartsOverAndSaysSo) {
+  const auto problem = hapsyn::test::two_objective_problem();
+  const std::string file = temp_file("hapsyn-subproblem-absent");
+  boost::filesystem::remove(file);
+  hapsyn::SolverContext context = checkpoint_context(file);
+  std::ostringstream log;
+  context.log = &log;
+  EXPECT_FALSE(hapsyn::plugins::read_subproblem_checkpoint(*problem, context, "test", "fp", {{"finished", 2}}));
+  EXPECT_EQ(log.str(), "test: no checkpoint to resume from; starting from the beginning\n");
+  EXPECT_EQ(hapsyn::plugins::checkpoint_note(context),
+            "; checkpoint " + file + " written: `hapsyn run --resume` continues from there");
+  EXPECT_EQ(hapsyn::plugins::checkpoint_note(hapsyn::SolverContext{}), "; no checkpoint (no checkpoint file in this context)");
+}
+
+TEST(SubSolver, CheckpointEntriesOfTheWrongShapeOrWithEditedValuesAreRefused) {
+  const auto problem = hapsyn::test::two_objective_problem();
+  const std::string file = temp_file("hapsyn-subproblem-refused");
+  const hapsyn::SolverContext context = checkpoint_context(file);
+  const std::vector<hapsyn::plugins::FinishedSubproblem> finished = {finished_at(*problem, 0.4, 0.2)};
+  const auto refused = [&](const hapsyn::Problem& p, const std::function<void(Json&)>& edit,
+                           std::initializer_list<std::string> fragments) {
+    hapsyn::plugins::write_subproblem_checkpoint(context, "test", "fp", {{"finished", &finished}}, 1.0);
+    std::ifstream in(file);
+    Json c = Json::parse(in);
+    edit(c["state"]);
+    c.erase("checksum");
+    c["checksum"] = hapsyn::fnv1a_hex(c.dump());
+    std::ofstream(file) << c.dump();
+    hapsyn::test::expect_error([&] { hapsyn::plugins::read_subproblem_checkpoint(p, context, "test", "fp", {{"finished", 1}}); },
+                               fragments);
+  };
+  const std::string prefix = "checkpoint: " + file + ": ";
+  refused(*problem, [](Json& s) { s.erase("seconds"); }, {prefix + "seconds: missing or not a number >= 0; delete it"});
+  refused(*problem, [](Json& s) { s["other"] = s["finished"]; s.erase("finished"); }, {prefix + "no \"finished\" array"});
+  refused(*problem, [](Json& s) { s["finished"].push_back(s["finished"][0]); },
+          {prefix + "finished: 2 finished subproblems, this study has 1"});
+  refused(*problem, [](Json& s) { s["finished"][0] = 3; }, {prefix + "finished[0]: not an object"});
+  refused(*problem, [](Json& s) { s["finished"][0].erase("record"); }, {prefix + "finished[0].record: missing or not an object"});
+  refused(*problem, [](Json& s) { s["finished"][0]["sample_evaluations"] = 1.5; },
+          {prefix + "finished[0].sample_evaluations: missing or not a count (an integer >= 0)"});
+  refused(*problem, [](Json& s) { s["finished"][0]["design"] = {0.4}; },
+          {prefix + "finished[0].design = [0.4]: must be 2 numbers (the full design)"});
+  refused(*problem, [](Json& s) { s["finished"][0]["objectives"] = {0.4, "x"}; },
+          {prefix + "finished[0].objectives = [0.4,\"x\"]: must be 2 numbers (one per objective)"});
+  refused(*problem, [](Json& s) { s["finished"][0]["design"][0] = 2.0; },
+          {prefix + "finished[0].design = [2.0,0.2]: cannot be evaluated (", "x0"});
+  refused(*problem, [](Json& s) { s["finished"][0]["objectives"][0] = 0.5; },
+          {prefix + "finished[0]: the design re-evaluates to objectives [0.39", "the checkpoint claims [0.5,"});
+  // A fixed component that differs from the study's value.
+  const auto fixed = hapsyn::plugins::fixed_component_problem(*problem, 1, 0.25);
+  refused(*fixed, [](Json&) {}, {prefix + "finished[0].design[1] = 0.2: x1 is fixed at 0.25 in this study"});
+  // A design that is not feasible in this study.
+  const auto half = half_reachable_problem();
+  refused(*half, [](Json& s) { s["finished"][0]["design"][0] = 0.75; },
+          {prefix + "finished[0]: the design is not feasible, the checkpoint claims objectives ["});
+  boost::filesystem::remove(file);
 }

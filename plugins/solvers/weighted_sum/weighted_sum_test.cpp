@@ -5,6 +5,16 @@
 #include "analytic_problems.hpp"
 #include "test_support.hpp"
 
+#include <hapsyn/checkpoint.hpp>
+
+#include <boost/filesystem.hpp>
+
+#include <unistd.h>
+
+#include <atomic>
+#include <fstream>
+#include <functional>
+
 using hapsyn::Json;
 using hapsyn::test::expect_error;
 
@@ -73,4 +83,129 @@ TEST(WeightedSum, WithoutARegistryFailsWithAStatus) {
   const auto result = solver.solve(*problem, hapsyn::SolverContext{});
   EXPECT_EQ(result.status, hapsyn::SolverStatus::kFailed);
   EXPECT_NE(result.message.find("weighted_sum has no sub-solver"), std::string::npos) << result.message;
+}
+
+// ---- stop, checkpoint, resume ----
+
+namespace {
+
+// The two-objective problem with its first objective's local calls counted: `stop` is set at
+// call `stop_after` (one thread: the same point of the run every time).
+struct Counter {
+  std::atomic<long long> calls{0};
+  long long stop_after = -1;
+  std::atomic<bool> stop{false};
+};
+std::shared_ptr<hapsyn::Problem> counted_problem(Counter& c) {
+  return hapsyn::test::analytic_problem(
+      {{0.0, 1.0}, {-1.0, 1.0}}, 0.05, {-1.0, 0.0, 1.0},
+      {[&c](const double* x, const double*) {
+         if (++c.calls == c.stop_after) c.stop = true;
+         return x[0] - 0.1 * x[1] * x[1];
+       },
+       [](const double* x, const double* s) {
+         return hapsyn::test::two_objective_h(x[0]) - 0.5 * (x[1] - 0.3 * s[0]) * (x[1] - 0.3 * s[0]);
+       }});
+}
+
+std::string temp_file(const std::string& name) {
+  return (boost::filesystem::temp_directory_path() / (name + "-" + std::to_string(::getpid()) + ".json")).string();
+}
+
+hapsyn::SolverResult run_weighted(const hapsyn::Problem& problem, const std::string& checkpoint, bool resume,
+                                  const std::atomic<bool>* stop) {
+  const Json options = {{"count", 6}, {"sub_solver", {{"plugin", "grid"}, {"options", {{"progress_interval", 1e9}}}}}};
+  const auto solver = hapsyn::test::registry().create_solver("weighted_sum", options, "solver");
+  solver->check(problem);
+  hapsyn::SolverContext context;
+  context.threads = 1;
+  context.seed = 5;
+  context.checkpoint_file = checkpoint;
+  context.resume = resume;
+  context.stop = stop;
+  return solver->solve(problem, context);
+}
+
+Json without_seconds(Json records) {
+  for (Json& r : records) r.erase("seconds");
+  return records;
+}
+
+void edit_checkpoint(const std::string& file, const std::function<void(Json& state)>& edit) {
+  std::ifstream in(file);
+  Json c = Json::parse(in);
+  edit(c["state"]);
+  c.erase("checksum");
+  c["checksum"] = hapsyn::fnv1a_hex(c.dump());
+  std::ofstream(file) << c.dump();
+}
+
+}  // namespace
+
+TEST(WeightedSum, StopMidRunGivesTheFrontSoFarAndResumeGivesTheUninterruptedResult) {
+  Counter full;
+  const auto reference = run_weighted(*counted_problem(full), "", false, nullptr);
+  ASSERT_EQ(reference.status, hapsyn::SolverStatus::kConverged) << reference.message;
+  for (double fraction : {0.05, 0.5, 0.75}) {
+    SCOPED_TRACE(fraction);
+    const std::string file = temp_file("hapsyn-weighted-stop");
+    boost::filesystem::remove(file);
+    Counter c;
+    c.stop_after = static_cast<long long>(fraction * static_cast<double>(full.calls));
+    const auto stopped = run_weighted(*counted_problem(c), file, false, &c.stop);
+    ASSERT_EQ(stopped.status, hapsyn::SolverStatus::kStopped) << stopped.message;
+    const std::size_t finished = stopped.statistics["runs"].size();
+    EXPECT_LT(finished, 6u);
+    EXPECT_NE(stopped.message.find("weighted sums stopped on request after " + std::to_string(finished) + " of 6 weight vectors"),
+              std::string::npos)
+        << stopped.message;
+    EXPECT_NE(stopped.message.find("checkpoint " + file + " written"), std::string::npos) << stopped.message;
+    EXPECT_EQ(stopped.front.empty(), finished == 0);
+    ASSERT_TRUE(boost::filesystem::exists(file));
+    Counter again;
+    const auto resumed = run_weighted(*counted_problem(again), file, true, nullptr);
+    EXPECT_EQ(resumed.status, reference.status);
+    EXPECT_EQ(resumed.message, reference.message);
+    ASSERT_EQ(resumed.front.size(), reference.front.size());
+    for (std::size_t i = 0; i < resumed.front.size(); ++i) {
+      EXPECT_EQ(resumed.front[i].design, reference.front[i].design);
+      EXPECT_EQ(resumed.front[i].objectives, reference.front[i].objectives);
+    }
+    EXPECT_EQ(resumed.design_evaluations, reference.design_evaluations);
+    EXPECT_EQ(resumed.sample_evaluations, reference.sample_evaluations);
+    EXPECT_EQ(without_seconds(resumed.statistics["runs"]), without_seconds(reference.statistics["runs"]));
+    EXPECT_EQ(resumed.statistics["resumed"]["finished"].get<std::size_t>(), finished);
+    boost::filesystem::remove(file);
+  }
+}
+
+TEST(WeightedSum, EditedCheckpointIsRefused) {
+  const std::string file = temp_file("hapsyn-weighted-edit");
+  boost::filesystem::remove(file);
+  Counter c;
+  ASSERT_EQ(run_weighted(*counted_problem(c), file, false, nullptr).status, hapsyn::SolverStatus::kConverged);
+  std::string original;
+  {
+    std::ifstream in(file);
+    original.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const auto refused = [&](const std::function<void(Json&)>& edit, std::initializer_list<std::string> fragments) {
+    std::ofstream(file) << original;
+    edit_checkpoint(file, edit);
+    Counter again;
+    expect_error([&] { run_weighted(*counted_problem(again), file, true, nullptr); }, fragments);
+  };
+  refused([](Json& s) { s["finished"][3]["objectives"][1] = s["finished"][3]["objectives"][1].get<double>() * 1.001; },
+          {"checkpoint: " + file + ": finished[3]: the design re-evaluates to objectives [", "the checkpoint claims [",
+           "; delete it, or run without --resume"});
+  refused([](Json& s) { s["finished"][1]["record"]["weights"] = {0.5, 0.5}; },
+          {"finished[1].record.weights = [0.5,0.5]: this study's weight vector 1 is [0.8,0.2]"});
+  refused([](Json& s) { s["finished"].push_back(s["finished"][0]); },
+          {"finished: 7 finished subproblems, this study has 6"});
+  // Damage without a recomputed checksum: the framework's check.
+  std::ofstream(file) << original.substr(0, original.size() / 2);
+  Counter again;
+  expect_error([&] { run_weighted(*counted_problem(again), file, true, nullptr); },
+               {"checkpoint: " + file + ": not valid JSON (truncated or damaged)"});
+  boost::filesystem::remove(file);
 }
