@@ -6,6 +6,7 @@
 
 #include <boost/filesystem.hpp>
 
+#include <atomic>
 #include <fstream>
 #include <sstream>
 
@@ -72,5 +73,71 @@ TEST(Compare, RefusesNoFilesAndDuplicateStudyNames) {
   options.plots = false;
   hapsyn::test::expect_error([&] { hapsyn::run_compare(options, hapsyn::test::registry()); },
                              {"compare: ", "a study named 'same' is already in this comparison"});
+  fs::remove_all(dir);
+}
+
+// ---- continuing, stopping ----
+
+namespace {
+hapsyn::CompareOptions two_grid_studies(const fs::path& dir) {
+  fs::create_directories(dir);
+  Json a = hapsyn::test::fivebar_study("grid");
+  Json b = a;
+  b["design"]["r"]["step"] = 0.2;
+  hapsyn::CompareOptions options;
+  options.files = {write_problem(dir, "fine", a), write_problem(dir, "coarse", b)};
+  options.output_directory = (dir / "out").string();
+  options.threads = 2;
+  options.seed = 7;
+  options.plots = false;
+  return options;
+}
+}  // namespace
+
+TEST(Compare, FinishedStudiesAreReusedAndAnotherProblemIsRefusedWithAWorkingRemedy) {
+  const fs::path dir = fs::temp_directory_path() / fs::unique_path("hapsyn-compare-%%%%%%");
+  hapsyn::CompareOptions options = two_grid_studies(dir);
+  const Json first = hapsyn::run_compare(options, hapsyn::test::registry());
+  EXPECT_EQ(first["status"], "finished");
+  const Json again = hapsyn::run_compare(options, hapsyn::test::registry());
+  ASSERT_EQ(again["rows"].size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_FALSE(first["rows"][i]["reused"].get<bool>());
+    EXPECT_TRUE(again["rows"][i]["reused"].get<bool>());
+    EXPECT_EQ(again["rows"][i]["wall_time_s"], first["rows"][i]["wall_time_s"]);
+    EXPECT_EQ(again["rows"][i]["samples"], first["rows"][i]["samples"]);
+  }
+  // Another problem under the same study name: refused with what works (no --force, which
+  // `hapsyn compare` does not take).
+  options.overrides = {"scene.options.step=0.05"};
+  const std::string message = hapsyn::test::error_of([&] { hapsyn::run_compare(options, hapsyn::test::registry()); });
+  EXPECT_NE(message.find("compare: " + (dir / "out" / "fine").string() +
+                         " holds a result of another problem (first difference at /scene/options/step: 0.025 there, "
+                         "0.05 in this comparison's " + options.files[0] + "); delete it, or choose another --out"),
+            std::string::npos)
+      << message;
+  EXPECT_EQ(message.find("--force"), std::string::npos) << message;
+  // force (CompareOptions::force) runs the studies again.
+  options.force = true;
+  const Json forced = hapsyn::run_compare(options, hapsyn::test::registry());
+  EXPECT_FALSE(forced["rows"][0]["reused"].get<bool>());
+  fs::remove_all(dir);
+}
+
+TEST(Compare, StopWritesTheFinishedStudiesWithStatusStopped) {
+  const fs::path dir = fs::temp_directory_path() / fs::unique_path("hapsyn-compare-%%%%%%");
+  hapsyn::CompareOptions options = two_grid_studies(dir);
+  const std::atomic<bool> stop{true};
+  options.stop = &stop;
+  const Json summary = hapsyn::run_compare(options, hapsyn::test::registry());
+  EXPECT_EQ(summary["status"], "stopped");
+  EXPECT_EQ(summary["rows"].size(), 0u);
+  EXPECT_EQ(summary["message"], "stopped on request at fine (not started) after 0 of 2 studies; run the same command "
+                                "again to continue (finished studies are reused, a stopped one resumes from its checkpoint)");
+  std::ifstream in((dir / "out" / "compare.json").string());
+  EXPECT_EQ(Json::parse(in)["status"], "stopped");
+  std::ostringstream table;
+  hapsyn::print_compare(summary, table);
+  EXPECT_NE(table.str().find("stopped: stopped on request at fine"), std::string::npos) << table.str();
   fs::remove_all(dir);
 }

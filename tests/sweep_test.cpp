@@ -4,8 +4,11 @@
 
 #include <boost/filesystem.hpp>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <fstream>
+#include <thread>
 
 using hapsyn::Json;
 using hapsyn::test::expect_error;
@@ -85,4 +88,133 @@ TEST(Sweep, AnInvalidRunIsRefusedBeforeAnyRunStarts) {
   expect_error([&] { hapsyn::run_sweep(hapsyn::test::fivebar_study(), options, hapsyn::test::registry()); },
                {"sweep: run with {\"scene.options.step\":0.03}", "step"});
   EXPECT_FALSE(fs::exists(out));
+}
+
+// ---- stopping and continuing ----
+
+namespace {
+hapsyn::SweepOptions small_sweep(const fs::path& out) {
+  hapsyn::SweepOptions options;
+  options.axes.push_back(hapsyn::parse_sweep_axis("design.l0.step,design.l1.step=0.1,0.05,0.025"));
+  options.output_directory = out.string();
+  options.threads = 2;
+  options.seed = 3;
+  return options;
+}
+Json culling_study() {
+  Json doc = hapsyn::test::fivebar_study("culling");
+  doc["solver"]["options"] = {{"polish", false}};
+  return doc;
+}
+Json read_json(const fs::path& file) {
+  std::ifstream in(file.string());
+  return Json::parse(in);
+}
+}  // namespace
+
+TEST(Sweep, StopBeforeARunWritesTheTablesWithStatusStopped) {
+  const fs::path out = fresh("stop-before");
+  hapsyn::SweepOptions options = small_sweep(out);
+  const std::atomic<bool> stop{true};
+  options.stop = &stop;
+  const Json summary = hapsyn::run_sweep(culling_study(), options, hapsyn::test::registry());
+  EXPECT_EQ(summary["status"], "stopped");
+  EXPECT_EQ(summary["runs"].size(), 0u);
+  EXPECT_EQ(summary["message"], "stopped on request at run-0 (not started) after 0 of 3 runs; run the same command again "
+                                "to continue (finished runs are reused, a stopped one resumes from its checkpoint)");
+  EXPECT_TRUE(summary["reference"]["run_time_s"].is_null());
+  const Json written = read_json(out / "sweep.json");
+  EXPECT_EQ(written["status"], "stopped");
+  EXPECT_EQ(lines(out / "sweep.csv"), 1);  // the header
+  EXPECT_FALSE(fs::exists(out / "run-0"));
+  fs::remove_all(out);
+}
+
+TEST(Sweep, StopDuringARunThenTheSameSweepContinuesToTheUninterruptedResult) {
+  const fs::path whole = fresh("uninterrupted"), out = fresh("stop-during");
+  const Json uninterrupted = hapsyn::run_sweep(culling_study(), small_sweep(whole), hapsyn::test::registry());
+  ASSERT_EQ(uninterrupted["status"], "finished");
+  // The stop request comes as soon as the first run has finished (a signal during the second).
+  std::atomic<bool> stop{false};
+  std::atomic<bool> done{false};
+  std::thread requester([&] {
+    while (!done && !fs::exists(out / "run-0" / "result.json")) std::this_thread::sleep_for(std::chrono::microseconds(100));
+    stop = true;
+  });
+  hapsyn::SweepOptions options = small_sweep(out);
+  options.stop = &stop;
+  const Json stopped = hapsyn::run_sweep(culling_study(), options, hapsyn::test::registry());
+  done = true;
+  requester.join();
+  ASSERT_EQ(stopped["status"], "stopped") << stopped.dump(1);
+  const std::size_t finished = stopped["runs"].size();
+  EXPECT_GE(finished, 1u);
+  EXPECT_LT(finished, 3u);
+  EXPECT_EQ(read_json(out / "sweep.json")["runs"].size(), finished);
+  EXPECT_EQ(lines(out / "sweep.csv"), static_cast<long>(finished) + 1);
+  // The same sweep again: the finished runs are reused, the others run; the result is the
+  // uninterrupted one.
+  const Json continued = hapsyn::run_sweep(culling_study(), small_sweep(out), hapsyn::test::registry());
+  ASSERT_EQ(continued["status"], "finished");
+  ASSERT_EQ(continued["runs"].size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(continued["runs"][i]["reused"].get<bool>(), i < finished) << i;
+    EXPECT_EQ(continued["runs"][i]["objectives"], uninterrupted["runs"][i]["objectives"]) << i;
+    // (culling's sample count may differ by a few at two threads: its early exits race)
+    EXPECT_EQ(continued["runs"][i]["evaluations"]["designs"], uninterrupted["runs"][i]["evaluations"]["designs"]) << i;
+    EXPECT_EQ(continued["runs"][i]["errors"]["objective_error"], uninterrupted["runs"][i]["errors"]["objective_error"]) << i;
+  }
+  EXPECT_FALSE(continued.contains("message"));
+  fs::remove_all(whole);
+  fs::remove_all(out);
+}
+
+TEST(Sweep, FinishedRunsAreReusedAndForeignResultsRefusedNamingTheFolder) {
+  const fs::path out = fresh("reuse");
+  hapsyn::SweepOptions options = small_sweep(out);
+  options.axes[0] = hapsyn::parse_sweep_axis("design.l0.step,design.l1.step=0.1,0.05");
+  const Json first = hapsyn::run_sweep(culling_study(), options, hapsyn::test::registry());
+  const Json again = hapsyn::run_sweep(culling_study(), options, hapsyn::test::registry());
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_FALSE(first["runs"][i]["reused"].get<bool>());
+    EXPECT_TRUE(again["runs"][i]["reused"].get<bool>());
+    EXPECT_EQ(again["runs"][i]["run_time_s"], first["runs"][i]["run_time_s"]);  // the stored time
+    EXPECT_EQ(again["runs"][i]["objectives"], first["runs"][i]["objectives"]);
+  }
+  const std::string run0 = (out / "run-0").string();
+  // Another problem in the same folders.
+  Json other = culling_study();
+  other["solver"]["options"]["polish"] = true;
+  expect_error([&] { hapsyn::run_sweep(other, options, hapsyn::test::registry()); },
+               {"sweep: " + run0 + " holds a result of another problem (first difference at /solver/options/polish: "
+                                   "false there, true in this sweep); delete it, or choose another --out"});
+  // Another seed.
+  hapsyn::SweepOptions reseeded = options;
+  reseeded.seed = 4;
+  expect_error([&] { hapsyn::run_sweep(culling_study(), reseeded, hapsyn::test::registry()); },
+               {"sweep: " + run0 + " holds a result run with seed 3, this sweep has seed 4; delete it, or choose another --out"});
+  // force runs everything again.
+  hapsyn::SweepOptions forced = options;
+  forced.force = true;
+  const Json rerun = hapsyn::run_sweep(other, forced, hapsyn::test::registry());
+  EXPECT_FALSE(rerun["runs"][0]["reused"].get<bool>());
+  // A damaged or foreign result.json.
+  std::ofstream((out / "run-0" / "result.json").string()) << "{\"problem\": ";
+  expect_error([&] { hapsyn::run_sweep(other, options, hapsyn::test::registry()); },
+               {"sweep: " + run0 + "/result.json: not a readable result (", "); delete it, or choose another --out"});
+  std::ofstream((out / "run-0" / "result.json").string()) << "{\"front\": []}";
+  expect_error([&] { hapsyn::run_sweep(other, options, hapsyn::test::registry()); },
+               {"sweep: " + run0 + "/result.json: not a hapsyn result (no \"problem\" or \"status\"); delete it"});
+  fs::remove_all(out);
+}
+
+TEST(Sweep, ARunThatFailsIsReportedWithItsFolderAndValues) {
+  const fs::path out = fresh("run-error");
+  fs::create_directories(out);
+  std::ofstream((out / "run-0").string()) << "a file where the run's folder goes";
+  hapsyn::SweepOptions options = small_sweep(out);
+  expect_error([&] { hapsyn::run_sweep(culling_study(), options, hapsyn::test::registry()); },
+               {"sweep: " + (out / "run-0").string() + " ({\"design.l0.step\":0.1,\"design.l1.step\":0.1}): output: ",
+                "cannot create the output directory"});
+  fs::remove_all(out);
 }

@@ -3,13 +3,16 @@
 #include <hapsyn/output_files.hpp>
 #include <hapsyn/plot.hpp>
 #include <hapsyn/problem_file.hpp>
+#include <hapsyn/solver.hpp>
 #include <hapsyn/study.hpp>
 #include <hapsyn/study_runner.hpp>
+#include <hapsyn/sweep.hpp>  // reusable_result
 
 #include <boost/filesystem.hpp>
 
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <iomanip>
 #include <set>
 #include <sstream>
@@ -167,12 +170,17 @@ Json run_compare(const CompareOptions& options, const Registry& registry) {
   std::vector<Json> results;
   Json rows = Json::array();
   std::set<std::string> names;
+  std::string stopped_at;  // the study that was stopped, or "" when none was
   for (const std::string& file : options.files) {
     Json doc = read_problem_file(file);
     for (const std::string& s : options.overrides) apply_override(doc, s);
     const std::string name = doc.value("name", fs::path(file).stem().string());
     if (!names.insert(name).second) {
       throw Error("compare", file + ": a study named '" + name + "' is already in this comparison (give each a distinct \"name\")");
+    }
+    if (options.stop && options.stop->load()) {
+      stopped_at = name + " (not started)";
+      break;
     }
     Study study;
     try {
@@ -185,11 +193,40 @@ Json run_compare(const CompareOptions& options, const Registry& registry) {
     run.threads = options.threads;
     run.seed = options.seed;
     run.quiet = true;
-    const Json result = run_study(study, run);
+    run.stop = options.stop;
+    // A finished study of the same problem in its folder is reused; a stopped one is resumed
+    // from its checkpoint; another problem's result is refused (never overwritten silently).
+    std::optional<Json> stored;
+    if (!options.force) {
+      stored = reusable_result(run.output_directory, study.resolved, options.seed, "compare",
+                               "this comparison's " + file);
+    }
+    Json result;
+    if (stored) {
+      result = std::move(*stored);
+    } else {
+      boost::system::error_code ec;
+      if (options.force) {
+        run.force = true;
+      } else {
+        fs::remove(fs::path(run.output_directory) / "result.json", ec);  // a stopped study's
+        run.resume = fs::exists(fs::path(run.output_directory) / "checkpoint.json", ec);
+      }
+      try {
+        result = run_study(study, run);
+      } catch (const Error& e) {
+        throw Error("compare", file + ": " + e.what());
+      }
+    }
+    if (result["status"] == to_string(SolverStatus::kStopped)) {
+      stopped_at = name;
+      break;
+    }
     Json row = {{"study", name},
                 {"file", file},
                 {"solver", study.solver_plugin},
                 {"status", result["status"]},
+                {"reused", stored.has_value()},
                 {"points", result.contains("front") ? result["front"].size() : (result.contains("best") ? 1 : 0)},
                 {"hypervolume", indicator(result, "hypervolume")},
                 {"spacing", indicator(result, "spacing")},
@@ -206,12 +243,21 @@ Json run_compare(const CompareOptions& options, const Registry& registry) {
     rows.push_back(row);
     results.push_back(result);
   }
-  const double first_time = rows[0]["wall_time_s"].get<double>();
-  for (Json& row : rows) row["time_ratio"] = row["wall_time_s"].get<double>() / first_time;
+  if (!rows.empty()) {
+    const double first_time = rows[0]["wall_time_s"].get<double>();
+    for (Json& row : rows) row["time_ratio"] = row["wall_time_s"].get<double>() / first_time;
+  }
 
   const fs::path out(options.output_directory);
   Json summary = {{"hapsyn", version()}, {"machine", machine_info()}, {"rows", rows}, {"plots", Json::object()}};
-  if (options.plots) {
+  summary["status"] = stopped_at.empty() ? "finished" : "stopped";
+  if (!stopped_at.empty()) {
+    summary["message"] = "stopped on request at " + stopped_at + " after " + std::to_string(rows.size()) + " of " +
+                         std::to_string(options.files.size()) +
+                         " studies; run the same command again to continue (finished studies are reused, a stopped "
+                         "one resumes from its checkpoint)";
+  }
+  if (options.plots && !results.empty()) {
     const std::string why = plot_fronts(out, results, rows);
     summary["plots"]["fronts"] = why.empty() ? Json("fronts.png, fronts.svg") : Json("not written: " + why);
     for (const Json& row : rows) {
@@ -268,6 +314,7 @@ void print_compare(const Json& summary, std::ostream& out) {
   for (auto it = summary["plots"].begin(); it != summary["plots"].end(); ++it) {
     out << "plot " << it.key() << ": " << it.value().get<std::string>() << "\n";
   }
+  if (summary.value("status", "") == "stopped") out << "stopped: " << summary["message"].get<std::string>() << "\n";
   out << "written: " << summary["output_directory"].get<std::string>() << "/compare.csv, compare.json\n";
 }
 

@@ -2,6 +2,8 @@
 #include <hapsyn/output_files.hpp>
 #include <hapsyn/plot.hpp>
 #include <hapsyn/problem_file.hpp>
+#include <hapsyn/read_file.hpp>
+#include <hapsyn/solver.hpp>
 #include <hapsyn/study.hpp>
 #include <hapsyn/study_runner.hpp>
 #include <hapsyn/sweep.hpp>
@@ -87,9 +89,13 @@ SweepAxis parse_sweep_axis(const std::string& spec) {
 
 namespace {
 
+// A result.json is a few MB at most (a front, statistics); anything far larger is not one.
+constexpr std::uint64_t kMaxResultBytes = 1ULL << 30;
+
 struct RunRecord {
-  Json values;  // path -> value
-  Json result;  // result.json of the run
+  Json values;          // path -> value
+  Json result;          // result.json of the run
+  bool reused = false;  // read from its folder, not run by this sweep
 };
 
 std::vector<std::vector<double>> front_of(const Json& result) {
@@ -199,7 +205,7 @@ Json tabulate_runs(const std::vector<RunRecord>& runs, const Json& reference, co
   std::ostringstream csv;
   csv.precision(10);
   std::vector<std::string> objective_names;
-  if (reference.contains("best")) {
+  if (reference.is_object() && reference.contains("best")) {
     for (auto it = reference["best"]["objectives"].begin(); it != reference["best"]["objectives"].end(); ++it) {
       objective_names.push_back(it.key());
     }
@@ -209,7 +215,7 @@ Json tabulate_runs(const std::vector<RunRecord>& runs, const Json& reference, co
   csv << ",run_time_s,solve_time_s,scene_from_cache,designs,samples,status";
   for (const auto& n : objective_names) csv << "," << n;
   csv << ",objective_error,design_distance,igd,time_ratio_to_reference\n";
-  const double reference_time = reference["sweep_run_time_s"].get<double>();
+  const Json reference_time = reference.is_null() ? Json(nullptr) : reference["sweep_run_time_s"];
   for (std::size_t i = 0; i < runs.size(); ++i) {
     const Json& r = runs[i].result;
     const Json from_cache = r.contains("scene") && r["scene"].contains("from_cache") ? r["scene"]["from_cache"] : Json(nullptr);
@@ -219,7 +225,8 @@ Json tabulate_runs(const std::vector<RunRecord>& runs, const Json& reference, co
                 {"scene_from_cache", from_cache},
                 {"evaluations", r["evaluations"]},
                 {"status", r["status"]},
-                {"errors", errors_against(r, reference)}};
+                {"reused", runs[i].reused},
+                {"errors", errors_against(r, reference.is_null() ? Json::object() : reference)}};
     if (r.contains("best")) row["objectives"] = r["best"]["objectives"];
     rows.push_back(row);
     std::string label;
@@ -233,13 +240,47 @@ Json tabulate_runs(const std::vector<RunRecord>& runs, const Json& reference, co
       csv << "," << (r.contains("best") && r["best"]["objectives"].contains(n) ? r["best"]["objectives"][n].dump() : "");
     }
     csv << "," << csv_cell(row["errors"]["objective_error"]) << "," << csv_cell(row["errors"]["design_distance"]) << ","
-        << csv_cell(row["errors"]["igd"]) << "," << r["sweep_run_time_s"].get<double>() / reference_time << "\n";
+        << csv_cell(row["errors"]["igd"]) << ","
+        << (reference_time.is_null() ? std::string() : csv_cell(Json(r["sweep_run_time_s"].get<double>() / reference_time.get<double>())))
+        << "\n";
   }
   csv_text = csv.str();
   return rows;
 }
 
 }  // namespace
+
+std::optional<Json> reusable_result(const std::string& directory, const Json& resolved,
+                                    const std::optional<std::uint64_t>& seed, const std::string& component,
+                                    const std::string& what) {
+  const fs::path file = fs::path(directory) / "result.json";
+  boost::system::error_code ec;
+  if (!fs::exists(file, ec)) return std::nullopt;
+  const std::string remedy = "; delete it, or choose another --out";
+  Json stored;
+  try {
+    stored = Json::parse(read_regular_file(file.string(), component, "result", kMaxResultBytes));
+  } catch (const std::exception& e) {
+    throw Error(component, file.string() + ": not a readable result (" + e.what() + ")" + remedy);
+  }
+  if (!stored.is_object() || !stored.contains("problem") || !stored.contains("status") || !stored["status"].is_string()) {
+    throw Error(component, file.string() + ": not a hapsyn result (no \"problem\" or \"status\")" + remedy);
+  }
+  if (stored["problem"] != resolved) {
+    const Json patch = Json::diff(stored["problem"], resolved);
+    const std::string at = patch.empty() ? std::string("/") : patch[0].value("path", std::string("/"));
+    const Json here = stored["problem"].contains(Json::json_pointer(at)) ? stored["problem"][Json::json_pointer(at)] : Json("(absent)");
+    const Json there = resolved.contains(Json::json_pointer(at)) ? resolved[Json::json_pointer(at)] : Json("(absent)");
+    throw Error(component, directory + " holds a result of another problem (first difference at " + at + ": " + here.dump() +
+                               " there, " + there.dump() + " in " + what + ")" + remedy);
+  }
+  if (seed && (!stored.contains("seed") || stored["seed"] != *seed)) {
+    throw Error(component, directory + " holds a result run with seed " + stored.value("seed", Json()).dump() + ", " + what +
+                               " has seed " + std::to_string(*seed) + remedy);
+  }
+  if (stored["status"] == to_string(SolverStatus::kStopped)) return std::nullopt;
+  return stored;
+}
 
 Json run_sweep(const Json& problem, const SweepOptions& options, const Registry& registry) {
   if (options.axes.empty()) throw Error("sweep", "at least one --vary is required");
@@ -264,43 +305,105 @@ Json run_sweep(const Json& problem, const SweepOptions& options, const Registry&
 
   const fs::path out(options.output_directory);
   fs::create_directories(out);
-  RunOptions run_options;
-  run_options.threads = options.threads;
-  run_options.seed = options.seed;
-  run_options.quiet = options.quiet;
-  run_options.write_samples = false;
-  run_options.force = true;  // the sweep owns its run directories
+  RunOptions base;
+  base.threads = options.threads;
+  base.seed = options.seed;
+  base.quiet = options.quiet;
+  base.write_samples = false;
+  base.stop = options.stop;
   // A run's time covers everything a user waits for: validation, the scene (built or read from
-  // its cache: scene knobs cost there, not in the solver) and the solve.
-  auto run_one = [&](const std::vector<std::string>& sets, const std::string& name) {
+  // its cache: scene knobs cost there, not in the solver) and the solve. A finished run of the
+  // same problem in its folder is reused; a stopped one is resumed from its checkpoint.
+  auto run_one = [&](const std::vector<std::string>& sets, const std::string& name, const Json& values) {
     const auto t0 = std::chrono::steady_clock::now();
+    const fs::path dir = out / name;
     Study study = load_study(make_doc(sets), registry);
-    run_options.output_directory = (out / name).string();
-    Json result = run_study(study, run_options);
-    result["sweep_run_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return result;
+    RunRecord record{values, Json(), false};
+    if (!options.force) {
+      if (std::optional<Json> stored = reusable_result(dir.string(), study.resolved, options.seed, "sweep", "this sweep")) {
+        record.result = std::move(*stored);
+        if (!record.result.contains("sweep_run_time_s")) record.result["sweep_run_time_s"] = record.result["wall_time_s"];
+        record.reused = true;
+        return record;
+      }
+    }
+    RunOptions run_options = base;
+    run_options.output_directory = dir.string();
+    boost::system::error_code ec;
+    if (options.force) {
+      run_options.force = true;  // the sweep owns its run directories
+    } else {
+      // A stopped run's result.json gives way to the continued run's.
+      fs::remove(dir / "result.json", ec);
+      run_options.resume = fs::exists(dir / "checkpoint.json", ec);
+    }
+    try {
+      record.result = run_study(study, run_options);
+    } catch (const Error& e) {
+      throw Error("sweep", dir.string() + " (" + values.dump() + "): " + e.what());
+    }
+    record.result["sweep_run_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    // The run time is kept with the result, for a later sweep that reuses it.
+    write_file_atomically((dir / "result.json").string(), record.result.dump(2) + "\n");
+    return record;
   };
+  const auto stop_requested = [&] { return options.stop != nullptr && options.stop->load(); };
+  const std::string stopped_status = to_string(SolverStatus::kStopped);
 
   std::vector<RunRecord> runs;
-  for (std::size_t c = 0; c < combos.size(); ++c) {
+  std::string stopped_at;  // the run folder that was stopped, or "" when none was
+  for (std::size_t c = 0; c < combos.size() && stopped_at.empty(); ++c) {
+    const std::string name = "run-" + std::to_string(c);
+    if (stop_requested()) {
+      stopped_at = name + " (not started)";
+      break;
+    }
     if (!options.quiet) std::cerr << "sweep: run " << (c + 1) << "/" << combos.size() << " " << combo_values[c].dump() << "\n";
-    runs.push_back({combo_values[c], run_one(combos[c], "run-" + std::to_string(c))});
+    RunRecord record = run_one(combos[c], name, combo_values[c]);
+    if (record.result["status"] == stopped_status) {
+      stopped_at = name;
+    } else {
+      runs.push_back(std::move(record));
+    }
   }
-  Json reference = separate_reference ? run_one(options.reference, "reference") : runs.back().result;
+  Json reference = nullptr;
+  if (stopped_at.empty()) {
+    if (!separate_reference) {
+      reference = runs.back().result;
+    } else if (stop_requested()) {
+      stopped_at = "reference (not started)";
+    } else {
+      RunRecord record = run_one(options.reference, "reference", Json::object());
+      if (record.result["status"] == stopped_status) {
+        stopped_at = "reference";
+      } else {
+        reference = record.result;
+      }
+    }
+  }
 
   Json summary;
+  summary["status"] = stopped_at.empty() ? "finished" : "stopped";
+  if (!stopped_at.empty()) {
+    summary["message"] = "stopped on request at " + stopped_at + " after " + std::to_string(runs.size()) + " of " +
+                         std::to_string(combos.size()) +
+                         " runs; run the same command again to continue (finished runs are reused, a stopped one "
+                         "resumes from its checkpoint)";
+  }
+  const bool have_reference = !reference.is_null();
   summary["reference"] = {{"overrides", options.reference.empty() ? Json(combo_values.back()) : Json(options.reference)},
-                          {"run_time_s", reference["sweep_run_time_s"]},
-                          {"best", reference.contains("best") ? reference["best"] : Json(nullptr)}};
-  summary["hapsyn"] = reference["hapsyn"];
-  summary["machine"] = reference["machine"];
-  summary["seed"] = reference["seed"];
+                          {"run_time_s", have_reference ? reference["sweep_run_time_s"] : Json(nullptr)},
+                          {"best", have_reference && reference.contains("best") ? reference["best"] : Json(nullptr)}};
+  const Json any = have_reference ? reference : runs.empty() ? Json(nullptr) : runs.front().result;
+  summary["hapsyn"] = any.is_null() ? Json({{"version", version()}}) : any["hapsyn"];
+  summary["machine"] = any.is_null() ? machine_info() : any["machine"];
+  summary["seed"] = any.is_null() ? (options.seed ? Json(*options.seed) : Json(nullptr)) : any["seed"];
   summary["problem"] = problem;
   std::string csv;
   summary["runs"] = tabulate_runs(runs, reference, options.axes, csv);
   write_file_atomically((out / "sweep.csv").string(), csv);
   write_file_atomically((out / "sweep.json").string(), summary.dump(2) + "\n");
-  write_plot(out, std::cerr);
+  if (have_reference) write_plot(out, std::cerr);
   summary["output_directory"] = out.string();
   return summary;
 }
