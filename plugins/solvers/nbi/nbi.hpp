@@ -16,6 +16,13 @@
 /// 4. Every point is evaluated over the whole workspace; dominated points are dropped
 ///    (`filter_dominated`).
 ///
+/// Degenerate payoff matrix: an objective whose payoff row has no spread (U_i - N_i <= 1e-9
+/// max(|U_i|, |N_i|)) cannot be normalized. When that holds for some objectives only (a constant
+/// objective, or one that does not conflict with the others at their optima), solve() returns
+/// kFailed naming them: the front would be degenerate and silently so. When it holds for all
+/// (one design is optimal in every objective), the front is that one point (kConverged, said
+/// in the message).
+///
 /// Formulation and convergence. Das & Dennis pose the equality G(x) = Phibar beta + t n. GII and
 /// GDI are min-max functions (not differentiable where the critical sample changes), and an
 /// equality on them would have to hold on a kink. We use the inequality relaxation (the
@@ -80,8 +87,20 @@ class NbiSolver : public Solver {
   ///         variable or a simplex grid too large; or when the shadow solver refuses one of the
   ///         single-objective problems ("<shadow_solver's path> (objective '<name>'): <its message>").
   void check(const Problem& problem) const override;
-  /// The front (kConverged); kInfeasible (or kStopped) when a shadow optimum is not found;
-  /// kFailed without a shadow solver (options made without a registry).
+  /// The front (kConverged; one point, with a message saying so, when every shadow optimum has
+  /// the same objective values: the objectives do not conflict); kInfeasible when a shadow
+  /// optimum is not found; kFailed without a shadow solver (options made without a registry) or
+  /// when some but not all objectives have no spread in the payoff matrix (the message names
+  /// them and what to do; the front would be degenerate); kStopped on a stop request (between
+  /// shadow optima and subproblems, and inside the shadow solver), with the front of the points
+  /// found so far.
+  ///
+  /// Checkpoint (context.checkpoint_file): written after every shadow optimum and every
+  /// subproblem (their records, designs, objective values and counts); on --resume the
+  /// finished ones are skipped, after their designs are re-evaluated and found to give the
+  /// claimed values, and the result is that of an uninterrupted run. The shadow solver runs
+  /// without a checkpoint of its own (an interrupted shadow optimum is solved again).
+  /// \throws Error("checkpoint", ...) on --resume with a checkpoint that fails the checks.
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
 
  private:

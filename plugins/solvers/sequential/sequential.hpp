@@ -41,7 +41,15 @@ class SequentialSolver : public Solver {
   ///         objective's problem with the variable fixed ("<sub_solver's path>: <its message>").
   void check(const Problem& problem) const override;
   /// The chosen design (kConverged); kInfeasible when no value gave a feasible design; kFailed
-  /// without a sub-solver (options made without a registry).
+  /// without a sub-solver (options made without a registry); kStopped on a stop request
+  /// (between values, and inside the sub-solver), with the best among the finished values (an
+  /// interrupted sub-solver's best is not used).
+  ///
+  /// Checkpoint (context.checkpoint_file): written after every value (its record, design,
+  /// objective values and counts); on --resume the finished ones are skipped, after their
+  /// designs are re-evaluated and found to give the claimed values, and the result is that of
+  /// an uninterrupted run. The sub-solver runs without a checkpoint of its own.
+  /// \throws Error("checkpoint", ...) on --resume with a checkpoint that fails the checks.
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
 
  private:

@@ -80,7 +80,7 @@ SolverResult WeightedSumSolver::solve(const Problem& problem, const SolverContex
   const auto elapsed = [&] { return seconds_before + std::chrono::duration<double>(Clock::now() - t_start).count(); };
 
   bool stopped = false;
-  for (std::size_t k = finished.size(); k < all_weights.size() && !stopped; ++k) {
+  for (std::size_t k = finished.size(); k < all_weights.size(); ++k) {
     if (context.stop_requested()) {
       stopped = true;
       break;

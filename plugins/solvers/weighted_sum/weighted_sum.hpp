@@ -43,7 +43,15 @@ class WeightedSumSolver : public Solver {
   ///         sub-solver refuses a reweighted problem ("<sub_solver's path>: <its message>").
   void check(const Problem& problem) const override;
   /// The front (kConverged); kInfeasible when no weight found a feasible design; kFailed
-  /// without a sub-solver (options made without a registry).
+  /// without a sub-solver (options made without a registry); kStopped on a stop request
+  /// (between weight vectors, and inside the sub-solver), with the front of the finished weight
+  /// vectors (an interrupted sub-solver's best is not used).
+  ///
+  /// Checkpoint (context.checkpoint_file): written after every weight vector (its record,
+  /// design, objective values and counts); on --resume the finished ones are skipped, after
+  /// their designs are re-evaluated and found to give the claimed values, and the result is
+  /// that of an uninterrupted run. The sub-solver runs without a checkpoint of its own.
+  /// \throws Error("checkpoint", ...) on --resume with a checkpoint that fails the checks.
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
   /// The weight vectors the options give for `objectives` objectives: `weights` when given,
   /// else the simplex grid with `count` points per edge.
