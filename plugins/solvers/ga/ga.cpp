@@ -160,16 +160,26 @@ void GaSearch::resume_from_checkpoint() {
   for (std::size_t i = 0; i < checkpoint.completed_runs.size(); ++i) {
     const Json& run = checkpoint.completed_runs[i];
     const std::string path = "state.completed_runs[" + std::to_string(i) + "]";
-    if (!run.is_object() || !run.contains("x")) continue;  // an infeasible run has no optimum
+    // The fields the summary reads, checked here: a damaged record is a checkpoint error, not a
+    // raw JSON exception at the end of the solve.
     pagmo::vector_double x;
     double score = 0.0;
+    std::vector<double> free;
     try {
+      if (run.at("run").get<int>() != static_cast<int>(i)) throw std::invalid_argument("run is not " + std::to_string(i));
+      if (run.at("status").get<std::string>() == "infeasible") continue;  // no optimum to check
       x = run.at("x").get<pagmo::vector_double>();
       score = run.at("score").get<double>();
-    } catch (const Json::exception& e) {
+      free = run.at("free").get<std::vector<double>>();
+      for (const Objective& o : problem_.objectives()) (void)run.at("objectives").at(o.name).get<double>();
+      if (!run.at("design").is_object()) throw std::invalid_argument("design is not an object");
+    } catch (const std::exception& e) {
       throw bad_checkpoint(context_, path + ": " + e.what());
     }
     check_claimed_best(x, score, path);
+    if (free != evaluator_->encoding().decode(x)) {
+      throw bad_checkpoint(context_, path + ": free does not match the decoded x");
+    }
   }
   if (checkpoint.current && checkpoint.current->contains("best_x")) {
     try {

@@ -574,6 +574,11 @@ TEST(Ga, DamagedEditedAndForeignCheckpointsAreRefused) {
                         "the checkpoint claims 99"});
 
   c = stop_midway();
+  c["state"]["completed_runs"][0].erase("free");
+  write_document(file, c, true);
+  expect_error(resume, {"checkpoint: " + file + ": state.completed_runs[0]: ", "free"});
+
+  c = stop_midway();
   c["state"].erase("elapsed_seconds");
   write_document(file, c, true);
   expect_error(resume, {"checkpoint: " + file + ": state: ", "elapsed_seconds", "; delete it, or run without --resume"});
