@@ -388,3 +388,39 @@ TEST(Grid, NonMonotoneMetricFailsWithPruningAndRunsWithout) {
   const auto unpruned = grid_solver({{"prune", false}, {"progress_interval", 1e9}}).solve(*problem, context);
   EXPECT_EQ(unpruned.status, hapsyn::SolverStatus::kConverged) << unpruned.message;
 }
+
+TEST(Grid, StopBeforeAnyFeasibleDesignIsAStatusWithACheckpoint) {
+  hapsyn::test::StopAfter counter;
+  counter.stop = true;  // before the first design (a stop is honoured between designs)
+  const auto problem = hapsyn::test::stopping_problem(counter);
+  const std::string dir = hapsyn::test::fresh_directory("grid-stop-early");
+  const std::string file = dir + "/checkpoint.json";
+  const auto stopped = solve_with(*problem, {{"progress_interval", 1e9}}, counter, file, false, 1);
+  EXPECT_EQ(stopped.status, hapsyn::SolverStatus::kStopped);
+  EXPECT_FALSE(stopped.best.has_value());
+  EXPECT_NE(stopped.message.find("stopped on request after 0.0% of 2,601 grid designs; no feasible design yet; "
+                                 "checkpoint " + file + " written, resume with --resume"),
+            std::string::npos)
+      << stopped.message;
+  EXPECT_TRUE(hapsyn::test::read_json_file(file)["state"]["best"].is_null());
+  counter.stop = false;
+  counter.limit = -1;
+  const auto resumed = solve_with(*problem, {{"progress_interval", 1e9}}, counter, file, true, 1);
+  EXPECT_EQ(resumed.status, hapsyn::SolverStatus::kConverged) << resumed.message;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Grid, NonMonotoneMetricFailsInParetoModeWithPruning) {
+  const auto problem = hapsyn::test::metric_problem(
+      0.1, {std::make_shared<hapsyn::test::NonMonotoneMetric>(), std::make_shared<hapsyn::test::NonMonotoneMetric>()},
+      {"bad1", "bad2"});
+  hapsyn::SolverContext context;
+  context.threads = 2;
+  const auto failed = grid_solver({{"pareto", true}, {"progress_interval", 1e9}}).solve(*problem, context);
+  EXPECT_EQ(failed.status, hapsyn::SolverStatus::kFailed);
+  EXPECT_TRUE(failed.front.empty());
+  EXPECT_NE(failed.message.find("breaks the worst-case monotonicity rule"), std::string::npos) << failed.message;
+  EXPECT_NE(failed.message.find("metric 'bad"), std::string::npos) << failed.message;
+  const auto unpruned = grid_solver({{"pareto", true}, {"prune", false}, {"progress_interval", 1e9}}).solve(*problem, context);
+  EXPECT_EQ(unpruned.status, hapsyn::SolverStatus::kConverged) << unpruned.message;
+}
