@@ -228,6 +228,11 @@ void GaSearch::check_claimed_best(const pagmo::vector_double& x, double claimed,
 void GaSearch::run_remaining() {
   solve_clock_ = Clock::now();
   for (int r = static_cast<int>(runs_.size()); r < options_.runs && !stopped_; ++r) {
+    if (context_.stop_requested()) {
+      // Before a run starts: the checkpoint on disk (between runs, or the resumed one) stands.
+      stopped_ = true;
+      break;
+    }
     const std::uint64_t run_seed = pa::derive_seed(context_.seed, static_cast<std::uint64_t>(r));
     Run run;
     run.state.run = r;
