@@ -1,7 +1,9 @@
 #include "culling.hpp"
 
+#include "grid/worst_case_check.hpp"
 #include "shared/minmax_sqp.hpp"
 
+#include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/parallel.hpp>
 
@@ -12,6 +14,7 @@
 #include <iomanip>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -74,16 +77,77 @@ struct Bounds {
   }
 };
 
+struct SweepCounts {
+  long long culled = 0, constraint_violated = 0, failed_at_bound = 0, full_searches = 0, full_feasible = 0,
+            full_pruned = 0, full_failed = 0, bound_samples = 0, full_samples = 0;
+
+  void add(const SweepCounts& c) {
+    culled += c.culled;
+    constraint_violated += c.constraint_violated;
+    failed_at_bound += c.failed_at_bound;
+    full_searches += c.full_searches;
+    full_feasible += c.full_feasible;
+    full_pruned += c.full_pruned;
+    full_failed += c.full_failed;
+    bound_samples += c.bound_samples;
+    full_samples += c.full_samples;
+  }
+  // The counts since `before` (a line's share of a thread's counts).
+  SweepCounts since(const SweepCounts& before) const {
+    SweepCounts d = *this;
+    d.culled -= before.culled;
+    d.constraint_violated -= before.constraint_violated;
+    d.failed_at_bound -= before.failed_at_bound;
+    d.full_searches -= before.full_searches;
+    d.full_feasible -= before.full_feasible;
+    d.full_pruned -= before.full_pruned;
+    d.full_failed -= before.full_failed;
+    d.bound_samples -= before.bound_samples;
+    d.full_samples -= before.full_samples;
+    return d;
+  }
+  Json to_json() const {
+    return {{"culled", culled}, {"constraint_violated", constraint_violated}, {"failed_at_bound", failed_at_bound},
+            {"full_searches", full_searches}, {"full_feasible", full_feasible}, {"full_pruned", full_pruned},
+            {"full_failed", full_failed}, {"bound_samples", bound_samples}, {"full_samples", full_samples}};
+  }
+};
+
+// Which grid lines are finished: every line below `prefix` and those in `beyond` (finished by
+// other threads while an earlier one was still running). A line counts only when all its
+// designs are done, so a checkpoint says exactly what a resumed run still has to sweep.
+struct Ledger {
+  long long lines = 0;
+  long long prefix = 0;
+  std::set<long long> beyond;
+
+  bool finished(long long line) const { return line < prefix || beyond.count(line) != 0; }
+  void finish(long long line) {
+    beyond.insert(line);
+    while (!beyond.empty() && *beyond.begin() == prefix) {
+      beyond.erase(beyond.begin());
+      ++prefix;
+    }
+  }
+  long long count() const { return prefix + static_cast<long long>(beyond.size()); }
+};
+
+
+
 // What the seed and the sweep share: the reference (the best fully evaluated feasible grid
 // design so far) and the global critical samples, in the order found.
 struct Reference {
-  std::mutex mutex;  // guards best, critical, is_critical, iterations and the progress stream
+  std::mutex mutex;  // guards best, critical, is_critical, iterations, the members below and the progress stream
   Best best;
   std::atomic<double> score{-kInf};  // best.score, readable without the lock
   std::vector<int> critical;
   std::vector<char> is_critical;
   std::atomic<int> critical_count{0};
   long long iterations = 0;  // reference updates
+  Ledger ledger;              // the sweep's finished lines
+  SweepCounts finished;       // the counts of the finished lines (before a resume included)
+  std::optional<MonotonicityBreach> breach;
+  std::atomic<bool> failed{false};  // a breach was found: the threads stop
 
   explicit Reference(int samples) : is_critical(static_cast<std::size_t>(samples), 0) {}
 
@@ -136,7 +200,7 @@ struct Seed {
 
 // The best feasible point of a coarse grid of start points (empty if none); at most 1e5 points.
 std::vector<double> best_start_point(const Problem& problem, const Bounds& bounds, int start_points,
-                                     Problem::EvalScratch& ws, Seed& seed) {
+                                     Problem::EvalScratch& ws, Seed& seed, const SolverContext& context) {
   const std::size_t n = bounds.lower.size();
   int m = start_points;
   while (m > 2 && std::pow(static_cast<double>(m), static_cast<double>(n)) > 1e5) --m;
@@ -144,7 +208,7 @@ std::vector<double> best_start_point(const Problem& problem, const Bounds& bound
   for (std::size_t k = 0; k < n; ++k) starts *= m;
   std::vector<double> x(n), start;
   double start_score = -kInf;
-  for (long long i = 0; i < starts && std::pow(2.0, static_cast<double>(n)) <= 1e5; ++i) {
+  for (long long i = 0; i < starts && std::pow(2.0, static_cast<double>(n)) <= 1e5 && !context.stop_requested(); ++i) {
     long long rest = i;
     for (std::size_t k = n; k-- > 0;) {
       x[k] = bounds.lower[k] + (bounds.upper[k] - bounds.lower[k]) * static_cast<double>(rest % m) / (m - 1);
@@ -166,11 +230,11 @@ std::vector<double> best_start_point(const Problem& problem, const Bounds& bound
 
 // Offers the feasible corners of the grid cell that holds `continuous` as the reference.
 void snap_to_grid(const Problem& problem, const Grid& grid, const std::vector<double>& continuous,
-                  Problem::EvalScratch& ws, Reference& reference, Seed& seed) {
+                  Problem::EvalScratch& ws, Reference& reference, Seed& seed, const SolverContext& context) {
   const std::size_t n = continuous.size();
   std::vector<double> x(n);
   const long long corners = 1LL << n;
-  for (long long c = 0; c < corners && n <= 20; ++c) {
+  for (long long c = 0; c < corners && n <= 20 && !context.stop_requested(); ++c) {
     long long index = 0;
     for (std::size_t k = 0; k < n; ++k) {
       const long long i = std::min(grid.nearest_cell(k, continuous[k]) + ((c >> k) & 1), grid.counts[k] - 1);
@@ -188,13 +252,14 @@ void snap_to_grid(const Problem& problem, const Grid& grid, const std::vector<do
   }
 }
 
+// Stops between evaluations (and before the SQP) on request: a resumed run keeps what it found.
 Seed seed_reference(const Problem& problem, const Grid& grid, const Bounds& bounds, const CullingOptions& options,
-                    Reference& reference) {
+                    Reference& reference, const SolverContext& context) {
   Seed seed;
   const auto t0 = Clock::now();
   auto ws = problem.make_eval_scratch();
-  const std::vector<double> start = best_start_point(problem, bounds, options.start_points, *ws, seed);
-  if (!start.empty()) {
+  const std::vector<double> start = best_start_point(problem, bounds, options.start_points, *ws, seed, context);
+  if (!start.empty() && !context.stop_requested()) {
     std::vector<double> continuous = start;
     if (!bounds.any_integer) {
       const SqpOutcome sqp = run_sqp(problem, start, bounds.lower, bounds.upper, options);
@@ -205,7 +270,7 @@ Seed seed_reference(const Problem& problem, const Grid& grid, const Bounds& boun
                                 {"seconds", sqp.seconds}};
       if (!sqp.x.empty()) continuous = sqp.x;
     }
-    snap_to_grid(problem, grid, continuous, *ws, reference, seed);
+    snap_to_grid(problem, grid, continuous, *ws, reference, seed, context);
   }
   seed.statistics["reference_score"] = reference.best.index >= 0 ? Json(reference.best.score) : Json(nullptr);
   seed.statistics["seconds"] = seconds_since(t0);
@@ -215,29 +280,14 @@ Seed seed_reference(const Problem& problem, const Grid& grid, const Bounds& boun
 // ---------------------------------------------------------------------------------------------
 // 2. The culling sweep over the grid: lines along the last variable, handed out dynamically.
 
-struct SweepCounts {
-  long long culled = 0, constraint_violated = 0, failed_at_bound = 0, full_searches = 0, full_feasible = 0,
-            full_pruned = 0, full_failed = 0, bound_samples = 0, full_samples = 0;
-
-  void add(const SweepCounts& c) {
-    culled += c.culled;
-    constraint_violated += c.constraint_violated;
-    failed_at_bound += c.failed_at_bound;
-    full_searches += c.full_searches;
-    full_feasible += c.full_feasible;
-    full_pruned += c.full_pruned;
-    full_failed += c.full_failed;
-    bound_samples += c.bound_samples;
-    full_samples += c.full_samples;
-  }
-};
-
 struct SweepThread {
   std::unique_ptr<Problem::EvalScratch> eval_scratch;
   std::vector<int> local;  // critical samples, most recently useful first
   int known = 0;           // global critical samples merged so far
   std::vector<double> x;
   SweepCounts counts;
+  std::vector<double> bound;  // the objectives' bound at the critical samples of the current design
+  bool has_bound = false;
 };
 
 // Merges the global critical samples found since the thread last looked.
@@ -253,6 +303,7 @@ void catch_up(SweepThread& s, Reference& reference) {
 // Bounds the design in s.x at the thread's critical samples. True when that rules it out
 // (culled, failed at a critical sample or violating a design constraint).
 bool ruled_out_by_bound(const Problem& problem, SweepThread& s, double threshold) {
+  s.has_bound = false;
   if (s.local.empty()) return false;
   EvalOptions bound;
   bound.subset = &s.local;
@@ -275,10 +326,15 @@ bool ruled_out_by_bound(const Problem& problem, SweepThread& s, double threshold
     }
     return true;
   }
+  // Kept for the monotonicity check, should the full search complete.
+  s.bound.assign(e.objectives.begin(), e.objectives.end());
+  s.has_bound = e.status == EvalStatus::kFeasible;
   return false;
 }
 
 // Searches the whole workspace for the design in s.x (grid `index`) and shares what it found.
+// A feasible result is checked against the design's bound at the critical samples: a bound
+// below the full value breaks the rule culling rests on (recorded in reference.breach).
 void full_search(const Problem& problem, SweepThread& s, long long index, double threshold, Reference& reference) {
   EvalOptions full;
   full.prune_below = threshold;
@@ -293,6 +349,14 @@ void full_search(const Problem& problem, SweepThread& s, long long index, double
   switch (e.status) {
     case EvalStatus::kFeasible:
       ++s.counts.full_feasible;
+      if (s.has_bound) {
+        if (auto breach = compare_bounds(problem, s.x.data(), s.bound, e.objectives,
+                                         static_cast<long long>(s.local.size()), false)) {
+          if (!reference.breach) reference.breach = breach;
+          reference.failed = true;
+          return;
+        }
+      }
       reference.offer(index, e);
       reference.publish(e.critical_samples);
       break;
@@ -309,13 +373,15 @@ void full_search(const Problem& problem, SweepThread& s, long long index, double
 }
 
 // Every design of one grid line (the last variable running), bounded first, searched in full
-// when the bound cannot rule it out.
-void cull_line(const Problem& problem, const Grid& grid, long long line, SweepThread& s, Reference& reference) {
+// when the bound cannot rule it out. False when a stop request (or a breach) left it unfinished.
+bool cull_line(const Problem& problem, const Grid& grid, long long line, SweepThread& s, Reference& reference,
+               const SolverContext& context) {
   const std::size_t n = s.x.size();
   const long long line_length = grid.counts[n - 1];
   catch_up(s, reference);
   grid.decode(line * line_length, s.x.data());
   for (long long i = 0; i < line_length; ++i) {
+    if (context.stop_requested() || reference.failed.load(std::memory_order_relaxed)) return false;
     const long long index = line * line_length + i;
     s.x[n - 1] = grid.space->grid_value(n - 1, i);
     const double threshold = reference.score.load(std::memory_order_relaxed);
@@ -323,6 +389,7 @@ void cull_line(const Problem& problem, const Grid& grid, long long line, SweepTh
     // The bound cannot rule the design out: search the whole workspace.
     full_search(problem, s, index, threshold, reference);
   }
+  return true;
 }
 
 // "culling: P% of N grid designs, ..." (the caller holds the reference's mutex).
@@ -340,26 +407,37 @@ std::string progress_line(const Grid& grid, const std::vector<SweepThread>& stat
   return out.str();
 }
 
-// The sweep on the context's threads; returns the counts summed over the threads.
-SweepCounts sweep(const Problem& problem, const Grid& grid, const CullingOptions& options,
-                  const SolverContext& context, Reference& reference) {
+// The sweep of the lines not finished yet on the context's threads; after each finished line
+// (under reference.mutex) a progress line and, when due, save(). Returns the counts of this
+// run summed over the threads (unfinished lines included).
+template <class Save>
+SweepCounts sweep(const Problem& problem, const Grid& grid, const CullingOptions& options, const SolverContext& context,
+                  Reference& reference, const Save& save) {
   std::vector<SweepThread> states(static_cast<std::size_t>(std::max(1, context.threads)));
   for (SweepThread& s : states) {
     s.eval_scratch = problem.make_eval_scratch();
     s.x.resize(grid.counts.size());
   }
-  const long long lines = grid.total / grid.counts.back();
-  std::atomic<long long> lines_done{0};
-  auto last_report = Clock::now();
+  const Ledger skip = reference.ledger;  // finished before this run
+  auto last_report = Clock::now(), last_checkpoint = Clock::now();
   const auto t_sweep = Clock::now();
-  parallel_for_dynamic(lines, static_cast<int>(states.size()), 4, [&](long long line, int t) {
-    if (context.stop && context.stop->load(std::memory_order_relaxed)) return;
-    cull_line(problem, grid, line, states[static_cast<std::size_t>(t)], reference);
-    const long long done = lines_done.fetch_add(1, std::memory_order_relaxed) + 1;
-    if (context.progress && t == 0 && seconds_since(last_report) >= options.progress_interval) {
-      std::lock_guard<std::mutex> lock(reference.mutex);
+  parallel_for_dynamic(reference.ledger.lines, static_cast<int>(states.size()), 1, [&](long long line, int t) {
+    if (skip.finished(line)) return;
+    SweepThread& s = states[static_cast<std::size_t>(t)];
+    const SweepCounts before = s.counts;
+    if (!cull_line(problem, grid, line, s, reference, context)) return;
+    std::lock_guard<std::mutex> lock(reference.mutex);
+    reference.ledger.finish(line);
+    reference.finished.add(s.counts.since(before));
+    if (context.progress && seconds_since(last_report) >= options.progress_interval) {
       last_report = Clock::now();
-      *context.progress << progress_line(grid, states, reference, done, lines, seconds_since(t_sweep)) << std::flush;
+      *context.progress << progress_line(grid, states, reference, reference.ledger.count(), reference.ledger.lines,
+                                         seconds_since(t_sweep))
+                        << std::flush;
+    }
+    if (seconds_since(last_checkpoint) >= options.checkpoint_interval) {
+      save();
+      last_checkpoint = Clock::now();
     }
   });
   SweepCounts sum;
@@ -417,6 +495,147 @@ Json polish_cell(const Problem& problem, const std::vector<double>& x, const Cul
   return polish;
 }
 
+
+// ---------------------------------------------------------------------------------------------
+// 4. Checkpoints.
+
+// What a breach means for culling.
+constexpr const char* kCullingBreach =
+    "culling relies on that rule, so its result could be wrong: solve this study with the grid solver and "
+    "prune: false";
+
+// The checkpoint's fingerprint: the study and the options that change the result (not the
+// progress and checkpoint intervals, which a resumed run may change).
+std::string fingerprint_of(const Problem& problem, const CullingOptions& options) {
+  Json o = options_to_json(options);
+  o.erase("progress_interval");
+  o.erase("checkpoint_interval");
+  return study_fingerprint(problem, o);
+}
+
+// Reads object[key] as T; a missing field or one of another type is a bad checkpoint naming
+// the field (never a raw JSON exception).
+template <class T>
+T field(const SolverContext& context, const Json& object, const std::string& path, const std::string& key) {
+  if (!object.is_object() || !object.contains(key)) throw bad_checkpoint(context, path + "." + key + " is missing");
+  try {
+    return object.at(key).get<T>();
+  } catch (const Json::exception&) {
+    throw bad_checkpoint(context, path + "." + key + " = " + object.at(key).dump().substr(0, 80) +
+                                      ": not of the expected type");
+  }
+}
+
+// The checkpoint's state (caller holds reference.mutex, or the sweep is not running).
+Json checkpoint_state(const Reference& reference, const Seed& seed, double seconds) {
+  Json state;
+  state["lines"] = reference.ledger.lines;
+  state["finished_prefix"] = reference.ledger.prefix;
+  state["finished_lines"] = std::vector<long long>(reference.ledger.beyond.begin(), reference.ledger.beyond.end());
+  state["reference"] = reference.best.index < 0 ? Json(nullptr)
+                                                : Json{{"index", reference.best.index}, {"score", reference.best.score}};
+  state["critical_samples"] = reference.critical;
+  state["iterations"] = reference.iterations;
+  state["counts"] = reference.finished.to_json();
+  state["seed"] = {{"statistics", seed.statistics}, {"designs", seed.designs}, {"samples", seed.samples}};
+  state["elapsed_seconds"] = seconds;
+  return state;
+}
+
+SweepCounts counts_from(const SolverContext& context, const Json& state) {
+  const Json c = field<Json>(context, state, "state", "counts");
+  SweepCounts n;
+  n.culled = field<long long>(context, c, "state.counts", "culled");
+  n.constraint_violated = field<long long>(context, c, "state.counts", "constraint_violated");
+  n.failed_at_bound = field<long long>(context, c, "state.counts", "failed_at_bound");
+  n.full_searches = field<long long>(context, c, "state.counts", "full_searches");
+  n.full_feasible = field<long long>(context, c, "state.counts", "full_feasible");
+  n.full_pruned = field<long long>(context, c, "state.counts", "full_pruned");
+  n.full_failed = field<long long>(context, c, "state.counts", "full_failed");
+  n.bound_samples = field<long long>(context, c, "state.counts", "bound_samples");
+  n.full_samples = field<long long>(context, c, "state.counts", "full_samples");
+  return n;
+}
+
+// Restores the sweep from a checkpoint's state; the reference is re-evaluated in full and the
+// checkpoint refused when it does not score what it claims (a hand-edited score must never
+// become the reference, let alone the optimum). Returns the seconds spent before.
+double restore(const Problem& problem, const Grid& grid, const SolverContext& context, const Json& state,
+               Reference& reference, Seed& seed) {
+  Ledger& ledger = reference.ledger;
+  if (field<long long>(context, state, "state", "lines") != ledger.lines) {
+    throw bad_checkpoint(context, "state.lines does not match this grid (" + std::to_string(ledger.lines) + " lines)");
+  }
+  ledger.prefix = field<long long>(context, state, "state", "finished_prefix");
+  if (ledger.prefix < 0 || ledger.prefix > ledger.lines) {
+    throw bad_checkpoint(context, "state.finished_prefix = " + std::to_string(ledger.prefix) + ": must lie in [0, " +
+                                      std::to_string(ledger.lines) + "]");
+  }
+  for (long long line : field<std::vector<long long>>(context, state, "state", "finished_lines")) {
+    if (line <= ledger.prefix || line >= ledger.lines) {
+      throw bad_checkpoint(context, "state.finished_lines: line " + std::to_string(line) + " must lie in (" +
+                                        std::to_string(ledger.prefix) + ", " + std::to_string(ledger.lines) + ")");
+    }
+    ledger.beyond.insert(line);
+  }
+  std::vector<std::vector<int>> critical(1);
+  for (int sample : field<std::vector<int>>(context, state, "state", "critical_samples")) {
+    if (sample < 0 || sample >= problem.samples().size()) {
+      throw bad_checkpoint(context, "state.critical_samples: sample " + std::to_string(sample) + " is not one of the " +
+                                        std::to_string(problem.samples().size()) + " samples");
+    }
+    critical[0].push_back(sample);
+  }
+  reference.publish(critical);
+  reference.iterations = field<long long>(context, state, "state", "iterations");
+  reference.finished = counts_from(context, state);
+  const Json s = field<Json>(context, state, "state", "seed");
+  seed.statistics = field<Json>(context, s, "state.seed", "statistics");
+  seed.designs = field<long long>(context, s, "state.seed", "designs");
+  seed.samples = field<long long>(context, s, "state.seed", "samples");
+  const Json claimed = field<Json>(context, state, "state", "reference");
+  if (!claimed.is_null()) {
+    const long long index = field<long long>(context, claimed, "state.reference", "index");
+    const double score = field<double>(context, claimed, "state.reference", "score");
+    if (index < 0 || index >= grid.total) {
+      throw bad_checkpoint(context, "state.reference.index = " + std::to_string(index) + ": not a grid design (0.." +
+                                        std::to_string(grid.total - 1) + ")");
+    }
+    std::vector<double> x(grid.counts.size());
+    grid.decode(index, x.data());
+    auto ws = problem.make_eval_scratch();
+    const Evaluation& e = problem.evaluate(x.data(), *ws);
+    if (e.status != EvalStatus::kFeasible || e.score != score) {
+      std::ostringstream m;
+      m.precision(17);
+      m << "state.reference: grid design " << index << " scores " << e.score << " (" << to_string(e.status)
+        << ") on re-evaluation, the checkpoint claims " << score;
+      throw bad_checkpoint(context, m.str());
+    }
+    reference.best.index = index;
+    reference.best.score = score;
+    reference.score.store(score);
+  }
+  return field<double>(context, state, "state", "elapsed_seconds");
+}
+
+// "stopped on request after 41.0% of 1,701,900 grid designs; <best>; checkpoint ... written, ...".
+std::string stopped_message(const Grid& grid, const Reference& reference, const SolverContext& context,
+                            const std::string& best) {
+  std::string total = std::to_string(grid.total), commas;
+  for (std::size_t i = 0; i < total.size(); ++i) {
+    if (i > 0 && (total.size() - i) % 3 == 0) commas += ',';
+    commas += total[i];
+  }
+  std::ostringstream s;
+  s << "stopped on request after " << std::fixed << std::setprecision(1)
+    << 100.0 * static_cast<double>(reference.ledger.count()) / static_cast<double>(reference.ledger.lines) << "% of "
+    << commas << " grid designs; " << best << "; "
+    << (context.checkpoint_file.empty() ? std::string("no checkpoint file, a new run starts over")
+                                        : "checkpoint " + context.checkpoint_file + " written, resume with --resume");
+  return s.str();
+}
+
 }  // namespace
 
 void CullingSolver::check(const Problem& problem) const {
@@ -447,11 +666,28 @@ SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& c
   const Grid grid(space);
   const Bounds bounds(space);
   Reference reference(problem.samples().size());
+  reference.ledger.lines = grid.total / grid.counts.back();
+  const std::string fingerprint = fingerprint_of(problem, options_);
 
-  const Seed seed = options_.seed ? seed_reference(problem, grid, bounds, options_, reference) : Seed{};
+  Seed seed;
+  double seconds_before = 0.0;
+  const std::optional<Json> state = read_checkpoint(context, "culling", fingerprint);
+  if (state) {
+    seconds_before = restore(problem, grid, context, *state, reference, seed);
+  } else if (options_.seed) {
+    seed = seed_reference(problem, grid, bounds, options_, reference, context);
+  }
+  auto save = [&] {  // caller holds reference.mutex, or the sweep is not running
+    write_checkpoint(context, "culling", fingerprint,
+                     checkpoint_state(reference, seed, seconds_before + seconds_since(t_start)));
+  };
+  if (!state) save();  // the seed is done: a resumed run skips it
   const auto t_sweep = Clock::now();
-  const SweepCounts sum = sweep(problem, grid, options_, context, reference);
+  const SweepCounts run_counts = sweep(problem, grid, options_, context, reference, save);
   const double sweep_seconds = seconds_since(t_sweep);
+  // This run's counts plus, on resume, those of the lines finished before.
+  SweepCounts sum = run_counts;
+  if (state) sum.add(counts_from(context, *state));
 
   SolverResult result;
   result.design_evaluations = seed.designs + grid.total;
@@ -459,12 +695,19 @@ SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& c
   Json stats = sweep_statistics(grid, sum, reference, problem.samples().size());
   stats["seed"] = seed.statistics;
   stats["sweep_seconds"] = sweep_seconds;
-
-  const bool stopped = context.stop && context.stop->load();
+  stats["seconds"] = seconds_before + seconds_since(t_start);
+  result.statistics = stats;
+  if (reference.breach) {
+    result.status = SolverStatus::kFailed;
+    result.message = breach_message(problem, *reference.breach, kCullingBreach);
+    return result;
+  }
+  const bool stopped = context.stop_requested() && reference.ledger.count() < reference.ledger.lines;
+  save();
   if (reference.best.index < 0) {
     result.status = stopped ? SolverStatus::kStopped : SolverStatus::kInfeasible;
-    result.message = "no feasible design among " + std::to_string(grid.total) + " grid designs";
-    result.statistics = stats;
+    result.message = stopped ? stopped_message(grid, reference, context, "no feasible design yet")
+                             : "no feasible design among " + std::to_string(grid.total) + " grid designs";
     return result;
   }
   std::vector<double> x(space.free_size());
@@ -475,14 +718,30 @@ SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& c
   SolutionPoint point{problem.full_design(x.data()), grid_best.objectives, grid_best.score};
   stats["grid_optimum"] = {{"design", problem.design_to_json(point.design)}, {"objectives", point.objectives},
                            {"score", point.score}, {"index", reference.best.index}};
+  std::vector<int> subset;
+  if (auto breach = spot_check(problem, x.data(), *ws, subset, false)) {
+    result.status = SolverStatus::kFailed;
+    result.message = breach_message(problem, *breach, kCullingBreach);
+    return result;
+  }
+  if (stopped) {
+    result.best = point;
+    result.statistics = stats;
+    std::ostringstream best;
+    best.precision(10);
+    best << "best so far: score " << point.score << " (grid design " << reference.best.index << ", not polished)";
+    result.status = SolverStatus::kStopped;
+    result.message = stopped_message(grid, reference, context, best.str());
+    return result;
+  }
   if (options_.polish && !bounds.any_integer) stats["polish"] = polish_cell(problem, x, options_, *ws, point, result);
   result.best = point;
-  stats["seconds"] = seconds_since(t_start);
+  stats["seconds"] = seconds_before + seconds_since(t_start);
   result.statistics = stats;
-  result.status = stopped ? SolverStatus::kStopped : SolverStatus::kConverged;
+  result.status = SolverStatus::kConverged;
   std::ostringstream msg;
-  msg << (stopped ? "stopped early; best so far of " : "culling of ") << grid.total << " grid designs: "
-      << sum.full_searches << " full workspace searches, " << sum.culled << " culled at critical samples";
+  msg << "culling of " << grid.total << " grid designs: " << sum.full_searches << " full workspace searches, "
+      << sum.culled << " culled at critical samples";
   result.message = msg.str();
   return result;
 }

@@ -14,6 +14,19 @@
 /// Unal's modification: the reference is seeded with a local SQP optimum (NLopt SLSQP, from the
 /// best point of a coarse start grid, snapped to the design grid), and the final grid cell is
 /// polished with SQP. Both can be switched off.
+///
+/// Stop and resume: a stop request is honoured between designs (during the seed, between its
+/// evaluations and before its SQP): status stopped with the reference so far (the best fully
+/// searched grid design, not polished). The checkpoint (after the seed, every
+/// checkpoint_interval seconds, when stopped and at the end) holds the finished grid lines, the
+/// reference (index and score), the critical samples, the counts and the seed's figures.
+/// `--resume` re-evaluates the reference and refuses the checkpoint when its score differs, then
+/// sweeps the unfinished lines: the grid optimum is bit for bit the uninterrupted run's.
+///
+/// Monotonicity spot check (grid/worst_case_check.hpp): every design that survives its bound
+/// at the critical samples and is then searched in full compares that bound with its full
+/// value, and the grid optimum is checked on half of the samples; a bound below the full value
+/// (a metric breaking the worst-case rule) gives status failed naming the metric.
 #include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
 
@@ -27,6 +40,7 @@ struct CullingOptions {
   double sqp_ftol{};
   int sqp_max_evaluations{};
   double progress_interval{};
+  double checkpoint_interval{};
 
   static void declare(OptionDeclarations<CullingOptions>& d) {
     d.describe(
@@ -48,6 +62,11 @@ struct CullingOptions {
     d.add(&CullingOptions::progress_interval, "progress_interval", 2.0, "Seconds between progress lines on stderr")
         .greater_than(0)
         .unit("s");
+    d.add(&CullingOptions::checkpoint_interval, "checkpoint_interval", 30.0,
+          "Seconds between checkpoints (and one after the seed, when stopped and at the end); hapsyn run --resume "
+          "continues from it")
+        .greater_than(0)
+        .unit("s");
   }
 };
 
@@ -58,6 +77,10 @@ class CullingSolver : public Solver {
   /// \throws Error naming the metric when an objective is not worst-case, is minimized or has a
   ///         negative weight; or when a free design variable has no grid step.
   void check(const Problem& problem) const override;
+  /// The grid optimum (polished) with kConverged, kInfeasible, kStopped (context.stop set: the
+  /// reference so far, the checkpoint written) or kFailed (a metric breaks the worst-case rule).
+  /// \throws Error("checkpoint", ...) with context.resume when the checkpoint is damaged, edited,
+  ///         foreign or its reference does not re-evaluate to the score it claims.
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
 
  private:

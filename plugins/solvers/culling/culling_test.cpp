@@ -2,7 +2,10 @@
 #include "culling.hpp"
 
 #include "../grid/grid.hpp"
+#include "grid/stop_test_support.hpp"
 #include "test_support.hpp"
+
+#include <filesystem>
 
 #include <random>
 
@@ -166,4 +169,121 @@ TEST(Culling, InfeasibleGridIsAStatus) {
   const auto result = solve(culling, *study.problem, 2);
   EXPECT_EQ(result.status, hapsyn::SolverStatus::kInfeasible);
   EXPECT_NE(result.message.find("no feasible design"), std::string::npos);
+}
+
+namespace {
+hapsyn::SolverResult cull_with(const hapsyn::Problem& problem, const Json& options, hapsyn::test::StopAfter& counter,
+                               const std::string& checkpoint, bool resume, int threads = 2) {
+  hapsyn::SolverContext context;
+  context.threads = threads;
+  context.seed = 5;
+  context.stop = &counter.stop;
+  context.checkpoint_file = checkpoint;
+  context.resume = resume;
+  return hapsyn::plugins::CullingSolver(hapsyn::make_options<hapsyn::plugins::CullingOptions>(options)).solve(problem, context);
+}
+}  // namespace
+
+TEST(Culling, StopMidRunCheckpointsAndResumeGivesTheUninterruptedOptimum) {
+  for (bool seed : {false, true}) {
+    for (int threads : {1, 2}) {
+      hapsyn::test::StopAfter counter;
+      const auto problem = hapsyn::test::stopping_problem(counter);
+      const std::string dir = hapsyn::test::fresh_directory("culling-stop");
+      const std::string file = dir + "/checkpoint.json";
+      const Json options = culling_options(seed, true);
+      const auto uninterrupted = cull_with(*problem, options, counter, "", false, threads);
+      ASSERT_EQ(uninterrupted.status, hapsyn::SolverStatus::kConverged) << uninterrupted.message;
+      const long long all_calls = counter.calls;
+      counter.calls = 0;
+      counter.limit = all_calls * 2 / 3;
+      const auto stopped = cull_with(*problem, options, counter, file, false, threads);
+      ASSERT_EQ(stopped.status, hapsyn::SolverStatus::kStopped) << stopped.message;
+      ASSERT_TRUE(stopped.best.has_value());
+      for (const std::string& part : std::vector<std::string>{"stopped on request after ", "% of 2,601 grid designs; best so far: score ",
+                                     "not polished); checkpoint " + file + " written, resume with --resume"}) {
+        EXPECT_NE(stopped.message.find(part), std::string::npos) << stopped.message << "\nmissing: " << part;
+      }
+      EXPECT_EQ(hapsyn::test::read_json_file(file)["solver"], "culling");
+      counter.stop = false;
+      counter.limit = -1;
+      const auto resumed = cull_with(*problem, options, counter, file, true, threads);
+      ASSERT_EQ(resumed.status, hapsyn::SolverStatus::kConverged) << resumed.message;
+      EXPECT_EQ(resumed.best->design, uninterrupted.best->design);
+      EXPECT_EQ(resumed.best->score, uninterrupted.best->score);
+      EXPECT_EQ(resumed.statistics["grid_optimum"], uninterrupted.statistics["grid_optimum"]);
+      std::filesystem::remove_all(dir);
+    }
+  }
+}
+
+TEST(Culling, DamagedEditedAndForeignCheckpointsAreRefused) {
+  hapsyn::test::StopAfter counter;
+  const auto problem = hapsyn::test::stopping_problem(counter);
+  const std::string dir = hapsyn::test::fresh_directory("culling-bad");
+  const std::string file = dir + "/checkpoint.json";
+  const Json options = culling_options(false, false);
+  (void)cull_with(*problem, options, counter, "", false);
+  const long long all_calls = counter.calls;
+  auto stop_midway = [&] {
+    counter.calls = 0;
+    counter.limit = all_calls * 2 / 3;
+    counter.stop = false;
+    const auto r = cull_with(*problem, options, counter, file, false);
+    ASSERT_EQ(r.status, hapsyn::SolverStatus::kStopped) << r.message;
+    counter.limit = -1;
+    counter.stop = false;
+  };
+  auto resume = [&] { cull_with(*problem, options, counter, file, true); };
+
+  stop_midway();
+  hapsyn::test::truncate_file(file);
+  expect_error(resume, {"checkpoint: " + file + ": not valid JSON (truncated or damaged); delete it, or run without --resume"});
+
+  stop_midway();
+  Json edited = hapsyn::test::read_json_file(file);
+  ASSERT_TRUE(edited["state"]["reference"].is_object());
+  edited["state"]["reference"]["score"] = 99.0;
+  hapsyn::test::write_json_file(file, edited, false);
+  expect_error(resume, {"checkpoint: " + file + ": damaged or edited (its checksum does not match its content)"});
+  hapsyn::test::write_json_file(file, edited, true);
+  expect_error(resume, {"checkpoint: " + file + ": state.reference: grid design ",
+                        "on re-evaluation, the checkpoint claims 99; delete it, or run without --resume"});
+
+  stop_midway();
+  edited = hapsyn::test::read_json_file(file);
+  edited["state"]["critical_samples"] = Json::array({3, 99});
+  hapsyn::test::write_json_file(file, edited, true);
+  expect_error(resume, {"checkpoint: " + file + ": state.critical_samples: sample 99 is not one of the 8 samples"});
+  edited["state"]["counts"].erase("culled");
+  edited["state"]["critical_samples"] = Json::array({3});
+  hapsyn::test::write_json_file(file, edited, true);
+  expect_error(resume, {"checkpoint: " + file + ": state.counts.culled is missing"});
+
+  stop_midway();
+  edited = hapsyn::test::read_json_file(file);
+  edited["solver"] = "grid";
+  hapsyn::test::write_json_file(file, edited, true);
+  expect_error(resume, {"checkpoint: " + file + ": written by solver \"grid\", this study's solver is \"culling\""});
+
+  stop_midway();
+  expect_error([&] { cull_with(*problem, culling_options(true, false), counter, file, true); },
+               {"checkpoint: " + file + ": written for another study"});
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Culling, NonMonotoneMetricFailsNamingTheMetric) {
+  const auto problem = hapsyn::test::non_monotone_problem();
+  for (bool seed : {false, true}) {
+    const hapsyn::plugins::CullingSolver culling(
+        hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(seed, false)));
+    const auto result = solve(culling, *problem, 2);
+    EXPECT_EQ(result.status, hapsyn::SolverStatus::kFailed) << result.message;
+    EXPECT_FALSE(result.best.has_value());
+    for (const char* part : {"metric 'bad' (objective 'bad') breaks the worst-case monotonicity rule: its value over ",
+                             "below its value over the whole scene ", "culling relies on that rule",
+                             "grid solver and prune: false"}) {
+      EXPECT_NE(result.message.find(part), std::string::npos) << result.message << "\nmissing: " << part;
+    }
+  }
 }

@@ -4,6 +4,7 @@
 #include "ga_summary.hpp"
 #include "shared/pagmo_adapter.hpp"
 
+#include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 
 #include <pagmo/algorithms/gaco.hpp>
@@ -101,6 +102,7 @@ class GaSearch {
   void report_generation(const Run& run);
   void finish_run(const Run& run, std::uint64_t seed);
   void write_checkpoint(const Run* run) const;
+  void check_claimed_best(const pagmo::vector_double& x, double claimed, const std::string& what) const;
 
   const GaOptions& options_;
   const Problem& problem_;
@@ -144,15 +146,49 @@ GaSearch::GaSearch(const GaOptions& options, const Problem& problem, const Solve
       subset_(multi_fidelity_ ? stratified_subset(problem.samples().size(), options.fidelity.subset_fraction)
                               : std::vector<int>{}),
       reporter_(context.progress, context.log, options.progress_interval),
-      fingerprint_(ga::study_fingerprint(problem, options)) {}
+      fingerprint_(study_fingerprint(problem, options_to_json(options))) {}
 
 void GaSearch::resume_from_checkpoint() {
   if (!context_.resume) return;
-  if (context_.checkpoint_file.empty() || !boost::filesystem::exists(context_.checkpoint_file)) {
+  const std::optional<Json> state = read_checkpoint(context_, "ga", fingerprint_);
+  if (!state) {
     reporter_.line("ga: no checkpoint to resume from; starting from the beginning", true);
     return;
   }
-  ga::Checkpoint checkpoint = ga::read_checkpoint(context_.checkpoint_file, fingerprint_);
+  ga::Checkpoint checkpoint = ga::checkpoint_from_state(context_, *state);
+  // The claimed optima are re-evaluated: an edited score must never become the study's best.
+  for (std::size_t i = 0; i < checkpoint.completed_runs.size(); ++i) {
+    const Json& run = checkpoint.completed_runs[i];
+    const std::string path = "state.completed_runs[" + std::to_string(i) + "]";
+    // The fields the summary reads, checked here: a damaged record is a checkpoint error, not a
+    // raw JSON exception at the end of the solve.
+    pagmo::vector_double x;
+    double score = 0.0;
+    std::vector<double> free;
+    try {
+      if (run.at("run").get<int>() != static_cast<int>(i)) throw std::invalid_argument("run is not " + std::to_string(i));
+      if (run.at("status").get<std::string>() == "infeasible") continue;  // no optimum to check
+      x = run.at("x").get<pagmo::vector_double>();
+      score = run.at("score").get<double>();
+      free = run.at("free").get<std::vector<double>>();
+      for (const Objective& o : problem_.objectives()) (void)run.at("objectives").at(o.name).get<double>();
+      if (!run.at("design").is_object()) throw std::invalid_argument("design is not an object");
+    } catch (const std::exception& e) {
+      throw bad_checkpoint(context_, path + ": " + e.what());
+    }
+    check_claimed_best(x, score, path);
+    if (free != evaluator_->encoding().decode(x)) {
+      throw bad_checkpoint(context_, path + ": free does not match the decoded x");
+    }
+  }
+  if (checkpoint.current && checkpoint.current->contains("best_x")) {
+    try {
+      const pagmo::vector_double x = checkpoint.current->at("best_x").get<pagmo::vector_double>();
+      if (!x.empty()) check_claimed_best(x, checkpoint.current->at("best_score").get<double>(), "state.current");
+    } catch (const Json::exception& e) {
+      throw bad_checkpoint(context_, std::string("state.current: ") + e.what());
+    }
+  }
   runs_ = std::move(checkpoint.completed_runs);
   run_seconds_ = std::move(checkpoint.run_seconds);
   designs_before_resume_ = checkpoint.designs;
@@ -167,9 +203,36 @@ void GaSearch::resume_from_checkpoint() {
                  true);
 }
 
+// Re-evaluates a claimed optimum (pagmo vector) on the full scene, outside the evaluator (its
+// cache and counters stay those of an uninterrupted run), and refuses the checkpoint when the
+// score differs. 1e-9 relative: the evaluator's paths (one design per thread, or split over
+// sample chunks) may round an averaging metric's sum differently; an edit is far larger.
+void GaSearch::check_claimed_best(const pagmo::vector_double& x, double claimed, const std::string& what) const {
+  if (x.size() != evaluator_->encoding().size()) {
+    throw bad_checkpoint(context_, what + ": best has " + std::to_string(x.size()) + " components, the study " +
+                                       std::to_string(evaluator_->encoding().size()));
+  }
+  const std::vector<double> free = evaluator_->encoding().decode(x);
+  Problem::ParallelOptions options;
+  options.chunks = options_.sample_chunks;
+  const Evaluation e = problem_.evaluate_parallel(free.data(), context_.threads, options);
+  if (e.status != EvalStatus::kFeasible || !(std::abs(e.score - claimed) <= 1e-9 * std::max(1.0, std::abs(claimed)))) {
+    std::ostringstream m;
+    m.precision(17);
+    m << what << ": its best design scores " << e.score << " (" << to_string(e.status)
+      << ") on re-evaluation, the checkpoint claims " << claimed;
+    throw bad_checkpoint(context_, m.str());
+  }
+}
+
 void GaSearch::run_remaining() {
   solve_clock_ = Clock::now();
   for (int r = static_cast<int>(runs_.size()); r < options_.runs && !stopped_; ++r) {
+    if (context_.stop_requested()) {
+      // Before a run starts: the checkpoint on disk (between runs, or the resumed one) stands.
+      stopped_ = true;
+      break;
+    }
     const std::uint64_t run_seed = pa::derive_seed(context_.seed, static_cast<std::uint64_t>(r));
     Run run;
     run.state.run = r;
@@ -186,7 +249,7 @@ void GaSearch::run_remaining() {
 void GaSearch::start_run(Run& run, std::uint64_t seed) {
   ga::RunState& state = run.state;
   if (resumed_ && resumed_->at("run").get<int>() == state.run) {
-    ga::restore_run(*resumed_, pagmo_problem_, state, run.algorithm, run.population);
+    ga::restore_run(context_, *resumed_, pagmo_problem_, state, run.algorithm, run.population);
     const bool on_subset = multi_fidelity_ && !state.switched;
     evaluator_->set_subset(on_subset ? &subset_ : nullptr, on_subset ? 1 : 0);
     resumed_.reset();
@@ -205,9 +268,10 @@ void GaSearch::start_run(Run& run, std::uint64_t seed) {
 void GaSearch::evolve(Run& run) {
   ga::RunState& state = run.state;
   while (state.generation < options_.generations) {
-    if (context_.stop && context_.stop->load()) {
+    if (context_.stop_requested()) {
       stopped_ = true;
       run.status = "stopped";
+      write_checkpoint(&run);  // between generations: a resumed run continues exactly from here
       return;
     }
     if (!state.switched && state.generation >= options_.fidelity.generations) switch_to_full(run);
@@ -340,7 +404,7 @@ void GaSearch::write_checkpoint(const Run* run) const {
     saved.seconds_before += seconds_since(run->clock);
     checkpoint.current = ga::run_to_json(saved, run->algorithm, run->population);
   }
-  ga::write_checkpoint(context_.checkpoint_file, context_.seed, fingerprint_, checkpoint);
+  hapsyn::write_checkpoint(context_, "ga", fingerprint_, ga::checkpoint_to_state(checkpoint));
 }
 
 SolverResult GaSearch::summary() {
@@ -352,7 +416,13 @@ SolverResult GaSearch::summary() {
   figures.cache_hits = evaluator_->cache_hits();
   figures.repair = evaluator_->encoding().describe_repair(problem_);
   figures.subset_samples = subset_.size();
-  return ga::summarise_runs(problem_, options_, runs_, run_seconds_, figures, context_.seed, reporter_);
+  SolverResult result = ga::summarise_runs(problem_, options_, runs_, run_seconds_, figures, context_.seed, reporter_);
+  if (stopped_) {
+    result.message += context_.checkpoint_file.empty()
+                          ? "; best so far; no checkpoint file, a new run starts over"
+                          : "; best so far; checkpoint " + context_.checkpoint_file + " written, resume with --resume";
+  }
+  return result;
 }
 
 }  // namespace

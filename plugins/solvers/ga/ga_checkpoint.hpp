@@ -4,14 +4,15 @@
 /// generations, the fingerprint that ties a checkpoint to its study, and the checkpoint file
 /// (README.md, "Checkpoints and --resume").
 ///
-/// The file is one JSON document: "seed" (the study seed, read by the framework), "solver":
-/// "ga", "fingerprint", "completed_runs" (the run records of statistics.runs), "run_seconds",
-/// "evaluations" {"designs", "samples"}, "elapsed_seconds", and "current" (the run in progress,
-/// absent between runs).
+/// The file is the framework's checkpoint (hapsyn/checkpoint.hpp: format, seed, solver "ga",
+/// fingerprint, checksum); its "state" holds "completed_runs" (the run records of
+/// statistics.runs), "run_seconds", "evaluations" {"designs", "samples"}, "elapsed_seconds", and
+/// "current" (the run in progress, absent between runs).
 #include "ga_options.hpp"
 
 #include <hapsyn/json.hpp>
 #include <hapsyn/problem.hpp>
+#include <hapsyn/solver.hpp>
 
 #include <pagmo/algorithm.hpp>
 #include <pagmo/population.hpp>
@@ -49,20 +50,14 @@ struct Checkpoint {
   std::optional<Json> current;          ///< the run in progress (run_to_json)
 };
 
-/// Fingerprint of a study for its checkpoints (hex FNV-1a): every option value, the scene's
-/// sample count, the free components' names, bounds and integrality, the objectives' names,
-/// weights and senses. A checkpoint is resumed only by a study with the same fingerprint.
-std::string study_fingerprint(const Problem& problem, const GaOptions& options);
+/// The checkpoint's "state" (the framework's checkpoint file, hapsyn/checkpoint.hpp, written
+/// with solver "ga" and study_fingerprint(problem, options_to_json(options))).
+Json checkpoint_to_state(const Checkpoint& checkpoint);
 
-/// Reads a checkpoint file.
-/// \throws Error("ga: <file>: cannot be read as a checkpoint (...)") when it is not JSON, and
-///         Error("ga: <file>: written for another study (...); delete it or run without --resume")
-///         when its solver is not "ga" or its fingerprint is not `fingerprint`.
-Checkpoint read_checkpoint(const std::string& file, const std::string& fingerprint);
-
-/// Writes a checkpoint file atomically (write_file_atomically). \param seed the study seed
-void write_checkpoint(const std::string& file, std::uint64_t seed, const std::string& fingerprint,
-                      const Checkpoint& checkpoint);
+/// The checkpoint from its "state" (read_checkpoint).
+/// \throws Error("checkpoint", "<file>: state.<field> ...; delete it, or run without --resume")
+///         (bad_checkpoint) when a field is missing or of another type.
+Checkpoint checkpoint_from_state(const SolverContext& context, const Json& state);
 
 /// The run in progress as the checkpoint's "current": its state, the algorithm with its random
 /// engine (pagmo_adapter::save_algorithm), the population's seed, decision and fitness vectors.
@@ -71,7 +66,9 @@ Json run_to_json(const RunState& state, const pagmo::algorithm& algorithm, const
 /// Restores a run in progress from a checkpoint's "current" (run_to_json): fills `state`
 /// (except state.run, which the caller sets), `algorithm` and `population` (on `problem`,
 /// nothing evaluated).
-void restore_run(const Json& current, const pagmo::problem& problem, RunState& state, pagmo::algorithm& algorithm,
-                 pagmo::population& population);
+/// \throws Error("checkpoint", "<file>: state.current...") (bad_checkpoint) when a field is
+///         missing, of another type or of another size, or the algorithm archive is damaged.
+void restore_run(const SolverContext& context, const Json& current, const pagmo::problem& problem, RunState& state,
+                 pagmo::algorithm& algorithm, pagmo::population& population);
 
 }  // namespace hapsyn::plugins::ga

@@ -7,6 +7,8 @@
 
 #include "test_support.hpp"
 
+#include <hapsyn/checkpoint.hpp>
+
 #include <hapsyn/problem.hpp>
 
 #include <boost/filesystem.hpp>
@@ -326,7 +328,7 @@ Json other_value(const Json& property) {
 // of them gives another fingerprint, so a checkpoint is never resumed under other options.
 TEST(Ga, CheckpointFingerprintChangesWithEveryOption) {
   const auto problem = toy_problem();
-  const std::string reference = hapsyn::plugins::ga::study_fingerprint(*problem, ga_options({}));
+  const std::string reference = hapsyn::study_fingerprint(*problem, hapsyn::options_to_json(ga_options({})));
   int options_changed = 0;
   std::function<void(const Json&, const std::vector<std::string>&)> visit = [&](const Json& schema,
                                                                                  const std::vector<std::string>& path) {
@@ -341,7 +343,8 @@ TEST(Ga, CheckpointFingerprintChangesWithEveryOption) {
       Json* target = &overrides;
       for (std::size_t i = 0; i + 1 < at.size(); ++i) target = &(*target)[at[i]];
       (*target)[at.back()] = other_value(property);
-      EXPECT_NE(hapsyn::plugins::ga::study_fingerprint(*problem, ga_options(overrides)), reference) << overrides.dump();
+      EXPECT_NE(hapsyn::study_fingerprint(*problem, hapsyn::options_to_json(ga_options(overrides))), reference)
+          << overrides.dump();
       ++options_changed;
     }
   };
@@ -383,8 +386,7 @@ TEST(GaCli, BadCheckpointsAreRefusedWithTheirReason) {
   EXPECT_NE(o.out.find("was written with seed 5"), std::string::npos) << o.out;
   o = hapsyn_cli(run);
   EXPECT_EQ(o.code, 1);
-  EXPECT_NE(o.out.find("ga: "), std::string::npos) << o.out;
-  EXPECT_NE(o.out.find("written for another study"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("checkpoint: " + checkpoint.string() + ": not a hapsyn checkpoint"), std::string::npos) << o.out;
   EXPECT_FALSE(fs::exists(dir / "out" / "result.json"));
   // No checkpoint at all: --resume starts from the beginning and says so in the log.
   fs::remove(checkpoint);
@@ -429,7 +431,7 @@ TEST(GaCli, KilledRunResumesFromItsCheckpointAndMatchesAnUninterruptedRun) {
     if (!fs::exists(checkpoint)) continue;
     try {
       const Json c = read_json(checkpoint);
-      mid_run = c["completed_runs"].size() >= 1 && c.contains("current");
+      mid_run = c["state"]["completed_runs"].size() >= 1 && c["state"].contains("current");
     } catch (const std::exception&) {
       ADD_FAILURE() << "a checkpoint was read half-written";
     }
@@ -456,5 +458,149 @@ TEST(GaCli, KilledRunResumesFromItsCheckpointAndMatchesAnUninterruptedRun) {
   std::ifstream log((out / "run.log").string());
   const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("ga: resuming from"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+namespace {
+// A log stream that requests a stop once it has received `limit` lines: the GA logs a line per
+// generation, so the stop falls at the same generation whatever the threads.
+class StopAfterLines : public std::streambuf {
+ public:
+  explicit StopAfterLines(int limit) : limit_(limit) {}
+  std::atomic<bool> stop{false};
+
+ protected:
+  int overflow(int c) override {
+    if (c == '\n' && ++lines_ >= limit_ && limit_ > 0) stop = true;
+    return c;
+  }
+
+ private:
+  int limit_;
+  int lines_ = 0;
+};
+
+// The toy GA with a checkpoint file, stopped after `stop_after_lines` log lines (0: never).
+hapsyn::SolverResult solve_toy_with(const Json& overrides, const std::string& checkpoint, bool resume,
+                                    int stop_after_lines) {
+  const auto problem = toy_problem();
+  hapsyn::plugins::GaSolver solver(ga_options(overrides));
+  StopAfterLines lines(stop_after_lines);
+  std::ostream log(&lines);
+  hapsyn::SolverContext context;
+  context.threads = 2;
+  context.seed = 11;
+  context.stop = &lines.stop;
+  context.log = &log;
+  context.checkpoint_file = checkpoint;
+  context.resume = resume;
+  return solver.solve(*problem, context);
+}
+
+// Run records without the evaluation counts (a resumed process starts with an empty cache).
+Json runs_without_counts(Json runs) {
+  for (Json& run : runs) run.erase("designs");
+  return runs;
+}
+
+void write_document(const std::string& file, Json document, bool rechecksum) {
+  if (rechecksum) {
+    document.erase("checksum");
+    document["checksum"] = hapsyn::fnv1a_hex(document.dump());
+  }
+  std::ofstream(file) << document.dump();
+}
+}  // namespace
+
+TEST(Ga, StopMidRunCheckpointsAndResumeGivesTheUninterruptedResult) {
+  for (const char* algorithm : {"sga", "gaco"}) {
+    const Json options = {{"algorithm", algorithm}, {"population", 16}, {"generations", 30}, {"runs", 2},
+                          {"stall_generations", 100}, {"checkpoint_every", 7}, {"gaco", {{"ker", 8}}}};
+    const fs::path dir = fresh_dir("stop");
+    fs::create_directories(dir);
+    const std::string file = (dir / "checkpoint.json").string();
+    const auto uninterrupted = solve_toy_with(options, "", false, 0);
+    ASSERT_TRUE(uninterrupted.best.has_value()) << uninterrupted.message;
+    const auto stopped = solve_toy_with(options, file, false, 45);  // in the second run
+    EXPECT_EQ(stopped.status, hapsyn::SolverStatus::kStopped);
+    ASSERT_TRUE(stopped.best.has_value());
+    EXPECT_NE(stopped.message.find(": stopped on request; best score "), std::string::npos) << stopped.message;
+    EXPECT_NE(stopped.message.find("; best so far; checkpoint " + file + " written, resume with --resume"),
+              std::string::npos)
+        << stopped.message;
+    const Json checkpoint = read_json(file);
+    EXPECT_EQ(checkpoint["solver"], "ga");
+    ASSERT_TRUE(checkpoint["state"].contains("current"));
+    EXPECT_EQ(checkpoint["state"]["current"]["run"], 1);
+    const auto resumed = solve_toy_with(options, file, true, 0);
+    ASSERT_TRUE(resumed.best.has_value()) << resumed.message;
+    EXPECT_EQ(resumed.status, uninterrupted.status);
+    EXPECT_EQ(resumed.best->design, uninterrupted.best->design);
+    EXPECT_EQ(resumed.best->score, uninterrupted.best->score);
+    EXPECT_EQ(runs_without_counts(resumed.statistics["runs"]), runs_without_counts(uninterrupted.statistics["runs"]));
+    fs::remove_all(dir);
+  }
+}
+
+TEST(Ga, DamagedEditedAndForeignCheckpointsAreRefused) {
+  const Json options = {{"population", 16}, {"generations", 30}, {"runs", 2}, {"stall_generations", 100},
+                        {"checkpoint_every", 7}};
+  const fs::path dir = fresh_dir("bad-state");
+  fs::create_directories(dir);
+  const std::string file = (dir / "checkpoint.json").string();
+  auto stop_midway = [&] {
+    EXPECT_EQ(solve_toy_with(options, file, false, 45).status, hapsyn::SolverStatus::kStopped);
+    return read_json(file);
+  };
+  auto resume = [&] { solve_toy_with(options, file, true, 0); };
+  using hapsyn::test::expect_error;
+
+  Json c = stop_midway();
+  std::ofstream(file) << c.dump().substr(0, c.dump().size() / 2);
+  expect_error(resume, {"checkpoint: " + file + ": not valid JSON (truncated or damaged); delete it, or run without --resume"});
+
+  c = stop_midway();
+  c["state"]["current"]["best_score"] = 99.0;
+  write_document(file, c, false);
+  expect_error(resume, {"checkpoint: " + file + ": damaged or edited (its checksum does not match its content)"});
+  write_document(file, c, true);
+  expect_error(resume, {"checkpoint: " + file + ": state.current: its best design scores ",
+                        "on re-evaluation, the checkpoint claims 99; delete it, or run without --resume"});
+
+  c = stop_midway();
+  c["state"]["completed_runs"][0]["score"] = 99.0;
+  write_document(file, c, true);
+  expect_error(resume, {"checkpoint: " + file + ": state.completed_runs[0]: its best design scores ",
+                        "the checkpoint claims 99"});
+
+  c = stop_midway();
+  c["state"]["completed_runs"][0].erase("free");
+  write_document(file, c, true);
+  expect_error(resume, {"checkpoint: " + file + ": state.completed_runs[0]: ", "free"});
+
+  c = stop_midway();
+  c["state"].erase("elapsed_seconds");
+  write_document(file, c, true);
+  expect_error(resume, {"checkpoint: " + file + ": state: ", "elapsed_seconds", "; delete it, or run without --resume"});
+
+  c = stop_midway();
+  c["state"]["current"]["stall"] = "three";
+  write_document(file, c, true);
+  expect_error(resume, {"checkpoint: " + file + ": state.current: ", "type must be number"});
+
+  c = stop_midway();
+  c["state"]["current"]["algorithm"] = "22 serialization::archive 17 damaged";
+  write_document(file, c, true);
+  expect_error(resume, {"checkpoint: " + file + ": state.current: "});
+
+  c = stop_midway();
+  c["solver"] = "nsga2";
+  write_document(file, c, true);
+  expect_error(resume, {"checkpoint: " + file + ": written by solver \"nsga2\", this study's solver is \"ga\""});
+
+  (void)stop_midway();
+  Json other = options;
+  other["population"] = 20;
+  expect_error([&] { solve_toy_with(other, file, true, 0); }, {"checkpoint: " + file + ": written for another study"});
   fs::remove_all(dir);
 }

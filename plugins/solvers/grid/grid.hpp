@@ -14,6 +14,18 @@
 /// by a point of the front found so far, which cannot cut a design of the final front. The
 /// front's objective vectors do not depend on the thread count; of designs with identical
 /// objective vectors the first in grid order is kept. This is the reference front for nbi.
+///
+/// Stop and resume: the grid is visited in chunks of 64 consecutive designs. A stop request is
+/// honoured between designs (status stopped, the best or front of the designs searched so far);
+/// the checkpoint (every checkpoint_interval seconds, at a stop and at the end) holds the
+/// finished chunks, the best (index and score) or the front (indices and objective values) and
+/// the counts. `--resume` re-evaluates the claimed best (every front point) and refuses the
+/// checkpoint when a value differs, then visits the unfinished chunks: the result is bit for
+/// bit the one of an uninterrupted run.
+///
+/// With pruning, designs that improve a thread's best (enter the front) and the winner are
+/// spot-checked for the worst-case monotonicity rule (grid/worst_case_check.hpp): a breach
+/// gives status failed naming the metric.
 #include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
 
@@ -23,6 +35,7 @@ struct GridOptions {
   bool prune{};
   bool pareto{};
   double progress_interval{};
+  double checkpoint_interval{};
 
   static void declare(OptionDeclarations<GridOptions>& d) {
     d.describe(
@@ -36,6 +49,10 @@ struct GridOptions {
     d.add(&GridOptions::progress_interval, "progress_interval", 2.0, "Seconds between progress lines on stderr")
         .greater_than(0)
         .unit("s");
+    d.add(&GridOptions::checkpoint_interval, "checkpoint_interval", 30.0,
+          "Seconds between checkpoints (and one when stopped or done); hapsyn run --resume continues from it")
+        .greater_than(0)
+        .unit("s");
   }
 };
 
@@ -47,7 +64,10 @@ class GridSolver : public Solver {
   ///         in pareto mode, with fewer than two objectives.
   void check(const Problem& problem) const override;
   /// The best grid design (kConverged), or in pareto mode the grid's exact front; kInfeasible
-  /// when no grid design is feasible, kStopped when context.stop was set (best so far).
+  /// when no grid design is feasible, kStopped when context.stop was set (best so far, the
+  /// checkpoint written), kFailed when a metric breaks the worst-case monotonicity rule.
+  /// \throws Error("checkpoint", ...) with context.resume when the checkpoint is damaged, edited,
+  ///         foreign or its best (front) does not re-evaluate to the values it claims.
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
   bool pareto() const override { return options_.pareto; }
 

@@ -2,6 +2,7 @@
 #include "grid.hpp"
 
 #include "analytic_problems.hpp"
+#include "stop_test_support.hpp"
 #include "test_support.hpp"
 
 #include <hapsyn/pareto.hpp>
@@ -213,4 +214,213 @@ TEST(Grid, ParetoModeHandlesThreeObjectives) {
   for (const auto& p : result.front) found.insert(p.objectives);
   EXPECT_EQ(found, expected);
   EXPECT_GT(expected.size(), 50u);  // the sphere octant's grid points (r = 0)
+}
+
+namespace {
+// A grid solver on the context a stop test needs: `threads`, the checkpoint file, resume, and the
+// counter's stop flag.
+hapsyn::SolverResult solve_with(const hapsyn::Problem& problem, const Json& options, hapsyn::test::StopAfter& counter,
+                                const std::string& checkpoint, bool resume, int threads = 2) {
+  hapsyn::SolverContext context;
+  context.threads = threads;
+  context.seed = 11;
+  context.stop = &counter.stop;
+  context.checkpoint_file = checkpoint;
+  context.resume = resume;
+  return grid_solver(options).solve(problem, context);
+}
+
+void expect_same_points(const std::vector<hapsyn::SolutionPoint>& a, const std::vector<hapsyn::SolutionPoint>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].objectives, b[i].objectives);
+    EXPECT_EQ(a[i].design, b[i].design);
+    EXPECT_EQ(a[i].score, b[i].score);
+  }
+}
+}  // namespace
+
+TEST(Grid, StopMidRunCheckpointsAndResumeGivesTheUninterruptedBest) {
+  for (int threads : {1, 2}) {
+    hapsyn::test::StopAfter counter;
+    const auto problem = hapsyn::test::stopping_problem(counter);
+    const std::string dir = hapsyn::test::fresh_directory("grid-stop");
+    const std::string file = dir + "/checkpoint.json";
+    const Json options = {{"progress_interval", 1e9}};
+    const auto uninterrupted = solve_with(*problem, options, counter, "", false, threads);
+    ASSERT_EQ(uninterrupted.status, hapsyn::SolverStatus::kConverged) << uninterrupted.message;
+
+    const long long all_calls = counter.calls;
+    counter.calls = 0;
+    counter.limit = all_calls / 3;
+    const auto stopped = solve_with(*problem, options, counter, file, false, threads);
+    EXPECT_EQ(stopped.status, hapsyn::SolverStatus::kStopped);
+    ASSERT_TRUE(stopped.best.has_value());
+    EXPECT_NE(stopped.message.find("stopped on request after "), std::string::npos) << stopped.message;
+    EXPECT_NE(stopped.message.find("% of 2,601 grid designs; best so far: score "), std::string::npos) << stopped.message;
+    EXPECT_NE(stopped.message.find("checkpoint " + file + " written, resume with --resume"), std::string::npos)
+        << stopped.message;
+    const Json checkpoint = hapsyn::test::read_json_file(file);
+    EXPECT_EQ(checkpoint["solver"], "grid");
+    EXPECT_LT(checkpoint["state"]["finished_prefix"].get<long long>(), 41);  // 2601 designs: 41 chunks
+
+    counter.stop = false;
+    counter.limit = -1;
+    const auto resumed = solve_with(*problem, options, counter, file, true, threads);
+    ASSERT_EQ(resumed.status, hapsyn::SolverStatus::kConverged) << resumed.message;
+    ASSERT_TRUE(resumed.best.has_value());
+    EXPECT_EQ(resumed.best->design, uninterrupted.best->design);
+    EXPECT_EQ(resumed.best->score, uninterrupted.best->score);
+    EXPECT_EQ(resumed.best->objectives, uninterrupted.best->objectives);
+    std::filesystem::remove_all(dir);
+  }
+}
+
+TEST(Grid, StopMidRunInParetoModeResumesToTheUninterruptedFront) {
+  hapsyn::test::StopAfter counter;
+  const auto problem = hapsyn::test::stopping_problem(counter, 0.05, true);
+  const std::string dir = hapsyn::test::fresh_directory("grid-stop-front");
+  const std::string file = dir + "/checkpoint.json";
+  const Json options = {{"pareto", true}, {"progress_interval", 1e9}};
+  const auto uninterrupted = solve_with(*problem, options, counter, "", false);
+  ASSERT_EQ(uninterrupted.status, hapsyn::SolverStatus::kConverged) << uninterrupted.message;
+  ASSERT_GE(uninterrupted.front.size(), 3u);
+  const long long all_calls = counter.calls;
+  counter.calls = 0;
+  counter.limit = all_calls / 3;
+  const auto stopped = solve_with(*problem, options, counter, file, false);
+  EXPECT_EQ(stopped.status, hapsyn::SolverStatus::kStopped);
+  EXPECT_FALSE(stopped.front.empty());
+  EXPECT_NE(stopped.message.find("front so far: "), std::string::npos) << stopped.message;
+  counter.stop = false;
+  counter.limit = -1;
+  const auto resumed = solve_with(*problem, options, counter, file, true);
+  ASSERT_EQ(resumed.status, hapsyn::SolverStatus::kConverged) << resumed.message;
+  expect_same_points(resumed.front, uninterrupted.front);
+
+  // A front point's objective value edited (checksum recomputed) is refused on re-evaluation.
+  counter.calls = 0;
+  counter.limit = all_calls / 3;
+  counter.stop = false;
+  (void)solve_with(*problem, options, counter, file, false);
+  counter.stop = false;
+  counter.limit = -1;
+  Json edited = hapsyn::test::read_json_file(file);
+  ASSERT_FALSE(edited["state"]["front"].empty());
+  edited["state"]["front"][0]["objectives"][0] = 99.0;
+  hapsyn::test::write_json_file(file, edited, true);
+  hapsyn::test::expect_error([&] { solve_with(*problem, options, counter, file, true); },
+                             {"checkpoint: " + file + ": state.front[0]: grid design ", "the checkpoint claims [99",
+                              "; delete it, or run without --resume"});
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Grid, DamagedEditedAndForeignCheckpointsAreRefused) {
+  hapsyn::test::StopAfter counter;
+  const auto problem = hapsyn::test::stopping_problem(counter);
+  const std::string dir = hapsyn::test::fresh_directory("grid-bad");
+  const std::string file = dir + "/checkpoint.json";
+  const Json options = {{"progress_interval", 1e9}};
+  (void)solve_with(*problem, options, counter, "", false);
+  const long long all_calls = counter.calls;
+  auto stop_midway = [&] {
+    counter.calls = 0;
+    counter.limit = all_calls / 3;
+    counter.stop = false;
+    const auto r = solve_with(*problem, options, counter, file, false);
+    ASSERT_EQ(r.status, hapsyn::SolverStatus::kStopped);
+    counter.limit = -1;
+    counter.stop = false;
+  };
+  auto resume = [&] { solve_with(*problem, options, counter, file, true); };
+  using hapsyn::test::expect_error;
+
+  stop_midway();
+  hapsyn::test::truncate_file(file);
+  expect_error(resume, {"checkpoint: " + file + ": not valid JSON (truncated or damaged); delete it, or run without --resume"});
+
+  stop_midway();
+  Json edited = hapsyn::test::read_json_file(file);
+  ASSERT_TRUE(edited["state"]["best"].is_object());
+  edited["state"]["best"]["score"] = 99.0;
+  hapsyn::test::write_json_file(file, edited, false);
+  expect_error(resume, {"checkpoint: " + file + ": damaged or edited (its checksum does not match its content)"});
+  hapsyn::test::write_json_file(file, edited, true);
+  expect_error(resume, {"checkpoint: " + file + ": state.best: grid design ", "on re-evaluation, the checkpoint claims 99",
+                        "; delete it, or run without --resume"});
+
+  stop_midway();
+  edited = hapsyn::test::read_json_file(file);
+  edited["state"].erase("finished_prefix");
+  hapsyn::test::write_json_file(file, edited, true);
+  expect_error(resume, {"checkpoint: " + file + ": state.finished_prefix is missing"});
+  edited["state"]["finished_prefix"] = "ten";
+  hapsyn::test::write_json_file(file, edited, true);
+  expect_error(resume, {"checkpoint: " + file + ": state.finished_prefix = \"ten\": not of the expected type"});
+
+  stop_midway();
+  edited = hapsyn::test::read_json_file(file);
+  edited["solver"] = "culling";
+  hapsyn::test::write_json_file(file, edited, true);
+  expect_error(resume, {"checkpoint: " + file + ": written by solver \"culling\", this study's solver is \"grid\""});
+
+  stop_midway();
+  expect_error([&] { solve_with(*problem, {{"prune", false}, {"progress_interval", 1e9}}, counter, file, true); },
+               {"checkpoint: " + file + ": written for another study"});
+  // The intervals are not part of the study: a resumed run may change them.
+  const auto r = solve_with(*problem, {{"progress_interval", 5.0}, {"checkpoint_interval", 1.0}}, counter, file, true);
+  EXPECT_EQ(r.status, hapsyn::SolverStatus::kConverged) << r.message;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Grid, NonMonotoneMetricFailsWithPruningAndRunsWithout) {
+  const auto problem = hapsyn::test::non_monotone_problem();
+  hapsyn::SolverContext context;
+  context.threads = 2;
+  const auto failed = grid_solver({{"progress_interval", 1e9}}).solve(*problem, context);
+  EXPECT_EQ(failed.status, hapsyn::SolverStatus::kFailed);
+  EXPECT_FALSE(failed.best.has_value());
+  for (const char* part : {"metric 'bad' (objective 'bad') breaks the worst-case monotonicity rule: its value over ",
+                           " of the 8 samples is ", "below its value over the whole scene ", "(design {",
+                           "grid pruning relies on that rule", "prune: false"}) {
+    EXPECT_NE(failed.message.find(part), std::string::npos) << failed.message << "\nmissing: " << part;
+  }
+  const auto unpruned = grid_solver({{"prune", false}, {"progress_interval", 1e9}}).solve(*problem, context);
+  EXPECT_EQ(unpruned.status, hapsyn::SolverStatus::kConverged) << unpruned.message;
+}
+
+TEST(Grid, StopBeforeAnyFeasibleDesignIsAStatusWithACheckpoint) {
+  hapsyn::test::StopAfter counter;
+  counter.stop = true;  // before the first design (a stop is honoured between designs)
+  const auto problem = hapsyn::test::stopping_problem(counter);
+  const std::string dir = hapsyn::test::fresh_directory("grid-stop-early");
+  const std::string file = dir + "/checkpoint.json";
+  const auto stopped = solve_with(*problem, {{"progress_interval", 1e9}}, counter, file, false, 1);
+  EXPECT_EQ(stopped.status, hapsyn::SolverStatus::kStopped);
+  EXPECT_FALSE(stopped.best.has_value());
+  EXPECT_NE(stopped.message.find("stopped on request after 0.0% of 2,601 grid designs; no feasible design yet; "
+                                 "checkpoint " + file + " written, resume with --resume"),
+            std::string::npos)
+      << stopped.message;
+  EXPECT_TRUE(hapsyn::test::read_json_file(file)["state"]["best"].is_null());
+  counter.stop = false;
+  counter.limit = -1;
+  const auto resumed = solve_with(*problem, {{"progress_interval", 1e9}}, counter, file, true, 1);
+  EXPECT_EQ(resumed.status, hapsyn::SolverStatus::kConverged) << resumed.message;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Grid, NonMonotoneMetricFailsInParetoModeWithPruning) {
+  const auto problem = hapsyn::test::metric_problem(
+      0.1, {std::make_shared<hapsyn::test::NonMonotoneMetric>(), std::make_shared<hapsyn::test::NonMonotoneMetric>()},
+      {"bad1", "bad2"});
+  hapsyn::SolverContext context;
+  context.threads = 2;
+  const auto failed = grid_solver({{"pareto", true}, {"progress_interval", 1e9}}).solve(*problem, context);
+  EXPECT_EQ(failed.status, hapsyn::SolverStatus::kFailed);
+  EXPECT_TRUE(failed.front.empty());
+  EXPECT_NE(failed.message.find("breaks the worst-case monotonicity rule"), std::string::npos) << failed.message;
+  EXPECT_NE(failed.message.find("metric 'bad"), std::string::npos) << failed.message;
+  const auto unpruned = grid_solver({{"pareto", true}, {"prune", false}, {"progress_interval", 1e9}}).solve(*problem, context);
+  EXPECT_EQ(unpruned.status, hapsyn::SolverStatus::kConverged) << unpruned.message;
 }

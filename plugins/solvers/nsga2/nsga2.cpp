@@ -2,6 +2,7 @@
 
 #include "shared/pagmo_adapter.hpp"
 
+#include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 
 #include <pagmo/algorithms/nsga2.hpp>
@@ -11,6 +12,7 @@
 #include <pagmo/utils/multi_objective.hpp>
 
 #include <algorithm>
+#include <optional>
 #include <chrono>
 #include <set>
 #include <sstream>
@@ -42,7 +44,8 @@ std::vector<std::size_t> first_front(const pagmo::population& population) {
     points.push_back(population.get_f()[i]);
   }
   std::vector<std::size_t> front;
-  if (points.empty()) return front;
+  // pagmo's sorting wants two points or more; one feasible individual is the front alone.
+  if (points.size() < 2) return feasible;
   const auto sorting = pagmo::fast_non_dominated_sorting(points);
   for (const auto k : std::get<0>(sorting)[0]) front.push_back(feasible[k]);
   return front;
@@ -67,22 +70,27 @@ std::vector<SolutionPoint> final_front(const Problem& problem, const pagmo::popu
 }
 
 // The progress line after a generation.
-std::string generation_line(const Nsga2Options& o, int generation, const pagmo::population& population,
-                            const pa::Evaluator& evaluator, double elapsed) {
+// `done` generations (and `designs` evaluations) in `elapsed` seconds of this process.
+std::string generation_line(const Nsga2Options& o, int generation, int done, const pagmo::population& population,
+                            long long designs, double elapsed) {
   std::ostringstream line;
   line << "nsga2: gen " << generation << "/" << o.generations << " front " << first_front(population).size() << "/"
-       << population.size() << " | " << static_cast<long long>(evaluator.design_evaluations() / std::max(1e-9, elapsed))
+       << population.size() << " | " << static_cast<long long>(static_cast<double>(designs) / std::max(1e-9, elapsed))
        << " designs/s | elapsed " << pa::format_duration(elapsed) << ", left "
-       << pa::format_duration(elapsed / generation * (o.generations - generation));
+       << pa::format_duration(elapsed / std::max(1, done) * (o.generations - generation));
   return line.str();
 }
 
 // Status and message from how the generations ended.
-void set_status_and_message(const Nsga2Options& o, int generation, bool stopped, SolverResult& result) {
+void set_status_and_message(const Nsga2Options& o, int generation, bool stopped, const SolverContext& context,
+                            SolverResult& result) {
   std::ostringstream message;
   if (stopped) {
     result.status = SolverStatus::kStopped;
-    message << "stopped on request after " << generation << " generations";
+    message << "stopped on request after " << generation << " of " << o.generations << " generations; front so far: "
+            << result.front.size() << " non-dominated designs; "
+            << (context.checkpoint_file.empty() ? std::string("no checkpoint file, a new run starts over")
+                                                : "checkpoint " + context.checkpoint_file + " written, resume with --resume");
   } else if (result.front.empty()) {
     result.status = SolverStatus::kInfeasible;
     message << "no feasible design in the final population of " << o.population;
@@ -92,6 +100,86 @@ void set_status_and_message(const Nsga2Options& o, int generation, bool stopped,
             << " non-dominated designs";
   }
   result.message = message.str();
+}
+
+// The checkpoint's fingerprint: the study and the options that change the front (not the
+// progress interval or the checkpoint period, which a resumed run may change).
+std::string fingerprint_of(const Problem& problem, const Nsga2Options& options) {
+  Json o = options_to_json(options);
+  o.erase("progress_interval");
+  o.erase("checkpoint_every");
+  return study_fingerprint(problem, o);
+}
+
+// The run between generations, as the checkpoint's state holds it.
+struct RunState {
+  int generation = 0;
+  pagmo::algorithm algorithm;
+  pagmo::population population;
+  long long designs = 0, samples = 0;  // evaluations before this process
+  double seconds = 0.0;                // solve time before this process [s]
+};
+
+Json state_to_json(const RunState& run, const pa::Evaluator& evaluator, double seconds) {
+  return {{"generation", run.generation},
+          {"algorithm", pa::save_algorithm(run.algorithm)},
+          {"population_seed", run.population.get_seed()},
+          {"x", pa::matrix_to_json(run.population.get_x())},
+          {"f", pa::matrix_to_json(run.population.get_f())},
+          {"evaluations", {{"designs", evaluator.design_evaluations()}, {"samples", evaluator.sample_evaluations()}}},
+          {"elapsed_seconds", seconds}};
+}
+
+// The run from a checkpoint's state. Every individual is re-evaluated (through the evaluator,
+// the path the run used, so the values repeat bit for bit) and the checkpoint refused when a
+// fitness vector differs from the claimed one: an edited value must never steer the search or
+// reach the front. What nlohmann, boost or pagmo throw for a damaged state becomes a bad
+// checkpoint naming the file.
+RunState restore_state(const SolverContext& context, const Nsga2Options& o, const Json& state,
+                       const pagmo::problem& problem, pa::Evaluator& evaluator) {
+  RunState run;
+  std::vector<pagmo::vector_double> xs, fs;
+  try {
+    run.generation = state.at("generation").get<int>();
+    run.algorithm = pa::load_algorithm(state.at("algorithm").get<std::string>());
+    run.population = pagmo::population(problem, 0u, state.at("population_seed").get<unsigned>());
+    xs = pa::matrix_from_json(state.at("x"));
+    fs = pa::matrix_from_json(state.at("f"));
+    run.designs = state.at("evaluations").at("designs").get<long long>();
+    run.samples = state.at("evaluations").at("samples").get<long long>();
+    run.seconds = state.at("elapsed_seconds").get<double>();
+    if (xs.size() != fs.size() || xs.size() != static_cast<std::size_t>(o.population)) {
+      throw std::invalid_argument(std::to_string(xs.size()) + " decision and " + std::to_string(fs.size()) +
+                                  " fitness vectors for a population of " + std::to_string(o.population));
+    }
+    if (run.generation < 0 || run.generation > o.generations) {
+      throw std::invalid_argument("generation " + std::to_string(run.generation) + " outside [0, " +
+                                  std::to_string(o.generations) + "]");
+    }
+    // push_back checks each vector's size against the problem.
+    for (std::size_t i = 0; i < xs.size(); ++i) run.population.push_back(xs[i], fs[i]);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw bad_checkpoint(context, std::string("state: ") + e.what());
+  }
+  pagmo::vector_double all;
+  for (const auto& x : xs) all.insert(all.end(), x.begin(), x.end());
+  const pagmo::vector_double f = evaluator.batch_fitness(all);
+  const std::size_t nf = evaluator.objective_count();
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    const pagmo::vector_double again(f.begin() + static_cast<std::ptrdiff_t>(i * nf),
+                                     f.begin() + static_cast<std::ptrdiff_t>((i + 1) * nf));
+    if (again != fs[i]) {
+      std::ostringstream m;
+      m.precision(17);
+      m << "state.f[" << i << "]: individual " << i << " has fitness " << Json(again).dump()
+        << " on re-evaluation, the checkpoint claims " << Json(fs[i]).dump();
+      throw bad_checkpoint(context, m.str());
+    }
+  }
+  evaluator.add_counts(run.designs, run.samples);
+  return run;
 }
 
 }  // namespace
@@ -131,33 +219,50 @@ SolverResult Nsga2Solver::solve(const Problem& problem, const SolverContext& con
       problem, pa::Encoding(problem, o.sort_descending, o.sort_ascending, "nsga2"), settings, true);
   const pagmo::problem prob = pa::make_problem(evaluator);
   pa::ProgressReporter reporter(context.progress, context.log, o.progress_interval);
-  const std::uint64_t seed = pa::derive_seed(context.seed, 0);
-  pagmo::algorithm algorithm = make_algorithm(o, seed);
-  pagmo::population population = pa::random_population(prob, *evaluator, static_cast<std::size_t>(o.population), seed);
+  const std::string fingerprint = fingerprint_of(problem, o);
 
-  int generation = 0;
+  RunState run;
+  if (const std::optional<Json> state = read_checkpoint(context, "nsga2", fingerprint)) {
+    run = restore_state(context, o, *state, prob, *evaluator);
+    reporter.line("nsga2: resuming from " + context.checkpoint_file + " at generation " + std::to_string(run.generation),
+                  true);
+  } else {
+    if (context.resume) reporter.line("nsga2: no checkpoint to resume from; starting from the beginning", true);
+    const std::uint64_t seed = pa::derive_seed(context.seed, 0);
+    run.algorithm = make_algorithm(o, seed);
+    run.population = pa::random_population(prob, *evaluator, static_cast<std::size_t>(o.population), seed);
+  }
+  const int first_generation = run.generation;
+  const long long designs_before = evaluator->design_evaluations();
+  auto save = [&] {
+    write_checkpoint(context, "nsga2", fingerprint, state_to_json(run, *evaluator, run.seconds + seconds_since(start)));
+  };
+
   bool stopped = false;
-  while (generation < o.generations) {
-    if (context.stop && context.stop->load()) {
+  while (run.generation < o.generations) {
+    if (context.stop_requested()) {
       stopped = true;
+      save();  // between generations: a resumed run continues exactly from here
       break;
     }
-    population = algorithm.evolve(population);
-    ++generation;
-    reporter.line(generation_line(o, generation, population, *evaluator, seconds_since(start)));
+    run.population = run.algorithm.evolve(run.population);
+    ++run.generation;
+    reporter.line(generation_line(o, run.generation, run.generation - first_generation, run.population,
+                                  evaluator->design_evaluations() - designs_before, seconds_since(start)));
+    if (o.checkpoint_every > 0 && run.generation % o.checkpoint_every == 0 && run.generation < o.generations) save();
   }
 
   SolverResult result;
-  result.front = final_front(problem, population, *evaluator);
+  result.front = final_front(problem, run.population, *evaluator);
   result.design_evaluations = evaluator->design_evaluations();
   result.sample_evaluations = evaluator->sample_evaluations();
-  result.statistics = {{"generations", generation},
+  result.statistics = {{"generations", run.generation},
                        {"front_size", result.front.size()},
                        {"cache_hits", evaluator->cache_hits()},
                        {"repair", evaluator->encoding().describe_repair(problem)},
                        {"evaluation", {{"parallel_over", o.parallel_over}, {"sample_chunks", o.sample_chunks}}},
-                       {"solve_seconds", seconds_since(start)}};
-  set_status_and_message(o, generation, stopped, result);
+                       {"solve_seconds", run.seconds + seconds_since(start)}};
+  set_status_and_message(o, run.generation, stopped, context, result);
   return result;
 }
 

@@ -8,8 +8,15 @@
 /// design split over the samples), a cache of evaluated designs.
 ///
 /// The result's front is the non-dominated set of the feasible designs of the final
-/// population (duplicates removed), sorted by the first objective. Runs the given number of
-/// generations (status budget_exhausted; stopped on request). No checkpoints.
+/// population (duplicates removed), sorted by the objectives (one point when one design is
+/// feasible). Runs the given number of generations (status budget_exhausted).
+///
+/// Stop and resume: a stop request is honoured between generations (status stopped, the front
+/// of the current population). The checkpoint (every checkpoint_every generations and at a
+/// stop) holds the generation, the algorithm with its random engine, the population's decision
+/// and fitness vectors and the counts; `--resume` re-evaluates the population, refuses the
+/// checkpoint when a fitness vector differs, and continues: the front is exactly the one of an
+/// uninterrupted run with the seed.
 #include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
 
@@ -31,6 +38,7 @@ struct Nsga2Options {
   std::vector<std::string> sort_descending;
   std::vector<std::string> sort_ascending;
   double progress_interval{};  ///< [s]
+  int checkpoint_every{};      ///< generations between checkpoints (0 = only at a stop)
 
   static void declare(OptionDeclarations<Nsga2Options>& d) {
     d.describe(
@@ -59,6 +67,10 @@ struct Nsga2Options {
           "Seconds between progress lines on stderr (run.log gets every generation)")
         .greater_than(0)
         .unit("s");
+    d.add(&Nsga2Options::checkpoint_every, "checkpoint_every", 10,
+          "Generations between checkpoints (output directory's checkpoint.json, for hapsyn run --resume; one is "
+          "also written at a stop); 0 = only at a stop")
+        .range(0, 1000000);
   }
 };
 
@@ -71,6 +83,10 @@ class Nsga2Solver : public Solver {
   /// \throws Error with fewer than two objectives or no free design variable, or an unknown
   ///         repair variable.
   void check(const Problem& problem) const override;
+  /// The final population's front with kBudgetExhausted, kInfeasible, or kStopped (context.stop
+  /// set: the current front, the checkpoint written).
+  /// \throws Error("checkpoint", ...) with context.resume when the checkpoint is damaged, edited,
+  ///         foreign, or its population does not re-evaluate to the fitness it claims.
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
 
  private:
