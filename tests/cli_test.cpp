@@ -312,9 +312,12 @@ TEST(Cli, ForceReplacesEveryOutputOfTheEarlierRun) {
   const std::string finished = "hapsyn: error: output: " + out.string() + " already holds a finished study (";
   EXPECT_NE(again.out.find(finished), std::string::npos) << again.out;
   const Output validate = hapsyn_cli("validate " + quick_study() + " --out " + out.string());
-  EXPECT_EQ(validate.code, 1);
-  EXPECT_NE(validate.out.find(finished), std::string::npos) << validate.out;
-  EXPECT_EQ(hapsyn_cli("validate " + quick_study() + " --out " + out.string() + " --force").code, 0);
+  EXPECT_EQ(validate.code, 0);
+  EXPECT_NE(validate.out.find("note: output: " + out.string() + " already holds a finished study ("), std::string::npos)
+      << validate.out;
+  const Output forced_validate = hapsyn_cli("validate " + quick_study() + " --out " + out.string() + " --force");
+  EXPECT_EQ(forced_validate.code, 0);
+  EXPECT_EQ(forced_validate.out.find("note:"), std::string::npos) << forced_validate.out;
   // --force without samples: the earlier samples.csv does not survive beside the new result.json.
   const Output forced = hapsyn_cli("run " + quick_study() + " --quiet --force --out " + out.string() +
                                    " --set output.samples_csv=false --set output.maps=false --seed 9");
@@ -465,5 +468,11 @@ TEST(Cli, PathsTheFileSystemRefusesAreClearErrors) {
   const Output deep = hapsyn_cli("validate " + quick_study() + " --out " + (dir / "new" / std::string(300, 'y')).string());
   EXPECT_EQ(deep.code, 1) << deep.out;
   EXPECT_NE(deep.out.find("characters, more than the 255 its file system allows"), std::string::npos) << deep.out;
+  const Output unwritable = hapsyn_cli("validate " + quick_study() + " --out /proc/hapsyn-cannot-write");
+  EXPECT_EQ(unwritable.code, 1) << unwritable.out;
+  EXPECT_NE(unwritable.out.find("hapsyn: error: output: cannot create the output directory /proc/hapsyn-cannot-write: "
+                                "/proc is not writable"),
+            std::string::npos)
+      << unwritable.out;
   fs::remove_all(dir);
 }

@@ -459,11 +459,22 @@ int validate_command(const Arguments& a, const hapsyn::Registry& registry) {
   std::vector<std::string> warnings;
   hapsyn::run_threads(study.resolved, options, warnings);
   const std::string out_dir = hapsyn::output_directory_of(study, options);
-  hapsyn::check_output_directory(out_dir, options);
+  // An output directory `run` cannot create or write is an error; one holding a finished (or
+  // stopped) study is a note: the file is valid, `run` only needs --force (or --resume).
+  hapsyn::RunOptions writable_only = options;
+  writable_only.force = true;
+  hapsyn::check_output_directory(out_dir, writable_only);
+  std::string note;
+  try {
+    hapsyn::check_output_directory(out_dir, options);
+  } catch (const hapsyn::Error& e) {
+    note = e.what();
+  }
   std::cout << a.file << ": valid (" << study.problem->dimension() << " free design variables, "
             << study.problem->samples().size() << " samples, " << study.problem->objectives().size()
             << " objective(s), solver " << study.solver_plugin << "; output " << out_dir << ")\n";
   for (const std::string& w : warnings) std::cout << "warning: " << w << "\n";
+  if (!note.empty()) std::cout << "note: " << note << "\n";
   return 0;
 }
 

@@ -75,11 +75,19 @@ bool finished_study(const fs::path& result_file, bool& stopped) {
   return !stopped;
 }
 
+// "" when an entry can be created in `dir`, else why not. Tried, not inferred from the mode
+// bits: access(2) says yes to root on /proc or a read-only mount. The probe is removed at once.
+std::string cannot_create_in(const fs::path& dir) {
+  std::string probe = (dir / ".hapsyn-probe-XXXXXX").string();
+  if (::mkdtemp(probe.data()) == nullptr) return std::strerror(errno);
+  ::rmdir(probe.c_str());
+  return "";
+}
+
 // The part of check_output_directory for a directory that exists.
 void check_existing_output(const std::string& out_dir, const RunOptions& options) {
-  if (::access(out_dir.c_str(), W_OK | X_OK) != 0) {
-    throw Error("output", "the output directory " + out_dir + " is not writable: " + std::strerror(errno));
-  }
+  const std::string why = cannot_create_in(out_dir);
+  if (!why.empty()) throw Error("output", "the output directory " + out_dir + " is not writable: " + why);
   const fs::path result_file = fs::path(out_dir) / "result.json";
   struct stat st {};
   if (options.force || ::lstat(result_file.c_str(), &st) != 0) return;
@@ -115,9 +123,10 @@ void check_creatable_output(const std::string& out_dir) {
   if (!S_ISDIR(st.st_mode)) {
     throw Error("output", "cannot create the output directory " + out_dir + ": " + ancestor.string() + " is not a directory");
   }
-  if (::access(ancestor.c_str(), W_OK | X_OK) != 0) {
+  const std::string why = cannot_create_in(ancestor);
+  if (!why.empty()) {
     throw Error("output", "cannot create the output directory " + out_dir + ": " + ancestor.string() +
-                              " is not writable: " + std::strerror(errno));
+                              " is not writable: " + why);
   }
   const long name_max = ::pathconf(ancestor.c_str(), _PC_NAME_MAX);
   for (const std::string& name : missing) {
