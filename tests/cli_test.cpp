@@ -345,16 +345,19 @@ TEST(Cli, ASecondRunIntoALockedDirectoryFailsAtOnce) {
 
 TEST(Cli, ASymbolicLinkRunLogIsRefusedAndItsTargetKept) {
   const fs::path out = fresh_dir("loglink");
-  fs::create_directories(out);
+  ASSERT_EQ(hapsyn_cli("run " + quick_study() + " --quiet --out " + out.string()).code, 0);
   std::ofstream((out / "precious.txt").string()) << "keep";
+  fs::remove(out / "run.log");
   fs::create_symlink(out / "precious.txt", out / "run.log");
-  const Output o = hapsyn_cli("run " + quick_study() + " --quiet --out " + out.string());
+  const Output o = hapsyn_cli("run " + quick_study() + " --quiet --force --out " + out.string());
   EXPECT_EQ(o.code, 1);
   EXPECT_NE(o.out.find("hapsyn: error: output: " + (out / "run.log").string() +
                        " is a symbolic link; a run log is never written through one (remove it)"),
             std::string::npos)
       << o.out;
   EXPECT_EQ(read_text(out / "precious.txt"), "keep");
+  EXPECT_TRUE(fs::exists(out / "result.json")) << "the refused run leaves the earlier study as it was";
+  EXPECT_TRUE(fs::exists(out / "samples.csv"));
   fs::remove_all(out);
 }
 

@@ -82,6 +82,12 @@ TEST(OutputFiles, LogFileWritesEachLineAndAppendsOnRequest) {
     file.stream() << "fresh\n";
   }
   EXPECT_EQ(read(log), "fresh\n");
+  {
+    hapsyn::LogFile file(log, true);
+    file.truncate();
+    file.stream() << "after truncate\n";
+  }
+  EXPECT_EQ(read(log), "after truncate\n");
   fs::remove_all(dir);
 }
 

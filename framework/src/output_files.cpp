@@ -119,6 +119,7 @@ std::string mebibytes(std::uint64_t bytes) {
 
 struct LogFile::Impl {
   int fd = -1;
+  std::string path;
   std::unique_ptr<LineFileBuffer> buffer;
   std::unique_ptr<std::ostream> stream;
 };
@@ -126,6 +127,7 @@ struct LogFile::Impl {
 LogFile::LogFile(const std::string& path, bool append) : impl_(std::make_unique<Impl>()) {
   // O_NOFOLLOW: open(2) fails with ELOOP on a symbolic link instead of writing to its target.
   const int flags = O_WRONLY | O_CREAT | O_NOFOLLOW | O_CLOEXEC | (append ? O_APPEND : O_TRUNC);
+  impl_->path = path;
   impl_->fd = ::open(path.c_str(), flags, 0644);
   if (impl_->fd < 0) {
     if (errno == ELOOP) {
@@ -144,6 +146,11 @@ LogFile::~LogFile() {
 }
 
 std::ostream& LogFile::stream() { return *impl_->stream; }
+
+void LogFile::truncate() {
+  impl_->stream->flush();
+  if (::ftruncate(impl_->fd, 0) != 0) throw Error("output", "cannot truncate " + impl_->path + ": " + std::strerror(errno));
+}
 
 DirectoryLock::DirectoryLock(const std::string& directory) {
   const std::string path = (fs::path(directory) / ".lock").string();

@@ -567,7 +567,6 @@ namespace {
 // The solve and the outputs, once the directory is locked and the log open.
 Json solve_and_write(Study& study, const RunOptions& options, const RunSetup& run, std::ostream& log) {
   std::ostream* progress = options.quiet ? nullptr : options.progress ? options.progress : &std::cerr;
-  remove_previous_outputs(run.out_dir);
   SolverContext context;
   context.threads = run.threads;
   context.seed = run.seed;
@@ -620,8 +619,11 @@ Json run_study(Study& study, const RunOptions& options) {
   check_output_directory(run.out_dir, options);  // again under the lock: another run may have finished meanwhile
   run.seed = choose_seed(resolved, options, run.checkpoint_file);
   check_output_space(study, options, run.out_dir);
-
-  LogFile log_file((fs::path(run.out_dir) / "run.log").string(), options.resume && !options.force);
+  // Opened (appending: nothing changes yet) before the previous study goes, so that a refused
+  // log (a symbolic link) leaves that study untouched; emptied after, for a fresh run.
+  LogFile log_file((fs::path(run.out_dir) / "run.log").string(), true);
+  remove_previous_outputs(run.out_dir);
+  if (!options.resume || options.force) log_file.truncate();
   std::ostream& log = log_file.stream();
   log << "hapsyn " << version() << " " << (options.resume ? "resume" : "run") << " " << resolved["name"].get<std::string>()
       << " at " << iso_time_now() << ", seed " << run.seed << ", " << run.threads << " threads\n";

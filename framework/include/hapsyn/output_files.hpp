@@ -40,6 +40,9 @@ class LogFile {
   LogFile(const LogFile&) = delete;
   LogFile& operator=(const LogFile&) = delete;
   std::ostream& stream();
+  /// Empties the file (a log opened with `append` that turns out to start afresh).
+  /// \throws Error("output", "cannot truncate <path>: <reason>").
+  void truncate();
 
  private:
   struct Impl;
