@@ -479,3 +479,23 @@ TEST(Cli, PathsTheFileSystemRefusesAreClearErrors) {
       << unwritable.out;
   fs::remove_all(dir);
 }
+
+TEST(Cli, AKilledForcedRunLeavesNoResultOfEitherRun) {
+  const fs::path out = fresh_dir("killed");
+  ASSERT_EQ(hapsyn_cli("run " + quick_study() + " --quiet --out " + out.string()).code, 0);
+  // SIGKILL while the forced run solves: no handler, no cleanup.
+  hapsyn_test_stopped("timeout -s KILL 2 ", "run " + problem("fivebar-gii-ga-coarse.json") +
+                                                " --set solver.options.generations=1000000"
+                                                " --set solver.options.stall_generations=1000000 --threads 2 --quiet"
+                                                " --force --out " + out.string());
+  EXPECT_FALSE(fs::exists(out / "result.json"));
+  EXPECT_FALSE(fs::exists(out / "samples.csv")) << "no file of the earlier run beside a later one";
+  EXPECT_FALSE(fs::exists(out / "maps.csv"));
+  EXPECT_TRUE(fs::exists(out / "run.log"));
+  // Nothing finished is there: the next run needs no --force and leaves no staging behind.
+  const Output next = hapsyn_cli("run " + quick_study() + " --quiet --out " + out.string());
+  EXPECT_EQ(next.code, 0) << next.out;
+  EXPECT_TRUE(fs::exists(out / "samples.csv"));
+  EXPECT_FALSE(has_staging(out));
+  fs::remove_all(out);
+}
