@@ -478,6 +478,14 @@ class StagedOutputs {
   const RunSetup& run_;
 };
 
+// A gnuplot message names the directory the plots were made in: the staging one, soon gone.
+void name_output_directory_in_plot_message(const std::string& staging, const std::string& out_dir, Json& doc) {
+  if (!doc.contains("plot_message")) return;
+  std::string message = doc["plot_message"];
+  for (std::size_t at; (at = message.find(staging)) != std::string::npos;) message.replace(at, staging.size(), out_dir);
+  doc["plot_message"] = message;
+}
+
 // Every output of a finished solve, staged then committed. A failure after result.json is
 // staged keeps the solve: result.json is committed with "output_errors" and the error thrown after.
 void write_outputs(const Study& study, const SolverResult& result, const RunOptions& options, const RunSetup& run,
@@ -503,13 +511,7 @@ void write_outputs(const Study& study, const SolverResult& result, const RunOpti
   } catch (const std::exception& e) {
     errors.push_back(without_component(e));
   }
-  if (doc.contains("plot_message")) {
-    std::string message = doc["plot_message"];
-    for (std::size_t at; (at = message.find(staged.dir())) != std::string::npos;) {
-      message.replace(at, staged.dir().size(), run.out_dir);
-    }
-    doc["plot_message"] = message;
-  }
+  name_output_directory_in_plot_message(staged.dir(), run.out_dir, doc);
   doc["phases"]["outputs_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   doc["wall_time_s"] = doc["phases"]["scene_s"].get<double>() + doc["phases"]["solve_s"].get<double>() +
                        doc["phases"]["outputs_s"].get<double>();
