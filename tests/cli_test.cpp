@@ -3,6 +3,9 @@
 
 #include <boost/filesystem.hpp>
 
+#include <hapsyn/output_files.hpp>
+
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <fstream>
@@ -15,6 +18,18 @@ using hapsyn::Json;
 namespace {
 using hapsyn::test::hapsyn_cli;
 using hapsyn::test::Output;
+
+// hapsyn under a command that signals it (`timeout`), with the exit status of hapsyn itself.
+Output hapsyn_test_stopped(const std::string& wrapper, const std::string& args) {
+  const std::string command = wrapper + std::string(HAPSYN_BINARY_DIR) + "/bin/hapsyn " + args + " 2>&1";
+  Output o;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  std::array<char, 4096> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) o.out += buffer.data();
+  const int status = ::pclose(pipe);
+  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return o;
+}
 
 std::string problem(const std::string& name) { return std::string(HAPSYN_SOURCE_DIR) + "/problems/" + name; }
 
@@ -30,6 +45,27 @@ Json read_json(const fs::path& p) {
 }
 
 long count_lines(const fs::path& p) { return hapsyn::test::count_lines(p.string()); }
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p.string());
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The shipped coarse grid study at a 50 mm design grid: a second or less.
+std::string quick_study() {
+  return problem("fivebar-gii-coarse.json") +
+         " --set design.l0.step=0.05 --set design.l1.step=0.05 --set design.l2.step=0.05 --set design.r.step=0.05"
+         " --set design.l1.lower=0.05 --set design.l2.lower=0.05";
+}
+
+bool has_staging(const fs::path& dir) {
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (e.path().filename().string().rfind(".staging-", 0) == 0) return true;
+  }
+  return false;
+}
 }  // namespace
 
 TEST(Cli, RunWritesResultJsonAndSamplesCsv) {
@@ -48,6 +84,14 @@ TEST(Cli, RunWritesResultJsonAndSamplesCsv) {
   EXPECT_FALSE(result["hapsyn"]["version"].get<std::string>().empty());
   EXPECT_EQ(result["plugins"].size(), 5u);
   EXPECT_EQ(count_lines(out / "samples.csv"), 101 * 101 + 1);
+  // The phases add up to the wall time; the outputs of a big scene report their progress.
+  const Json& phases = result["phases"];
+  EXPECT_GT(phases["scene_s"].get<double>(), 0.0);
+  EXPECT_NEAR(phases["scene_s"].get<double>() + phases["solve_s"].get<double>() + phases["outputs_s"].get<double>(),
+              result["wall_time_s"].get<double>(), 1e-9);
+  EXPECT_NE(o.out.find("outputs: writing samples.csv"), std::string::npos) << o.out;
+  EXPECT_NE(read_text(out / "run.log").find("outputs: writing samples.csv"), std::string::npos);
+  EXPECT_FALSE(has_staging(out));
   fs::remove_all(out);
 }
 
@@ -159,6 +203,14 @@ TEST(Cli, CoarseGridStudyFindsAFeasibleOptimum) {
   EXPECT_EQ(result["status"], "converged");
   EXPECT_GT(result["best"]["objectives"]["gii"].get<double>(), 0.5);
   EXPECT_LE(result["best"]["objectives"]["gii"].get<double>(), 1.0);
+  // The GII optimum of this grid has the longest l2 the bounds allow: the run says so.
+  const std::string warning = "design.l2 = 0.3 is at its upper bound: the optimum may lie beyond it; widen "
+                              "design.l2.upper to check";
+  ASSERT_TRUE(result.contains("warnings")) << result.dump(2);
+  EXPECT_NE(std::find(result["warnings"].begin(), result["warnings"].end(), warning), result["warnings"].end())
+      << result["warnings"].dump();
+  EXPECT_NE(o.out.find("warning: " + warning), std::string::npos) << o.out;
+  EXPECT_NE(read_text(out / "run.log").find("warning: " + warning), std::string::npos);
   fs::remove_all(out);
 }
 
@@ -246,4 +298,204 @@ TEST(Cli, SceneWorksOnAnyProblemFileAndRefusesBadScenes) {
   const Output attribute = hapsyn_cli("scene " + human_arm_scene_args(fresh_dir("scene-attr")) + " --attribute forces");
   EXPECT_EQ(attribute.code, 1);
   EXPECT_NE(attribute.out.find("human_arm: per-sample attribute 'forces' requested"), std::string::npos) << attribute.out;
+}
+
+// ---- trustworthy outputs: never mixed, locked, logged ----
+
+TEST(Cli, ForceReplacesEveryOutputOfTheEarlierRun) {
+  const fs::path out = fresh_dir("force");
+  ASSERT_EQ(hapsyn_cli("run " + quick_study() + " --quiet --out " + out.string()).code, 0);
+  ASSERT_TRUE(fs::exists(out / "samples.csv"));
+  // Without --force a finished study stays, and validate says so as run does.
+  const Output again = hapsyn_cli("run " + quick_study() + " --quiet --out " + out.string());
+  EXPECT_EQ(again.code, 1);
+  const std::string finished = "hapsyn: error: output: " + out.string() + " already holds a finished study (";
+  EXPECT_NE(again.out.find(finished), std::string::npos) << again.out;
+  const Output validate = hapsyn_cli("validate " + quick_study() + " --out " + out.string());
+  EXPECT_EQ(validate.code, 0);
+  EXPECT_NE(validate.out.find("note: output: " + out.string() + " already holds a finished study ("), std::string::npos)
+      << validate.out;
+  const Output forced_validate = hapsyn_cli("validate " + quick_study() + " --out " + out.string() + " --force");
+  EXPECT_EQ(forced_validate.code, 0);
+  EXPECT_EQ(forced_validate.out.find("note:"), std::string::npos) << forced_validate.out;
+  // --force without samples: the earlier samples.csv does not survive beside the new result.json.
+  const Output forced = hapsyn_cli("run " + quick_study() + " --quiet --force --out " + out.string() +
+                                   " --set output.samples_csv=false --set output.maps=false --seed 9");
+  ASSERT_EQ(forced.code, 0) << forced.out;
+  EXPECT_EQ(read_json(out / "result.json")["seed"], 9);
+  EXPECT_FALSE(fs::exists(out / "samples.csv"));
+  EXPECT_FALSE(fs::exists(out / "maps.csv"));
+  EXPECT_FALSE(has_staging(out));
+  fs::remove_all(out);
+}
+
+TEST(Cli, ASecondRunIntoALockedDirectoryFailsAtOnce) {
+  const fs::path out = fresh_dir("lock");
+  fs::create_directories(out);
+  const hapsyn::DirectoryLock held(out.string());
+  const Output o = hapsyn_cli("run " + quick_study() + " --quiet --out " + out.string());
+  EXPECT_EQ(o.code, 1);
+  EXPECT_NE(o.out.find("hapsyn: error: output: " + out.string() + " is in use by another hapsyn run (pid " +
+                       std::to_string(::getpid()) + ")"),
+            std::string::npos)
+      << o.out;
+  EXPECT_FALSE(fs::exists(out / "result.json"));
+  fs::remove_all(out);
+}
+
+TEST(Cli, ASymbolicLinkRunLogIsRefusedAndItsTargetKept) {
+  const fs::path out = fresh_dir("loglink");
+  ASSERT_EQ(hapsyn_cli("run " + quick_study() + " --quiet --out " + out.string()).code, 0);
+  std::ofstream((out / "precious.txt").string()) << "keep";
+  fs::remove(out / "run.log");
+  fs::create_symlink(out / "precious.txt", out / "run.log");
+  const Output o = hapsyn_cli("run " + quick_study() + " --quiet --force --out " + out.string());
+  EXPECT_EQ(o.code, 1);
+  EXPECT_NE(o.out.find("hapsyn: error: output: " + (out / "run.log").string() +
+                       " is a symbolic link; a run log is never written through one (remove it)"),
+            std::string::npos)
+      << o.out;
+  EXPECT_EQ(read_text(out / "precious.txt"), "keep");
+  EXPECT_TRUE(fs::exists(out / "result.json")) << "the refused run leaves the earlier study as it was";
+  EXPECT_TRUE(fs::exists(out / "samples.csv"));
+  fs::remove_all(out);
+}
+
+TEST(Cli, AnOutputThatCannotBePlacedKeepsTheSolveAndEndsTheLog) {
+  const fs::path out = fresh_dir("blocked");
+  fs::create_directories(out / "samples.csv" / "in-the-way");
+  const Output o = hapsyn_cli("run " + quick_study() + " --quiet --out " + out.string());
+  EXPECT_EQ(o.code, 1);
+  EXPECT_NE(o.out.find("/samples.csv to " + (out / "samples.csv").string() + ": Is a directory; " +
+                       (out / "result.json").string() + " holds the solve (see its \"output_errors\")"),
+            std::string::npos)
+      << o.out;
+  const Json result = read_json(out / "result.json");
+  EXPECT_EQ(result["status"], "converged");
+  EXPECT_EQ(result["output_errors"].size(), 1u);
+  EXPECT_FALSE(result["files"].contains("samples")) << result["files"].dump();
+  EXPECT_EQ(result["files"]["maps"], "maps.csv");
+  EXPECT_TRUE(fs::exists(out / "maps.csv"));
+  const std::string log = read_text(out / "run.log");
+  EXPECT_NE(log.find("\nfailed: output: cannot move "), std::string::npos) << log;
+  EXPECT_NE(log.find("\nbest: {"), std::string::npos) << log;
+  EXPECT_FALSE(has_staging(out));
+  fs::remove_all(out);
+}
+
+TEST(Cli, AStoppedRunKeepsItsCheckpointAndResumes) {
+  const fs::path out = fresh_dir("stopped");
+  // A GA long enough to be stopped: SIGINT after 3 s, as Ctrl-C or a job scheduler sends.
+  const std::string study = problem("fivebar-gii-ga-coarse.json") +
+                            " --set solver.options.generations=1000000 --set solver.options.stall_generations=1000000"
+                            " --set solver.options.checkpoint_every=1 --threads 2 --quiet --out " + out.string();
+  const std::string stop = "timeout --preserve-status -s INT 3 ";
+  const Output first = hapsyn_test_stopped(stop, "run " + study);
+  EXPECT_EQ(first.code, 4) << first.out;
+  EXPECT_NE(first.out.find("stopped; resume with: hapsyn run " + problem("fivebar-gii-ga-coarse.json") +
+                           " --set solver.options.generations=1000000"),
+            std::string::npos)
+      << first.out;
+  EXPECT_NE(first.out.find(" --resume\n"), std::string::npos) << first.out;
+  EXPECT_EQ(read_json(out / "result.json")["status"], "stopped");
+  EXPECT_TRUE(fs::exists(out / "checkpoint.json"));
+  // A stopped study is not finished: --resume continues it; a plain run must choose.
+  const Output plain = hapsyn_cli("run " + study);
+  EXPECT_EQ(plain.code, 1);
+  EXPECT_NE(plain.out.find("holds a stopped study"), std::string::npos) << plain.out;
+  const Output resumed = hapsyn_test_stopped(stop, "run " + study + " --resume");
+  EXPECT_EQ(resumed.code, 4) << resumed.out;
+  EXPECT_EQ(read_json(out / "result.json")["status"], "stopped");
+  EXPECT_NE(read_text(out / "run.log").find("resume"), std::string::npos);
+  fs::remove_all(out);
+}
+
+TEST(Cli, AParetoRunWritesItsFrontAsCsv) {
+  const fs::path out = fresh_dir("front");
+  const Output o = hapsyn_cli("run " + problem("fivebar-pareto-weighted-sum.json") + " --quiet --out " + out.string() +
+                              " --set solver.options.count=3 --set design.l0.step=0.05 --set design.l1.step=0.05"
+                              " --set design.l2.step=0.05 --set design.r.step=0.05 --set design.l1.lower=0.05"
+                              " --set design.l2.lower=0.05 --set indicators={}");
+  ASSERT_EQ(o.code, 0) << o.out;
+  const Json result = read_json(out / "result.json");
+  ASSERT_TRUE(result.contains("front"));
+  EXPECT_EQ(result["files"]["front"], "front.csv");
+  EXPECT_EQ(count_lines(out / "front.csv"), static_cast<long>(result["front"].size()) + 1);
+  std::ifstream csv((out / "front.csv").string());
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header, "design.l0,design.l1,design.l2,design.r,gii,gdi");
+  fs::remove_all(out);
+}
+
+TEST(Cli, SeedsMustBeWholeNumbers) {
+  for (const std::string& command : {"run " + quick_study() + " --seed", "sweep " + quick_study() + " --vary threads=1 --seed",
+                                     "compare " + problem("fivebar-gii-coarse.json") + " --seed"}) {
+    for (const std::string seed : {"-1", "1.5", "18446744073709551616"}) {
+      const Output o = hapsyn_cli(command + " " + seed);
+      EXPECT_EQ(o.code, 2) << command << " " << seed << "\n" << o.out;
+      EXPECT_NE(o.out.find("--seed " + seed + ": must be a whole number in [0, 18446744073709551615]"), std::string::npos)
+          << o.out;
+    }
+  }
+}
+
+TEST(Cli, TooManyThreadsAreCappedWithAWarning) {
+  const fs::path out = fresh_dir("threads");
+  const Output o = hapsyn_cli("run " + quick_study() + " --quiet --threads 100000 --out " + out.string());
+  ASSERT_EQ(o.code, 0) << o.out;
+  EXPECT_NE(o.out.find("hapsyn: warning: --threads 100000: capped to "), std::string::npos) << o.out;
+  EXPECT_NE(read_text(out / "run.log").find("warning: --threads 100000: capped to "), std::string::npos);
+  EXPECT_LE(read_json(out / "result.json")["threads"].get<int>(), 1024);
+  const Output file = hapsyn_cli("validate " + quick_study() + " --set threads=3000000000");
+  EXPECT_EQ(file.code, 1);
+  EXPECT_NE(file.out.find("threads = 3000000000"), std::string::npos) << file.out;
+  fs::remove_all(out);
+}
+
+TEST(Cli, PathsTheFileSystemRefusesAreClearErrors) {
+  const fs::path dir = fresh_dir("paths");
+  fs::create_directories(dir);
+  const Output csv = hapsyn_cli("scene " + problem("fivebar-gii-coarse.json") + " --csv " + dir.string());
+  EXPECT_EQ(csv.code, 1);
+  EXPECT_NE(csv.out.find("hapsyn: error: scene: --csv " + dir.string() + " is a directory; give a file name, e.g. " +
+                         (dir / "samples.csv").string()),
+            std::string::npos)
+      << csv.out;
+  const std::string too_long = (dir / std::string(300, 'x')).string();
+  const Output out = hapsyn_cli("run " + quick_study() + " --quiet --out " + too_long);
+  EXPECT_EQ(out.code, 1) << out.out;
+  EXPECT_NE(out.out.find("hapsyn: error: output: the output directory " + too_long + ": File name too long"),
+            std::string::npos)
+      << out.out;
+  const Output deep = hapsyn_cli("validate " + quick_study() + " --out " + (dir / "new" / std::string(300, 'y')).string());
+  EXPECT_EQ(deep.code, 1) << deep.out;
+  EXPECT_NE(deep.out.find("characters, more than the 255 its file system allows"), std::string::npos) << deep.out;
+  const Output unwritable = hapsyn_cli("validate " + quick_study() + " --out /proc/hapsyn-cannot-write");
+  EXPECT_EQ(unwritable.code, 1) << unwritable.out;
+  EXPECT_NE(unwritable.out.find("hapsyn: error: output: cannot create the output directory /proc/hapsyn-cannot-write: "
+                                "/proc is not writable"),
+            std::string::npos)
+      << unwritable.out;
+  fs::remove_all(dir);
+}
+
+TEST(Cli, AKilledForcedRunLeavesNoResultOfEitherRun) {
+  const fs::path out = fresh_dir("killed");
+  ASSERT_EQ(hapsyn_cli("run " + quick_study() + " --quiet --out " + out.string()).code, 0);
+  // SIGKILL while the forced run solves: no handler, no cleanup.
+  hapsyn_test_stopped("timeout -s KILL 2 ", "run " + problem("fivebar-gii-ga-coarse.json") +
+                                                " --set solver.options.generations=1000000"
+                                                " --set solver.options.stall_generations=1000000 --threads 2 --quiet"
+                                                " --force --out " + out.string());
+  EXPECT_FALSE(fs::exists(out / "result.json"));
+  EXPECT_FALSE(fs::exists(out / "samples.csv")) << "no file of the earlier run beside a later one";
+  EXPECT_FALSE(fs::exists(out / "maps.csv"));
+  EXPECT_TRUE(fs::exists(out / "run.log"));
+  // Nothing finished is there: the next run needs no --force and leaves no staging behind.
+  const Output next = hapsyn_cli("run " + quick_study() + " --quiet --out " + out.string());
+  EXPECT_EQ(next.code, 0) << next.out;
+  EXPECT_TRUE(fs::exists(out / "samples.csv"));
+  EXPECT_FALSE(has_staging(out));
+  fs::remove_all(out);
 }

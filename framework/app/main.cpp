@@ -1,8 +1,11 @@
 // The hapsyn command-line program: run, validate, plugins, describe, scene.
 //
 // Exit codes: 0 the command did its work (for `run`: result.json written; the solver's outcome
-// is its "status"), 1 bad input (problem file, options, plugins, output directory), 2 usage
-// error, 3 unexpected internal error.
+// is its "status"), 1 bad input (problem file, options, plugins, output directory) or an output
+// that could not be written, 2 usage error, 3 unexpected internal error, 4 `run` stopped on
+// request (SIGINT, SIGTERM, SIGUSR1): result.json holds the best so far with status "stopped",
+// the checkpoint is kept and `hapsyn run FILE --resume` continues (a job script can tell this
+// from a finished run and requeue). A second signal ends the process at once with 128 + signal.
 #include <hapsyn/compare.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/groups.hpp>
@@ -24,7 +27,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
+#include <chrono>
 #include <cstdint>
+#include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <optional>
@@ -66,6 +72,8 @@ hapsyn::Study load(const std::string& file, const std::vector<std::string>& sets
   for (const std::string& s : sets) hapsyn::apply_override(doc, s);
   return hapsyn::load_study(doc, registry);
 }
+
+constexpr int kExitStopped = 4;
 
 std::string format_number(double v) {
   std::ostringstream s;
@@ -119,8 +127,26 @@ void print_summary(const Json& result, std::ostream& out) {
   // Objectives per subject, activity, ... (scenes of recorded motion).
   if (result.contains("groups")) out << "per group of samples (best design):\n" << hapsyn::groups_text(result["groups"]);
   out << "evaluations: " << result["evaluations"]["designs"] << " designs, " << result["evaluations"]["samples"]
-      << " sample solves; wall time " << format_number(result["wall_time_s"].get<double>()) << " s\n";
+      << " sample solves; wall time " << format_number(result["wall_time_s"].get<double>()) << " s";
+  if (result.contains("phases")) {
+    const Json& p = result["phases"];
+    out << " (scene " << format_number(p["scene_s"].get<double>()) << " s, solve " << format_number(p["solve_s"].get<double>())
+        << " s, outputs " << format_number(p["outputs_s"].get<double>()) << " s)";
+  }
+  out << "\n";
+  for (const Json& w : result.value("warnings", Json::array())) out << "warning: " << w.get<std::string>() << "\n";
   out << "result: " << result["output_directory"].get<std::string>() << "/result.json\n";
+}
+
+// A shell word: quoted unless it is plain.
+std::string shell_word(const std::string& s) {
+  if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-+=.,/:@") ==
+                        std::string::npos) {
+    return s;
+  }
+  std::string quoted = "'";
+  for (char c : s) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
 }
 
 std::string schema_type(const Json& s) {
@@ -245,7 +271,13 @@ int scene_command(const std::string& file, const std::vector<std::string>& sets,
   }
   if (!csv.empty()) {
     const boost::filesystem::path path(csv);
-    if (path.has_parent_path()) boost::filesystem::create_directories(path.parent_path());
+    boost::system::error_code ec;
+    if (boost::filesystem::is_directory(path, ec) || csv.back() == '/') {
+      throw hapsyn::Error("scene", "--csv " + csv + " is a directory; give a file name, e.g. " +
+                                       (path / "samples.csv").lexically_normal().string());
+    }
+    if (path.has_parent_path()) boost::filesystem::create_directories(path.parent_path(), ec);
+    if (ec) throw hapsyn::Error("output", "--csv " + csv + ": cannot create " + path.parent_path().string() + ": " + ec.message());
     hapsyn::write_file_atomically(csv, hapsyn::scene_csv(set));
     std::cout << "csv: " << csv << " (" << set.size() << " rows)\n";
   }
@@ -321,13 +353,26 @@ struct Commands {
   CLI::App* compare = nullptr;
 };
 
+// --seed: a whole number that fits 64 bits. Checked on the text, before CLI11 converts it: a
+// conversion would turn "-1" into 2^64 - 1.
+const CLI::Validator kSeed(
+    [](std::string& text) -> std::string {
+      if (!text.empty() && text.find_first_not_of("0123456789") == std::string::npos) {
+        errno = 0;
+        [[maybe_unused]] const unsigned long long value = std::strtoull(text.c_str(), nullptr, 10);
+        if (errno != ERANGE) return "";
+      }
+      return "--seed " + text + ": must be a whole number in [0, 18446744073709551615]";
+    },
+    "SEED");
+
 void define_study_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.run = app.add_subcommand("run", "Run a study and write result.json (+ samples.csv)");
   c.run->add_option("file", a.file, "Problem file (JSON)")->required();
   c.run->add_option("--set", a.sets, "Override a key: path=value (value read as JSON when it parses, else a string)");
   c.run->add_option("--out", a.out_dir, "Output directory (overrides output.directory)");
   c.run->add_option("--threads", a.threads, "Worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
-  c.run_seed = c.run->add_option("--seed", a.seed, "Random seed (default: from the file, else drawn)");
+  c.run_seed = c.run->add_option("--seed", a.seed, "Random seed (default: from the file, else drawn)")->check(kSeed);
   c.run->add_flag("--quiet,-q", a.quiet, "No progress output");
   c.run->add_flag("--resume", a.resume, "Continue from the output directory's checkpoint (solvers that checkpoint: ga)");
   c.run->add_flag("--force", a.force, "Overwrite a finished study (an existing result.json) in the output directory");
@@ -335,6 +380,9 @@ void define_study_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.validate = app.add_subcommand("validate", "Check a problem file completely without running it");
   c.validate->add_option("file", a.file, "Problem file (JSON)")->required();
   c.validate->add_option("--set", a.sets, "Override a key: path=value");
+  c.validate->add_option("--out", a.out_dir, "Output directory to check as `run` would (default: output.directory)");
+  c.validate->add_flag("--resume", a.resume, "Check the output directory for `run --resume`");
+  c.validate->add_flag("--force", a.force, "Check the output directory for `run --force`");
 
   c.plugins = app.add_subcommand("plugins", "List the plugins found (name, kind, version, file)");
 
@@ -367,7 +415,7 @@ void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.sweep->add_option("--set", a.sets, "Override a key in every run: path=value");
   c.sweep->add_option("--out", a.sweep_out, "Output directory (sweep.csv, sweep.json, sweep.png/svg, one folder per run)");
   c.sweep->add_option("--threads", a.threads, "Worker threads per run (default: all cores)")->check(CLI::NonNegativeNumber);
-  c.sweep->add_option("--seed", a.sweep_seed, "Random seed of every run");
+  c.sweep->add_option("--seed", a.sweep_seed, "Random seed of every run")->check(kSeed);
   c.sweep->add_flag("--progress", a.sweep_progress, "Show each run's progress");
 
   c.compare = app.add_subcommand(
@@ -376,12 +424,14 @@ void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.compare->add_option("--set", a.compare.overrides, "Override a key in every study: path=value");
   c.compare->add_option("--out", a.compare.output_directory, "Output directory (one folder per study)");
   c.compare->add_option("--threads", a.compare.threads, "Worker threads per study")->check(CLI::NonNegativeNumber);
-  c.compare->add_option("--seed", a.seed, "Random seed of every study");
+  c.compare->add_option("--seed", a.seed, "Random seed of every study")->check(kSeed);
 }
 
 int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& registry) {
+  const auto t0 = std::chrono::steady_clock::now();
   hapsyn::Study study = load(a.file, a.sets, registry);
   hapsyn::RunOptions options;
+  options.scene_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   options.output_directory = a.out_dir;
   options.threads = a.threads;
   if (*c.run_seed) options.seed = a.seed;
@@ -389,15 +439,42 @@ int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& r
   options.resume = a.resume;
   options.force = a.force;
   options.stop = &stop_requested;
-  print_summary(hapsyn::run_study(study, options), std::cout);
-  return 0;
+  const Json result = hapsyn::run_study(study, options);
+  print_summary(result, std::cout);
+  if (result["status"] != "stopped") return 0;
+  std::string again = "hapsyn run " + shell_word(a.file);
+  for (const std::string& s : a.sets) again += " --set " + shell_word(s);
+  if (!a.out_dir.empty()) again += " --out " + shell_word(a.out_dir);
+  std::cout << "stopped; resume with: " << again << " --resume\n";
+  return kExitStopped;
 }
 
 int validate_command(const Arguments& a, const hapsyn::Registry& registry) {
   hapsyn::Study study = load(a.file, a.sets, registry);
+  hapsyn::RunOptions options;
+  options.output_directory = a.out_dir;
+  options.resume = a.resume;
+  options.force = a.force;
+  // The file is valid only if `run` would start: the output directory is checked as run_study does.
+  std::vector<std::string> warnings;
+  hapsyn::run_threads(study.resolved, options, warnings);
+  const std::string out_dir = hapsyn::output_directory_of(study, options);
+  // An output directory `run` cannot create or write is an error; one holding a finished (or
+  // stopped) study is a note: the file is valid, `run` only needs --force (or --resume).
+  hapsyn::RunOptions writable_only = options;
+  writable_only.force = true;
+  hapsyn::check_output_directory(out_dir, writable_only);
+  std::string note;
+  try {
+    hapsyn::check_output_directory(out_dir, options);
+  } catch (const hapsyn::Error& e) {
+    note = e.what();
+  }
   std::cout << a.file << ": valid (" << study.problem->dimension() << " free design variables, "
             << study.problem->samples().size() << " samples, " << study.problem->objectives().size()
-            << " objective(s), solver " << study.solver_plugin << ")\n";
+            << " objective(s), solver " << study.solver_plugin << "; output " << out_dir << ")\n";
+  for (const std::string& w : warnings) std::cout << "warning: " << w << "\n";
+  if (!note.empty()) std::cout << "note: " << note << "\n";
   return 0;
 }
 
@@ -458,6 +535,11 @@ int main(int argc, char** argv) {
     return dispatch(commands, arguments, registry);
   } catch (const hapsyn::Error& e) {
     std::cerr << "hapsyn: error: " << e.what() << "\n";
+    return 1;
+  } catch (const boost::filesystem::filesystem_error& e) {
+    // A path the file system refuses (too long, a file where a directory is expected): bad
+    // input, named by boost's message ("<operation>: <reason>: \"<path>\"").
+    std::cerr << "hapsyn: error: output: " << e.what() << "\n";
     return 1;
   } catch (const std::exception& e) {
     std::cerr << "hapsyn: internal error: " << e.what() << "\n";

@@ -51,6 +51,21 @@ SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full
   return records;
 }
 
+std::vector<std::string> local_columns(const Problem& problem) {
+  std::vector<std::string> names;
+  for (const MetricEntry& m : problem.metrics()) {
+    for (const LocalValue& l : m.metric->locals()) names.push_back(m.plugin + "." + l.name);
+  }
+  // A metric used by several objectives (coverage with other options) repeats its names: each
+  // occurrence gets its index among the equal names, so every column can be selected by name.
+  std::map<std::string, int> count, seen;
+  for (const std::string& n : names) ++count[n];
+  for (std::string& n : names) {
+    if (count[n] > 1) n += "[" + std::to_string(seen[n]++) + "]";
+  }
+  return names;
+}
+
 std::string samples_csv(const Problem& problem, const SampleRecords& records) {
   std::ostringstream csv;
   csv.precision(10);
@@ -62,9 +77,7 @@ std::string samples_csv(const Problem& problem, const SampleRecords& records) {
   const bool weighted = !samples.weights.empty();
   if (weighted) csv << ",weight";
   csv << ",status";
-  for (const MetricEntry& m : problem.metrics()) {
-    for (const LocalValue& l : m.metric->locals()) csv << "," << m.plugin << "." << l.name;
-  }
+  for (const std::string& column : local_columns(problem)) csv << "," << column;
   csv << "\n";
   for (int i = 0; i < samples.size(); ++i) {
     csv << i;

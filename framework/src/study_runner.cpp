@@ -1,5 +1,5 @@
-// Running a loaded study: output-directory guards, seed, run log, the solver call, and the
-// result files, each a named step of run_study.
+// Running a loaded study: output-directory guards and lock, seed, run log, the solver call, and
+// the result files (staged, then committed with result.json last), each a named step of run_study.
 #include <hapsyn/error.hpp>
 #include <hapsyn/groups.hpp>
 #include <hapsyn/maps.hpp>
@@ -8,16 +8,24 @@
 #include <hapsyn/plugin.hpp>
 #include <hapsyn/study_runner.hpp>
 
+#include <hapsyn/read_file.hpp>
+
 #include <boost/filesystem.hpp>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <climits>
+#include <cmath>
 #include <cstring>
-#include <fstream>
+#include <functional>
+#include <iomanip>
 #include <iostream>
 #include <random>
+#include <sstream>
 
 namespace hapsyn {
 
@@ -30,34 +38,113 @@ struct RunSetup {
   std::string out_dir;
   fs::path result_file;
   fs::path checkpoint_file;
+  fs::path staging;  // <out>/.staging-<pid>: the outputs until result.json commits them
   int threads = 1;
   std::uint64_t seed = 0;
+  std::vector<std::string> warnings;
 };
 
-int threads_of(const Json& resolved, const RunOptions& options) {
-  if (options.threads > 0) return options.threads;
-  if (resolved.contains("threads") && resolved["threads"].get<int>() > 0) return resolved["threads"].get<int>();
-  return hardware_threads();
+constexpr int kThreadsPerHardwareThread = 4;
+constexpr int kMaxThreads = 1024;
+constexpr std::uint64_t kMaxResultBytes = std::uint64_t{1} << 30;
+
+// The file's "threads" as a count, range-checked here as well as by the schema: a value that
+// does not fit an int would otherwise wrap.
+int file_threads(const Json& resolved) {
+  if (!resolved.contains("threads")) return 0;
+  const Json& t = resolved["threads"];
+  const bool in_range = t.is_number_unsigned() ? t.get<std::uint64_t>() <= static_cast<std::uint64_t>(INT_MAX)
+                        : t.is_number_integer() ? t.get<std::int64_t>() >= 0 && t.get<std::int64_t>() <= INT_MAX
+                                                : false;
+  if (!in_range) {
+    throw Error("problem", "threads = " + t.dump() + ": must be an integer in [0, " + std::to_string(INT_MAX) +
+                               "] (0 = all cores)");
+  }
+  return t.get<int>();
 }
 
-// A finished study is never overwritten by accident.
-void refuse_finished_study(const RunSetup& run, const RunOptions& options) {
-  if (!fs::exists(run.result_file) || options.force) return;
-  if (options.resume) {
-    throw Error("output", run.result_file.string() + ": the study in " + run.out_dir +
-                              " has finished; there is nothing to resume (pass --force to run it again)");
+// True when result_file holds a study that ended for good (any status but "stopped"); an
+// unreadable result.json counts as finished, so that it is never removed without --force.
+bool finished_study(const fs::path& result_file, bool& stopped) {
+  stopped = false;
+  try {
+    const Json doc = Json::parse(read_regular_file(result_file.string(), "output", "result", kMaxResultBytes));
+    stopped = doc.is_object() && doc.value("status", "") == "stopped";
+  } catch (const std::exception&) {
   }
-  throw Error("output", run.out_dir + " already holds a finished study (" + run.result_file.string() +
-                            "); pass --force to overwrite it, or --out for another directory");
+  return !stopped;
+}
+
+// "" when an entry can be created in `dir`, else why not. Tried, not inferred from the mode
+// bits: access(2) says yes to root on /proc or a read-only mount. The probe is removed at once.
+std::string cannot_create_in(const fs::path& dir) {
+  std::string probe = (dir / ".hapsyn-probe-XXXXXX").string();
+  if (::mkdtemp(probe.data()) == nullptr) return std::strerror(errno);
+  ::rmdir(probe.c_str());
+  return "";
+}
+
+// The part of check_output_directory for a directory that exists.
+void check_existing_output(const std::string& out_dir, const RunOptions& options) {
+  const std::string why = cannot_create_in(out_dir);
+  if (!why.empty()) throw Error("output", "the output directory " + out_dir + " is not writable: " + why);
+  const fs::path result_file = fs::path(out_dir) / "result.json";
+  struct stat st {};
+  if (options.force || ::lstat(result_file.c_str(), &st) != 0) return;
+  bool stopped = false;
+  if (finished_study(result_file, stopped)) {
+    if (options.resume) {
+      throw Error("output", result_file.string() + ": the study in " + out_dir +
+                                " has finished; there is nothing to resume (pass --force to run it again)");
+    }
+    throw Error("output", out_dir + " already holds a finished study (" + result_file.string() +
+                              "); pass --force to overwrite it, or --out for another directory");
+  }
+  if (!options.resume) {
+    throw Error("output", out_dir + " holds a stopped study (" + result_file.string() +
+                              " has status \"stopped\"); pass --resume to continue it, or --force to start over");
+  }
+}
+
+// The part of check_output_directory for a directory still to be created: the nearest existing
+// ancestor must be a writable directory, and every new name must fit the file system.
+void check_creatable_output(const std::string& out_dir) {
+  fs::path ancestor = fs::absolute(fs::path(out_dir));
+  std::vector<std::string> missing;
+  struct stat st {};
+  while (::stat(ancestor.c_str(), &st) != 0) {
+    if (errno != ENOENT || !ancestor.has_parent_path() || ancestor == ancestor.parent_path()) {
+      throw Error("output", "cannot create the output directory " + out_dir + ": " + ancestor.string() + ": " +
+                                std::strerror(errno));
+    }
+    missing.push_back(ancestor.filename().string());
+    ancestor = ancestor.parent_path();
+  }
+  if (!S_ISDIR(st.st_mode)) {
+    throw Error("output", "cannot create the output directory " + out_dir + ": " + ancestor.string() + " is not a directory");
+  }
+  const std::string why = cannot_create_in(ancestor);
+  if (!why.empty()) {
+    throw Error("output", "cannot create the output directory " + out_dir + ": " + ancestor.string() +
+                              " is not writable: " + why);
+  }
+  const long name_max = ::pathconf(ancestor.c_str(), _PC_NAME_MAX);
+  for (const std::string& name : missing) {
+    if (name_max > 0 && static_cast<long>(name.size()) > name_max) {
+      throw Error("output", "cannot create the output directory " + out_dir + ": the name \"" + name.substr(0, 40) +
+                                "...\" is " + std::to_string(name.size()) + " characters, more than the " +
+                                std::to_string(name_max) + " its file system allows");
+    }
+  }
 }
 
 // The seed of the checkpoint a resumed run continues from (none when not resuming or absent).
 std::optional<std::uint64_t> checkpoint_seed(const fs::path& checkpoint_file, const RunOptions& options) {
-  if (!options.resume || options.force || !fs::exists(checkpoint_file)) return std::nullopt;
+  boost::system::error_code ec;
+  if (!options.resume || options.force || !fs::exists(checkpoint_file, ec)) return std::nullopt;
   Json checkpoint;
   try {
-    std::ifstream in(checkpoint_file.string());
-    checkpoint = Json::parse(in);
+    checkpoint = Json::parse(read_regular_file(checkpoint_file.string(), "output", "checkpoint", kMaxResultBytes));
   } catch (const std::exception& e) {
     throw Error("output", checkpoint_file.string() + ": cannot be read as a checkpoint (" + e.what() +
                               "); delete it, or run without --resume");
@@ -80,20 +167,62 @@ std::uint64_t choose_seed(const Json& resolved, const RunOptions& options, const
     return *options.seed;
   }
   if (from_checkpoint) return *from_checkpoint;
-  if (resolved.contains("seed")) return resolved["seed"].get<std::uint64_t>();
+  if (resolved.contains("seed")) {
+    if (!resolved["seed"].is_number_unsigned()) {
+      throw Error("problem", "seed = " + resolved["seed"].dump() + ": must be an integer in [0, 18446744073709551615]");
+    }
+    return resolved["seed"].get<std::uint64_t>();
+  }
   return std::random_device{}();
 }
 
-// Refuses an unusable output directory before any work is done.
-void prepare_output_directory(const std::string& out_dir) {
+// Creates the output directory (check_output_directory has said it can be).
+void create_output_directory(const std::string& out_dir) {
   boost::system::error_code ec;
   fs::create_directories(out_dir, ec);
-  if (ec || !fs::is_directory(out_dir)) {
+  if (ec || !fs::is_directory(out_dir, ec)) {
     throw Error("output", "cannot create the output directory " + out_dir + (ec ? ": " + ec.message() : ""));
   }
-  if (::access(out_dir.c_str(), W_OK) != 0) {
-    throw Error("output", "the output directory " + out_dir + " is not writable: " + std::strerror(errno));
+}
+
+// Rough size of the files written after the solve: samples.csv and maps.csv hold one row per
+// sample (at most) and about 16 characters per cell.
+void check_output_space(const Study& study, const RunOptions& options, const std::string& out_dir) {
+  const Json& output = study.resolved["output"];
+  const SampleSet& samples = study.problem->samples();
+  const std::uint64_t rows = static_cast<std::uint64_t>(samples.size());
+  std::uint64_t needed = 0;
+  std::string what = "result.json, run.log, checkpoint";
+  if (options.write_samples && output.value("samples_csv", true)) {
+    const std::uint64_t columns = 3 + static_cast<std::uint64_t>(samples.dimension()) + local_columns(*study.problem).size();
+    needed += rows * columns * 16;
+    what += ", samples.csv (" + std::to_string(rows) + " rows x " + std::to_string(columns) + " columns)";
   }
+  if (options.write_samples && output.value("maps", true)) {
+    needed += rows * (5 + study.problem->objectives().size()) * 16;
+    what += ", maps.csv";
+  }
+  check_free_space(out_dir, needed, what);
+}
+
+// Files of an earlier run in the output directory: result.json goes first, so that from the
+// first removal on the directory no longer claims a finished study; stale staging directories
+// (of killed runs: none can be alive, this run holds the lock) go too.
+void remove_previous_outputs(const std::string& out_dir) {
+  boost::system::error_code ec;
+  fs::remove(fs::path(out_dir) / "result.json", ec);
+  if (ec) throw Error("output", "cannot remove the earlier " + out_dir + "/result.json: " + ec.message());
+  std::vector<fs::path> stale;
+  for (fs::directory_iterator it(out_dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const bool output = name == "samples.csv" || name == "maps.csv" || name == "groups.csv" || name == "front.csv" ||
+                        name.rfind("map_", 0) == 0 || name.rfind("timeline.", 0) == 0;
+    boost::system::error_code ignored;
+    if (name.rfind(".staging-", 0) == 0 || (output && fs::is_regular_file(it->symlink_status(ignored)))) {
+      stale.push_back(it->path());
+    }
+  }
+  for (const fs::path& p : stale) fs::remove_all(p, ec);
 }
 
 Json point_to_json(const Problem& problem, const SolutionPoint& p) {
@@ -107,8 +236,7 @@ Json point_to_json(const Problem& problem, const SolutionPoint& p) {
 }
 
 // The body of result.json: provenance, the run, the solver's result.
-Json result_document(const Study& study, const RunSetup& run, const SolverResult& result, const std::string& started,
-                     double wall) {
+Json result_document(const Study& study, const RunSetup& run, const SolverResult& result, const std::string& started) {
   Json doc;
   doc["hapsyn"] = {{"version", version()}, {"plugin_api", HAPSYN_PLUGIN_API_VERSION}};
   doc["problem"] = study.resolved;
@@ -121,7 +249,6 @@ Json result_document(const Study& study, const RunSetup& run, const SolverResult
   doc["threads"] = run.threads;
   doc["machine"] = machine_info();
   doc["started"] = started;
-  doc["wall_time_s"] = wall;
   doc["status"] = to_string(result.status);
   doc["message"] = result.message;
   doc["evaluations"] = {{"designs", result.design_evaluations}, {"samples", result.sample_evaluations}};
@@ -138,7 +265,7 @@ Json result_document(const Study& study, const RunSetup& run, const SolverResult
 }
 
 // "indicators" of a study with a front or reference indicators (else nothing to add).
-void add_indicators(const Study& study, const SolverResult& result, double wall, Json& doc) {
+void add_indicators(const Study& study, const SolverResult& result, double solve_s, Json& doc) {
   if (result.front.empty() && study.reference_front.empty() && study.reference_point.empty() &&
       study.reference_front_missing.empty()) {
     return;
@@ -158,7 +285,7 @@ void add_indicators(const Study& study, const SolverResult& result, double wall,
                                             " does not exist: run the reference study first for GD, IGD and domination gaps";
   }
   indicators["evaluations"] = doc["evaluations"];
-  indicators["wall_time_s"] = wall;
+  indicators["wall_time_s"] = solve_s;
   doc["indicators"] = indicators;
 }
 
@@ -181,32 +308,301 @@ void write_group_files(const Study& study, const SampleRecords& records, const s
   }
 }
 
-// samples.csv, maps.csv and the map plots of the best design, as the options and the file ask;
-// each file written is named in doc["files"].
+// samples.csv, maps.csv and the map plots of the best design, as the options and the file ask,
+// into `dir` (the staging directory); each file written is named in doc["files"]. `note` tells
+// the user what takes long on a big scene.
 void write_best_design_files(const Study& study, const SolverResult& result, const RunOptions& options,
-                             const std::string& out_dir, Json& doc) {
-  doc["files"] = Json::object();
+                             const std::string& dir, const std::function<void(const std::string&)>& note, Json& doc) {
   const Json& output = study.resolved["output"];
   const bool want_samples = options.write_samples && output.value("samples_csv", true);
   const bool want_maps = options.write_samples && output.value("maps", true);
   const bool want_groups = options.write_samples && output.value("groups", true) && !study.problem->samples().groups.empty();
   if (!result.best || !(want_samples || want_maps || want_groups)) return;
+  note("evaluating the best design on each of the " + std::to_string(study.problem->samples().size()) + " samples");
   const SampleRecords records = record_samples(*study.problem, result.best->design);
-  if (want_groups) write_group_files(study, records, out_dir, doc);
+  if (want_groups) write_group_files(study, records, dir, doc);
   if (want_samples) {
-    write_file_atomically((fs::path(out_dir) / "samples.csv").string(), samples_csv(*study.problem, records));
+    note("writing samples.csv");
+    write_file_atomically((fs::path(dir) / "samples.csv").string(), samples_csv(*study.problem, records));
     doc["files"]["samples"] = "samples.csv";
   }
   if (want_maps) {
+    note("writing maps.csv");
     const PositionMaps maps = position_maps(*study.problem, records);
-    write_file_atomically((fs::path(out_dir) / "maps.csv").string(), maps_csv(maps));
+    write_file_atomically((fs::path(dir) / "maps.csv").string(), maps_csv(maps));
     doc["files"]["maps"] = "maps.csv";
     if (output.value("plots", false)) {
+      note("plotting the maps");
       std::string message;
-      doc["files"]["plots"] = plot_maps(maps, out_dir, message);
+      doc["files"]["plots"] = plot_maps(maps, dir, message);
       if (!message.empty()) doc["plot_message"] = message;
     }
   }
+}
+
+// front.csv: one row per front point, the design components (design.<name>), then the objectives.
+std::string front_csv(const Problem& problem, const std::vector<SolutionPoint>& front) {
+  std::ostringstream csv;
+  csv.precision(12);
+  const std::vector<DesignComponent>& components = problem.design_space().components();
+  for (std::size_t c = 0; c < components.size(); ++c) csv << (c ? "," : "") << "design." << components[c].name;
+  for (const Objective& o : problem.objectives()) csv << "," << o.name;
+  csv << "\n";
+  for (const SolutionPoint& p : front) {
+    for (Eigen::Index c = 0; c < p.design.size(); ++c) csv << (c ? "," : "") << p.design[c];
+    for (double v : p.objectives) csv << "," << v;
+    csv << "\n";
+  }
+  return csv.str();
+}
+
+std::string format_value(double v) {
+  std::ostringstream s;
+  s << std::setprecision(6) << v;
+  return s.str();
+}
+
+// "design.l1" and its bound's path "design.l1.upper" ("design.l.upper[2]" for a vector's component).
+std::string bound_path(const DesignComponent& c, const char* side) {
+  return "design." + c.variable + "." + side + (c.name != c.variable ? "[" + std::to_string(c.index) + "]" : "");
+}
+
+// -1 when x lies on free component k's lower bound, +1 on its upper, 0 else: within half a step
+// of the grid's end points, or 1e-9 of the range for a continuous component.
+int bound_side(const DesignSpace& space, std::size_t k, double x) {
+  const DesignComponent& c = space.components()[static_cast<std::size_t>(space.free_indices()[k])];
+  const double tolerance = c.step > 0.0 ? 0.5 * c.step : 1e-9 * std::max({c.upper - c.lower, std::abs(c.lower), std::abs(c.upper)});
+  const double top = c.step > 0.0 ? space.grid_value(k, space.grid_count(k) - 1) : c.upper;
+  if (std::abs(x - c.lower) <= tolerance) return -1;
+  if (std::abs(x - top) <= tolerance) return 1;
+  return 0;
+}
+
+}  // namespace
+
+std::vector<std::string> bound_warnings(const Problem& problem, const SolverResult& result) {
+  std::vector<std::string> warnings;
+  const DesignSpace& space = problem.design_space();
+  for (std::size_t k = 0; k < space.free_size(); ++k) {
+    const int index = space.free_indices()[k];
+    const DesignComponent& c = space.components()[static_cast<std::size_t>(index)];
+    if (c.integer) continue;  // integer codes (sizes, gears) are enumerations: an end is no hint
+    for (const int side : {-1, 1}) {
+      const char* name = side < 0 ? "lower" : "upper";
+      const std::string widen = "; widen " + bound_path(c, name) + " to check";
+      const std::string at = " is at its " + std::string(name) + " bound";
+      if (result.best && bound_side(space, k, result.best->design[index]) == side) {
+        warnings.push_back("design." + c.name + " = " + format_value(result.best->design[index]) + at +
+                           ": the optimum may lie beyond it" + widen);
+        continue;
+      }
+      std::size_t on = 0;
+      for (const SolutionPoint& p : result.front) on += bound_side(space, k, p.design[index]) == side;
+      if (on > 0) {
+        warnings.push_back("design." + c.name + at + " in " + std::to_string(on) + " of " +
+                           std::to_string(result.front.size()) + " front points: the front may extend beyond it" + widen);
+      }
+    }
+  }
+  return warnings;
+}
+
+namespace {
+
+// The message of `e` without an output Error's "output: " (the run's error adds its own).
+std::string without_component(const std::exception& e) {
+  const auto* error = dynamic_cast<const Error*>(&e);
+  const std::string what = e.what();
+  return error && error->component() == "output" && what.rfind("output: ", 0) == 0 ? what.substr(8) : what;
+}
+
+// The staged outputs of one run: files are written into <out>/.staging-<pid> and moved into
+// <out> by commit(), result.json last, so that the directory never mixes two runs' files.
+class StagedOutputs {
+ public:
+  explicit StagedOutputs(const RunSetup& run) : run_(run) {
+    boost::system::error_code ec;
+    fs::create_directory(run.staging, ec);
+    if (ec) throw Error("output", "cannot create " + run.staging.string() + ": " + ec.message());
+  }
+  ~StagedOutputs() {
+    boost::system::error_code ignored;
+    fs::remove_all(run_.staging, ignored);
+  }
+  StagedOutputs(const StagedOutputs&) = delete;
+  StagedOutputs& operator=(const StagedOutputs&) = delete;
+
+  std::string dir() const { return run_.staging.string(); }
+  void write_result(const Json& doc) const {
+    write_file_atomically((run_.staging / "result.json").string(), doc.dump(2) + "\n");
+  }
+  // Moves every staged file into the output directory, result.json last; a file that cannot be
+  // moved is reported in `errors` and dropped from doc["files"] before result.json is rewritten.
+  void commit(Json& doc, std::vector<std::string>& errors) const {
+    std::vector<fs::path> staged;
+    boost::system::error_code ec;
+    for (fs::directory_iterator it(run_.staging, ec), end; !ec && it != end; it.increment(ec)) {
+      if (it->path().filename() != "result.json") staged.push_back(it->path());
+    }
+    if (ec) throw Error("output", "cannot list " + run_.staging.string() + ": " + ec.message());
+    for (const fs::path& file : staged) {
+      try {
+        move_file(file.string(), (fs::path(run_.out_dir) / file.filename()).string());
+      } catch (const Error& e) {
+        errors.push_back(without_component(e));
+        drop_file(doc, file.filename().string());
+      }
+    }
+    if (!errors.empty()) {
+      doc["output_errors"] = errors;
+      write_result(doc);
+    }
+    move_file((run_.staging / "result.json").string(), run_.result_file.string());
+    sync_directory(run_.out_dir);
+  }
+
+ private:
+  static void drop_file(Json& doc, const std::string& name) {
+    Json& files = doc["files"];
+    for (auto it = files.begin(); it != files.end();) {
+      if (it->is_array()) {
+        Json kept = Json::array();
+        for (const Json& f : *it) {
+          if (f != name) kept.push_back(f);
+        }
+        *it = kept;
+      }
+      it = *it == name ? files.erase(it) : std::next(it);
+    }
+  }
+  const RunSetup& run_;
+};
+
+// A gnuplot message names the directory the plots were made in: the staging one, soon gone.
+void name_output_directory_in_plot_message(const std::string& staging, const std::string& out_dir, Json& doc) {
+  if (!doc.contains("plot_message")) return;
+  std::string message = doc["plot_message"];
+  for (std::size_t at; (at = message.find(staging)) != std::string::npos;) message.replace(at, staging.size(), out_dir);
+  doc["plot_message"] = message;
+}
+
+// Every output of a finished solve, staged then committed. A failure after result.json is
+// staged keeps the solve: result.json is committed with "output_errors" and the error thrown after.
+void write_outputs(const Study& study, const SolverResult& result, const RunOptions& options, const RunSetup& run,
+                   std::ostream* progress, std::ostream& log, Json& doc) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const bool big = study.problem->samples().size() >= 10000;
+  const auto note = [&](const std::string& line) {
+    if (!big) return;
+    if (progress) *progress << "outputs: " << line << "\n";
+    log << "outputs: " << line << "\n";
+  };
+  StagedOutputs staged(run);
+  doc["files"] = Json::object();
+  doc["output_directory"] = run.out_dir;
+  staged.write_result(doc);  // first: whatever fails next, the solve is on disk
+  std::vector<std::string> errors;
+  try {
+    if (!result.front.empty()) {
+      write_file_atomically((fs::path(staged.dir()) / "front.csv").string(), front_csv(*study.problem, result.front));
+      doc["files"]["front"] = "front.csv";
+    }
+    write_best_design_files(study, result, options, staged.dir(), note, doc);
+  } catch (const std::exception& e) {
+    errors.push_back(without_component(e));
+  }
+  name_output_directory_in_plot_message(staged.dir(), run.out_dir, doc);
+  doc["phases"]["outputs_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  doc["wall_time_s"] = doc["phases"]["scene_s"].get<double>() + doc["phases"]["solve_s"].get<double>() +
+                       doc["phases"]["outputs_s"].get<double>();
+  staged.write_result(doc);
+  staged.commit(doc, errors);
+  if (!errors.empty()) {
+    throw Error("output", errors.front() + "; " + run.result_file.string() + " holds the solve (see its \"output_errors\")");
+  }
+}
+
+// "stopped": the checkpoint stays for --resume; any other outcome: it has served.
+void finish_checkpoint(const RunSetup& run, const Json& doc) {
+  if (doc["status"] == "stopped") return;
+  boost::system::error_code ignored;
+  fs::remove(run.checkpoint_file, ignored);
+}
+
+}  // namespace
+
+std::string output_directory_of(const Study& study, const RunOptions& options) {
+  return options.output_directory.empty() ? study.output_directory : options.output_directory;
+}
+
+void check_output_directory(const std::string& out_dir, const RunOptions& options) {
+  if (out_dir.empty()) throw Error("output", "the output directory is empty: give output.directory or --out");
+  struct stat st {};
+  if (::stat(out_dir.c_str(), &st) == 0) {
+    if (!S_ISDIR(st.st_mode)) throw Error("output", "the output directory " + out_dir + " is not a directory");
+    check_existing_output(out_dir, options);
+  } else if (errno == ENOENT) {
+    check_creatable_output(out_dir);
+  } else {
+    throw Error("output", "the output directory " + out_dir + ": " + std::strerror(errno));
+  }
+}
+
+int run_threads(const Json& resolved, const RunOptions& options, std::vector<std::string>& warnings) {
+  if (options.threads < 0) {
+    throw Error("output", "threads = " + std::to_string(options.threads) + ": must be >= 0 (0 = the file's, else all cores)");
+  }
+  const int hardware = hardware_threads();
+  const int from_file = file_threads(resolved);
+  const int threads = options.threads > 0 ? options.threads : from_file > 0 ? from_file : hardware;
+  const int cap = std::min(kMaxThreads, kThreadsPerHardwareThread * std::max(1, hardware));
+  if (threads <= cap) return threads;
+  const std::string source = options.threads > 0 ? "--threads " + std::to_string(threads)
+                                                  : "threads = " + std::to_string(threads) + " (problem file)";
+  warnings.push_back(source + ": capped to " + std::to_string(cap) + " (" + std::to_string(kThreadsPerHardwareThread) +
+                     " x the " + std::to_string(hardware) + " hardware threads)");
+  return cap;
+}
+
+namespace {
+
+// The solve and the outputs, once the directory is locked and the log open.
+Json solve_and_write(Study& study, const RunOptions& options, const RunSetup& run, std::ostream& log) {
+  std::ostream* progress = options.quiet ? nullptr : options.progress ? options.progress : &std::cerr;
+  SolverContext context;
+  context.threads = run.threads;
+  context.seed = run.seed;
+  context.progress = progress;
+  context.stop = options.stop;
+  context.output_directory = run.out_dir;
+  context.log = &log;
+  context.checkpoint_file = run.checkpoint_file.string();
+  context.resume = options.resume && !options.force;
+
+  const std::string started = iso_time_now();
+  const auto t0 = std::chrono::steady_clock::now();
+  SolverResult result = study.solver->solve(*study.problem, context);
+  const double solve_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  Json doc = result_document(study, run, result, started);
+  doc["phases"] = {{"scene_s", options.scene_time_s}, {"solve_s", solve_s}, {"outputs_s", 0.0}};
+  doc["wall_time_s"] = options.scene_time_s + solve_s;
+  std::vector<std::string> warnings = run.warnings;
+  for (const std::string& w : bound_warnings(*study.problem, result)) {
+    warnings.push_back(w);
+    log << "warning: " << w << "\n";
+  }
+  if (!warnings.empty()) doc["warnings"] = warnings;
+  add_indicators(study, result, solve_s, doc);
+  try {
+    write_outputs(study, result, options, run, progress, log, doc);
+  } catch (...) {
+    // The solve outlives a failed write: its best design is in the log at least.
+    if (doc.contains("best")) log << "best: " << doc["best"].dump() << "\n";
+    throw;
+  }
+  finish_checkpoint(run, doc);
+  return doc;
 }
 
 }  // namespace
@@ -214,44 +610,39 @@ void write_best_design_files(const Study& study, const SolverResult& result, con
 Json run_study(Study& study, const RunOptions& options) {
   const Json& resolved = study.resolved;
   RunSetup run;
-  run.out_dir = options.output_directory.empty() ? study.output_directory : options.output_directory;
+  run.out_dir = output_directory_of(study, options);
   run.result_file = fs::path(run.out_dir) / "result.json";
   run.checkpoint_file = fs::path(run.out_dir) / "checkpoint.json";
-  run.threads = threads_of(resolved, options);
-  refuse_finished_study(run, options);
+  run.staging = fs::path(run.out_dir) / (".staging-" + std::to_string(::getpid()));
+  run.threads = run_threads(resolved, options, run.warnings);
+  check_output_directory(run.out_dir, options);
+  create_output_directory(run.out_dir);
+  const DirectoryLock lock(run.out_dir);
+  check_output_directory(run.out_dir, options);  // again under the lock: another run may have finished meanwhile
   run.seed = choose_seed(resolved, options, run.checkpoint_file);
-  prepare_output_directory(run.out_dir);
-
-  std::ofstream log((fs::path(run.out_dir) / "run.log").string(), options.resume ? std::ios::app : std::ios::trunc);
+  check_output_space(study, options, run.out_dir);
+  // Opened (appending: nothing changes yet) before the previous study goes, so that a refused
+  // log (a symbolic link) leaves that study untouched; emptied after, for a fresh run.
+  LogFile log_file((fs::path(run.out_dir) / "run.log").string(), true);
+  remove_previous_outputs(run.out_dir);
+  if (!options.resume || options.force) log_file.truncate();
+  std::ostream& log = log_file.stream();
   log << "hapsyn " << version() << " " << (options.resume ? "resume" : "run") << " " << resolved["name"].get<std::string>()
       << " at " << iso_time_now() << ", seed " << run.seed << ", " << run.threads << " threads\n";
-  log.flush();
-
-  SolverContext context;
-  context.threads = run.threads;
-  context.seed = run.seed;
-  context.progress = options.quiet ? nullptr : options.progress ? options.progress : &std::cerr;
-  context.stop = options.stop;
-  context.output_directory = run.out_dir;
-  context.log = log ? &log : nullptr;
-  context.checkpoint_file = run.checkpoint_file.string();
-  context.resume = options.resume && !options.force;
-
-  const std::string started = iso_time_now();
-  const auto t0 = std::chrono::steady_clock::now();
-  SolverResult result = study.solver->solve(*study.problem, context);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-
-  Json doc = result_document(study, run, result, started, wall);
-  add_indicators(study, result, wall, doc);
-  write_best_design_files(study, result, options, run.out_dir, doc);
-  doc["output_directory"] = run.out_dir;
-  write_file_atomically(run.result_file.string(), doc.dump(2) + "\n");
-  // The study is finished: its checkpoint has served.
-  boost::system::error_code remove_error;
-  fs::remove(run.checkpoint_file, remove_error);
-  if (log) log << "finished: status " << doc["status"].get<std::string>() << ", wall time " << wall << " s\n";
-  return doc;
+  std::ostream& warn = options.progress ? *options.progress : std::cerr;
+  for (const std::string& w : run.warnings) {
+    warn << "hapsyn: warning: " << w << "\n";
+    log << "warning: " << w << "\n";
+  }
+  try {
+    Json doc = solve_and_write(study, options, run, log);
+    log << "finished: status " << doc["status"].get<std::string>() << ", wall time " << doc["wall_time_s"].get<double>()
+        << " s\n";
+    return doc;
+  } catch (const std::exception& e) {
+    log << "failed: " << e.what() << "\n";
+    throw;
+  }
 }
 
 }  // namespace hapsyn

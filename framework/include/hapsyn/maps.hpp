@@ -21,8 +21,13 @@ struct SampleRecords {
 /// Evaluates `full_design` (all components) sample by sample. \throws Error as Problem::evaluate.
 SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full_design);
 
+/// The names of the local-value columns of samples.csv, one per local of every metric in order:
+/// "<metric>.<local>", and "<metric>.<local>[k]" for the k-th (from 0) of names that would repeat
+/// (a metric used by several objectives), so every name is unique.
+std::vector<std::string> local_columns(const Problem& problem);
+
 /// samples.csv: sample, the scene coordinates, `weight` when the scene has SampleSet::weights,
-/// status, then <metric>.<local> per metric (local values as computed, before weighting).
+/// status, then the local_columns (local values as computed, before weighting).
 std::string samples_csv(const Problem& problem, const SampleRecords& records);
 
 /// Every objective's value per group of samples: group[i] in [0, G) is sample i's group,
