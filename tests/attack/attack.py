@@ -1161,7 +1161,7 @@ def case_checkpoint(ctx: Ctx, case: Case, sb: Sandbox) -> Outcome:
     elif kind == "object":
         ck.write_bytes(b"{}")
     r = run(ctx, sb, ["run", problem(GA_PROBLEM), "--out", str(out), "--quiet", "--resume"] + extra + with_sets(GA_SETS),
-            timeout=max(ctx.args.timeout, 60))
+            timeout=max(ctx.args.timeout, 30))
     checks = [classify(r, expect)]
     if expect == "refuse" and r.rc == 1 and "checkpoint.json" not in r.err:
         checks.append(("wrong", "refused, but the message does not name checkpoint.json: " + first_error_line(r.err)))
@@ -1441,10 +1441,30 @@ def case_signal(ctx: Ctx, case: Case, sb: Sandbox) -> Outcome:
         probs = out_dir_problems(out, True)
         if probs:
             checks.append(("mixed", "; ".join(probs)))
+        if r.rc == 0 and doc is not None and doc.get("status") == "stopped":
+            checks.append(resume_after_stop(ctx, sb, prob, sets, out))
     cat, det = worst(*checks)
     o = outcome(r, cat, f"{solver}: " + (det or f"stopped {took:.1f} s after {sig.name}"))
     o.cmd = cmd + f"   # then kill -{sig.name[3:]} after {delay:.1f} s"
     return o
+
+
+def resume_after_stop(ctx: Ctx, sb: Sandbox, prob: str, sets: list, out: Path) -> tuple:
+    """A stopped study continues with --resume: it must start (not be refused as finished) and
+    stop again on SIGINT."""
+    t0 = time.monotonic()
+    p, cmd, argv = start(ctx, sb, ["run", problem(prob), "--out", str(out), "--threads", "2", "--resume"] + with_sets(sets))
+    while p.poll() is None and time.monotonic() - t0 < 3.0:
+        time.sleep(0.02)
+    if p.poll() is None:
+        os.kill(p.pid, signal.SIGINT)
+    r = finish(p, cmd, argv, ctx.args.stop_bound + 10, t0)
+    if r.timed_out:
+        return "hang", "the resumed run did not stop on SIGINT"
+    if r.rc == 1 and "finished" in r.err:
+        return "wrong", "a stopped study cannot be resumed (--resume refuses it as finished): " + first_error_line(r.err)
+    cat, det = classify(r, "accept")
+    return cat, ("--resume after the stop: " + det) if det else ""
 
 
 def gen_signal(seed: int, n: int) -> list:

@@ -8,7 +8,9 @@
 #include <boost/filesystem.hpp>
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <fstream>
+#include <iostream>
 #include <iterator>
 
 namespace fs = boost::filesystem;
@@ -37,6 +39,8 @@ TEST(StructuredFuzz, MutantsOfTheCorpusEndInAnErrorOrAValidStudy) {
     const int steps = 1 + static_cast<int>(rng() % 3);
     for (int k = 0; k < steps; ++k) hapsyn::fuzz::mutate_structure(input, 100000, rng);
     SCOPED_TRACE("mutant " + std::to_string(i) + ": " + input.substr(0, 200));
+    // HAPSYN_FUZZ_VERBOSE=1: name each mutant before it runs (a crash ends the process, not the test).
+    if (std::getenv("HAPSYN_FUZZ_VERBOSE")) std::cerr << "mutant " << i << " (" << input.size() << " bytes): " << input.substr(0, 120) << std::endl;
     EXPECT_NO_THROW(hapsyn::fuzz::fuzz_one(reinterpret_cast<const std::uint8_t*>(input.data()), input.size()));
   }
 }
