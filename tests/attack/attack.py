@@ -357,6 +357,11 @@ def outside_writes(before: dict, after: dict, allowed: list) -> list:
     return sorted(bad)
 
 
+def leftover_temps(before: dict, after: dict) -> list:
+    """Temporary files (of atomic writes) that appeared and were not cleaned up."""
+    return sorted(p for p in after if p not in before and re.search(r"(^|/)\.tmp-|\.tmp$|\.part$", p))
+
+
 def sha(path: Path) -> Optional[str]:
     try:
         return hashlib.sha256(path.read_bytes()).hexdigest()
@@ -675,7 +680,11 @@ def case_set(ctx: Ctx, case: Case, sb: Sandbox) -> Outcome:
         allowed = [str(sb.cwd / "results")]
     cat, det = classify(r, "any" if expect == "contained" else expect)
     checks = [(cat, det)]
-    bad = outside_writes(before, sb.snapshot(), allowed)
+    after = sb.snapshot()
+    temps = leftover_temps(before, after) if not r.timed_out and r.rc is not None and r.rc >= 0 else []
+    if temps:
+        checks.append(("mixed", "temporary files left: " + ", ".join(os.path.relpath(t, sb.root) for t in temps[:3])))
+    bad = outside_writes(before, after, allowed)
     if bad:
         kind = "wrong" if expect == "contained" else "mixed"
         checks.append((kind, "wrote outside " + (allowed[0] if allowed else "(nothing allowed)") + ": " +
@@ -818,9 +827,13 @@ def case_cli(ctx: Ctx, case: Case, sb: Sandbox) -> Outcome:
         probs = out_dir_problems(out, True)
         if probs:
             checks.append(("mixed", "; ".join(probs)))
-    bad = outside_writes(before, sb.snapshot(), [str(sb.cwd)])
+    after = sb.snapshot()
+    bad = outside_writes(before, after, [str(sb.cwd)])
     if bad:
         checks.append(("mixed", "wrote outside the working directory: " + ", ".join(bad[:3])))
+    temps = leftover_temps(before, after) if not r.timed_out and r.rc is not None and r.rc >= 0 else []
+    if temps:
+        checks.append(("mixed", "temporary files left: " + ", ".join(os.path.relpath(t, sb.root) for t in temps[:3])))
     if case.kind == "out-is-file" and (sb.cwd / "file.txt").read_text() != "precious\n":
         checks.append(("wrong", "the file given as --out was overwritten"))
     cat, det = worst(*checks)
@@ -973,7 +986,7 @@ def case_output(ctx: Ctx, case: Case, sb: Sandbox) -> Outcome:
             checks.append(("mixed", "CSVs written though result.json cannot be: " + ", ".join(sorted(names))))
         cat, det = worst(*checks)
         return outcome(r, cat, det)
-    if kind in ("full-fs", "full-fs-prefilled", "full-fs-force"):
+    if kind in ("full-fs", "full-fs-prefilled", "full-fs-force", "full-fs-tight"):
         if not ctx.is_root:
             return Outcome("skip", "not root: cannot mount a tmpfs")
         mnt = sb.root / "fs"
@@ -989,14 +1002,41 @@ def case_output(ctx: Ctx, case: Case, sb: Sandbox) -> Outcome:
                         f.write(b"\0" * (400 * 1024))
                     except OSError:
                         pass
+            args = ["run", P, "--out", str(fout), "--quiet", "--force"] + with_sets(OUT_A)
+            if kind == "full-fs-tight":
+                # A small study (CSVs of a few KiB) on a filesystem with 2, 4, ... 40 KiB left
+                # (one run each, on a cleaned filesystem): some files fit, the later ones do not.
+                args = ["run", P, "--out", str(fout), "--quiet", "--force", "--set", "scene.options.step=0.01"]
+                sizes = list(range(2, 42, 2))
+                rng.shuffle(sizes)
+                r = None
+                for kib in sizes:
+                    shutil.rmtree(fout, ignore_errors=True)
+                    (mnt / "filler").unlink(missing_ok=True)
+                    st = os.statvfs(mnt)
+                    with open(mnt / "filler", "wb") as f:
+                        try:
+                            f.write(b"\0" * max(0, st.f_bavail * st.f_frsize - kib * 1024))
+                        except OSError:
+                            pass
+                    r = run(ctx, sb, args)
+                    checks = [classify(r)]
+                    probs = out_dir_problems(fout, True)
+                    if probs:
+                        checks.append(("mixed", f"{kib} KiB free: " + "; ".join(probs)))
+                    cat, det = worst(*checks)
+                    if cat != "ok":
+                        break
+                o = outcome(r, cat, det)
+                o.cmd = f"mount -t tmpfs -o size=200k tmpfs {mnt} && (fill it up to {kib} KiB free) && " + o.cmd
+                return o
             if kind == "full-fs-force":
                 small = ["scene.options.step=0.01"]
                 r0 = run(ctx, sb, ["run", P, "--out", str(fout), "--quiet"] + with_sets(small))
                 if r0.rc != 0:
                     return outcome(r0, "skip", "could not write the first (small) study: " + first_error_line(r0.err))
-            args = ["run", P, "--out", str(fout), "--quiet", "--force"] + with_sets(OUT_A)
             r = run(ctx, sb, args)
-            checks = [classify(r, "refuse")]
+            checks = [classify(r, "any" if kind == "full-fs-tight" else "refuse")]
             probs = out_dir_problems(fout, True)
             if probs:
                 checks.append(("mixed", "; ".join(probs)))
@@ -1017,14 +1057,15 @@ OUTPUT_KINDS = [
     ("kill-after-samples", "runner: output files not staged (old result.json + new CSVs)"),
     ("concurrent-empty", "runner: no output lock (two runs into one directory)"),
     ("runlog-symlink", "runner: run.log followed as a symlink"),
-    ("full-fs", "runner: full filesystem leaves a partial output"),
+    ("full-fs-tight", "runner: full filesystem leaves a partial output"),
     ("kill-random", "runner: output files not staged (old result.json + new CSVs)"),
     ("concurrent-force", "runner: no output lock (two runs into one directory)"),
-    ("full-fs-prefilled", "runner: no free-space check"),
+    ("full-fs", "runner: full filesystem leaves a partial output"),
     ("runlog-symlink-resume", "runner: run.log followed as a symlink"),
     ("samples-is-dir", "runner: output path occupied by a directory"),
     ("result-is-dir", "runner: output path occupied by a directory"),
     ("full-fs-force", "runner: full filesystem leaves a partial output"),
+    ("full-fs-prefilled", "runner: no free-space check"),
 ]
 
 
@@ -1033,8 +1074,10 @@ def gen_output(seed: int, n: int) -> list:
     for i in range(n):
         if i < len(OUTPUT_KINDS):
             kind, cause = OUTPUT_KINDS[i]
-        elif i % 3 == 0:
+        elif i % 4 == 0:
             kind, cause = OUTPUT_KINDS[1]
+        elif i % 4 == 1:
+            kind, cause = OUTPUT_KINDS[3]
         else:
             kind, cause = OUTPUT_KINDS[4]
         cases.append(Case("output", i, kind, cause, case_output, {"rng": f"{seed}:output:{i}"}))
@@ -1471,9 +1514,7 @@ def gen_signal(seed: int, n: int) -> list:
     cases = []
     for i in range(n):
         study = i % len(SIGNAL_STUDIES)
-        kind = "sigint" if i < len(SIGNAL_STUDIES) else SIGNAL_KINDS[(i // len(SIGNAL_STUDIES)) % len(SIGNAL_KINDS)]
-        if i == 1:
-            kind = "sigint"
+        kind = "sigint" if i < len(SIGNAL_STUDIES) else SIGNAL_KINDS[1 + (i - len(SIGNAL_STUDIES)) % 3]
         solver = SIGNAL_STUDIES[study][0]
         cause = f"solver {solver}: no graceful stop with a checkpoint" if kind != "double-sigint" else "runner: second signal"
         cases.append(Case("signal", i, kind, cause, case_signal, {"rng": f"{seed}:signal:{i}", "study": study}))
