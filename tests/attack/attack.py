@@ -320,8 +320,8 @@ def out_dir_problems(out: Path, clean_exit: bool) -> list:
         except (OSError, ValueError) as e:
             problems.append(f"result.json unreadable ({e.__class__.__name__})")
             doc = None
-        if isinstance(doc, dict):
-            files = doc.get("files") if isinstance(doc.get("files"), dict) else {}
+        if isinstance(doc, dict) and isinstance(doc.get("files"), dict):
+            files = doc["files"]
             listed = {v for v in files.values() if isinstance(v, str)}
             for c in csvs:
                 if c not in listed:
@@ -330,7 +330,7 @@ def out_dir_problems(out: Path, clean_exit: bool) -> list:
                 if f.endswith(".csv") and f not in names:
                     problems.append(f"result.json names {f}, which is missing")
     if clean_exit:
-        temps = sorted(n for n in names if re.search(r"\.tmp|~$|\.part$|\.new$|^\.hapsyn", n))
+        temps = sorted(n for n in names if re.search(r"\.tmp|~$|\.part$|\.new$", n))
         if temps:
             problems.append("temporary files left after the process ended: " + ", ".join(temps[:5]))
     return problems
