@@ -5,7 +5,8 @@
 // that could not be written, 2 usage error, 3 unexpected internal error, 4 `run` stopped on
 // request (SIGINT, SIGTERM, SIGUSR1): result.json holds the best so far with status "stopped",
 // the checkpoint is kept and `hapsyn run FILE --resume` continues (a job script can tell this
-// from a finished run and requeue). A second signal ends the process at once with 128 + signal.
+// from a finished run and requeue); likewise `sweep` and `compare` stopped (the same command
+// continues them, reusing the finished runs). A second signal ends the process at once with 128 + signal.
 #include <hapsyn/compare.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/groups.hpp>
@@ -298,8 +299,10 @@ int scene_command(const std::string& file, const std::vector<std::string>& sets,
 }
 
 void print_sweep(const Json& summary, std::ostream& out) {
-  out << "sweep: " << summary["runs"].size() << " runs; reference " << summary["reference"]["overrides"].dump()
-      << " (" << format_number(summary["reference"]["run_time_s"].get<double>()) << " s)\n";
+  const Json& reference_time = summary["reference"]["run_time_s"];
+  out << "sweep: " << summary["runs"].size() << " runs; reference " << summary["reference"]["overrides"].dump() << " ("
+      << (reference_time.is_number() ? format_number(reference_time.get<double>()) + " s" : std::string("not run")) << ")\n";
+  if (summary.value("status", "") == "stopped") out << "stopped: " << summary.value("message", "") << "\n";
   std::vector<std::string> keys;
   if (!summary["runs"].empty()) {
     for (auto it = summary["runs"][0]["values"].begin(); it != summary["runs"][0]["values"].end(); ++it) keys.push_back(it.key());
@@ -374,7 +377,7 @@ void define_study_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.run->add_option("--threads", a.threads, "Worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
   c.run_seed = c.run->add_option("--seed", a.seed, "Random seed (default: from the file, else drawn)")->check(kSeed);
   c.run->add_flag("--quiet,-q", a.quiet, "No progress output");
-  c.run->add_flag("--resume", a.resume, "Continue from the output directory's checkpoint (solvers that checkpoint: ga)");
+  c.run->add_flag("--resume", a.resume, "Continue from the output directory's checkpoint (every solver that can run long checkpoints)");
   c.run->add_flag("--force", a.force, "Overwrite a finished study (an existing result.json) in the output directory");
 
   c.validate = app.add_subcommand("validate", "Check a problem file completely without running it");
@@ -417,6 +420,8 @@ void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.sweep->add_option("--threads", a.threads, "Worker threads per run (default: all cores)")->check(CLI::NonNegativeNumber);
   c.sweep->add_option("--seed", a.sweep_seed, "Random seed of every run")->check(kSeed);
   c.sweep->add_flag("--progress", a.sweep_progress, "Show each run's progress");
+  c.sweep->add_flag("--force", a.force,
+                    "Run every case again (default: a folder's finished result of the same problem and seed is reused)");
 
   c.compare = app.add_subcommand(
       "compare", "Run several studies on this machine: one table (front quality, evaluations, time) and plots");
@@ -425,6 +430,8 @@ void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.compare->add_option("--out", a.compare.output_directory, "Output directory (one folder per study)");
   c.compare->add_option("--threads", a.compare.threads, "Worker threads per study")->check(CLI::NonNegativeNumber);
   c.compare->add_option("--seed", a.seed, "Random seed of every study")->check(kSeed);
+  c.compare->add_flag("--force", a.compare.force,
+                      "Run every study again (default: a folder's finished result of the same problem and seed is reused)");
 }
 
 int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& registry) {
@@ -489,8 +496,10 @@ int sweep_command(const Arguments& a, const hapsyn::Registry& registry) {
   options.seed = a.sweep_seed;
   options.quiet = !a.sweep_progress;
   options.stop = &stop_requested;
-  print_sweep(hapsyn::run_sweep(doc, options, registry), std::cout);
-  return 0;
+  options.force = a.force;
+  const Json summary = hapsyn::run_sweep(doc, options, registry);
+  print_sweep(summary, std::cout);
+  return summary.value("status", "") == "stopped" ? kExitStopped : 0;
 }
 
 int dispatch(const Commands& c, Arguments& a, const hapsyn::Registry& registry) {
@@ -505,8 +514,9 @@ int dispatch(const Commands& c, Arguments& a, const hapsyn::Registry& registry) 
   if (*c.compare) {
     if (c.compare->count("--seed") > 0) a.compare.seed = a.seed;
     a.compare.stop = &stop_requested;
-    hapsyn::print_compare(hapsyn::run_compare(a.compare, registry), std::cout);
-    return 0;
+    const Json summary = hapsyn::run_compare(a.compare, registry);
+    hapsyn::print_compare(summary, std::cout);
+    return summary.value("status", "") == "stopped" ? kExitStopped : 0;
   }
   if (*c.scene) {
     const std::optional<int> threads = c.scene_threads->count() > 0 ? std::optional<int>(a.threads) : std::nullopt;

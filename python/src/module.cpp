@@ -54,7 +54,7 @@ PYBIND11_MODULE(_hapsyn, m) {
       .def("resolved", &StudyHandle::resolved, "The resolved problem as JSON text.")
       .def("free_names", &StudyHandle::free_names, "Names of the free design components, in order.")
       .def("objective_names", &StudyHandle::objective_names, "Names of the objectives, in order.")
-      .def("local_names", &StudyHandle::local_names, "<metric>.<local> for every local value, in order.")
+      .def("local_names", &StudyHandle::local_names, "<metric>.<local> for every local value, in order (\"[k]\" appended to names that repeat, as in samples.csv).")
       .def("free_from_json", &StudyHandle::free_from_json, py::arg("design_json"),
            "Free design vector from a JSON object of design variables.")
       .def("run", &StudyHandle::run, py::arg("threads"), py::arg("seed"), py::arg("out"), py::arg("force"),

@@ -151,13 +151,8 @@ std::vector<std::string> StudyHandle::objective_names() const {
   return names;
 }
 
-std::vector<std::string> StudyHandle::local_names() const {
-  std::vector<std::string> names;
-  for (const MetricEntry& m : study_->problem->metrics()) {
-    for (const LocalValue& l : m.metric->locals()) names.push_back(m.plugin + "." + l.name);
-  }
-  return names;
-}
+// The same unique names as samples.csv's columns (a metric used twice gets "[k]" suffixes).
+std::vector<std::string> StudyHandle::local_names() const { return local_columns(*study_->problem); }
 
 std::vector<double> StudyHandle::free_from_json(const std::string& design_json) const {
   const Json design = Json::parse(design_json);
