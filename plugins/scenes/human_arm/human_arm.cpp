@@ -233,6 +233,7 @@ std::uint64_t bytes_per_sample(bool ellipsoids) {
 }
 
 // The largest cache file a scene of at most `samples` samples can have: header, key, payload.
+// (samples <= 401^3 x 1e6 candidate poses: no overflow.)
 std::uint64_t max_cache_bytes(const std::string& key, long long samples, bool ellipsoids) {
   return 4096 + key.size() + static_cast<std::uint64_t>(samples) * bytes_per_sample(ellipsoids);
 }
@@ -257,7 +258,8 @@ std::string load_cache_bytes(const std::string& file, std::uint64_t max_bytes, s
 }
 
 // Reads a cache file. Returns "" and fills raw when it is intact and made for `key`; else the
-// reason it is not used ("missing", "corrupt: ...", "stale: ...").
+// reason it is not used ("missing", "corrupt: ...", "stale: ..."). `max_samples`: the candidate
+// poses of these options, which no intact cache exceeds; a larger file is not even read.
 std::string read_cache(const std::string& file, const std::string& key, bool ellipsoids, int lattice_points,
                        int orientations, long long max_samples, RawScene* raw) {
   std::string bytes;
@@ -540,7 +542,7 @@ SampleSet HumanArmScene::build(const SceneRequest& request) const {
   std::string cache_status = o.cache ? (file.empty() ? "off: no cache directory ($XDG_CACHE_HOME and $HOME unset)" : "")
                                      : "off";
   if (!file.empty()) {
-    const std::string why = read_cache(file, key, ellipsoids, g.points, o.orientations, o.max_samples, &raw);
+    const std::string why = read_cache(file, key, ellipsoids, g.points, o.orientations, size_.candidate_poses, &raw);
     if (why.empty()) {
       from_cache = true;
       cache_status = "hit";
