@@ -4,7 +4,12 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <thread>
+
+#include <sys/stat.h>
+#include <unistd.h>
 
 using hapsyn::Json;
 using hapsyn::Registry;
@@ -205,4 +210,115 @@ TEST(Registry, OptionsRoundTripThroughJson) {
   EXPECT_EQ(hapsyn::options_schema<Local>()["properties"]["n"]["minimum"].dump(), "2");
   expect_error([] { hapsyn::make_options<Local>(Json{{"n", 1}}); }, {"options.n = 1: must be >= 2"});
   expect_error([] { hapsyn::make_options<Local>(Json{{"rotation", {{1, 0}, {0}}}}); }, {"options.rotation[1]"});
+}
+
+// ---- plugin library files and names (issue 20) ----
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// A fresh directory under the test's temporary directory, removed at the end.
+struct TempDir {
+  fs::path path;
+  explicit TempDir(const std::string& name) : path(fs::temp_directory_path() / ("hapsyn-registry-" + name + "-" + std::to_string(::getpid()))) {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+// A copy of the built gii plugin, cut to `length` bytes, as `dir`/hapsyn-gii.so.
+void truncated_copy(const fs::path& dir, std::uintmax_t length) {
+  const fs::path target = dir / "hapsyn-gii.so";
+  fs::copy_file(fs::path(HAPSYN_PLUGIN_DIR) / "hapsyn-gii.so", target, fs::copy_options::overwrite_existing);
+  fs::resize_file(target, length);
+}
+
+}  // namespace
+
+TEST(Registry, TruncatedLibraryIsSkippedWithAWarningNamingTheFile) {
+  const std::uintmax_t full = fs::file_size(fs::path(HAPSYN_PLUGIN_DIR) / "hapsyn-gii.so");
+  for (const std::uintmax_t length : {std::uintmax_t(0), std::uintmax_t(20), std::uintmax_t(64), full / 2, full - 1}) {
+    TempDir dir("truncated");
+    truncated_copy(dir.path, length);
+    fs::copy_file(fs::path(HAPSYN_PLUGIN_DIR) / "hapsyn-gdi.so", dir.path / "hapsyn-gdi.so");
+    const Registry registry({dir.path.string()});
+    std::vector<std::string> errors;
+    const auto records = registry.list(&errors);  // a SIGBUS here would end the test binary
+    ASSERT_EQ(records.size(), 1u) << "length " << length;
+    EXPECT_EQ(records[0].name, "gdi");
+    ASSERT_EQ(errors.size(), 1u) << "length " << length;
+    const std::string& e = errors[0];
+    EXPECT_NE(e.find("registry: " + (dir.path / "hapsyn-gii.so").string() + ": not loaded: "), std::string::npos) << e;
+    EXPECT_TRUE(e.find("truncated?") != std::string::npos || e.find("not an ELF file") != std::string::npos) << e;
+    // A study that names the plugin gets the same error.
+    expect_error([&] { registry.find("gii"); }, {"hapsyn-gii.so", "not loaded"});
+  }
+}
+
+TEST(Registry, TruncatedLibraryMessageSaysWhatEndsPastTheFile) {
+  TempDir dir("truncated-message");
+  const std::uintmax_t full = fs::file_size(fs::path(HAPSYN_PLUGIN_DIR) / "hapsyn-gii.so");
+  truncated_copy(dir.path, full - 1);
+  expect_error([&] { Registry({dir.path.string()}).find("gii"); },
+               {"hapsyn-gii.so: not loaded: ", "ends past the end of the file", "the file has " + std::to_string(full - 1) +
+                                                                                    " bytes; truncated?"});
+  truncated_copy(dir.path, 10);
+  expect_error([&] { Registry({dir.path.string()}).find("gii"); },
+               {"hapsyn-gii.so: not loaded: is 10 bytes, shorter than an ELF header (truncated?)"});
+}
+
+TEST(Registry, CliListsTheOtherPluginsBesideATruncatedOne) {
+  TempDir dir("cli");
+  const std::uintmax_t full = fs::file_size(fs::path(HAPSYN_PLUGIN_DIR) / "hapsyn-gii.so");
+  truncated_copy(dir.path, full / 2);
+  ::setenv("HAPSYN_PLUGIN_PATH", dir.path.c_str(), 1);  // popen's shell inherits it
+  const auto o = hapsyn::test::hapsyn_cli("plugins");
+  ::unsetenv("HAPSYN_PLUGIN_PATH");
+  EXPECT_EQ(o.code, 0) << o.out;
+  EXPECT_NE(o.out.find("hapsyn: warning: registry: " + (dir.path / "hapsyn-gii.so").string() + ": not loaded: "),
+            std::string::npos)
+      << o.out;
+  EXPECT_NE(o.out.find("fivebar"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("gdi"), std::string::npos) << o.out;
+}
+
+TEST(Registry, NonRegularPluginFilesAreRefusedWithoutBlocking) {
+  TempDir dir("fifo");
+  ASSERT_EQ(::mkfifo((dir.path / "hapsyn-gii.so").c_str(), 0600), 0);
+  fs::create_directories(dir.path / "hapsyn-gdi.so");
+  const Registry registry({dir.path.string()});
+  expect_error([&] { registry.find("gii"); }, {"hapsyn-gii.so: not loaded: is not a regular file (a FIFO, socket or device)"});
+  expect_error([&] { registry.find("gdi"); }, {"hapsyn-gdi.so: not loaded: is a directory, not a shared library"});
+}
+
+TEST(Registry, TextFileNamedLikeAPluginIsNotAnElfFile) {
+  TempDir dir("text");
+  std::ofstream(dir.path / "hapsyn-gii.so") << std::string(200, 'x');
+  expect_error([&] { Registry({dir.path.string()}).find("gii"); }, {"hapsyn-gii.so: not loaded: not an ELF file (no ELF magic)"});
+}
+
+TEST(Registry, PluginNameThatCouldBeAPathIsRefused) {
+  for (const std::string name : {"y.so/../payload", "../hapsyn-gii", "/tmp/x", "gii.so", "a b", ""}) {
+    expect_error([&] { hapsyn::test::registry().find(name); },
+                 {"registry: plugin name " + Json(name).dump() + ": not a plugin name (names are letters, digits, '_' and '-')"});
+  }
+  expect_error([] { hapsyn::test::registry().create_scene("../../x", Json::object(), "scene"); },
+               {"plugin name \"../../x\"", "names are letters, digits, '_' and '-'"});
+  EXPECT_EQ(hapsyn::test::registry().find("motion_feasibility").kind, "metric");  // '_' is a name character
+}
+
+TEST(Registry, FilesWhoseNameIsNotAPluginNameAreIgnored) {
+  TempDir dir("names");
+  fs::copy_file(fs::path(HAPSYN_PLUGIN_DIR) / "hapsyn-gdi.so", dir.path / "hapsyn-gdi.so");
+  fs::copy_file(fs::path(HAPSYN_PLUGIN_DIR) / "hapsyn-gii.so", dir.path / "hapsyn-g.ii.so");
+  const Registry registry({dir.path.string()});
+  EXPECT_EQ(registry.known_names(), std::vector<std::string>{"gdi"});
+  std::vector<std::string> errors;
+  EXPECT_EQ(registry.list(&errors).size(), 1u);
+  EXPECT_TRUE(errors.empty());
 }

@@ -7,6 +7,8 @@
 
 #include <boost/filesystem.hpp>
 
+#include <sstream>
+
 #include <unistd.h>
 
 using hapsyn::Json;
@@ -111,4 +113,26 @@ TEST(SceneWeights, SceneCsvEndsWithAWeightColumnWhenWeightsArePresent) {
   EXPECT_EQ(hapsyn::scene_csv(s), "x,y\n0,0\n0.5,0\n");
   s.weights = {0.25, 3.0};
   EXPECT_EQ(hapsyn::scene_csv(s), "x,y,weight\n0,0,0.25\n0.5,0,3\n");
+}
+
+// The run's grants to a scene build (issue 20): a default request grants nothing, so a scene
+// built without the loader's settings behaves as before (every core, no progress output).
+TEST(Scene, DefaultRequestStatesNoThreadsAndNoProgressStream) {
+  const hapsyn::SceneRequest request;
+  EXPECT_TRUE(request.attributes.empty());
+  EXPECT_EQ(request.threads, 0);
+  EXPECT_EQ(request.progress, nullptr);
+}
+
+TEST(Scene, PluginScenesReceiveTheRequestThreadsAndProgressThroughTheRegistry) {
+  // human_arm through the plugin boundary: the fields added after `attributes` arrive intact.
+  const auto scene = registry().create_scene(
+      "human_arm", Json{{"lattice_step", 0.2}, {"orientations", 20}, {"joint3_steps", 3}, {"cache", false}}, "scene");
+  hapsyn::SceneRequest request;
+  request.threads = 1;
+  std::ostringstream progress;
+  request.progress = &progress;
+  const SampleSet set = scene->build(request);
+  EXPECT_GT(set.size(), 0);
+  EXPECT_EQ(progress.str(), "");  // a build well under 2 s prints nothing
 }

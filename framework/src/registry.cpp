@@ -10,8 +10,16 @@
 #include <boost/dll/shared_library.hpp>
 #include <boost/filesystem.hpp>
 
+#include <elf.h>
+#include <fcntl.h>
+#include <link.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <functional>
 #include <set>
 #include <sstream>
@@ -24,19 +32,124 @@ namespace {
 constexpr const char* kPrefix = "hapsyn-";
 constexpr const char* kSuffix = ".so";
 
-bool is_plugin_file_name(const std::string& file) {
-  return file.size() > std::string(kPrefix).size() + std::string(kSuffix).size() &&
-         file.compare(0, 7, kPrefix) == 0 && file.compare(file.size() - 3, 3, kSuffix) == 0;
+// Plugin names are file-name fragments: nothing that could make a path ('/', "..", '.so').
+bool is_plugin_name(const std::string& name) {
+  return !name.empty() && name.size() <= 128 && std::all_of(name.begin(), name.end(), [](char c) {
+           return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+         });
 }
 
 std::string plugin_name_of(const std::string& file) {
   return file.substr(7, file.size() - 10);
 }
 
+// hapsyn-<name>.so with a valid name: other files in a plugin directory are not plugins.
+bool is_plugin_file_name(const std::string& file) {
+  return file.size() > std::string(kPrefix).size() + std::string(kSuffix).size() &&
+         file.compare(0, 7, kPrefix) == 0 && file.compare(file.size() - 3, 3, kSuffix) == 0 &&
+         is_plugin_name(plugin_name_of(file));
+}
+
 std::string join(const std::vector<std::string>& items, const std::string& separator) {
   std::string out;
   for (std::size_t i = 0; i < items.size(); ++i) out += (i ? separator : "") + items[i];
   return out;
+}
+
+// ---- plugin library files, checked before dlopen ----
+// dlopen maps a library's segments as its program headers describe them; a truncated file maps
+// past its end and the first touch of those pages is a SIGBUS, not an error dlopen could report.
+// So the headers are read with plain reads first and every range they name must lie in the file.
+
+struct Fd {
+  int fd = -1;
+  ~Fd() {
+    if (fd >= 0) ::close(fd);
+  }
+};
+
+// Reads exactly `size` bytes at `offset`; false on a short read.
+bool read_at(int fd, void* out, std::size_t size, std::uint64_t offset) {
+  auto* bytes = static_cast<char*>(out);
+  std::size_t done = 0;
+  while (done < size) {
+    const ssize_t n = ::pread(fd, bytes + done, size - done, static_cast<off_t>(offset + done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    done += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+// The ELF header of the running libhapsyn: the class, byte order and machine a plugin must match.
+const ElfW(Ehdr)& own_elf_header() {
+  static const ElfW(Ehdr) header = [] {
+    ElfW(Ehdr) h{};
+    Fd self;
+    self.fd = ::open(boost::dll::this_line_location().string().c_str(), O_RDONLY | O_CLOEXEC);
+    if (self.fd < 0 || !read_at(self.fd, &h, sizeof h, 0)) std::memset(&h, 0, sizeof h);
+    return h;
+  }();
+  return header;
+}
+
+// "end of <what> at byte <end> > file size <size>" when [offset, offset + length) leaves the file.
+std::string range_problem(std::uint64_t offset, std::uint64_t length, std::uint64_t size, const std::string& what) {
+  if (offset <= size && length <= size - offset) return "";
+  return what + " ends past the end of the file (at byte " +
+         (offset > UINT64_MAX - length ? std::string("> 2^64") : std::to_string(offset + length)) + ", the file has " +
+         std::to_string(size) + " bytes; truncated?)";
+}
+
+std::string header_problem(const ElfW(Ehdr)& h, std::uint64_t size) {
+  if (std::memcmp(h.e_ident, ELFMAG, SELFMAG) != 0) return "not an ELF file (no ELF magic)";
+  const ElfW(Ehdr)& own = own_elf_header();
+  if (own.e_ident[EI_CLASS] != 0 && h.e_ident[EI_CLASS] != own.e_ident[EI_CLASS]) {
+    return h.e_ident[EI_CLASS] == ELFCLASS32 ? "a 32-bit ELF file, this hapsyn is 64-bit" : "an ELF file of another class";
+  }
+  if (own.e_ident[EI_DATA] != 0 && h.e_ident[EI_DATA] != own.e_ident[EI_DATA]) return "an ELF file of the other byte order";
+  if (own.e_machine != 0 && h.e_machine != own.e_machine) {
+    return "an ELF file for another machine (e_machine " + std::to_string(h.e_machine) + ", this hapsyn: " +
+           std::to_string(own.e_machine) + ")";
+  }
+  if (h.e_type != ET_DYN) return "not a shared library (ELF type " + std::to_string(h.e_type) + ")";
+  if (h.e_phnum > 0 && h.e_phentsize != sizeof(ElfW(Phdr))) return "malformed ELF header (program header entry size)";
+  std::string why = range_problem(h.e_phoff, std::uint64_t(h.e_phnum) * h.e_phentsize, size, "the program header table");
+  if (why.empty() && h.e_shoff != 0) {
+    why = range_problem(h.e_shoff, std::uint64_t(h.e_shnum) * h.e_shentsize, size, "the section header table");
+  }
+  return why;
+}
+
+// Why the file at `path` must not be handed to dlopen, or "" when its headers fit the file.
+std::string library_file_problem(const std::string& path) {
+  Fd file;
+  file.fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);  // a FIFO must not block
+  if (file.fd < 0) return std::string("cannot be opened: ") + std::strerror(errno);
+  struct stat st {};
+  if (::fstat(file.fd, &st) != 0) return std::string("cannot be examined: ") + std::strerror(errno);
+  if (!S_ISREG(st.st_mode)) {
+    return S_ISDIR(st.st_mode) ? "is a directory, not a shared library" : "is not a regular file (a FIFO, socket or device)";
+  }
+  const auto size = static_cast<std::uint64_t>(st.st_size);
+  ElfW(Ehdr) h{};
+  if (size < sizeof h || !read_at(file.fd, &h, sizeof h, 0)) {
+    return "is " + std::to_string(size) + " bytes, shorter than an ELF header (truncated?)";
+  }
+  if (std::string why = header_problem(h, size); !why.empty()) return why;
+  for (int i = 0; i < h.e_phnum; ++i) {
+    ElfW(Phdr) ph{};
+    if (!read_at(file.fd, &ph, sizeof ph, h.e_phoff + std::uint64_t(i) * sizeof ph)) return "program header unreadable";
+    std::string why = range_problem(ph.p_offset, ph.p_filesz, size, "segment " + std::to_string(i));
+    if (!why.empty()) return why;
+  }
+  return "";
+}
+
+void check_plugin_name(const std::string& name) {
+  if (is_plugin_name(name)) return;
+  throw Error("registry", "plugin name " + Json(name).dump(-1, ' ', false, Json::error_handler_t::replace) +
+                              ": not a plugin name (names are letters, digits, '_' and '-')");
 }
 }  // namespace
 
@@ -84,6 +197,9 @@ const Registry::Loaded& Registry::load(const std::string& path_in) const {
   auto found = loaded_.find(path);
   if (found != loaded_.end()) return *found->second;
 
+  if (const std::string why = library_file_problem(path); !why.empty()) {
+    throw Error("registry", path + ": not loaded: " + why);
+  }
   auto loaded = std::make_unique<Loaded>();
   try {
     loaded->library.load(path, boost::dll::load_mode::rtld_lazy | boost::dll::load_mode::rtld_local);
@@ -146,6 +262,7 @@ const Registry::Loaded& Registry::load(const std::string& path_in) const {
 }
 
 const PluginRecord& Registry::find(const std::string& name) const {
+  check_plugin_name(name);
   for (const std::string& dir : search_path_) {
     const fs::path candidate = fs::path(dir) / (kPrefix + name + kSuffix);
     boost::system::error_code ec;

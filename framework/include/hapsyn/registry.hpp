@@ -1,7 +1,17 @@
 #pragma once
 /// \file
 /// Finds, loads and checks plugins (Boost.DLL). A plugin is found by name: the file
-/// hapsyn-<name>.so in the search path.
+/// hapsyn-<name>.so in the search path. A name is letters, digits, '_' and '-' only, so it can
+/// never make a path that leaves the search-path directories; files hapsyn-*.so whose middle is
+/// not such a name are ignored.
+///
+/// Before a library is handed to dlopen its file is checked cheaply (a truncated library would
+/// otherwise be mapped past its end and crash the process with SIGBUS on first touch): it must be
+/// a regular file (not a FIFO, device or directory) with an ELF header of this hapsyn's class,
+/// byte order and machine, of type ET_DYN, whose program header table, every segment
+/// (p_offset + p_filesz) and section header table lie inside the file. Otherwise the error is
+/// Error("registry", "<file>: not loaded: <what is wrong>"), e.g. "... segment 2 ends past the
+/// end of the file (at byte 81920, the file has 40960 bytes; truncated?)".
 #include <hapsyn/json.hpp>
 #include <hapsyn/mechanism.hpp>
 #include <hapsyn/metric.hpp>
@@ -40,11 +50,15 @@ class Registry {
   const std::vector<std::string>& search_path() const { return search_path_; }
 
   /// Loads and checks the plugin called `name`.
-  /// \throws Error "registry: unknown plugin 'x' (known: a, b, c)"; a version mismatch naming
-  ///         the file and both versions; a library that is not a hapsyn plugin; a bad schema.
+  /// \throws Error "registry: plugin name \"y.so/../x\": not a plugin name (names are letters,
+  ///         digits, '_' and '-')"; "registry: unknown plugin 'x' ...; known plugins: a, b, c"; a
+  ///         library file that fails the check above ("<file>: not loaded: ..."); a version
+  ///         mismatch naming the file and both versions; a library that is not a hapsyn plugin; a
+  ///         bad schema.
   const PluginRecord& find(const std::string& name) const;
-  /// Every plugin in the search path (loads them all). Files that fail to load are reported
-  /// in `errors` (one message each) instead of throwing.
+  /// Every plugin in the search path (loads them all). Files that fail to load, truncated or
+  /// damaged libraries included, are reported in `errors` (one message each, naming the file)
+  /// instead of throwing; the others are listed.
   std::vector<PluginRecord> list(std::vector<std::string>* errors = nullptr) const;
   /// Names of hapsyn-*.so files in the search path (without loading them), sorted.
   std::vector<std::string> known_names() const;

@@ -5,6 +5,7 @@
 #include <hapsyn/json.hpp>
 
 #include <Eigen/Core>
+#include <iosfwd>
 #include <map>
 #include <optional>
 #include <string>
@@ -133,8 +134,19 @@ Eigen::Matrix3d rotation_option(const std::vector<std::vector<double>>& rows, co
 
 /// What the scene must provide, derived from the study's metrics (e.g. the human ellipsoids
 /// are built only when a metric needs them).
+///
+/// It also carries what the run grants the build (the fields after `attributes` were added
+/// last, so a plugin built before them still reads `attributes` where it was):
 struct SceneRequest {
   std::vector<std::string> attributes;  ///< attribute names some metric requires
+  /// Threads the run allows the build (`hapsyn run --threads N`), >= 0; 0 means the run stated
+  /// none, and the scene may use every core. A scene's own `threads` option, when it has one
+  /// and it is set (> 0), wins over this. The loader fills it.
+  int threads = 0;
+  /// Where a build that takes long reports how far it is: whole lines, at most one every 2 s,
+  /// e.g. "human_arm: building the reachable poses: 40% of 656000, ~12 s left". nullptr: quiet
+  /// (tests, --quiet). May be written from the scene's worker threads, never two lines at once.
+  std::ostream* progress = nullptr;
 };
 
 /// Scene plugin: the one pure virtual is build().

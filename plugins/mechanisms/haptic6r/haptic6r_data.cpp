@@ -4,6 +4,7 @@
 
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
+#include <hapsyn/read_file.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -20,11 +21,13 @@ constexpr double kDeg = kPi / 180.0;
 
 std::string show(const Json& v) { return v.dump(); }
 
+// A data file is a few kB: a FIFO, a device or a huge file is refused before it is read.
+constexpr std::uint64_t kMaxDataFileBytes = 64u << 20;
+
 Json read_json_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(kName, path + ": cannot be read");
+  const std::string text = read_regular_file(path, kName, "data file", kMaxDataFileBytes);
   try {
-    return Json::parse(in);
+    return Json::parse(text);
   } catch (const std::exception& e) {
     throw Error(kName, path + ": not valid JSON (" + e.what() + ")");
   }

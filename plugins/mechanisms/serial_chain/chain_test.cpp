@@ -994,7 +994,12 @@ TEST(ChainTemplate, UrdfClosedLoopIsRefused) {
 
 TEST(ChainTemplate, UrdfErrorsNameTheFileAndTheProblem) {
   expect_error([] { ChainTemplate::from_urdf("/nonexistent/arm.urdf", "a", "b"); },
-               {"serial_chain: /nonexistent/arm.urdf: cannot be read"});
+               {"serial_chain: cannot read URDF file /nonexistent/arm.urdf: No such file or directory"});
+  // A FIFO, a device or a directory is refused before it is read (nothing blocks or fills memory).
+  expect_error([] { ChainTemplate::from_urdf("/dev/zero", "a", "b"); },
+               {"serial_chain: URDF file /dev/zero is not a regular file (a device or socket)"});
+  expect_error([] { ChainTemplate::from_urdf("/tmp", "a", "b"); },
+               {"serial_chain: URDF file /tmp is not a regular file (a directory)"});
   const std::string bad_xml = write_file("bad_xml.urdf", "<?xml version=\"1.0\"?>\n<robot name=\"t\">\n  <link name=\"a\"/>\n"
                                                          "  <link name=\"b\"/>\n  <link name=\"c\"></joint>\n</robot>\n");
   expect_error([&] { ChainTemplate::from_urdf(bad_xml, "a", "b"); }, {bad_xml, "not valid XML: line 5, column 18: Error reading end tag"});
@@ -1064,7 +1069,10 @@ void expect_dh_error(const std::string& name, const Json& doc, std::initializer_
 
 TEST(ChainTemplate, DhErrorsNameTheFileThePathTheValueAndTheRule) {
   EXPECT_EQ(ChainTemplate::from_dh_file(write_file("small.json", small_table().dump())).dof(), 2);
-  expect_error([] { ChainTemplate::from_dh_file("/nonexistent/t.json"); }, {"/nonexistent/t.json: cannot be read"});
+  expect_error([] { ChainTemplate::from_dh_file("/nonexistent/t.json"); },
+               {"serial_chain: cannot read DH file /nonexistent/t.json: No such file or directory"});
+  expect_error([] { ChainTemplate::from_dh_file("/dev/zero"); },
+               {"serial_chain: DH file /dev/zero is not a regular file (a device or socket)"});
   const std::string not_json = write_file("not_json.json", "{\"format\": ");
   expect_error([&] { ChainTemplate::from_dh_file(not_json); }, {not_json, "not valid JSON"});
 

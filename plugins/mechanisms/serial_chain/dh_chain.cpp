@@ -11,6 +11,7 @@
 #include "chain_template_impl.hpp"
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/read_file.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -128,11 +129,13 @@ class DhReader {
   std::string file_;
 };
 
+// A DH file is a few kB: a FIFO, a device or a huge file is refused before it is read.
+constexpr std::uint64_t kMaxDhFileBytes = 64u << 20;
+
 OrderedJson read_json(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(kSerialChainName, path + ": cannot be read");
+  const std::string text = read_regular_file(path, kSerialChainName, "DH file", kMaxDhFileBytes);
   try {
-    return OrderedJson::parse(in);
+    return OrderedJson::parse(text);
   } catch (const std::exception& e) {
     throw Error(kSerialChainName, path + ": not valid JSON (" + e.what() + ")");
   }

@@ -5,6 +5,7 @@
 #include "chain_template_impl.hpp"
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/read_file.hpp>
 
 #include <cassert>
 #include <cmath>
@@ -66,12 +67,12 @@ struct UrdfPath {
   int mass_scale_parameter = -1;
 };
 
+// A URDF of a robot arm is well below this; a FIFO, a device or a huge file is refused before
+// it is read.
+constexpr std::uint64_t kMaxUrdfFileBytes = 64u << 20;
+
 std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(kSerialChainName, path + ": cannot be read");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+  return read_regular_file(path, kSerialChainName, "URDF file", kMaxUrdfFileBytes);
 }
 
 // A joint's <origin> as the file writes it: x, y, z, roll, pitch, yaw.

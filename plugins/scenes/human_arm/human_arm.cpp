@@ -5,18 +5,22 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/output_files.hpp>
 #include <hapsyn/parallel.hpp>
+#include <hapsyn/read_file.hpp>
 
 #include <Eigen/LU>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
+#include <iostream>
+#include <mutex>
 #include <random>
 #include <sstream>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace hapsyn::plugins {
@@ -88,7 +92,46 @@ HumanArmSceneOptions resolve_human_arm_scene_options(const HumanArmOptions& opti
   o.cache = options.cache;
   o.cache_directory = options.cache_directory;
   o.threads = options.threads;
+  o.max_samples = options.max_samples;
+  o.max_ik_solves = options.max_ik_solves;
   return o;
+}
+
+HumanArmSceneSize human_arm_scene_size(const HumanArmSceneOptions& o, double reach) {
+  HumanArmSceneSize size;
+  const std::vector<double> axis = lattice_axis(o.lattice_step, o.lattice_extent);
+  size.per_axis = static_cast<int>(axis.size());
+  // The build's own test (solve_lattice), so the count is exact; per_axis <= 401 keeps it cheap.
+  for (double z : axis) {
+    for (double y : axis) {
+      for (double x : axis) {
+        if (Eigen::Vector3d(x, y, z).norm() <= reach * (1.0 + 1e-9)) ++size.points_in_reach;
+      }
+    }
+  }
+  // <= 401^3 x 1e6 x 1e4 < 2^63 by the declared ranges.
+  size.candidate_poses = size.points_in_reach * o.orientations;
+  size.ik_solves = size.candidate_poses * o.joint3_steps;
+  return size;
+}
+
+void check_human_arm_scene_size(const HumanArmSceneOptions& o, const HumanArmSceneSize& size) {
+  const std::string made_of = " candidate poses (" + std::to_string(size.points_in_reach) +
+                              " lattice points within the arm's reach, of " + std::to_string(size.per_axis) +
+                              "^3 from lattice_step " + show(Json(o.lattice_step)) + " and lattice_extent " +
+                              show(Json(o.lattice_extent)) + ", x " + std::to_string(o.orientations) + " orientations)";
+  if (size.candidate_poses > o.max_samples) {
+    throw Error(kName, "options.max_samples = " + std::to_string(o.max_samples) + ": the scene would try " +
+                           std::to_string(size.candidate_poses) + made_of +
+                           "; raise lattice_step, lower orientations, or raise max_samples deliberately");
+  }
+  if (size.ik_solves > o.max_ik_solves) {
+    throw Error(kName, "options.max_ik_solves = " + std::to_string(o.max_ik_solves) + ": the scene would do " +
+                           std::to_string(size.ik_solves) + " IK solves (" + std::to_string(size.candidate_poses) +
+                           made_of + " x " + std::to_string(o.joint3_steps) +
+                           " joint3_steps); lower joint3_steps or orientations, raise lattice_step, or raise "
+                           "max_ik_solves deliberately");
+  }
 }
 
 // ---------------------------------------------------------------- scene ----
@@ -185,13 +228,44 @@ std::string write_cache(const std::string& file, const std::string& key, const R
   }
 }
 
+std::uint64_t bytes_per_sample(bool ellipsoids) {
+  return 2 * sizeof(std::int32_t) + 8 * sizeof(double) + (ellipsoids ? 72 * sizeof(double) : 0);
+}
+
+// The largest cache file a scene of at most `samples` samples can have: header, key, payload.
+// (samples <= 401^3 x 1e6 candidate poses: no overflow.)
+std::uint64_t max_cache_bytes(const std::string& key, long long samples, bool ellipsoids) {
+  return 4096 + key.size() + static_cast<std::uint64_t>(samples) * bytes_per_sample(ellipsoids);
+}
+
+// The cache file's bytes, or a reason it is not used ("missing", "corrupt: ..."). A cache path
+// that exists but is not a regular file (a directory, a FIFO, /dev/zero) is no cache at all and
+// can be neither read nor replaced: that is an Error naming it, not a rebuild.
+std::string load_cache_bytes(const std::string& file, std::uint64_t max_bytes, std::string* bytes) {
+  struct stat st {};
+  if (::stat(file.c_str(), &st) != 0) return "missing";
+  if (!S_ISREG(st.st_mode)) {
+    throw Error(kName, "cache file " + file + " is not a regular file (" +
+                           (S_ISDIR(st.st_mode) ? "a directory" : S_ISFIFO(st.st_mode) ? "a FIFO" : "a device or socket") +
+                           "); remove it, or set cache_directory or cache = false");
+  }
+  if (static_cast<std::uint64_t>(st.st_size) > max_bytes) {
+    return "corrupt: " + std::to_string(st.st_size) + " bytes, more than the " + std::to_string(max_bytes) +
+           " a cache of these options can hold";
+  }
+  *bytes = read_regular_file(file, kName, "cache file", max_bytes);
+  return "";
+}
+
 // Reads a cache file. Returns "" and fills raw when it is intact and made for `key`; else the
-// reason it is not used ("missing", "corrupt: ...", "stale: ...").
+// reason it is not used ("missing", "corrupt: ...", "stale: ..."). `max_samples`: the candidate
+// poses of these options, which no intact cache exceeds; a larger file is not even read.
 std::string read_cache(const std::string& file, const std::string& key, bool ellipsoids, int lattice_points,
-                       int orientations, RawScene* raw) {
-  std::ifstream f(file, std::ios::binary);
-  if (!f) return "missing";
-  std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+                       int orientations, long long max_samples, RawScene* raw) {
+  std::string bytes;
+  if (std::string why = load_cache_bytes(file, max_cache_bytes(key, max_samples, ellipsoids), &bytes); !why.empty()) {
+    return why;
+  }
   Reader r{bytes};
   char magic[8];
   if (!r.get(&magic) || std::memcmp(magic, kCacheMagic, sizeof magic) != 0) return "corrupt: not a human_arm cache file";
@@ -207,8 +281,8 @@ std::string read_cache(const std::string& file, const std::string& key, bool ell
   const std::size_t header_end = r.at;
   if (!r.get(&header_sum) || header_sum != fnv1a64(bytes.data(), header_end)) return "corrupt: header checksum";
   if (stored_key != key || (flags != 0) != ellipsoids) return "stale: made for other options or another arm file";
-  const std::uint64_t per_sample = 2 * sizeof(std::int32_t) + 8 * sizeof(double) + (ellipsoids ? 72 * sizeof(double) : 0);
-  if (n > (std::uint64_t(1) << 40) || payload_size != n * per_sample) return "corrupt: payload size";
+  const std::uint64_t per_sample = bytes_per_sample(ellipsoids);
+  if (n > static_cast<std::uint64_t>(max_samples) || payload_size != n * per_sample) return "corrupt: payload size";
   if (bytes.size() - r.at != payload_size) return "corrupt: truncated or oversized payload";
   if (fnv1a64(bytes.data() + r.at, payload_size) != payload_sum) return "corrupt: payload checksum";
   RawScene s;
@@ -234,7 +308,11 @@ std::string read_cache(const std::string& file, const std::string& key, bool ell
 }  // namespace
 
 HumanArmScene::HumanArmScene(const HumanArmOptions& options)
-    : options_(resolve_human_arm_scene_options(options)), arm_(load_human_arm(options_.arm_file)) {}
+    : options_(resolve_human_arm_scene_options(options)),
+      arm_(load_human_arm(options_.arm_file)),
+      size_(human_arm_scene_size(options_, arm_.reach())) {
+  check_human_arm_scene_size(options_, size_);
+}
 
 std::string HumanArmScene::cache_key(bool ellipsoids) const {
   const HumanArmSceneOptions& o = options_;
@@ -332,14 +410,51 @@ void solve_lattice_point(const HumanArm& arm, const HumanArmSceneOptions& o, con
   }
 }
 
+// "human_arm: building the reachable poses: P% of N, ~L s left" on `out`, at most every 2 s
+// (the first after 2 s, so a quick build prints nothing); silent when `out` is null. Called from
+// the build's worker threads: one of them prints, the others never wait for it.
+class BuildProgress {
+ public:
+  BuildProgress(std::ostream* out, long long total) : out_(out), total_(total) {}
+  void add(long long poses) {
+    if (!out_) return;
+    const long long done = done_ += poses;
+    std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+    if (!lock.owns_lock()) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_ < std::chrono::seconds(2) || done <= 0 || total_ <= 0) return;
+    last_ = now;
+    const double fraction = std::min(1.0, static_cast<double>(done) / static_cast<double>(total_));
+    const double elapsed = std::chrono::duration<double>(now - start_).count();
+    char line[160];
+    std::snprintf(line, sizeof line, "human_arm: building the reachable poses: %.0f%% of %lld, ~%.0f s left\n",
+                  100.0 * fraction, total_, elapsed * (1.0 - fraction) / fraction);
+    *out_ << line << std::flush;
+  }
+
+ private:
+  std::ostream* out_;
+  long long total_;
+  std::atomic<long long> done_{0};
+  std::mutex mutex_;
+  const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point last_ = start_;
+};
+
+// The build's thread count: the scene's own option, else what the run grants, else every core.
+int build_threads(const HumanArmSceneOptions& o, const SceneRequest& request) {
+  if (o.threads > 0) return o.threads;
+  return request.threads > 0 ? request.threads : hardware_threads();
+}
+
 // Every lattice point in parallel, merged in lattice order (so the result does not depend on
 // the thread count).
-RawScene solve_lattice(const HumanArm& arm, const HumanArmSceneOptions& o, const LatticeGeometry& g, bool ellipsoids) {
+RawScene solve_lattice(const HumanArm& arm, const HumanArmSceneOptions& o, const LatticeGeometry& g, bool ellipsoids,
+                       int threads, BuildProgress& progress) {
   const std::vector<double> grid = arm.joint3_grid(o.joint3_steps);
   std::vector<Eigen::Matrix3d> matrices(g.rotations.size());
   for (std::size_t i = 0; i < g.rotations.size(); ++i) matrices[i] = g.rotations[i].toRotationMatrix();
   std::vector<RawScene> per_point(static_cast<std::size_t>(g.points));
-  const int threads = o.threads > 0 ? o.threads : hardware_threads();
   // Lattice points far from the shoulder cost nothing; near ones cost a full orientation
   // sweep: dynamic scheduling balances them.
   parallel_for_dynamic(g.points, threads, 1, [&](long long index, int) {
@@ -347,6 +462,7 @@ RawScene solve_lattice(const HumanArm& arm, const HumanArmSceneOptions& o, const
     if (p.norm() > arm.reach() * (1.0 + 1e-9)) return;
     solve_lattice_point(arm, o, matrices, grid, ellipsoids, static_cast<int>(index), p,
                         per_point[static_cast<std::size_t>(index)]);
+    progress.add(o.orientations);
   });
   RawScene raw;
   for (RawScene& s : per_point) {
@@ -426,16 +542,19 @@ SampleSet HumanArmScene::build(const SceneRequest& request) const {
   std::string cache_status = o.cache ? (file.empty() ? "off: no cache directory ($XDG_CACHE_HOME and $HOME unset)" : "")
                                      : "off";
   if (!file.empty()) {
-    const std::string why = read_cache(file, key, ellipsoids, g.points, o.orientations, &raw);
+    const std::string why = read_cache(file, key, ellipsoids, g.points, o.orientations, size_.candidate_poses, &raw);
     if (why.empty()) {
       from_cache = true;
       cache_status = "hit";
     } else {
       cache_status = why == "missing" ? "miss: built" : "rebuilt (" + why + ")";
+      // A damaged cache is never trusted; the rebuild replaces it, and the user hears why.
+      if (why.rfind("corrupt", 0) == 0) std::cerr << "hapsyn: warning: human_arm: cache file " << file << " " << why << "; rebuilding\n";
     }
   }
   if (!from_cache) {
-    raw = solve_lattice(arm_, o, g, ellipsoids);
+    BuildProgress progress(request.progress, size_.candidate_poses);
+    raw = solve_lattice(arm_, o, g, ellipsoids, build_threads(o, request), progress);
     if (!file.empty()) {
       const std::string failure = write_cache(file, key, raw, ellipsoids);
       if (!failure.empty()) cache_status += "; cache not written: " + failure;
@@ -452,6 +571,7 @@ SampleSet HumanArmScene::build(const SceneRequest& request) const {
   info["orientations"] = o.orientations;
   info["joint3_steps"] = o.joint3_steps;
   info["poses_tried"] = static_cast<long long>(g.points) * o.orientations;
+  info["candidate_poses"] = size_.candidate_poses;
   info["build_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   info["cache_file"] = file;
   info["cache_status"] = cache_status;

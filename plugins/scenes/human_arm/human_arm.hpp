@@ -62,8 +62,14 @@ struct HumanArmData {
 ///         sin(alpha_3) sin(alpha_4), sin(alpha_5) sin(alpha_6) bounded away from 0).
 HumanArmData parse_human_arm(const Json& document, const std::string& label);
 
-/// Reads and parses an arm file. \throws Error("human_arm", "<file>: ...") also when the file
-/// cannot be read or is not JSON.
+/// Largest arm file read [bytes]: an arm file is a few kB.
+constexpr std::uint64_t kHumanArmMaxArmFileBytes = 16u << 20;
+
+/// Reads and parses an arm file. \throws Error("human_arm", "<file>: ...") when it is not JSON;
+/// Error("human_arm: cannot read arm file <file>: ...") when it cannot be read;
+/// Error("human_arm: arm file <file> is not a regular file (...)") for a FIFO, device or
+/// directory; Error("human_arm: arm file <file> is <n> bytes, more than the ...") beyond
+/// kHumanArmMaxArmFileBytes.
 HumanArmData load_human_arm(const std::string& path);
 
 /// Resolves an arm_file option: an absolute path as is; a relative path against the current
@@ -132,6 +138,13 @@ std::vector<Eigen::Quaterniond> orientation_set(int n);
 /// Lattice coordinates along one axis: k * step for k = -m..m, m = floor(extent/step + 1e-9).
 std::vector<double> lattice_axis(double step, double extent);
 
+/// Default of the max_samples option: 50 million candidate poses (about 30 GB of samples with
+/// the ellipsoids; the paper's scene tries about 0.7 million).
+constexpr long long kHumanArmMaxSamples = 50000000;
+/// Default of the max_ik_solves option: 1e9 solves (minutes on a few cores; the paper's scene
+/// needs about 11 million).
+constexpr long long kHumanArmMaxIkSolves = 1000000000;
+
 /// The options of the human_arm scene as a problem file gives them, declared once
 /// (`hapsyn describe human_arm`). Shapes, ranges and types are checked by the framework from
 /// these declarations; HumanArmScene's constructor checks the rest (see
@@ -148,7 +161,9 @@ struct HumanArmOptions {
   std::vector<double> x_E_P;                ///< 3: end-effector position in P [m]
   bool cache{};
   std::string cache_directory;              ///< "" = $XDG_CACHE_HOME/hapsyn or ~/.cache/hapsyn
-  int threads{};                            ///< [0, 4096], 0 = all cores
+  int threads{};                            ///< [0, 4096], 0 = the run's --threads, else all cores
+  long long max_samples{};                  ///< >= 1: cap on the candidate poses (kHumanArmMaxSamples)
+  long long max_ik_solves{};                ///< >= 1: cap on the IK solves (kHumanArmMaxIkSolves)
 
   static void declare(OptionDeclarations<HumanArmOptions>& d) {
     using O = HumanArmOptions;
@@ -202,8 +217,19 @@ struct HumanArmOptions {
           "rebuilt.");
     d.add(&O::cache_directory, "cache_directory", "",
           "Where cached scenes live; \"\" means $XDG_CACHE_HOME/hapsyn, else ~/.cache/hapsyn.");
-    d.add(&O::threads, "threads", 0, "Threads used to build the scene (0: all cores). The samples do not depend on it.")
+    d.add(&O::threads, "threads", 0,
+          "Threads used to build the scene (0: the run's --threads when given, else all cores). The samples do not "
+          "depend on it.")
         .range(0, 4096);
+    d.add(&O::max_samples, "max_samples", kHumanArmMaxSamples,
+          "Largest number of candidate poses (lattice points within the arm's reach x orientations) the scene may "
+          "try; larger scenes are refused before anything is built (a guard against a lattice_step or orientations "
+          "that would run for hours and fill memory). Raise it deliberately for a finer scene.")
+        .minimum(1);
+    d.add(&O::max_ik_solves, "max_ik_solves", kHumanArmMaxIkSolves,
+          "Largest number of inverse-kinematics solves (candidate poses x joint3_steps) the build may do; larger "
+          "scenes are refused before anything is built.")
+        .minimum(1);
   }
 };
 
@@ -221,8 +247,28 @@ struct HumanArmSceneOptions {
   Eigen::Vector3d x_E_P;         ///< end-effector position in P [m]
   bool cache{};
   std::string cache_directory;   ///< "" = $XDG_CACHE_HOME/hapsyn or ~/.cache/hapsyn
-  int threads{};                 ///< 0 = all cores
+  int threads{};                 ///< 0 = SceneRequest::threads, else all cores
+  long long max_samples{};       ///< cap on candidate poses
+  long long max_ik_solves{};     ///< cap on IK solves
 };
+
+/// How big a human_arm scene is before it is built: what the size caps compare.
+struct HumanArmSceneSize {
+  int per_axis = 0;                ///< lattice points per axis
+  long long points_in_reach = 0;   ///< lattice points within the arm's reach (the others are skipped)
+  long long candidate_poses = 0;   ///< points_in_reach x orientations: an upper bound on the samples
+  long long ik_solves = 0;         ///< candidate_poses x joint3_steps
+};
+
+/// Counts the lattice points the build will solve (those within `reach` [m] of the shoulder) and
+/// what follows from them. No overflow: every factor is bounded by the declarations.
+HumanArmSceneSize human_arm_scene_size(const HumanArmSceneOptions& options, double reach);
+
+/// \throws Error("human_arm", "options.max_samples = <cap>: the scene would try <n> candidate
+///         poses (<points> lattice points within reach (<per_axis>^3 from lattice_step ...,
+///         lattice_extent ...) x <orientations> orientations); ...") or the same for
+///         max_ik_solves, when a cap is exceeded.
+void check_human_arm_scene_size(const HumanArmSceneOptions& options, const HumanArmSceneSize& size);
 
 /// Resolves declared options (already validated against HumanArmOptions::declare) for building.
 /// \\throws Error("human_arm", "options.<key> = <value>: <rule>") for what the declarations cannot
@@ -241,8 +287,9 @@ HumanArmSceneOptions resolve_human_arm_scene_options(const HumanArmOptions& opti
 class HumanArmScene final : public Scene {
  public:
   using Options = HumanArmOptions;
-  /// Resolves the options and loads the arm file.
-  /// \throws Error("human_arm", ...) as resolve_human_arm_scene_options and load_human_arm do.
+  /// Resolves the options, loads the arm file and checks the scene's size against the caps.
+  /// \throws Error("human_arm", ...) as resolve_human_arm_scene_options, load_human_arm and
+  ///         check_human_arm_scene_size do.
   explicit HumanArmScene(const HumanArmOptions& options);
   SampleSet build(const SceneRequest& request) const override;
 
@@ -256,6 +303,7 @@ class HumanArmScene final : public Scene {
  private:
   HumanArmSceneOptions options_;
   HumanArm arm_;
+  HumanArmSceneSize size_;
 };
 
 /// 64-bit FNV-1a of bytes (cache file names and payload checksums).

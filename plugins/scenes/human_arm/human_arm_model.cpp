@@ -4,6 +4,7 @@
 #include "human_arm.hpp"
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/read_file.hpp>
 
 #include <Eigen/Cholesky>
 #include <Eigen/SVD>
@@ -208,13 +209,11 @@ HumanArmData parse_human_arm(const Json& doc, const std::string& label) {
 }
 
 HumanArmData load_human_arm(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(kName, path + ": cannot be read");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
+  // A FIFO, a device or a huge file is refused before it is read (an arm file is a few kB).
+  const std::string text = read_regular_file(path, kName, "arm file", kHumanArmMaxArmFileBytes);
   Json doc;
   try {
-    doc = Json::parse(buffer.str());
+    doc = Json::parse(text);
   } catch (const Json::parse_error& e) {
     throw Error(kName, path + ": not valid JSON (" + std::string(e.what()) + ")");
   }

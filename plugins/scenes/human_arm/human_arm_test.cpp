@@ -7,6 +7,7 @@
 #include "test_support.hpp"
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/parallel.hpp>
 #include <hapsyn/schema.hpp>
 
 #include <gtest/gtest.h>
@@ -14,11 +15,14 @@
 #include <Eigen/SVD>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <sstream>
 #include <string>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #ifdef HAPSYN_HAVE_KDL
@@ -772,7 +776,8 @@ TEST(HumanArm, ArmFileErrorsNameTheFileThePathTheValueAndTheRule) {
 TEST(HumanArm, UnreadableOrMalformedArmFilesAreRefused) {
   const fs::path dir = temp_dir("armfiles");
   const std::string missing = (dir / "missing.json").string();
-  EXPECT_EQ(error_of([&] { load_human_arm(missing); }), "human_arm: " + missing + ": cannot be read");
+  EXPECT_EQ(error_of([&] { load_human_arm(missing); }),
+            "human_arm: cannot read arm file " + missing + ": No such file or directory");
   const fs::path broken = dir / "broken.json";
   std::ofstream(broken) << "{ \"dh\": [ }";
   EXPECT_EQ(error_of([&] { load_human_arm(broken.string()); }).rfind("human_arm: " + broken.string() + ": not valid JSON (", 0),
@@ -814,7 +819,8 @@ TEST(HumanArm, OptionErrorsNameTheOptionTheValueAndTheRule) {
   // The declared rules, checked by the framework when a study creates the scene.
   EXPECT_EQ(registry_error(Json{{"lattice_stp", 0.1}}),
             "problem: scene.options.lattice_stp: unknown key (did you mean 'lattice_step'?); known keys: C_E_P, C_S_B, "
-            "arm_file, cache, cache_directory, joint3_steps, lattice_extent, lattice_step, orientations, threads, x_E_P, "
+            "arm_file, cache, cache_directory, joint3_steps, lattice_extent, lattice_step, max_ik_solves, max_samples, "
+            "orientations, threads, x_E_P, "
             "x_S_B");
   EXPECT_EQ(registry_error(Json{{"lattice_step", 0.0}}), "problem: scene.options.lattice_step = 0.0: must be > 0");
   EXPECT_EQ(registry_error(Json{{"orientations", 0}}), "problem: scene.options.orientations = 0: must be >= 1");
@@ -862,10 +868,200 @@ TEST(HumanArm, DeclaredSchemaIsValidAndItsDefaultsAreThePapers) {
   EXPECT_TRUE(defaults.cache);
   EXPECT_EQ(defaults.cache_directory, "");
   EXPECT_EQ(defaults.threads, 0);
+  EXPECT_EQ(defaults.max_samples, 50000000);
+  EXPECT_EQ(defaults.max_ik_solves, 1000000000);
   for (const char* key : {"lattice_step", "lattice_extent", "x_S_B", "x_E_P"}) {
     EXPECT_EQ(schema.at("properties").at(key).at("unit"), "m") << key;
   }
   EXPECT_THROW(hapsyn::validate_and_fill(schema, Json{{"orientations", -1}}, "scene.options"), hapsyn::Error);
+}
+
+// ------------------------------------------------------- trustworthy runs (issue 20) ----
+
+TEST(HumanArm, SceneOfBillionsOfPosesIsRefusedBeforeItIsBuilt) {
+  // 281^3 lattice points, of which those within reach times 505 orientations: billions.
+  const std::string fine = error_of([] { HumanArmScene(options_of(Json{{"lattice_step", 0.005}, {"cache", false}})); });
+  EXPECT_EQ(fine.rfind("human_arm: options.max_samples = 50000000: the scene would try ", 0), 0u) << fine;
+  for (const char* part : {"lattice points within the arm's reach, of 281^3 from lattice_step 0.005 and lattice_extent 0.7",
+                           "x 505 orientations", "raise max_samples deliberately"}) {
+    EXPECT_NE(fine.find(part), std::string::npos) << fine;
+  }
+  const std::string many = error_of([] {
+    HumanArmScene(options_of(Json{{"orientations", 1000000}, {"joint3_steps", 10000}, {"cache", false}}));
+  });
+  EXPECT_NE(many.find("x 1000000 orientations"), std::string::npos) << many;
+  // Within max_samples but too many IK solves.
+  const std::string solves = error_of([] {
+    HumanArmScene(options_of(Json{{"orientations", 20000}, {"joint3_steps", 10000}, {"cache", false}}));
+  });
+  EXPECT_EQ(solves.rfind("human_arm: options.max_ik_solves = 1000000000: the scene would do ", 0), 0u) << solves;
+  EXPECT_NE(solves.find("x 10000 joint3_steps"), std::string::npos) << solves;
+}
+
+TEST(HumanArm, SceneSizeCountsTheLatticePointsItWillSolve) {
+  const HumanArmSceneOptions o = resolve_human_arm_scene_options(options_of(Json{{"cache", false}}));
+  const HumanArmSceneSize size = human_arm_scene_size(o, arm().reach());
+  EXPECT_EQ(size.per_axis, 15);
+  EXPECT_GT(size.points_in_reach, 0);
+  EXPECT_LT(size.points_in_reach, 15 * 15 * 15);
+  EXPECT_EQ(size.candidate_poses, size.points_in_reach * 505);
+  EXPECT_EQ(size.ik_solves, size.candidate_poses * 17);
+  // The cap is an option: a user who means it can raise (or lower) it.
+  const std::string lowered = error_of([] { HumanArmScene(options_of(Json{{"max_samples", 1000}, {"cache", false}})); });
+  EXPECT_NE(lowered.find("options.max_samples = 1000: the scene would try " + std::to_string(size.candidate_poses)),
+            std::string::npos)
+      << lowered;
+  const fs::path dir = temp_dir("size");
+  Json options = small_scene(dir);
+  options["cache"] = false;
+  const SampleSet set = HumanArmScene(options_of(options)).build({});
+  EXPECT_LE(set.size(), set.info["candidate_poses"].get<long long>());
+  fs::remove_all(dir);
+}
+
+TEST(HumanArm, ArmFileThatIsNotARegularFileIsRefusedWithoutBlocking) {
+  const fs::path dir = temp_dir("armfifo");
+  const std::string fifo = (dir / "arm.json").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_EQ(error_of([&] { load_human_arm(fifo); }), "human_arm: arm file " + fifo + " is not a regular file (a FIFO)");
+  EXPECT_EQ(error_of([&] { load_human_arm("/dev/zero"); }),
+            "human_arm: arm file /dev/zero is not a regular file (a device or socket)");
+  EXPECT_EQ(error_of([&] { load_human_arm(dir.string()); }),
+            "human_arm: arm file " + dir.string() + " is not a regular file (a directory)");
+  const fs::path huge = dir / "huge.json";
+  std::ofstream(huge) << "{}";
+  fs::resize_file(huge, kHumanArmMaxArmFileBytes + 1);
+  EXPECT_EQ(error_of([&] { load_human_arm(huge.string()); }),
+            "human_arm: arm file " + huge.string() + " is " + std::to_string(kHumanArmMaxArmFileBytes + 1) +
+                " bytes, more than the " + std::to_string(kHumanArmMaxArmFileBytes) + " this reader accepts");
+  fs::remove_all(dir);
+}
+
+TEST(HumanArm, CachePathThatIsNotARegularFileIsAClearError) {
+  const fs::path dir = temp_dir("cachedir");
+  const HumanArmScene scene(options_of(small_scene(dir)));
+  const std::string file = scene.cache_file(false);
+  fs::create_directories(file);
+  EXPECT_EQ(error_of([&] { scene.build({}); }), "human_arm: cache file " + file +
+                                                    " is not a regular file (a directory); remove it, or set "
+                                                    "cache_directory or cache = false");
+  fs::remove_all(file);
+  ASSERT_EQ(::mkfifo(file.c_str(), 0600), 0);
+  EXPECT_EQ(error_of([&] { scene.build({}); }), "human_arm: cache file " + file +
+                                                    " is not a regular file (a FIFO); remove it, or set "
+                                                    "cache_directory or cache = false");
+  fs::remove(file);
+  fs::create_symlink("/dev/zero", file);
+  EXPECT_NE(error_of([&] { scene.build({}); }).find("is not a regular file (a device or socket)"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST(HumanArm, OversizedCacheIsRebuiltWithAWarningWithoutReadingIt) {
+  const fs::path dir = temp_dir("hugecache");
+  const HumanArmScene scene(options_of(small_scene(dir)));
+  const SampleSet reference = scene.build({});
+  const std::string file = reference.info["cache_file"];
+  fs::resize_file(file, std::uintmax_t{1} << 40);  // sparse: 1 TiB that must not be read
+  testing::internal::CaptureStderr();
+  const SampleSet again = scene.build({});
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(again.info["cache_status"].get<std::string>().rfind("rebuilt (corrupt: 1099511627776 bytes, more than the ", 0),
+            0u)
+      << again.info["cache_status"];
+  EXPECT_TRUE(again.poses == reference.poses);
+  EXPECT_EQ(err.rfind("hapsyn: warning: human_arm: cache file " + file + " corrupt: 1099511627776 bytes", 0), 0u) << err;
+  EXPECT_NE(err.find("; rebuilding"), std::string::npos) << err;
+  EXPECT_LT(fs::file_size(file), std::uintmax_t{1} << 20);  // replaced by the rebuilt cache
+  fs::remove_all(dir);
+}
+
+TEST(HumanArm, DamagedCacheRebuildIsAnnouncedOnStandardError) {
+  const fs::path dir = temp_dir("warn");
+  const HumanArmScene scene(options_of(small_scene(dir)));
+  const std::string file = scene.build({}).info["cache_file"];
+  fs::resize_file(file, 30);
+  testing::internal::CaptureStderr();
+  scene.build({});
+  EXPECT_EQ(testing::internal::GetCapturedStderr(),
+            "hapsyn: warning: human_arm: cache file " + file + " corrupt: truncated header; rebuilding\n");
+  fs::remove_all(dir);
+}
+
+TEST(HumanArm, RunThreadsReachTheBuildWhenTheSceneSetsNone) {
+  const fs::path dir = temp_dir("runthreads");
+  Json options = small_scene(dir);
+  options["cache"] = false;
+  options["threads"] = 0;
+  hapsyn::SceneRequest one;
+  one.threads = 1;
+  const SampleSet a = HumanArmScene(options_of(options)).build(one);
+  hapsyn::SceneRequest four;
+  four.threads = 4;
+  const SampleSet b = HumanArmScene(options_of(options)).build(four);
+  EXPECT_TRUE(a.poses == b.poses);
+  // With one thread granted, the build never starts a second one: the seam refuses any start,
+  // so a build that tried would print the shortfall warning.
+  hapsyn::set_thread_start_limit_for_testing(0);
+  testing::internal::CaptureStderr();
+  const SampleSet c = HumanArmScene(options_of(options)).build(one);
+  const std::string quiet = testing::internal::GetCapturedStderr();
+  testing::internal::CaptureStderr();
+  HumanArmScene(options_of(options)).build(four);
+  const std::string tried = testing::internal::GetCapturedStderr();
+  hapsyn::set_thread_start_limit_for_testing(-1);
+  EXPECT_EQ(quiet, "");
+  EXPECT_NE(tried.find("could only start 1 of 4 threads"), std::string::npos) << tried;
+  EXPECT_TRUE(a.poses == c.poses);
+  // The scene's own option wins over the run's.
+  options["threads"] = 2;
+  hapsyn::set_thread_start_limit_for_testing(0);
+  testing::internal::CaptureStderr();
+  HumanArmScene(options_of(options)).build(one);
+  const std::string own = testing::internal::GetCapturedStderr();
+  hapsyn::set_thread_start_limit_for_testing(-1);
+  EXPECT_NE(own.find("could only start 1 of 2 threads"), std::string::npos) << own;
+  fs::remove_all(dir);
+}
+
+TEST(HumanArm, SlowBuildReportsProgressOnTheRequestStreamAndIsQuietWithout) {
+  const fs::path dir = temp_dir("progress");
+  Json options = small_scene(dir);
+  options["cache"] = false;
+  options["threads"] = 1;
+  options["lattice_step"] = 0.1;
+  options["orientations"] = 1000;  // about 5 s on one thread: long enough for a progress line
+  options["joint3_steps"] = 9;
+  const HumanArmScene scene(options_of(options));
+  std::ostringstream progress;
+  hapsyn::SceneRequest request;
+  request.progress = &progress;
+  testing::internal::CaptureStderr();
+  testing::internal::CaptureStdout();
+  const auto start = std::chrono::steady_clock::now();
+  const SampleSet set = scene.build(request);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(testing::internal::GetCapturedStdout(), "");
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+  const std::string text = progress.str();
+  const std::string total = std::to_string(set.info["candidate_poses"].get<long long>());
+  std::istringstream lines(text);
+  int count = 0;
+  for (std::string line; std::getline(lines, line); ++count) {
+    EXPECT_EQ(line.rfind("human_arm: building the reachable poses: ", 0), 0u) << line;
+    EXPECT_NE(line.find("% of " + total + ", ~"), std::string::npos) << line;
+    EXPECT_EQ(line.substr(line.size() - 7), " s left") << line;
+  }
+  EXPECT_LE(count, static_cast<int>(seconds / 2.0) + 1) << text;  // at most one line every 2 s
+  if (seconds > 4.5) {
+    EXPECT_GE(count, 1) << "a " << seconds << " s build printed nothing";
+  }
+  // Without a stream: nothing anywhere.
+  testing::internal::CaptureStderr();
+  testing::internal::CaptureStdout();
+  scene.build({});
+  EXPECT_EQ(testing::internal::GetCapturedStdout(), "");
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+  fs::remove_all(dir);
 }
 
 }  // namespace
