@@ -4,6 +4,7 @@
 // is its "status"), 1 bad input (problem file, options, plugins, output directory), 2 usage
 // error, 3 unexpected internal error.
 #include <hapsyn/compare.hpp>
+#include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/groups.hpp>
 #include <hapsyn/output_files.hpp>
@@ -64,6 +65,8 @@ void install_stop_handlers() {
 hapsyn::Study load(const std::string& file, const std::vector<std::string>& sets, const hapsyn::Registry& registry) {
   Json doc = hapsyn::read_problem_file(file);
   for (const std::string& s : sets) hapsyn::apply_override(doc, s);
+  // Relative paths in the file (data files, reference front) are relative to the file first.
+  const hapsyn::ProblemDirectoryScope scope(file);
   return hapsyn::load_study(doc, registry);
 }
 
