@@ -1,5 +1,7 @@
 // Problem files: reading, malformed-JSON positions, and --set overrides.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cstdio>
@@ -77,12 +79,39 @@ TEST_F(ProblemFile, ReadsAFile) {
 TEST_F(ProblemFile, RefusesAMissingFile) {
   const std::string path = dir_ + "/absent.json";
   EXPECT_EQ(error_of([&] { hapsyn::read_problem_file(path); }),
-            "problem: cannot read " + path + ": No such file or directory");
+            "problem: cannot read problem file " + path + ": No such file or directory");
 }
 
 TEST_F(ProblemFile, RefusesADirectory) {
   EXPECT_EQ(error_of([&] { hapsyn::read_problem_file(dir_); }),
-            "problem: cannot read " + dir_ + ": Is a directory");
+            "problem: problem file " + dir_ + " is not a regular file (a directory)");
+}
+
+TEST_F(ProblemFile, RefusesAFifoWithoutWaitingForAWriter) {
+  const std::string path = dir_ + "/fifo.json";
+  ASSERT_EQ(mkfifo(path.c_str(), 0600), 0);
+  files_.push_back(path);
+  EXPECT_EQ(error_of([&] { hapsyn::read_problem_file(path); }),
+            "problem: problem file " + path + " is not a regular file (a FIFO)");
+}
+
+TEST_F(ProblemFile, RefusesADeviceInsteadOfReadingItForever) {
+  EXPECT_EQ(error_of([] { hapsyn::read_problem_file("/dev/zero"); }),
+            "problem: problem file /dev/zero is not a regular file (a device or socket)");
+}
+
+TEST_F(ProblemFile, RefusesDeepNestingBeforeBuildingTheDocument) {
+  // 60 KB of '[' overflowed the stack in nlohmann's recursive destructor.
+  const std::string path = write("deep.json", "{\"a\":\n" + std::string(60000, '[') + std::string(60000, ']') + "}");
+  EXPECT_EQ(error_of([&] { hapsyn::read_problem_file(path); }),
+            "problem: " + path + ":2:256: nesting deeper than 256 levels (arrays and objects inside each other): "
+            "refused before it is built");
+}
+
+TEST_F(ProblemFile, RefusesADuplicateKeyWithItsPathAndPosition) {
+  const std::string path = write("dup.json", "{\"design\": {\n  \"l1\": {\"lower\": 0.1},\n    \"l1\": {\"lower\": 0.2}}}");
+  EXPECT_EQ(error_of([&] { hapsyn::read_problem_file(path); }),
+            "problem: " + path + ":3:5: duplicate key \"l1\" in design (each key may appear once)");
 }
 
 TEST_F(ProblemFile, ReportsTheFileNameInSyntaxErrors) {
@@ -138,6 +167,44 @@ TEST(ProblemFileParse, RefusesATopLevelThatIsNotAnObject) {
   EXPECT_EQ(parse_error("\"fivebar\""),
             "problem: p.json: top level = \"fivebar\": must be an object, not a string");
   EXPECT_EQ(parse_error("null"), "problem: p.json: top level = null: must be an object, not null");
+}
+
+TEST(ProblemFileParse, AcceptsNestingUpToTheLimit) {
+  const std::size_t n = hapsyn::kMaxJsonDepth - 1;  // inside the top-level object
+  const Json doc = hapsyn::parse_problem_text("{\"a\":" + std::string(n, '[') + std::string(n, ']') + "}", "p.json");
+  EXPECT_TRUE(doc["a"].is_array());
+}
+
+TEST(ProblemFileParse, NamesTheArrayElementHoldingADuplicateKey) {
+  EXPECT_EQ(parse_error(R"({"objectives": [{"metric": "gii"}, {"metric": "gdi", "metric": "gii"}]})"),
+            "problem: p.json:1:54: duplicate key \"metric\" in objectives[1] (each key may appear once)");
+  EXPECT_EQ(parse_error(R"({"a": 1, "a": 2})"),
+            "problem: p.json:1:10: duplicate key \"a\" in the top level (each key may appear once)");
+}
+
+TEST(ProblemFileParse, AcceptsTheSameKeyInDifferentObjects) {
+  const Json doc = hapsyn::parse_problem_text(R"({"a": {"x": 1}, "b": {"x": 2}, "c": [{"x": 3}, {"x": 4}]})", "p.json");
+  EXPECT_EQ(doc["c"][1]["x"], 4);
+}
+
+TEST(ProblemFileParse, RefusesInvalidUtf8InAString) {
+  EXPECT_THAT(parse_error("{\"name\": \"\xff\"}"), ::testing::HasSubstr("p.json:1:11: malformed JSON: invalid string: ill-formed UTF-8"));
+}
+
+TEST(ProblemFileTextRules, RefusesInvalidUtf8InAValueOrKeyNamingThePath) {
+  Json doc = {{"objectives", Json::array({Json::object({{"name", "a\xff"}})})}};
+  EXPECT_EQ(error_of([&] { hapsyn::check_json_text_rules(doc); }),
+            "problem: objectives[0].name = \"a\\xff\": invalid UTF-8 at byte 1 (text must be UTF-8)");
+  Json keys = {{"design", {{"l\xc3", 1}}}};
+  EXPECT_EQ(error_of([&] { hapsyn::check_json_text_rules(keys); }),
+            "problem: design has key \"l\\xc3\": invalid UTF-8 at byte 1 (text must be UTF-8)");
+}
+
+TEST(ProblemFileTextRules, AcceptsMultiByteCharactersAndRefusesOverlongAndSurrogateForms) {
+  EXPECT_EQ(error_of([] { hapsyn::check_json_text_rules(Json{{"n", "\xc3\xa9\xe2\x82\xac\xf0\x9f\x98\x80"}}); }), "(no error)");
+  EXPECT_THAT(error_of([] { hapsyn::check_json_text_rules(Json{{"n", "\xc0\xaf"}}); }), ::testing::HasSubstr("invalid UTF-8 at byte 0"));
+  EXPECT_THAT(error_of([] { hapsyn::check_json_text_rules(Json{{"n", "\xed\xa0\x80"}}); }), ::testing::HasSubstr("invalid UTF-8 at byte 0"));
+  EXPECT_THAT(error_of([] { hapsyn::check_json_text_rules(Json{{"n", "ab\xe2\x82"}}); }), ::testing::HasSubstr("invalid UTF-8 at byte 2"));
 }
 
 TEST(ProblemFileParse, AcceptsAnObject) {
@@ -303,6 +370,22 @@ TEST(ProblemFileOverride, RefusesAPathThroughAScalar) {
             "set: 'objectives[0].metric.x=1': cannot set 'x' inside objectives[0].metric: \"gii\" "
             "is not an "
             "object");
+}
+
+TEST(ProblemFileOverride, RefusesAValueThatIsNotUtf8) {
+  // Taken as a string, it passed validation and made dump() throw after the whole solve.
+  EXPECT_EQ(override_error(sample_problem(), "name=\xff"),
+            "set: \"name=\\xff\": invalid UTF-8 at byte 5 (paths and values must be UTF-8)");
+}
+
+TEST(ProblemFileOverride, RefusesAValueNestedTooDeep) {
+  EXPECT_THAT(override_error(sample_problem(), "scene.options.x=" + std::string(5000, '[') + std::string(5000, ']')),
+              ::testing::HasSubstr("value at 1:257: nesting deeper than 256 levels"));
+}
+
+TEST(ProblemFileOverride, RefusesAValueWithADuplicateKey) {
+  EXPECT_THAT(override_error(sample_problem(), R"(scene.options={"side": 0.1, "side": 0.2})"),
+              ::testing::HasSubstr("value at 1:15: duplicate key \"side\" in the top level"));
 }
 
 TEST(ProblemFileOverride, LeavesTheProblemUnchangedWhenRefused) {

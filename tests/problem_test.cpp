@@ -139,6 +139,18 @@ TEST(Problem, NanFromAMetricIsAnErrorNamingTheMetricAndSample) {
                {"metric 'nanmetric' returned nan", "at sample", "\"l1\":0.2997"});
 }
 
+TEST(Problem, NonFiniteMechanismQuantitiesAreBlamedOnTheMechanismNotTheMetric) {
+  // A bar width of 1e300 overflows the inertias: the metric's NaN is the mechanism's fault.
+  Json doc = fivebar_study();
+  doc["mechanism"]["options"]["k"] = 1e300;
+  doc["objectives"] = Json::array({{{"metric", "gdi"}}});
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  auto ws = study.problem->make_eval_scratch();
+  expect_error([&] { study.problem->evaluate(kGood.data(), *ws); },
+               {"problem: mechanism 'fivebar' returned a non-finite effective_mass at sample", "\"l1\":0.2997",
+                "check the mechanism's options"});
+}
+
 TEST(Problem, WithObjectivesSharesTheSceneAndChangesTheScore) {
   hapsyn::Json doc = hapsyn::test::fivebar_study();
   doc["objectives"] = hapsyn::Json::array({{{"metric", "gii"}}, {{"metric", "gdi"}}});

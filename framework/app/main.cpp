@@ -8,6 +8,7 @@
 // from a finished run and requeue); likewise `sweep` and `compare` stopped (the same command
 // continues them, reusing the finished runs). A second signal ends the process at once with 128 + signal.
 #include <hapsyn/compare.hpp>
+#include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/groups.hpp>
 #include <hapsyn/output_files.hpp>
@@ -71,6 +72,8 @@ void install_stop_handlers() {
 hapsyn::Study load(const std::string& file, const std::vector<std::string>& sets, const hapsyn::Registry& registry) {
   Json doc = hapsyn::read_problem_file(file);
   for (const std::string& s : sets) hapsyn::apply_override(doc, s);
+  // Relative paths in the file (data files, reference front) are relative to the file first.
+  const hapsyn::ProblemDirectoryScope scope(file);
   return hapsyn::load_study(doc, registry);
 }
 

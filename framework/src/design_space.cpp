@@ -33,9 +33,17 @@ long long DesignSpace::grid_count(std::size_t free_k) const {
   const DesignComponent& c = components_[static_cast<std::size_t>(free_[free_k])];
   assert(c.step > 0.0);
   // The tolerance keeps an upper bound that lies on the grid (0.3 = 0.01 + 29 * 0.01) on it,
-  // despite (upper - lower) / step evaluating to 28.999999999999996.
-  const double n = (c.upper - c.lower) / c.step;
-  return static_cast<long long>(std::floor(n + 1e-9 * std::max(1.0, n))) + 1;
+  // despite (upper - lower) / step evaluating to 28.999999999999996. In long double and checked:
+  // a tiny step (1e-20) must not overflow into a 1-point axis.
+  const long double n = (static_cast<long double>(c.upper) - c.lower) / c.step;
+  const long double count = std::floor(n + 1e-9L * std::max(1.0L, n)) + 1;
+  if (!(count <= static_cast<long double>(kMaxGridAxisPoints))) {
+    std::ostringstream message;
+    message << "design." << c.name << ": a step of " << c.step << " makes more than " << kMaxGridAxisPoints
+            << " grid points on this variable";
+    throw Error("problem", message.str());
+  }
+  return static_cast<long long>(count);
 }
 
 double DesignSpace::grid_value(std::size_t free_k, long long i) const {
@@ -55,7 +63,9 @@ long long DesignSpace::check_grid(const std::string& component) const {
     total *= static_cast<long double>(grid_count(k));
   }
   // Linear grid indices are long long: refuse what they cannot number.
-  if (total > 9e18L) throw Error(component, "the design grid has more than 9e18 points; use larger steps");
+  if (total > static_cast<long double>(kMaxGridPoints)) {
+    throw Error(component, "the design grid has more than 9e18 points; use larger steps");
+  }
   return static_cast<long long>(total);
 }
 
@@ -171,6 +181,58 @@ EntryValues read_entry(const Json& entry, const VariableDecl& d, const std::stri
   return e;
 }
 
+// A grid step must make a sane number of points (kMaxGridAxisPoints) and divide upper - lower:
+// otherwise the grid silently never visits the upper bound (0.07 over [0.01, 0.3] stops at 0.29).
+void check_step_divides(const DesignComponent& c, const std::string& path) {
+  if (!(c.upper > c.lower)) return;
+  const long double range = static_cast<long double>(c.upper) - c.lower;
+  const long double n = range / c.step;
+  if (!(n + 1 <= static_cast<long double>(kMaxGridAxisPoints))) {
+    std::ostringstream message;
+    message.precision(3);
+    message << path << " = " << number(c.step) << ": makes " << static_cast<double>(n + 1) << " grid points on ["
+            << number(c.lower) << ", " << number(c.upper) << "], more than the " << static_cast<double>(kMaxGridAxisPoints)
+            << " a design variable may have; use a larger step";
+    throw Error("problem", message.str());
+  }
+  const long double k = std::round(n);
+  if (std::fabs(n - k) <= 1e-9L * std::max(1.0L, n)) return;
+  const long double below = std::floor(n), above = std::ceil(n);
+  std::ostringstream message;
+  message << path << " = " << number(c.step) << ": does not divide [" << number(c.lower) << ", " << number(c.upper)
+          << "] (";
+  message << std::fixed;
+  message.precision(2);
+  message << static_cast<double>(n) << " steps), so the grid would never visit the upper bound: ";
+  message.unsetf(std::ios::floatfield);
+  if (!c.integer) {
+    message << "use " << number(static_cast<double>(range / below)) << " (" << static_cast<long long>(below)
+            << " steps) or " << number(static_cast<double>(range / above)) << " (" << static_cast<long long>(above)
+            << " steps), or ";
+  }
+  message << "set upper to " << number(static_cast<double>(c.lower + below * c.step));
+  throw Error("problem", message.str());
+}
+
+// Refuses a design grid with more points than kMaxGridPoints (linear grid indices are long long).
+void check_grid_size(const std::vector<DesignComponent>& components) {
+  long double total = 1;
+  std::string factors;
+  for (const DesignComponent& c : components) {
+    if (c.fixed || !(c.step > 0.0)) continue;
+    const long double n = (static_cast<long double>(c.upper) - c.lower) / c.step;
+    const long double count = std::floor(n + 1e-9L * std::max(1.0L, n)) + 1;  // as grid_count
+    total *= count;
+    factors += (factors.empty() ? "" : " x ") + c.name + ": " + number(static_cast<double>(count));
+  }
+  if (total <= static_cast<long double>(kMaxGridPoints)) return;
+  std::ostringstream message;
+  message.precision(3);
+  message << "design: the grid has " << static_cast<double>(total) << " points (" << factors << "), more than the "
+          << static_cast<double>(kMaxGridPoints) << " a design grid may have; use larger steps or fix variables";
+  throw Error("problem", message.str());
+}
+
 // Component i of variable d, checked against the mechanism's hard limits.
 DesignComponent resolve_component(const VariableDecl& d, const Json& entry, const EntryValues& e, int i,
                                   const std::string& path) {
@@ -215,6 +277,7 @@ DesignComponent resolve_component(const VariableDecl& d, const Json& entry, cons
       throw Error("problem", path + ".step" + suffix + " = " + number(c.step) +
                                  ": must not exceed the range upper - lower (" + number(c.upper - c.lower) + ")");
     }
+    check_step_divides(c, path + ".step" + suffix);
     if (c.upper == c.lower) c.fixed = true;
   } else if (c.integer) {
     c.step = 1.0;
@@ -258,6 +321,7 @@ DesignSpace build_design_space(const Json& design, const std::vector<VariableDec
     for (int i = 0; i < d.size; ++i) components.push_back(resolve_component(d, entry, e, i, path));
     resolved_design[d.name] = resolved_entry(entry, d, e);
   }
+  check_grid_size(components);
   return DesignSpace(std::move(components));
 }
 

@@ -315,10 +315,43 @@ void Problem::accumulate_locals(int sample, EvalScratch& ws, bool keep_locals) c
     ws.quantities.attribute_count = static_cast<int>(metric_attributes_[m].size());
     metrics_[m].metric->local(ws.quantities, ws.locals.data() + local_offset_[m]);
   }
-  fold_locals(sample, ws, keep_locals);
+  fold_locals(sample, ws, keep_locals, ws.quantities);
 }
 
-void Problem::fold_locals(int sample, EvalScratch& ws, bool keep_locals) const {
+// The first quantity the mechanism filled (those the metrics need) that is not finite, or null.
+// Only called once a local value came out non-finite: the per-sample loop pays nothing for it.
+static const char* non_finite_quantity(const SampleQuantities& q, Needs needs) {
+  if (q.status != SampleStatus::kReachable) return nullptr;  // the rest is not meaningful then
+  if (!q.q.allFinite()) return "joint angles q";
+  if ((needs & kNeedJacobian) && !q.jacobian.allFinite()) return "jacobian";
+  if ((needs & kNeedInertia) && !q.inertia.allFinite()) return "inertia";
+  if ((needs & kNeedEffectiveMass) && !q.effective_mass.allFinite()) return "effective_mass";
+  if ((needs & kNeedGravity) && !q.gravity.allFinite()) return "gravity";
+  if ((needs & kNeedActuatorLimits) && !(q.max_velocity.allFinite() && q.max_torque.allFinite()))
+    return "actuator limits";
+  if ((needs & kNeedJointVelocity) && !q.joint_velocity.allFinite()) return "joint_velocity";
+  if ((needs & kNeedJointAcceleration) && !q.joint_acceleration.allFinite()) return "joint_acceleration";
+  if ((needs & kNeedVelocityTorque) && !q.velocity_torque.allFinite()) return "velocity_torque";
+  return nullptr;
+}
+
+// A non-finite local value: the mechanism's fault when its own quantities were not finite (a
+// mechanism option such as a bar width of 1e300 overflowing), else the metric's.
+void Problem::refuse_non_finite_local(std::size_t m, int local, int sample, const EvalScratch& ws,
+                                      const SampleQuantities& q) const {
+  std::ostringstream where;
+  if (const char* quantity = non_finite_quantity(q, needs_)) {
+    where << "mechanism '" << mechanism_plugin_ << "' returned a non-finite " << quantity << " at sample " << sample
+          << " of design " << format_design(*this, ws.full) << " (check the mechanism's options and design bounds)";
+  } else {
+    where << "metric '" << metrics_[m].plugin << "' returned " << ws.locals[static_cast<std::size_t>(local_offset_[m] + local)]
+          << " for local value " << local << " at sample " << sample << " (" << to_string(q.status) << ") of design "
+          << format_design(*this, ws.full);
+  }
+  throw Error("problem", where.str());
+}
+
+void Problem::fold_locals(int sample, EvalScratch& ws, bool keep_locals, const SampleQuantities& q) const {
   // The sample's weight factor for sum reductions (1 when unweighted: v * 1.0 is v exactly).
   const double scale = sample_scale_.empty() ? 1.0 : sample_scale_[static_cast<std::size_t>(sample)];
   for (std::size_t m = 0; m < metrics_.size(); ++m) {
@@ -326,13 +359,7 @@ void Problem::fold_locals(int sample, EvalScratch& ws, bool keep_locals) const {
     const int end = local_offset_[m + 1];
     for (int i = begin; i < end; ++i) {
       const double v = ws.locals[static_cast<std::size_t>(i)];
-      if (!std::isfinite(v)) {
-        std::ostringstream where;
-        where << "metric '" << metrics_[m].plugin << "' returned " << v << " for local value " << (i - begin)
-              << " at sample " << sample << " (" << to_string(ws.quantities.status) << ") of design "
-              << format_design(*this, ws.full);
-        throw Error("problem", where.str());
-      }
+      if (!std::isfinite(v)) refuse_non_finite_local(m, i - begin, sample, ws, q);
       const std::size_t ui = static_cast<std::size_t>(i);
       if (local_reduction_[ui] == Reduction::kSum) {
         ws.accumulator[ui] += v * scale;
@@ -482,8 +509,7 @@ const Evaluation& Problem::evaluate_batched(const MechanismModel& model, EvalScr
         const double* block = ws.batch_locals.data() + static_cast<std::size_t>(batch_) * local_offset_[m];
         std::copy(block + i * k, block + (i + 1) * k, ws.locals.begin() + local_offset_[m]);
       }
-      ws.quantities.status = q.status;  // for fold_locals' messages
-      fold_locals(q.sample, ws, options.on_sample != nullptr);
+      fold_locals(q.sample, ws, options.on_sample != nullptr, q);
       ++folded;
       if (options.on_sample) (*options.on_sample)(q.sample, q, ws.nested_locals);
       if ((prune_front && front_dominates(*options.prune_dominated_by, ws)) ||

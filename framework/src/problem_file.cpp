@@ -4,7 +4,10 @@
 #include <cstring>
 #include <hapsyn/error.hpp>
 #include <hapsyn/problem_file.hpp>
+#include <hapsyn/read_file.hpp>
+#include <iterator>
 #include <memory>
+#include <set>
 #include <optional>
 #include <string>
 #include <vector>
@@ -13,26 +16,77 @@ namespace hapsyn {
 
 namespace {
 
-// nlohmann reports the line and column of some errors wrongly (column 0 after a newline) and
-// reports number overflow ("1e999") without any position, so a first pass with this handler
-// only records where parsing stops and why; the document itself is built by a second pass.
-class ErrorFinder : public nlohmann::json_sax<Json> {
+// An iterator over the text that records the offset of the last character the lexer read, so
+// that the SAX callbacks (which get no position) can point at where they are.
+class CountingIterator {
  public:
-  bool null() override { return true; }
-  bool boolean(bool) override { return true; }
-  bool number_integer(number_integer_t) override { return true; }
-  bool number_unsigned(number_unsigned_t) override { return true; }
-  bool number_float(number_float_t, const string_t&) override { return true; }
-  bool string(string_t&) override { return true; }
-  bool binary(binary_t&) override { return true; }
-  bool start_object(std::size_t) override { return true; }
-  bool key(string_t&) override { return true; }
-  bool end_object() override { return true; }
-  bool start_array(std::size_t) override { return true; }
-  bool end_array() override { return true; }
+  using iterator_category = std::forward_iterator_tag;
+  using value_type = char;
+  using difference_type = std::ptrdiff_t;
+  using pointer = const char*;
+  using reference = const char&;
+
+  CountingIterator(const char* begin, const char* p, std::size_t* last) : begin_(begin), p_(p), last_(last) {}
+  reference operator*() const {
+    *last_ = static_cast<std::size_t>(p_ - begin_);
+    return *p_;
+  }
+  CountingIterator& operator++() {
+    ++p_;
+    return *this;
+  }
+  CountingIterator operator++(int) {
+    CountingIterator old = *this;
+    ++p_;
+    return old;
+  }
+  bool operator==(const CountingIterator& o) const { return p_ == o.p_; }
+  bool operator!=(const CountingIterator& o) const { return p_ != o.p_; }
+
+ private:
+  const char* begin_;
+  const char* p_;
+  std::size_t* last_;
+};
+
+// The first pass over a JSON text, before any document is built. nlohmann reports the line and
+// column of some errors wrongly (column 0 after a newline) and reports number overflow ("1e999")
+// without any position, so this handler records where parsing stops and why; it also refuses
+// what nlohmann would accept but must not be: nesting deeper than kMaxJsonDepth (the DOM's
+// recursive destructor would overflow the stack) and a key given twice (the last would win
+// silently). The document itself is built by a second pass.
+class TextChecker : public nlohmann::json_sax<Json> {
+ public:
+  enum class Failure { kNone, kSyntax, kDepth, kDuplicateKey };
+
+  explicit TextChecker(const std::size_t* last_read) : last_read_(last_read) {}
+
+  bool null() override { return value(); }
+  bool boolean(bool) override { return value(); }
+  bool number_integer(number_integer_t) override { return value(); }
+  bool number_unsigned(number_unsigned_t) override { return value(); }
+  bool number_float(number_float_t, const string_t&) override { return value(); }
+  bool string(string_t&) override { return value(); }
+  bool binary(binary_t&) override { return value(); }
+  bool start_object(std::size_t) override { return open(true); }
+  bool key(string_t& k) override {
+    Frame& f = frames_.back();
+    if (!f.keys.insert(k).second) {
+      where = path();
+      token = k;
+      failed = Failure::kDuplicateKey;
+      byte = *last_read_;  // the key's closing quote
+      return false;
+    }
+    f.key = k;
+    return true;
+  }
+  bool end_object() override { return close(); }
+  bool start_array(std::size_t) override { return open(false); }
+  bool end_array() override { return close(); }
   bool parse_error(std::size_t position, const std::string& last_token,
                    const nlohmann::detail::exception& e) override {
-    failed = true;
+    failed = Failure::kSyntax;
     byte = position;
     token = last_token;
     id = e.id;
@@ -40,16 +94,61 @@ class ErrorFinder : public nlohmann::json_sax<Json> {
     return false;
   }
 
-  bool failed = false;
-  std::size_t byte = 0;  // count of bytes read when the error was seen
-  std::string token;
+  Failure failed = Failure::kNone;
+  std::size_t byte = 0;  // syntax: count of bytes read; others: offset of the offending character
+  std::string token;     // syntax: the last token; duplicate: the key
+  std::string where;     // depth, duplicate: the JSON path of the object or array
   int id = 0;
   std::string what;
+
+ private:
+  struct Frame {
+    bool object = false;
+    std::set<std::string> keys;  // keys seen so far (objects)
+    std::string key;             // the current key (objects)
+    std::size_t count = 0;       // elements started so far (arrays)
+  };
+
+  bool value() {
+    if (!frames_.empty() && !frames_.back().object) ++frames_.back().count;
+    return true;
+  }
+  bool open(bool object) {
+    value();
+    if (frames_.size() >= kMaxJsonDepth) {
+      failed = Failure::kDepth;
+      byte = *last_read_;
+      return false;
+    }
+    frames_.push_back(Frame{object, {}, {}, 0});
+    return true;
+  }
+  bool close() {
+    frames_.pop_back();
+    return true;
+  }
+  // The JSON path of the innermost open value ("design.l1", "objectives[0]"; "" at the top).
+  std::string path() const {
+    std::string out;
+    for (std::size_t i = 0; i < frames_.size(); ++i) {
+      if (i + 1 == frames_.size()) break;  // the innermost frame is where we are, not a step
+      const Frame& f = frames_[i];
+      if (f.object) {
+        out += (out.empty() ? "" : ".") + f.key;
+      } else {
+        out += "[" + std::to_string(f.count - 1) + "]";
+      }
+    }
+    return out;
+  }
+
+  const std::size_t* last_read_;
+  std::vector<Frame> frames_;
 };
 
 // nlohmann's messages read "[json.exception.parse_error.101] parse error at line 1, column 9:
 // syntax error while parsing value - invalid literal; ..." : keep the part after the dash.
-std::string short_reason(const ErrorFinder& f) {
+std::string short_reason(const TextChecker& f) {
   if (f.id == 406) return "number " + f.token + " is out of range";
   std::string reason = f.what;
   const auto column = reason.find(", column ");
@@ -94,6 +193,128 @@ std::string type_name_of(const Json& value) {
       return "nothing";
     default:
       return "a number";
+  }
+}
+
+// The first pass over `text` (see TextChecker).
+TextChecker check_text(const std::string& text) {
+  std::size_t last_read = 0;
+  TextChecker checker(&last_read);
+  const char* begin = text.data();
+  Json::sax_parse(CountingIterator(begin, begin, &last_read), CountingIterator(begin, begin + text.size(), &last_read),
+                  &checker);
+  return checker;
+}
+
+// Where the checker's failure is, as an offset into `text`.
+std::size_t error_offset(const std::string& text, const TextChecker& f) {
+  if (f.failed == TextChecker::Failure::kSyntax) {
+    // For a number out of range the position is its last character: point at its first.
+    std::size_t offset = f.byte > 0 ? f.byte - 1 : 0;
+    if (f.id == 406 && offset + 1 >= f.token.size()) offset = offset + 1 - f.token.size();
+    return offset;
+  }
+  if (f.failed == TextChecker::Failure::kDuplicateKey) {
+    // From the key's closing quote back to its opening one (an escaped quote is part of the key).
+    std::size_t i = std::min(f.byte, text.size());
+    while (i-- > 0) {
+      if (text[i] != '"') continue;
+      std::size_t backslashes = 0;
+      while (i > backslashes && text[i - 1 - backslashes] == '\\') ++backslashes;
+      if (backslashes % 2 == 0) return i;
+    }
+  }
+  return f.byte;
+}
+
+// What is wrong, after "SOURCE:LINE:COLUMN: ".
+std::string problem_of(const TextChecker& f) {
+  switch (f.failed) {
+    case TextChecker::Failure::kDepth:
+      return "nesting deeper than " + std::to_string(kMaxJsonDepth) +
+             " levels (arrays and objects inside each other): refused before it is built";
+    case TextChecker::Failure::kDuplicateKey:
+      return "duplicate key " + Json(f.token).dump(-1, ' ', true, Json::error_handler_t::replace) + " in " +
+             (f.where.empty() ? std::string("the top level") : f.where) + " (each key may appear once)";
+    default:
+      return "malformed JSON: " + short_reason(f);
+  }
+}
+
+// The offset of the first byte of `s` that is not part of valid UTF-8 (overlong forms,
+// surrogates and code points above U+10FFFF are invalid), or npos.
+std::size_t invalid_utf8_at(const std::string& s) {
+  std::size_t i = 0;
+  while (i < s.size()) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    std::size_t n = 0;
+    unsigned lo = 0x80, hi = 0xBF;  // the allowed range of the second byte
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if (c >= 0xC2 && c <= 0xDF) {
+      n = 1;
+    } else if (c >= 0xE0 && c <= 0xEF) {
+      n = 2;
+      if (c == 0xE0) lo = 0xA0;
+      if (c == 0xED) hi = 0x9F;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+      n = 3;
+      if (c == 0xF0) lo = 0x90;
+      if (c == 0xF4) hi = 0x8F;
+    } else {
+      return i;
+    }
+    if (i + n >= s.size()) return i;  // truncated sequence
+    for (std::size_t k = 1; k <= n; ++k) {
+      const auto d = static_cast<unsigned char>(s[i + k]);
+      if (d < (k == 1 ? lo : 0x80) || d > (k == 1 ? hi : 0xBF)) return i;
+    }
+    i += n + 1;
+  }
+  return std::string::npos;
+}
+
+// `s` shown in a message whatever its bytes: invalid ones as \xHH.
+std::string shown_string(const std::string& s) {
+  std::string out = "\"";
+  static const char* const kHex = "0123456789abcdef";
+  for (std::size_t i = 0; i < s.size() && i < 80; ++i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    if (c >= 0x20 && c < 0x7F && c != '"' && c != '\\') {
+      out += static_cast<char>(c);
+    } else {
+      out += std::string("\\x") + kHex[c >> 4] + kHex[c & 15];
+    }
+  }
+  return out + (s.size() > 80 ? "...\"" : "\"");
+}
+
+void refuse_invalid_utf8(const std::string& s, const std::string& path, const char* what) {
+  const std::size_t bad = invalid_utf8_at(s);
+  if (bad == std::string::npos) return;
+  throw Error("problem", (path.empty() ? std::string("(top level)") : path) + " " + what + " " + shown_string(s) +
+                             ": invalid UTF-8 at byte " + std::to_string(bad) + " (text must be UTF-8)");
+}
+
+void check_strings(const Json& value, const std::string& path, std::size_t depth) {
+  if (value.is_string()) {
+    refuse_invalid_utf8(value.get_ref<const std::string&>(), path, "=");
+    return;
+  }
+  if (!value.is_structured()) return;
+  if (depth >= kMaxJsonDepth) {
+    throw Error("problem", (path.empty() ? std::string("(top level)") : path.substr(0, 200)) +
+                               ": nesting deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+  }
+  if (value.is_object()) {
+    for (auto it = value.begin(); it != value.end(); ++it) {
+      const std::string child = path.empty() ? it.key() : path + "." + it.key();
+      refuse_invalid_utf8(it.key(), path, "has key");
+      check_strings(it.value(), child, depth + 1);
+    }
+  } else {
+    for (std::size_t i = 0; i < value.size(); ++i) check_strings(value[i], path + "[" + std::to_string(i) + "]", depth + 1);
   }
 }
 
@@ -174,30 +395,13 @@ std::string trim(const std::string& s) {
 }  // namespace
 
 Json read_problem_file(const std::string& path) {
-  errno = 0;
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
-                                                       &std::fclose);
-  if (!file) throw Error("problem", "cannot read " + path + ": " + std::strerror(errno));
-  std::string text;
-  char buffer[65536];
-  std::size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof buffer, file.get())) > 0) text.append(buffer, n);
-  // fopen succeeds on a directory on Linux; the read then fails with EISDIR.
-  if (std::ferror(file.get()))
-    throw Error("problem", "cannot read " + path + ": " + std::strerror(errno));
-  return parse_problem_text(text, path);
+  return parse_problem_text(read_regular_file(path, "problem", "problem file", kMaxProblemFileBytes), path);
 }
 
 Json parse_problem_text(const std::string& text, const std::string& source) {
-  ErrorFinder finder;
-  Json::sax_parse(text, &finder);
-  if (finder.failed) {
-    // For a number out of range the position is its last character: point at its first.
-    std::size_t offset = finder.byte > 0 ? finder.byte - 1 : 0;
-    if (finder.id == 406 && offset + 1 >= finder.token.size())
-      offset = offset + 1 - finder.token.size();
-    throw Error("problem", source + ":" + line_and_column(text, offset) +
-                               ": malformed JSON: " + short_reason(finder));
+  const TextChecker finder = check_text(text);
+  if (finder.failed != TextChecker::Failure::kNone) {
+    throw Error("problem", source + ":" + line_and_column(text, error_offset(text, finder)) + ": " + problem_of(finder));
   }
   Json document = Json::parse(text, nullptr, false);
   if (document.is_discarded()) throw Error("problem", source + ": malformed JSON");
@@ -208,7 +412,14 @@ Json parse_problem_text(const std::string& text, const std::string& source) {
   return document;
 }
 
+void check_json_text_rules(const Json& value, const std::string& path) { check_strings(value, path, 0); }
+
 void apply_override(Json& problem, const std::string& assignment) {
+  // Before anything echoes it: a message must itself be valid UTF-8.
+  if (const std::size_t bad = invalid_utf8_at(assignment); bad != std::string::npos) {
+    throw Error("set", shown_string(assignment) + ": invalid UTF-8 at byte " + std::to_string(bad) +
+                           " (paths and values must be UTF-8)");
+  }
   const auto equals = assignment.find('=');
   if (equals == std::string::npos) refuse_override(assignment, "expected path=value (no '=')");
   const std::string path = trim(assignment.substr(0, equals));
@@ -217,7 +428,13 @@ void apply_override(Json& problem, const std::string& assignment) {
 
   // NaN and Infinity are not JSON and an out-of-range number is refused by the parser: all stay
   // strings, which the schema then refuses with the value in view.
-  Json value = Json::parse(text, nullptr, false);
+  // Text that is JSON but must not be (too deep, a duplicate key) is refused, not taken as a string.
+  const TextChecker checked = check_text(text);
+  if (checked.failed == TextChecker::Failure::kDepth || checked.failed == TextChecker::Failure::kDuplicateKey) {
+    refuse_override(assignment.size() > 200 ? assignment.substr(0, 200) + "..." : assignment,
+                    "value at " + line_and_column(text, error_offset(text, checked)) + ": " + problem_of(checked));
+  }
+  Json value = checked.failed == TextChecker::Failure::kNone ? Json::parse(text, nullptr, false) : Json(text);
   if (value.is_discarded()) value = text;
 
   const std::vector<Segment> segments = split_path(path, assignment);

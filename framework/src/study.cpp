@@ -1,5 +1,6 @@
 // Loading a study: the framework's schema of a problem file, and load_study, which validates a
 // problem document and builds the plugins, the design space, the scene and the problem.
+#include <hapsyn/data_file.hpp>
 #include <hapsyn/design_space.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/problem_file.hpp>
@@ -36,7 +37,7 @@ const char* const kProblemSchema = R"json({
         "metric": {"type": "string", "description": "Metric plugin name"},
         "name": {"type": "string", "description": "Label (default: the metric name)"},
         "sense": {"type": "string", "enum": ["maximize", "minimize"], "default": "maximize"},
-        "weight": {"type": "number", "description": "Weight in a weighted-sum study", "default": 1.0},
+        "weight": {"type": "number", "minimum": 0, "description": "Weight in a weighted-sum study (>= 0; use sense to minimize)", "default": 1.0},
         "options": {"type": "object", "description": "Options of the metric plugin", "default": {}}}}},
     "solver": {"type": "object", "required": ["plugin"], "properties": {
         "plugin": {"type": "string", "description": "Solver plugin name"},
@@ -51,8 +52,8 @@ const char* const kProblemSchema = R"json({
     "indicators": {"type": "object", "description": "Front-quality indicators written into result.json", "properties": {
         "reference_front": {"type": "string", "description": "result.json of a study whose front is the reference (IGD, GD, domination gaps)"},
         "reference_point": {"type": "array", "items": {"type": "number"}, "description": "Hypervolume reference point, one value per objective (natural units), worse than every front point"}}},
-    "seed": {"type": "integer", "minimum": 0, "description": "Random seed (default: drawn and recorded)"},
-    "threads": {"type": "integer", "minimum": 0, "description": "Worker threads (0 = all cores)"}
+    "seed": {"type": "integer", "minimum": 0, "maximum": 18446744073709551615, "description": "Random seed, an unsigned 64-bit integer (default: drawn and recorded)"},
+    "threads": {"type": "integer", "minimum": 0, "maximum": 1024, "description": "Worker threads (0 = all cores)"}
   },
   "required": ["mechanism", "scene", "objectives", "solver"]
 })json";
@@ -64,6 +65,54 @@ void note_plugin(Study& study, const Registry& registry, const std::string& name
     if (p.file == r.file) return;
   }
   study.plugins.push_back(r);
+}
+
+// A name that becomes part of a path (the study's results/<name>, a plugin's libhapsyn_<name>.so)
+// must not be able to leave its folder: [A-Za-z0-9._-], not starting with '.', at most 100.
+void check_safe_name(const std::string& path, const std::string& name) {
+  std::string rule;
+  if (name.empty()) {
+    rule = "must not be empty";
+  } else if (name.size() > kMaxNameLength) {
+    rule = "must have at most " + std::to_string(kMaxNameLength) + " characters (it has " +
+           std::to_string(name.size()) + ")";
+  } else if (name[0] == '.') {
+    rule = "must not start with '.'";
+  } else {
+    for (const char c : name) {
+      const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' ||
+                      c == '_' || c == '-';
+      if (!ok) {
+        rule = std::string("must use only letters, digits, '.', '_' and '-' (it becomes part of a file path; '") +
+               (c == '/' ? "/" : c == '\\' ? "\\" : std::string(1, c)) + "' is not allowed)";
+        break;
+      }
+    }
+  }
+  if (!rule.empty()) throw Error("problem", path + " = " + render_value(Json(name)) + ": " + rule);
+}
+
+// registry.find, with an unknown plugin blamed on the key that named it.
+const PluginRecord& find_plugin(const Registry& registry, const std::string& path, const std::string& name) {
+  check_safe_name(path, name);
+  try {
+    return registry.find(name);
+  } catch (const Error& e) {
+    throw Error("problem", path + " = \"" + name + "\": " + e.what());
+  }
+}
+
+// A single-objective study maximizes the weighted sum: with every weight 0 every design scores 0,
+// and the solver would report an arbitrary design as converged.
+void check_weights_not_all_zero(const Json& objectives) {
+  std::string names;
+  for (const Json& o : objectives) {
+    if (o["weight"].get<double>() != 0.0) return;
+    names += (names.empty() ? "" : ", ") + o["name"].get<std::string>();
+  }
+  throw Error("problem", "objectives: every weight is 0 (" + names +
+                             "): the weighted sum would be 0 for every design; give at least one objective a "
+                             "nonzero \"weight\"");
 }
 
 // The metric and the objective of each entry of the "objectives" section (its options resolved
@@ -97,13 +146,14 @@ void load_objectives(Json& objs, const Registry& registry, const std::vector<InP
     const std::string path = "objectives[" + std::to_string(i) + "]";
     Json& o = objs[i];
     const std::string metric_name = o["metric"];
+    check_safe_name(path + ".metric", metric_name);
     const auto own = std::find_if(in_process.begin(), in_process.end(),
                                   [&](const InProcessMetric& m) { return m.name == metric_name; });
     std::shared_ptr<Metric> metric;
     if (own != in_process.end()) {
       metric = create_in_process(*own, o["options"], path, study);
     } else {
-      const PluginRecord& record = registry.find(metric_name);
+      const PluginRecord& record = find_plugin(registry, path + ".metric", metric_name);
       if (record.kind != "metric") {
         throw Error("problem", path + ".metric = \"" + metric_name + "\": '" + metric_name + "' is a " + record.kind +
                                    " plugin, not a metric plugin");
@@ -155,6 +205,7 @@ void check_timeline_option(const Json& resolved, const SampleSet& samples) {
 std::shared_ptr<SampleSet> build_samples(Json& resolved, const Registry& registry, Study& study,
                                          const SceneRequest& request) {
   const std::string scene_name = resolved["scene"]["plugin"];
+  find_plugin(registry, "scene.plugin", scene_name);
   std::shared_ptr<Scene> scene =
       registry.create_scene(scene_name, resolved["scene"]["options"], "scene", &resolved["scene"]["options"]);
   note_plugin(study, registry, scene_name);
@@ -163,6 +214,11 @@ std::shared_ptr<SampleSet> build_samples(Json& resolved, const Registry& registr
     samples = std::make_shared<SampleSet>(scene->build(request));
   } catch (const Error& e) {
     throw Error("problem", std::string("scene.options: ") + e.what());
+  }
+  if (samples->size() > kMaxSceneSamples) {
+    throw Error("problem", "scene.plugin = \"" + scene_name + "\": the scene has " + std::to_string(samples->size()) +
+                               " samples, more than the " + std::to_string(kMaxSceneSamples) +
+                               " a study may have; use coarser scene options");
   }
   check_lattice(*samples, scene_name);
   check_groups(*samples, scene_name);
@@ -173,9 +229,9 @@ std::shared_ptr<SampleSet> build_samples(Json& resolved, const Registry& registr
 
 // The optional "indicators" section: a reference point with one finite value per objective,
 // and a reference front read from a result.json holding the study's objectives.
-void load_indicators(const Json& resolved, const Problem& problem, Study& study) {
+void load_indicators(Json& resolved, const Problem& problem, Study& study) {
   if (!resolved.contains("indicators")) return;
-  const Json& section = resolved["indicators"];
+  const Json section = resolved["indicators"];
   const std::size_t m = problem.objectives().size();
   if (section.contains("reference_point")) {
     const Json& point = section["reference_point"];
@@ -192,7 +248,9 @@ void load_indicators(const Json& resolved, const Problem& problem, Study& study)
     }
   }
   if (section.contains("reference_front")) {
-    const std::string path = section["reference_front"];
+    // Relative to the problem file first: `hapsyn run dir/problem.json` from anywhere.
+    const std::string path = resolve_problem_path(section["reference_front"].get<std::string>());
+    resolved["indicators"]["reference_front"] = path;
     if (!boost::filesystem::exists(path)) {
       // Not written yet (a fresh checkout; compare runs the reference study first): the study
       // is valid, its result.json records why it has no reference indicators.
@@ -222,6 +280,7 @@ void load_indicators(const Json& resolved, const Problem& problem, Study& study)
 
 Study load_study(const Json& input, const Registry& registry, const std::vector<InProcessMetric>& in_process) {
   if (!input.is_object()) throw Error("problem", "the problem must be a JSON object");
+  check_json_text_rules(input);
   Json without_design = input;
   without_design.erase("design");
   Json resolved = validate_and_fill(Json::parse(kProblemSchema), without_design, "");
@@ -230,9 +289,12 @@ Study load_study(const Json& input, const Registry& registry, const std::vector<
     throw Error("problem", "design = " + render_value(design) + ": must be an object of design variables");
   }
 
+  check_safe_name("name", resolved["name"].get<std::string>());
+
   Study study;
   // Mechanism.
   const std::string mechanism_name = resolved["mechanism"]["plugin"];
+  find_plugin(registry, "mechanism.plugin", mechanism_name);
   std::shared_ptr<Mechanism> mechanism =
       registry.create_mechanism(mechanism_name, resolved["mechanism"]["options"], "mechanism", &resolved["mechanism"]["options"]);
   note_plugin(study, registry, mechanism_name);
@@ -250,9 +312,12 @@ Study load_study(const Json& input, const Registry& registry, const std::vector<
 
   // Solver (created before the scene is built: its options are checked before any work).
   study.solver_plugin = resolved["solver"]["plugin"];
+  find_plugin(registry, "solver.plugin", study.solver_plugin);
   study.solver =
       registry.create_solver(study.solver_plugin, resolved["solver"]["options"], "solver", &resolved["solver"]["options"]);
   note_plugin(study, registry, study.solver_plugin);
+
+  if (!study.solver->pareto()) check_weights_not_all_zero(resolved["objectives"]);
 
   // Scene.
   std::shared_ptr<SampleSet> samples = build_samples(resolved, registry, study, request);

@@ -16,6 +16,13 @@
 
 namespace hapsyn {
 
+/// Most grid points one design variable may have (its step against its range): beyond it a grid
+/// is not searchable, and a tiny step (1e-20) would overflow the count.
+constexpr long long kMaxGridAxisPoints = 1000000000LL;
+/// Most points a whole design grid (the product over the free variables with a step) may have:
+/// linear grid indices are long long.
+constexpr long long kMaxGridPoints = 9000000000000000000LL;
+
 /// A design variable as a mechanism declares it. Units are SI (m, rad, kg) unless `unit` says.
 struct VariableDecl {
   std::string name;         ///< key in the problem file's "design" object, e.g. "l1"
@@ -66,6 +73,8 @@ class DesignSpace {
   Eigen::VectorXd expand(const Eigen::VectorXd& free_values) const;
   /// Number of grid points of free component k (requires a step): floor((upper-lower)/step)+1,
   /// with a relative tolerance so that an upper bound on the grid is included.
+  /// \throws Error("problem: design.<name>: ...") above kMaxGridAxisPoints (build_design_space
+  ///         refuses such steps first; this guards spaces built by hand).
   long long grid_count(std::size_t free_k) const;
   /// Grid value i of free component k: lower + i*step (clamped to upper).
   double grid_value(std::size_t free_k, long long i) const;
@@ -100,7 +109,11 @@ class DesignSpace {
 ///         unknown variables or keys (with the nearest name), non-numbers, non-finite values,
 ///         wrong component counts, bounds outside the mechanism's hard limits, lower > upper,
 ///         a value outside its bounds, a step <= 0 or wider than the range, a step with a
-///         value, non-integers for integer variables.
+///         value, non-integers for integer variables, a step that does not divide upper - lower
+///         (relative tolerance 1e-9 on the step count; the message proposes the two nearest
+///         dividing steps and the upper bound the step reaches), a step making more than
+///         kMaxGridAxisPoints points, a grid (product over the variables with a step) of more
+///         than kMaxGridPoints points.
 DesignSpace build_design_space(const Json& design, const std::vector<VariableDecl>& decls, Json& resolved_design);
 
 }  // namespace hapsyn

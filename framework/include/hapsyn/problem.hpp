@@ -199,7 +199,10 @@ class Problem {
   // The steps of evaluate().
   bool constraints_hold(EvalScratch& ws, Evaluation& out) const;
   void accumulate_locals(int sample, EvalScratch& ws, bool keep_locals) const;
-  void fold_locals(int sample, EvalScratch& ws, bool keep_locals) const;
+  // `q`: the sample's quantities, blamed instead of the metric when a local value is not finite.
+  void fold_locals(int sample, EvalScratch& ws, bool keep_locals, const SampleQuantities& q) const;
+  [[noreturn]] void refuse_non_finite_local(std::size_t metric, int local, int sample, const EvalScratch& ws,
+                                            const SampleQuantities& q) const;
   const Evaluation& evaluate_batched(const MechanismModel& model, EvalScratch& ws, const EvalOptions& options,
                                      bool prune, bool prune_front) const;
   double score_bound(const EvalScratch& ws, long long samples) const;

@@ -9,12 +9,21 @@
 #include <hapsyn/registry.hpp>
 #include <hapsyn/solver.hpp>
 
+#include <cstddef>
 #include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
 namespace hapsyn {
+
+/// Longest study or plugin name [characters]. Names become parts of paths (results/<name>,
+/// libhapsyn_<name>.so), so they are limited to [A-Za-z0-9._-] and may not start with '.'.
+constexpr std::size_t kMaxNameLength = 100;
+
+/// Most samples a scene may give a study: beyond it every design evaluation is hopeless, and
+/// sample indices are int. A plugin's own limits usually refuse such options first.
+constexpr long long kMaxSceneSamples = 100000000;
 
 /// A validated, ready-to-run study.
 struct Study {
@@ -52,8 +61,18 @@ struct InProcessMetric {
 /// objective's metric and options, the solver and its options, the scene and its options (the
 /// scene is built here, with the attributes the metrics ask for; its SampleLattice, if any, is
 /// checked), Solver::check, the "indicators" section and its reference front file.
-/// The resolved document (Study::resolved) records every default, and "aggregation":
-/// "weighted_sum" for several objectives under a single-objective solver.
+/// The resolved document (Study::resolved) records every default, "aggregation":
+/// "weighted_sum" for several objectives under a single-objective solver, and
+/// indicators.reference_front as the absolute path it was resolved to.
+/// Beyond the schema: every string valid UTF-8 and nesting at most kMaxJsonDepth
+/// (check_json_text_rules); "name" and every plugin name (mechanism.plugin, scene.plugin,
+/// solver.plugin, objectives[i].metric) a safe name (kMaxNameLength, [A-Za-z0-9._-], not
+/// starting with '.'), an unknown plugin blamed on the key naming it; "threads" 0..1024, "seed" an
+/// unsigned 64-bit integer; weights >= 0 and, under a single-objective solver, not all 0; a design
+/// grid within build_design_space's caps; at most kMaxSceneSamples samples.
+/// Relative paths (indicators.reference_front, plugins' data files through find_data_file) are
+/// resolved against the problem file's folder first while the caller holds a
+/// ProblemDirectoryScope (data_file.hpp), then against the current directory.
 /// \param problem  the parsed (and overridden) problem document
 /// \param registry finds and creates the plugins; must outlive the study
 /// \throws Error naming the JSON path, the value and the rule (component "problem" for the
