@@ -69,12 +69,26 @@ void install_stop_handlers() {
   for (int s : {SIGINT, SIGTERM, SIGUSR1}) ::sigaction(s, &action, nullptr);
 }
 
-hapsyn::Study load(const std::string& file, const std::vector<std::string>& sets, const hapsyn::Registry& registry) {
+hapsyn::Study load(const std::string& file, const std::vector<std::string>& sets, const hapsyn::Registry& registry,
+                   const hapsyn::LoadSettings& settings = {}) {
   Json doc = hapsyn::read_problem_file(file);
   for (const std::string& s : sets) hapsyn::apply_override(doc, s);
   // Relative paths in the file (data files, reference front) are relative to the file first.
   const hapsyn::ProblemDirectoryScope scope(file);
-  return hapsyn::load_study(doc, registry);
+  return hapsyn::load_study(doc, registry, {}, settings);
+}
+
+// The scene build gets the run's --threads (capped as the run caps it) and progress lines.
+hapsyn::LoadSettings load_settings(int threads, bool quiet) {
+  hapsyn::LoadSettings settings;
+  if (threads > 0) {
+    hapsyn::RunOptions options;
+    options.threads = threads;
+    std::vector<std::string> warnings;  // the run itself reports the cap
+    settings.threads = hapsyn::run_threads(Json::object(), options, warnings);
+  }
+  settings.progress = quiet ? nullptr : &std::cerr;
+  return settings;
 }
 
 constexpr int kExitStopped = 4;
@@ -259,7 +273,8 @@ int scene_command(const std::string& file, const std::vector<std::string>& sets,
                   const hapsyn::Registry& registry) {
   Json doc = hapsyn::read_problem_file(file);
   for (const std::string& s : sets) hapsyn::apply_override(doc, s);
-  const hapsyn::BuiltScene built = hapsyn::build_scene_alone(doc, registry, threads, attributes);
+  const hapsyn::ProblemDirectoryScope scope(file);
+  const hapsyn::BuiltScene built = hapsyn::build_scene_alone(doc, registry, threads, attributes, &std::cerr);
   const hapsyn::SampleSet& set = built.samples;
   std::cout << "scene " << built.plugin << ": " << set.size() << " samples (";
   for (std::size_t c = 0; c < set.coordinates.size(); ++c) std::cout << (c ? ", " : "") << set.coordinates[c];
@@ -439,7 +454,7 @@ void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
 
 int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& registry) {
   const auto t0 = std::chrono::steady_clock::now();
-  hapsyn::Study study = load(a.file, a.sets, registry);
+  hapsyn::Study study = load(a.file, a.sets, registry, load_settings(a.threads, a.quiet));
   hapsyn::RunOptions options;
   options.scene_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   options.output_directory = a.out_dir;
@@ -460,7 +475,7 @@ int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& r
 }
 
 int validate_command(const Arguments& a, const hapsyn::Registry& registry) {
-  hapsyn::Study study = load(a.file, a.sets, registry);
+  hapsyn::Study study = load(a.file, a.sets, registry, load_settings(0, false));
   hapsyn::RunOptions options;
   options.output_directory = a.out_dir;
   options.resume = a.resume;
@@ -500,6 +515,7 @@ int sweep_command(const Arguments& a, const hapsyn::Registry& registry) {
   options.quiet = !a.sweep_progress;
   options.stop = &stop_requested;
   options.force = a.force;
+  const hapsyn::ProblemDirectoryScope scope(a.file);  // the file's relative paths, as `run` reads them
   const Json summary = hapsyn::run_sweep(doc, options, registry);
   print_sweep(summary, std::cout);
   return summary.value("status", "") == "stopped" ? kExitStopped : 0;

@@ -1,4 +1,5 @@
 #include <hapsyn/compare.hpp>
+#include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/output_files.hpp>
 #include <hapsyn/plot.hpp>
@@ -184,7 +185,11 @@ Json run_compare(const CompareOptions& options, const Registry& registry) {
     }
     Study study;
     try {
-      study = load_study(doc, registry);
+      // Relative paths in a problem file are relative to that file first.
+      const ProblemDirectoryScope scope(file);
+      LoadSettings settings;
+      settings.threads = options.threads;
+      study = load_study(doc, registry, {}, settings);
     } catch (const Error& e) {
       throw Error("compare", file + ": " + e.what());
     }

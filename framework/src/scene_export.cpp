@@ -41,19 +41,15 @@ std::string scene_plugin_of(const Json& problem) {
 }  // namespace
 
 BuiltScene build_scene_alone(const Json& problem, const Registry& registry, std::optional<int> threads,
-                             const std::vector<std::string>& attributes) {
+                             const std::vector<std::string>& attributes, std::ostream* progress) {
   BuiltScene built;
   built.plugin = scene_plugin_of(problem);
-  Json options = problem["scene"].value("options", Json::object());
-  if (threads) {
-    const PluginRecord& record = registry.find(built.plugin);
-    if (record.schema.contains("properties") && record.schema["properties"].contains("threads") && options.is_object()) {
-      options["threads"] = *threads;
-    }
-  }
+  const Json options = problem["scene"].value("options", Json::object());
   const auto plugin = registry.create_scene(built.plugin, options, "scene");
   SceneRequest request;
   request.attributes = attributes;
+  request.threads = threads.value_or(0);
+  request.progress = progress;
   const auto start = std::chrono::steady_clock::now();
   built.samples = plugin->build(request);
   built.build_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

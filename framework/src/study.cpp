@@ -278,7 +278,8 @@ void load_indicators(Json& resolved, const Problem& problem, Study& study) {
 
 }  // namespace
 
-Study load_study(const Json& input, const Registry& registry, const std::vector<InProcessMetric>& in_process) {
+Study load_study(const Json& input, const Registry& registry, const std::vector<InProcessMetric>& in_process,
+                 const LoadSettings& settings) {
   if (!input.is_object()) throw Error("problem", "the problem must be a JSON object");
   check_json_text_rules(input);
   Json without_design = input;
@@ -308,6 +309,8 @@ Study load_study(const Json& input, const Registry& registry, const std::vector<
   std::vector<MetricEntry> metrics;
   std::vector<Objective> objectives;
   SceneRequest request;
+  request.threads = settings.threads > 0 ? settings.threads : resolved.value("threads", 0);
+  request.progress = settings.progress;
   load_objectives(resolved["objectives"], registry, in_process, study, metrics, objectives, request);
 
   // Solver (created before the scene is built: its options are checked before any work).

@@ -287,7 +287,10 @@ Json run_sweep(const Json& problem, const SweepOptions& options, const Registry&
   std::vector<std::vector<std::string>> combos;
   std::vector<Json> combo_values;
   combinations(options.axes, combos, combo_values);
-  // Validate every run (and the reference) before any of them starts.
+  // Validate every run (and the reference) before any of them starts. Scene builds get the
+  // sweep's threads, as the runs do.
+  LoadSettings settings;
+  settings.threads = options.threads;
   auto make_doc = [&](const std::vector<std::string>& sets) {
     Json doc = problem;
     for (const std::string& s : sets) apply_override(doc, s);
@@ -295,13 +298,13 @@ Json run_sweep(const Json& problem, const SweepOptions& options, const Registry&
   };
   for (std::size_t c = 0; c < combos.size(); ++c) {
     try {
-      load_study(make_doc(combos[c]), registry);
+      load_study(make_doc(combos[c]), registry, {}, settings);
     } catch (const Error& e) {
       throw Error("sweep", "run with " + combo_values[c].dump() + ": " + e.what());
     }
   }
   const bool separate_reference = !options.reference.empty();
-  if (separate_reference) load_study(make_doc(options.reference), registry);
+  if (separate_reference) load_study(make_doc(options.reference), registry, {}, settings);
 
   const fs::path out(options.output_directory);
   fs::create_directories(out);
@@ -317,7 +320,7 @@ Json run_sweep(const Json& problem, const SweepOptions& options, const Registry&
   auto run_one = [&](const std::vector<std::string>& sets, const std::string& name, const Json& values) {
     const auto t0 = std::chrono::steady_clock::now();
     const fs::path dir = out / name;
-    Study study = load_study(make_doc(sets), registry);
+    Study study = load_study(make_doc(sets), registry, {}, settings);
     RunRecord record{values, Json(), false};
     if (!options.force) {
       if (std::optional<Json> stored = reusable_result(dir.string(), study.resolved, options.seed, "sweep", "this sweep")) {

@@ -39,6 +39,9 @@ ROOT = Path(__file__).resolve().parents[2]
 PROBLEMS = ROOT / "problems"
 CATEGORIES = ["ok", "crash", "hang", "internal", "wrong", "mixed"]
 SEVERITY = {"crash": 6, "hang": 5, "internal": 4, "wrong": 3, "mixed": 2, "skip": 1, "ok": 0}
+# `hapsyn run` stopped on request (SIGINT, SIGTERM, SIGUSR1): result.json status "stopped".
+EXIT_STOPPED = 4
+
 CLASSES = ["json", "set", "cli", "output", "checkpoint", "cache", "plugins", "signal"]
 CLEAR_ERROR = re.compile(r"^hapsyn: error: [A-Za-z0-9_.\-]+(?: [A-Za-z0-9_.\-']+)?: \S", re.M)
 SANITIZER = re.compile(r"AddressSanitizer|UndefinedBehaviorSanitizer|runtime error:|LeakSanitizer|ThreadSanitizer")
@@ -1457,7 +1460,7 @@ def case_signal(ctx: Ctx, case: Case, sb: Sandbox) -> Outcome:
         checks = []
         if r.timed_out or took > 5:
             checks.append(("hang", f"second SIGINT: still running {took:.1f} s later"))
-        elif r.rc not in (0, 130, -2):
+        elif r.rc not in (0, EXIT_STOPPED, 130, -2):
             checks.append(classify(r))
         probs = out_dir_problems(out, False)
         if probs:
@@ -1472,9 +1475,12 @@ def case_signal(ctx: Ctx, case: Case, sb: Sandbox) -> Outcome:
     if r.timed_out or took > bound:
         checks.append(("hang", f"{sig.name}: still running {took:.1f} s later (bound {bound:.0f} s)"))
     else:
-        checks.append(classify(r, "accept"))
         doc = result_of(out)
-        if r.rc == 0:
+        if r.rc != EXIT_STOPPED:
+            checks.append(classify(r, "accept"))
+            if r.rc == 0:
+                checks.append(("wrong", f"exit 0 after {sig.name}: a stopped run exits {EXIT_STOPPED}"))
+        else:
             if doc is None:
                 checks.append(("wrong", "exit 0 without result.json"))
             elif doc.get("status") != "stopped":
@@ -1484,7 +1490,7 @@ def case_signal(ctx: Ctx, case: Case, sb: Sandbox) -> Outcome:
         probs = out_dir_problems(out, True)
         if probs:
             checks.append(("mixed", "; ".join(probs)))
-        if r.rc == 0 and doc is not None and doc.get("status") == "stopped":
+        if r.rc == EXIT_STOPPED and doc is not None and doc.get("status") == "stopped":
             checks.append(resume_after_stop(ctx, sb, prob, sets, out))
     cat, det = worst(*checks)
     o = outcome(r, cat, f"{solver}: " + (det or f"stopped {took:.1f} s after {sig.name}"))
@@ -1506,6 +1512,8 @@ def resume_after_stop(ctx: Ctx, sb: Sandbox, prob: str, sets: list, out: Path) -
         return "hang", "the resumed run did not stop on SIGINT"
     if r.rc == 1 and "finished" in r.err:
         return "wrong", "a stopped study cannot be resumed (--resume refuses it as finished): " + first_error_line(r.err)
+    if r.rc == EXIT_STOPPED:
+        return "ok", ""
     cat, det = classify(r, "accept")
     return cat, ("--resume after the stop: " + det) if det else ""
 

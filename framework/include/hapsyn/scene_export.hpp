@@ -8,6 +8,7 @@
 #include <hapsyn/scene.hpp>
 
 #include <optional>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -23,12 +24,14 @@ struct BuiltScene {
 /// Builds the "scene" section ({"plugin", "options"}) of a problem document; every other
 /// section is ignored. The lattice declaration, if any, is checked (check_lattice), and so are
 /// the weights, if any (check_weights, naming the scene plugin).
-/// \param threads    when given, sets options.threads if the scene's schema has that option
+/// \param threads    when given, the build's threads (SceneRequest::threads; a scene's own
+///                   `threads` option above 0 wins)
 /// \param attributes per-sample attributes to request (SceneRequest::attributes)
+/// \param progress   progress lines of a long build (SceneRequest::progress), null: quiet
 /// \throws Error("problem", "scene ...") for a missing or malformed section, the registry's
 ///         and the scene's errors for unknown plugins, bad options or attributes.
 BuiltScene build_scene_alone(const Json& problem, const Registry& registry, std::optional<int> threads,
-                             const std::vector<std::string>& attributes);
+                             const std::vector<std::string>& attributes, std::ostream* progress = nullptr);
 
 /// The samples as CSV: the pose columns (SampleSet::coordinates), then every attribute in
 /// alphabetical order, flattened as name[i] (name alone for a single column), then a `weight`

@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <functional>
 #include <memory>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -79,6 +80,17 @@ struct InProcessMetric {
 ///         file's own rules, the plugin's name for its options), or a scene's lattice error.
 /// \param in_process metrics known by name besides the registry's plugins (they take
 ///        precedence over a plugin of the same name)
-Study load_study(const Json& problem, const Registry& registry, const std::vector<InProcessMetric>& in_process = {});
+/// How the scene is built during load_study (the run's settings reach the scene build).
+struct LoadSettings {
+  /// Threads for the scene build: the run's --threads (already capped by the caller); 0 = the
+  /// file's "threads", else all cores. A scene's own `threads` option, when it has one and it is
+  /// above 0, wins.
+  int threads = 0;
+  /// Progress lines of a long scene build (null: quiet).
+  std::ostream* progress = nullptr;
+};
+
+Study load_study(const Json& problem, const Registry& registry, const std::vector<InProcessMetric>& in_process = {},
+                 const LoadSettings& settings = {});
 
 }  // namespace hapsyn
