@@ -397,3 +397,9 @@ TEST(ProblemFileOverride, LeavesTheProblemUnchangedWhenRefused) {
 }
 
 }  // namespace
+
+TEST(ProblemFileParse, RefusesANulByteInsteadOfIgnoringWhatFollowsIt) {
+  // nlohmann's lexer ends the input at a NUL: "garbage" would be ignored without a word.
+  EXPECT_EQ(parse_error(std::string("{\"name\": \"x\"}\n\0garbage", 23)),
+            "problem: p.json:2:1: a NUL byte: JSON text may not contain one (is this a binary file?)");
+}

@@ -147,3 +147,24 @@ TEST(RunOutputs, ThreadsAreCappedWithAWarningAndRangeChecked) {
             "problem: threads = -2: must be an integer in [0, 2147483647] (0 = all cores)");
   EXPECT_EQ(hapsyn::run_threads(Json{{"threads", 1}}, options, warnings), 1);
 }
+
+TEST(RunOutputs, AnOutputNameTakenByADirectoryIsRefusedBeforeTheSolve) {
+  const fs::path dir = fresh_dir("occupied");
+  fs::create_directories(dir / "samples.csv");
+  hapsyn::RunOptions force;
+  force.force = true;  // also with --force: the move into place would fail after the whole solve
+  EXPECT_EQ(error_of([&] { hapsyn::check_output_directory(dir.string(), force); }),
+            "output: " + (dir / "samples.csv").string() +
+                " is a directory, where a run writes a file; remove it, or choose another --out");
+  fs::remove_all(dir);
+}
+
+TEST(RunOutputs, AnOutputDirectoryThatIsNotUtf8IsRefused) {
+  // result.json records the directory; a name it cannot hold fails before the solve, not after.
+  const std::string out = fresh_dir("utf8").string() + "\xff";
+  EXPECT_EQ(error_of([&] { hapsyn::check_output_directory(out, hapsyn::RunOptions()); }).rfind(
+                "output: output directory = ", 0),
+            0u);
+  EXPECT_NE(error_of([&] { hapsyn::check_output_directory(out, hapsyn::RunOptions()); }).find("invalid UTF-8"),
+            std::string::npos);
+}

@@ -52,8 +52,9 @@ double DesignSpace::grid_value(std::size_t free_k, long long i) const {
   return std::min(c.upper, c.lower + static_cast<double>(i) * c.step);
 }
 
-long long DesignSpace::check_grid(const std::string& component) const {
+long long DesignSpace::check_grid(const std::string& component, double max_designs) const {
   long double total = 1;
+  std::string axes;
   for (std::size_t k = 0; k < free_.size(); ++k) {
     const DesignComponent& c = components_[static_cast<std::size_t>(free_[k])];
     if (!(c.step > 0.0)) {
@@ -61,10 +62,21 @@ long long DesignSpace::check_grid(const std::string& component) const {
                              "every free design variable (or a \"value\" to fix it)");
     }
     total *= static_cast<long double>(grid_count(k));
+    axes += (axes.empty() ? "" : " x ") + c.name + ": " + std::to_string(grid_count(k));
   }
   // Linear grid indices are long long: refuse what they cannot number.
   if (total > static_cast<long double>(kMaxGridPoints)) {
     throw Error(component, "the design grid has more than 9e18 points; use larger steps");
+  }
+  if (max_designs > 0.0 && total > static_cast<long double>(max_designs)) {
+    std::ostringstream message;
+    message.precision(3);
+    message << "the design grid has " << static_cast<double>(total) << " designs (" << axes
+            << "), more than solver.options.max_designs = ";
+    message.precision(12);
+    message << max_designs
+            << "; use larger steps or fix variables, or raise max_designs deliberately";
+    throw Error(component, message.str());
   }
   return static_cast<long long>(total);
 }

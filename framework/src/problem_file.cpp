@@ -399,6 +399,12 @@ Json read_problem_file(const std::string& path) {
 }
 
 Json parse_problem_text(const std::string& text, const std::string& source) {
+  // nlohmann's lexer takes a NUL byte for the end of the input: whatever follows one would be
+  // ignored without a word.
+  if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {
+    throw Error("problem", source + ":" + line_and_column(text, nul) + ": a NUL byte: JSON text may not contain one (" +
+                               "is this a binary file?)");
+  }
   const TextChecker finder = check_text(text);
   if (finder.failed != TextChecker::Failure::kNone) {
     throw Error("problem", source + ":" + line_and_column(text, error_offset(text, finder)) + ": " + problem_of(finder));

@@ -6,6 +6,7 @@
 #include <hapsyn/output_files.hpp>
 #include <hapsyn/parallel.hpp>
 #include <hapsyn/plugin.hpp>
+#include <hapsyn/problem_file.hpp>
 #include <hapsyn/study_runner.hpp>
 
 #include <hapsyn/read_file.hpp>
@@ -84,10 +85,24 @@ std::string cannot_create_in(const fs::path& dir) {
   return "";
 }
 
+// Refuses an output directory where a file this run writes is something else (a directory, a
+// FIFO): the move into place would fail after the whole solve. run.log is checked when opened.
+void check_output_names_free(const std::string& out_dir) {
+  for (const char* name : {"result.json", "samples.csv", "maps.csv", "groups.csv", "front.csv", "checkpoint.json"}) {
+    const fs::path file = fs::path(out_dir) / name;
+    struct stat st {};
+    if (::lstat(file.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+      throw Error("output", file.string() + " is " + (S_ISDIR(st.st_mode) ? "a directory" : S_ISLNK(st.st_mode) ? "a symbolic link" : "not a regular file") +
+                                ", where a run writes a file; remove it, or choose another --out");
+    }
+  }
+}
+
 // The part of check_output_directory for a directory that exists.
 void check_existing_output(const std::string& out_dir, const RunOptions& options) {
   const std::string why = cannot_create_in(out_dir);
   if (!why.empty()) throw Error("output", "the output directory " + out_dir + " is not writable: " + why);
+  check_output_names_free(out_dir);
   const fs::path result_file = fs::path(out_dir) / "result.json";
   struct stat st {};
   if (options.force || ::lstat(result_file.c_str(), &st) != 0) return;
@@ -445,9 +460,11 @@ class StagedOutputs {
       if (it->path().filename() != "result.json") staged.push_back(it->path());
     }
     if (ec) throw Error("output", "cannot list " + run_.staging.string() + ": " + ec.message());
+    std::vector<fs::path> moved;
     for (const fs::path& file : staged) {
       try {
         move_file(file.string(), (fs::path(run_.out_dir) / file.filename()).string());
+        moved.push_back(fs::path(run_.out_dir) / file.filename());
       } catch (const Error& e) {
         errors.push_back(without_component(e));
         drop_file(doc, file.filename().string());
@@ -457,7 +474,14 @@ class StagedOutputs {
       doc["output_errors"] = errors;
       write_result(doc);
     }
-    move_file((run_.staging / "result.json").string(), run_.result_file.string());
+    try {
+      move_file((run_.staging / "result.json").string(), run_.result_file.string());
+    } catch (const Error&) {
+      // Without result.json the files just moved would be outputs no result claims: take them back.
+      boost::system::error_code ignored;
+      for (const fs::path& file : moved) fs::remove(file, ignored);
+      throw;
+    }
     sync_directory(run_.out_dir);
   }
 
@@ -537,6 +561,12 @@ std::string output_directory_of(const Study& study, const RunOptions& options) {
 
 void check_output_directory(const std::string& out_dir, const RunOptions& options) {
   if (out_dir.empty()) throw Error("output", "the output directory is empty: give output.directory or --out");
+  // result.json records the directory: a name that is not UTF-8 could not be written into it.
+  try {
+    check_json_text_rules(Json(out_dir), "output directory");
+  } catch (const Error& e) {
+    throw Error("output", std::string(e.what()).substr(e.component().size() + 2));
+  }
   struct stat st {};
   if (::stat(out_dir.c_str(), &st) == 0) {
     if (!S_ISDIR(st.st_mode)) throw Error("output", "the output directory " + out_dir + " is not a directory");

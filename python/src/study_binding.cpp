@@ -2,6 +2,7 @@
 
 #include "python_metric.hpp"
 
+#include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/maps.hpp>
 #include <hapsyn/problem_file.hpp>
@@ -124,6 +125,8 @@ StudyHandle::StudyHandle(const std::string& document, bool is_file, const std::v
     py::gil_scoped_release release;  // scenes may take a while to build
     Json doc = is_file ? read_problem_file(document) : parse_problem_text(document, "<dict>");
     for (const std::string& s : overrides) apply_override(doc, s);
+    // Relative paths in a problem file are relative to that file first, as for `hapsyn run`.
+    const ProblemDirectoryScope scope(is_file ? document : std::string());
     study_ = std::make_unique<Study>(load_study(doc, *registry_, in_process));
     scratch_ = study_->problem->make_eval_scratch();
   }

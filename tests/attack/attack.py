@@ -994,7 +994,9 @@ def case_output(ctx: Ctx, case: Case, sb: Sandbox) -> Outcome:
             return Outcome("skip", "not root: cannot mount a tmpfs")
         mnt = sb.root / "fs"
         mnt.mkdir()
-        m = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=200k", "tmpfs", str(mnt)], capture_output=True, text=True)
+        # full-fs-force first writes a finished study, which needs the runner's 1 MiB floor free.
+        size = "4m" if kind == "full-fs-force" else "200k"
+        m = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(mnt)], capture_output=True, text=True)
         if m.returncode != 0:
             return Outcome("skip", "mount -t tmpfs failed: " + m.stderr.strip())
         try:
@@ -1038,6 +1040,13 @@ def case_output(ctx: Ctx, case: Case, sb: Sandbox) -> Outcome:
                 r0 = run(ctx, sb, ["run", P, "--out", str(fout), "--quiet"] + with_sets(small))
                 if r0.rc != 0:
                     return outcome(r0, "skip", "could not write the first (small) study: " + first_error_line(r0.err))
+                # Then the file system fills up (100 KiB left) before the --force run.
+                st = os.statvfs(mnt)
+                with open(mnt / "filler", "wb") as f:
+                    try:
+                        f.write(b"\0" * max(0, st.f_bavail * st.f_frsize - 100 * 1024))
+                    except OSError:
+                        pass
             r = run(ctx, sb, args)
             checks = [classify(r, "any" if kind == "full-fs-tight" else "refuse")]
             probs = out_dir_problems(fout, True)
@@ -1049,7 +1058,7 @@ def case_output(ctx: Ctx, case: Case, sb: Sandbox) -> Outcome:
                     checks.append(("mixed", "the failed --force run destroyed the earlier finished result.json"))
             cat, det = worst(*checks)
             o = outcome(r, cat, det)
-            o.cmd = f"mount -t tmpfs -o size=200k tmpfs {mnt} && " + o.cmd
+            o.cmd = f"mount -t tmpfs -o size={size} tmpfs {mnt} && " + o.cmd
             return o
         finally:
             subprocess.run(["umount", "-l", str(mnt)], capture_output=True)

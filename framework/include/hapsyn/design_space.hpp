@@ -81,8 +81,12 @@ class DesignSpace {
   /// Checks that every free component has a grid step and that the grid can be indexed, for a
   /// solver that searches the grid; returns the number of grid designs.
   /// \param component the solver, for the error ("grid", "culling")
-  /// \throws Error("<component>: design.<var> has no step: ...") or when the grid exceeds 9e18 points.
-  long long check_grid(const std::string& component) const;
+  /// \param max_designs when > 0, the most grid designs the solver accepts (its `max_designs`
+  ///        option): a search of more is refused at load, not discovered after days
+  /// \throws Error("<component>: design.<var> has no step: ...") or when the grid exceeds 9e18
+  ///         points, or Error("<component>: the design grid has N designs (<axes>), more than
+  ///         solver.options.max_designs = M; ...") when it exceeds max_designs.
+  long long check_grid(const std::string& component, double max_designs = 0.0) const;
   /// Grid counts of every free component (each needs a step).
   std::vector<long long> grid_counts() const;
   /// The free design of grid point `index` in the mixed-radix numbering of `counts` (the last

@@ -656,7 +656,7 @@ void CullingSolver::check(const Problem& problem) const {
                                  ": a weighted sum keeps the per-sample bound only with non-negative weights");
     }
   }
-  problem.design_space().check_grid("culling");
+  problem.design_space().check_grid("culling", options_.max_designs);
 }
 
 SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& context) const {

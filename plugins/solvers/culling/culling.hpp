@@ -41,6 +41,7 @@ struct CullingOptions {
   int sqp_max_evaluations{};
   double progress_interval{};
   double checkpoint_interval{};
+  double max_designs{};
 
   static void declare(OptionDeclarations<CullingOptions>& d) {
     d.describe(
@@ -67,6 +68,9 @@ struct CullingOptions {
           "continues from it")
         .greater_than(0)
         .unit("s");
+    d.add(&CullingOptions::max_designs, "max_designs", 1e12,
+          "Most grid designs a search may have: a larger grid is refused at load (validate), not found out after days")
+        .greater_than(0);
   }
 };
 

@@ -288,3 +288,10 @@ TEST(Culling, NonMonotoneMetricFailsNamingTheMetric) {
     }
   }
 }
+
+TEST(Culling, RefusesAGridLargerThanMaxDesignsAtLoad) {
+  Json doc = hapsyn::test::fivebar_study("culling");
+  doc["solver"]["options"]["max_designs"] = 1000;  // the test grid has 4 x 6 x 6 x 7 = 1008 designs
+  expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); },
+               {"culling: the design grid has 1.01e+03 designs", "more than solver.options.max_designs = 1000"});
+}

@@ -26,7 +26,7 @@ void GridSolver::check(const Problem& problem) const {
     throw Error("grid", "solver.options.pareto = true: needs two or more objectives (the study has " +
                             std::to_string(problem.objectives().size()) + ")");
   }
-  problem.design_space().check_grid("grid");
+  problem.design_space().check_grid("grid", options_.max_designs);
 }
 
 SolverResult GridSolver::solve(const Problem& problem, const SolverContext& context) const {

@@ -36,6 +36,7 @@ struct GridOptions {
   bool pareto{};
   double progress_interval{};
   double checkpoint_interval{};
+  double max_designs{};
 
   static void declare(OptionDeclarations<GridOptions>& d) {
     d.describe(
@@ -53,6 +54,9 @@ struct GridOptions {
           "Seconds between checkpoints (and one when stopped or done); hapsyn run --resume continues from it")
         .greater_than(0)
         .unit("s");
+    d.add(&GridOptions::max_designs, "max_designs", 1e12,
+          "Most grid designs a search may have: a larger grid is refused at load (validate), not found out after days")
+        .greater_than(0);
   }
 };
 

@@ -424,3 +424,14 @@ TEST(Grid, NonMonotoneMetricFailsInParetoModeWithPruning) {
   const auto unpruned = grid_solver({{"pareto", true}, {"prune", false}, {"progress_interval", 1e9}}).solve(*problem, context);
   EXPECT_EQ(unpruned.status, hapsyn::SolverStatus::kConverged) << unpruned.message;
 }
+
+TEST(Grid, RefusesAGridLargerThanMaxDesignsAtLoad) {
+  Json doc = hapsyn::test::fivebar_study("grid");
+  doc["solver"]["options"]["max_designs"] = 100;  // the test grid has 4 x 6 x 6 x 7 = 1008 designs
+  hapsyn::test::expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); },
+                             {"grid: the design grid has 1.01e+03 designs (l0: 4 x l1: 6 x l2: 6 x r: 7), more than "
+                              "solver.options.max_designs = 100; use larger steps or fix variables, or raise max_designs "
+                              "deliberately"});
+  doc["solver"]["options"]["max_designs"] = 1008;
+  EXPECT_NO_THROW(hapsyn::load_study(doc, hapsyn::test::registry()));
+}

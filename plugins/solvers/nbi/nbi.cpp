@@ -426,7 +426,9 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
     const std::string where = "after " + std::to_string(i) + " of " + std::to_string(m) + " shadow optima";
     if (context.stop_requested()) return stopped(where);
     const auto t0 = Clock::now();
-    const SolverResult r = run_sub_solver(*shadow_solver, *single_objective_problem(problem, i), context);
+    const SolverResult r = run_sub_solver(*shadow_solver, *single_objective_problem(problem, i), context,
+                                          "nbi: shadow optimum " + std::to_string(i + 1) + " of " + std::to_string(m) + " (" +
+                                              problem.objectives()[i].name + ")");
     if (r.status == SolverStatus::kStopped) {
       progress.interrupted_designs += r.design_evaluations;
       progress.interrupted_samples += r.sample_evaluations;
@@ -486,6 +488,7 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
     if (f.point) solved.push_back({interior[k], free_design(problem.design_space(), f.point->design)});
     progress.subproblems.push_back(std::move(f));
     checkpoint();
+    solver_line(context, "nbi: subproblem " + std::to_string(k + 1) + " of " + std::to_string(interior.size()) + " solved");
   }
 
   // 4. The front.

@@ -80,7 +80,9 @@ SolverResult SequentialSolver::solve(const Problem& problem, const SolverContext
     }
     const auto t0 = Clock::now();
     const double v = problem.design_space().grid_value(k, static_cast<long long>(i));
-    const SolverResult r = run_sub_solver(*solver, *fixed_component_problem(*first, k, v), context);
+    std::ostringstream what;
+    what << "sequential: " << options_.variable << " = " << v << " (" << i + 1 << " of " << values << ")";
+    const SolverResult r = run_sub_solver(*solver, *fixed_component_problem(*first, k, v), context, what.str());
     if (r.status == SolverStatus::kStopped) {
       // Its best is not this value's optimum: the value is run again on --resume.
       result.design_evaluations += r.design_evaluations;

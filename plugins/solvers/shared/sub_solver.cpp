@@ -4,7 +4,9 @@
 #include <hapsyn/error.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <ostream>
+#include <sstream>
 
 namespace hapsyn::plugins {
 
@@ -58,13 +60,23 @@ std::shared_ptr<const Problem> fixed_component_problem(const Problem& problem, s
   return problem.with_design_space(DesignSpace(std::move(components)));
 }
 
-SolverResult run_sub_solver(const Solver& solver, const Problem& problem, const SolverContext& parent) {
+SolverResult run_sub_solver(const Solver& solver, const Problem& problem, const SolverContext& parent,
+                            const std::string& what) {
   SolverContext context = parent;
-  context.progress = nullptr;
   // The parent checkpoints its finished subproblems; the sub-solver writes none of its own.
   context.checkpoint_file.clear();
   context.resume = false;
-  return solver.solve(problem, context);
+  if (!what.empty()) solver_line(parent, what + " ...");
+  const auto t0 = std::chrono::steady_clock::now();
+  SolverResult result = solver.solve(problem, context);
+  if (!what.empty()) {
+    std::ostringstream line;
+    line.precision(3);
+    line << what << ": " << to_string(result.status) << " in "
+         << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s";
+    solver_line(parent, line.str());
+  }
+  return result;
 }
 
 bool evaluate_full_design(const Problem& problem, const Eigen::VectorXd& full, int threads,

@@ -38,11 +38,16 @@ std::shared_ptr<const Problem> reweighted_problem(const Problem& problem, const 
 /// The problem with free design component `free_index` fixed at `value` (within its bounds).
 std::shared_ptr<const Problem> fixed_component_problem(const Problem& problem, std::size_t free_index, double value);
 
-/// Runs `solver` on `problem` with the parent's threads, seed, stop flag and log, quietly, and
-/// without a checkpoint: the sub-solver's checkpoint_file is empty and resume false, because the
-/// parent checkpoints at subproblem granularity (an interrupted subproblem is run again on
-/// --resume) and the sub-solver must not overwrite the parent's file.
-SolverResult run_sub_solver(const Solver& solver, const Problem& problem, const SolverContext& parent);
+/// Runs `solver` on `problem` with the parent's threads, seed, stop flag, progress stream and log
+/// (a long subproblem is never silent: its own progress lines show how far it is), and without a
+/// checkpoint: the sub-solver's checkpoint_file is empty and resume false, because the parent
+/// checkpoints at subproblem granularity (an interrupted subproblem is run again on --resume) and
+/// the sub-solver must not overwrite the parent's file.
+/// \param what  when not empty, the subproblem as the parent names it ("nbi: shadow optimum 1 of
+///              2 (gii)"): a line "<what> ..." before and "<what>: <status> in <t> s" after
+///              go to the parent's progress and log (solver_line).
+SolverResult run_sub_solver(const Solver& solver, const Problem& problem, const SolverContext& parent,
+                            const std::string& what = "");
 
 /// Evaluates a full design over every sample with `problem`'s objectives (all of them), in a
 /// fixed number of sample chunks: the values do not depend on `threads`.

@@ -141,7 +141,7 @@ TEST(SubSolver, FixedComponentProblemFixesOneFreeVariableAtTheValue) {
   EXPECT_EQ(full[1], 0.25);
 }
 
-TEST(SubSolver, RunSubSolverPassesThreadsAndStopButNoProgress) {
+TEST(SubSolver, RunSubSolverPassesThreadsStopAndProgress) {
   const auto problem = hapsyn::test::two_objective_problem();
   const RecordingSolver recording;
   const std::atomic<bool> stop{false};
@@ -155,8 +155,22 @@ TEST(SubSolver, RunSubSolverPassesThreadsAndStopButNoProgress) {
   EXPECT_EQ(recording.seen_context.threads, 3);
   EXPECT_EQ(recording.seen_context.seed, 11u);
   EXPECT_EQ(recording.seen_context.stop, &stop);
-  EXPECT_EQ(recording.seen_context.progress, nullptr);
+  EXPECT_EQ(recording.seen_context.progress, &std::cerr);
   EXPECT_EQ(recording.seen_objectives, 2u);
+}
+
+TEST(SubSolver, RunSubSolverNamesTheSubproblemBeforeAndAfter) {
+  const auto problem = hapsyn::test::two_objective_problem();
+  const RecordingSolver recording;
+  std::ostringstream progress, log;
+  hapsyn::SolverContext parent;
+  parent.progress = &progress;
+  parent.log = &log;
+  hapsyn::plugins::run_sub_solver(recording, *problem, parent, "nbi: shadow optimum 1 of 2 (f0)");
+  EXPECT_EQ(progress.str().rfind("nbi: shadow optimum 1 of 2 (f0) ...\nnbi: shadow optimum 1 of 2 (f0): ", 0), 0u)
+      << progress.str();
+  EXPECT_NE(progress.str().find(" s\n"), std::string::npos) << progress.str();
+  EXPECT_EQ(log.str(), progress.str());
 }
 
 TEST(SubSolver, EvaluateFullDesignGivesEveryObjectiveOverEverySample) {

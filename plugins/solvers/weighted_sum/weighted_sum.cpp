@@ -87,7 +87,9 @@ SolverResult WeightedSumSolver::solve(const Problem& problem, const SolverContex
     }
     const std::vector<double>& w = all_weights[k];
     const auto t0 = Clock::now();
-    const SolverResult r = run_sub_solver(*solver, *reweighted_problem(problem, w), context);
+    const SolverResult r = run_sub_solver(*solver, *reweighted_problem(problem, w), context,
+                                          "weighted_sum: weights " + Json(w).dump() + " (" + std::to_string(k + 1) + " of " +
+                                              std::to_string(all_weights.size()) + ")");
     if (r.status == SolverStatus::kStopped) {
       // Its best is not this weight's optimum: the weight is run again on --resume.
       result.design_evaluations += r.design_evaluations;
