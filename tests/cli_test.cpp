@@ -31,6 +31,22 @@ Output hapsyn_test_stopped(const std::string& wrapper, const std::string& args) 
   return o;
 }
 
+// Runs `hapsyn <args>` in the background and sends it SIGINT once the shell test `condition`
+// holds (polled every 50 ms, for at most 60 s): the stop comes at a known point of the run, not
+// after a fixed time that a loaded machine may not reach. The exit code is hapsyn's.
+Output hapsyn_interrupted_when(const std::string& condition, const std::string& args) {
+  const std::string script = std::string(HAPSYN_BINARY_DIR) + "/bin/hapsyn " + args +
+                             " & p=$!; i=0; until " + condition +
+                             "; do sleep 0.05; i=$((i+1)); [ $i -gt 1200 ] && break; done; kill -INT $p; wait $p";
+  Output o;
+  FILE* pipe = ::popen(("sh -c '" + script + "' 2>&1").c_str(), "r");
+  std::array<char, 4096> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) o.out += buffer.data();
+  const int status = ::pclose(pipe);
+  o.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return o;
+}
+
 std::string problem(const std::string& name) { return std::string(HAPSYN_SOURCE_DIR) + "/problems/" + name; }
 
 fs::path fresh_dir(const std::string& name) {
@@ -378,12 +394,12 @@ TEST(Cli, AnOutputNameTakenByADirectoryIsRefusedBeforeTheSolveAndLogged) {
 
 TEST(Cli, AStoppedRunKeepsItsCheckpointAndResumes) {
   const fs::path out = fresh_dir("stopped");
-  // A GA long enough to be stopped: SIGINT after 3 s, as Ctrl-C or a job scheduler sends.
+  // A GA long enough to be stopped by SIGINT, as Ctrl-C or a job scheduler sends.
   const std::string study = problem("fivebar-gii-ga-coarse.json") +
                             " --set solver.options.generations=1000000 --set solver.options.stall_generations=1000000"
                             " --set solver.options.checkpoint_every=1 --threads 2 --quiet --out " + out.string();
-  const std::string stop = "timeout --preserve-status -s INT 3 ";
-  const Output first = hapsyn_test_stopped(stop, "run " + study);
+  // SIGINT once the first checkpoint is on disk (after the first generation).
+  const Output first = hapsyn_interrupted_when("[ -f " + (out / "checkpoint.json").string() + " ]", "run " + study);
   EXPECT_EQ(first.code, 4) << first.out;
   EXPECT_NE(first.out.find("stopped; resume with: hapsyn run " + problem("fivebar-gii-ga-coarse.json") +
                            " --set solver.options.generations=1000000"),
@@ -396,7 +412,9 @@ TEST(Cli, AStoppedRunKeepsItsCheckpointAndResumes) {
   const Output plain = hapsyn_cli("run " + study);
   EXPECT_EQ(plain.code, 1);
   EXPECT_NE(plain.out.find("holds a stopped study"), std::string::npos) << plain.out;
-  const Output resumed = hapsyn_test_stopped(stop, "run " + study + " --resume");
+  // SIGINT once the resumed run has said so in its log.
+  const Output resumed =
+      hapsyn_interrupted_when("grep -q \"ga: resuming\" " + (out / "run.log").string(), "run " + study + " --resume");
   EXPECT_EQ(resumed.code, 4) << resumed.out;
   EXPECT_EQ(read_json(out / "result.json")["status"], "stopped");
   EXPECT_NE(read_text(out / "run.log").find("resume"), std::string::npos);
