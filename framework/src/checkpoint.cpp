@@ -51,6 +51,11 @@ std::string study_fingerprint(const Problem& problem, const Json& solver_options
   return fnv1a_hex(s.str());
 }
 
+std::string study_fingerprint(const Problem& problem, Json solver_options, std::initializer_list<const char*> ignored) {
+  for (const char* name : ignored) solver_options.erase(name);
+  return study_fingerprint(problem, solver_options);
+}
+
 void write_checkpoint(const SolverContext& context, const std::string& solver, const std::string& fingerprint,
                       const Json& state) {
   if (context.checkpoint_file.empty()) return;

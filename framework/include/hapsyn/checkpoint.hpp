@@ -16,6 +16,7 @@
 #include <hapsyn/solver.hpp>
 
 #include <cstdint>
+#include <initializer_list>
 #include <optional>
 #include <string>
 
@@ -30,6 +31,16 @@ std::string fnv1a_hex(const std::string& text);
 /// the objectives' names, weights and senses. A checkpoint is resumed only by a study with the
 /// same fingerprint.
 std::string study_fingerprint(const Problem& problem, const Json& solver_options);
+/// As above, without the options named in `ignored`: those a resumed run may change without
+/// changing the result (progress and checkpoint intervals, a size cap).
+std::string study_fingerprint(const Problem& problem, Json solver_options, std::initializer_list<const char*> ignored);
+
+/// Reads object[key] of a checkpoint's state as T for a solver's resume. \param path the
+/// object's path in the state, for the message ("state", "state.best")
+/// \throws bad_checkpoint(context, "<path>.<key> is missing") or "<path>.<key> = <value>: not of
+///         the expected type" (never a raw JSON exception).
+template <class T>
+T checkpoint_field(const SolverContext& context, const Json& object, const std::string& path, const std::string& key);
 
 /// Writes the checkpoint of `solver` with its `state` to context.checkpoint_file, atomically
 /// (nothing when the file name is empty). Called by solvers between units of work.
@@ -50,5 +61,16 @@ std::optional<Json> read_checkpoint(const SolverContext& context, const std::str
 /// hold together (a field missing or of the wrong type, a best value that re-evaluates
 /// differently): Error("checkpoint", "<file>: <detail>; delete it, or run without --resume").
 Error bad_checkpoint(const SolverContext& context, const std::string& detail);
+
+template <class T>
+T checkpoint_field(const SolverContext& context, const Json& object, const std::string& path, const std::string& key) {
+  if (!object.is_object() || !object.contains(key)) throw bad_checkpoint(context, path + "." + key + " is missing");
+  try {
+    return object.at(key).get<T>();
+  } catch (const Json::exception&) {
+    throw bad_checkpoint(context, path + "." + key + " = " + object.at(key).dump().substr(0, 80) +
+                                      ": not of the expected type");
+  }
+}
 
 }  // namespace hapsyn

@@ -505,25 +505,9 @@ constexpr const char* kCullingBreach =
     "prune: false";
 
 // The checkpoint's fingerprint: the study and the options that change the result (not the
-// progress and checkpoint intervals, which a resumed run may change).
+// progress and checkpoint intervals or the size cap, which a resumed run may change).
 std::string fingerprint_of(const Problem& problem, const CullingOptions& options) {
-  Json o = options_to_json(options);
-  o.erase("progress_interval");
-  o.erase("checkpoint_interval");
-  return study_fingerprint(problem, o);
-}
-
-// Reads object[key] as T; a missing field or one of another type is a bad checkpoint naming
-// the field (never a raw JSON exception).
-template <class T>
-T field(const SolverContext& context, const Json& object, const std::string& path, const std::string& key) {
-  if (!object.is_object() || !object.contains(key)) throw bad_checkpoint(context, path + "." + key + " is missing");
-  try {
-    return object.at(key).get<T>();
-  } catch (const Json::exception&) {
-    throw bad_checkpoint(context, path + "." + key + " = " + object.at(key).dump().substr(0, 80) +
-                                      ": not of the expected type");
-  }
+  return study_fingerprint(problem, options_to_json(options), {"progress_interval", "checkpoint_interval", "max_designs"});
 }
 
 // The checkpoint's state (caller holds reference.mutex, or the sweep is not running).
@@ -543,17 +527,17 @@ Json checkpoint_state(const Reference& reference, const Seed& seed, double secon
 }
 
 SweepCounts counts_from(const SolverContext& context, const Json& state) {
-  const Json c = field<Json>(context, state, "state", "counts");
+  const Json c = checkpoint_field<Json>(context, state, "state", "counts");
   SweepCounts n;
-  n.culled = field<long long>(context, c, "state.counts", "culled");
-  n.constraint_violated = field<long long>(context, c, "state.counts", "constraint_violated");
-  n.failed_at_bound = field<long long>(context, c, "state.counts", "failed_at_bound");
-  n.full_searches = field<long long>(context, c, "state.counts", "full_searches");
-  n.full_feasible = field<long long>(context, c, "state.counts", "full_feasible");
-  n.full_pruned = field<long long>(context, c, "state.counts", "full_pruned");
-  n.full_failed = field<long long>(context, c, "state.counts", "full_failed");
-  n.bound_samples = field<long long>(context, c, "state.counts", "bound_samples");
-  n.full_samples = field<long long>(context, c, "state.counts", "full_samples");
+  n.culled = checkpoint_field<long long>(context, c, "state.counts", "culled");
+  n.constraint_violated = checkpoint_field<long long>(context, c, "state.counts", "constraint_violated");
+  n.failed_at_bound = checkpoint_field<long long>(context, c, "state.counts", "failed_at_bound");
+  n.full_searches = checkpoint_field<long long>(context, c, "state.counts", "full_searches");
+  n.full_feasible = checkpoint_field<long long>(context, c, "state.counts", "full_feasible");
+  n.full_pruned = checkpoint_field<long long>(context, c, "state.counts", "full_pruned");
+  n.full_failed = checkpoint_field<long long>(context, c, "state.counts", "full_failed");
+  n.bound_samples = checkpoint_field<long long>(context, c, "state.counts", "bound_samples");
+  n.full_samples = checkpoint_field<long long>(context, c, "state.counts", "full_samples");
   return n;
 }
 
@@ -563,15 +547,15 @@ SweepCounts counts_from(const SolverContext& context, const Json& state) {
 double restore(const Problem& problem, const Grid& grid, const SolverContext& context, const Json& state,
                Reference& reference, Seed& seed) {
   Ledger& ledger = reference.ledger;
-  if (field<long long>(context, state, "state", "lines") != ledger.lines) {
+  if (checkpoint_field<long long>(context, state, "state", "lines") != ledger.lines) {
     throw bad_checkpoint(context, "state.lines does not match this grid (" + std::to_string(ledger.lines) + " lines)");
   }
-  ledger.prefix = field<long long>(context, state, "state", "finished_prefix");
+  ledger.prefix = checkpoint_field<long long>(context, state, "state", "finished_prefix");
   if (ledger.prefix < 0 || ledger.prefix > ledger.lines) {
     throw bad_checkpoint(context, "state.finished_prefix = " + std::to_string(ledger.prefix) + ": must lie in [0, " +
                                       std::to_string(ledger.lines) + "]");
   }
-  for (long long line : field<std::vector<long long>>(context, state, "state", "finished_lines")) {
+  for (long long line : checkpoint_field<std::vector<long long>>(context, state, "state", "finished_lines")) {
     if (line <= ledger.prefix || line >= ledger.lines) {
       throw bad_checkpoint(context, "state.finished_lines: line " + std::to_string(line) + " must lie in (" +
                                         std::to_string(ledger.prefix) + ", " + std::to_string(ledger.lines) + ")");
@@ -579,7 +563,7 @@ double restore(const Problem& problem, const Grid& grid, const SolverContext& co
     ledger.beyond.insert(line);
   }
   std::vector<std::vector<int>> critical(1);
-  for (int sample : field<std::vector<int>>(context, state, "state", "critical_samples")) {
+  for (int sample : checkpoint_field<std::vector<int>>(context, state, "state", "critical_samples")) {
     if (sample < 0 || sample >= problem.samples().size()) {
       throw bad_checkpoint(context, "state.critical_samples: sample " + std::to_string(sample) + " is not one of the " +
                                         std::to_string(problem.samples().size()) + " samples");
@@ -587,16 +571,16 @@ double restore(const Problem& problem, const Grid& grid, const SolverContext& co
     critical[0].push_back(sample);
   }
   reference.publish(critical);
-  reference.iterations = field<long long>(context, state, "state", "iterations");
+  reference.iterations = checkpoint_field<long long>(context, state, "state", "iterations");
   reference.finished = counts_from(context, state);
-  const Json s = field<Json>(context, state, "state", "seed");
-  seed.statistics = field<Json>(context, s, "state.seed", "statistics");
-  seed.designs = field<long long>(context, s, "state.seed", "designs");
-  seed.samples = field<long long>(context, s, "state.seed", "samples");
-  const Json claimed = field<Json>(context, state, "state", "reference");
+  const Json s = checkpoint_field<Json>(context, state, "state", "seed");
+  seed.statistics = checkpoint_field<Json>(context, s, "state.seed", "statistics");
+  seed.designs = checkpoint_field<long long>(context, s, "state.seed", "designs");
+  seed.samples = checkpoint_field<long long>(context, s, "state.seed", "samples");
+  const Json claimed = checkpoint_field<Json>(context, state, "state", "reference");
   if (!claimed.is_null()) {
-    const long long index = field<long long>(context, claimed, "state.reference", "index");
-    const double score = field<double>(context, claimed, "state.reference", "score");
+    const long long index = checkpoint_field<long long>(context, claimed, "state.reference", "index");
+    const double score = checkpoint_field<double>(context, claimed, "state.reference", "score");
     if (index < 0 || index >= grid.total) {
       throw bad_checkpoint(context, "state.reference.index = " + std::to_string(index) + ": not a grid design (0.." +
                                         std::to_string(grid.total - 1) + ")");
@@ -616,7 +600,7 @@ double restore(const Problem& problem, const Grid& grid, const SolverContext& co
     reference.best.score = score;
     reference.score.store(score);
   }
-  return field<double>(context, state, "state", "elapsed_seconds");
+  return checkpoint_field<double>(context, state, "state", "elapsed_seconds");
 }
 
 // "stopped on request after 41.0% of 1,701,900 grid designs; <best>; checkpoint ... written, ...".

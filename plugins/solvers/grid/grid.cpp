@@ -150,25 +150,9 @@ std::string with_commas(long long n) {
 }
 
 // The checkpoint's fingerprint: the study and the options that change the result (not the
-// progress and checkpoint intervals, which a resumed run may change).
+// progress and checkpoint intervals or the size cap, which a resumed run may change).
 std::string fingerprint_of(const Problem& problem, const GridOptions& options) {
-  Json o = options_to_json(options);
-  o.erase("progress_interval");
-  o.erase("checkpoint_interval");
-  return study_fingerprint(problem, o);
-}
-
-// Reads state[key] of a checkpoint as T; a missing field or one of another type is a bad
-// checkpoint naming "state.<key>" (never a raw JSON exception).
-template <class T>
-T field(const SolverContext& context, const Json& object, const std::string& path, const std::string& key) {
-  if (!object.is_object() || !object.contains(key)) throw bad_checkpoint(context, path + "." + key + " is missing");
-  try {
-    return object.at(key).get<T>();
-  } catch (const Json::exception&) {
-    throw bad_checkpoint(context, path + "." + key + " = " + object.at(key).dump().substr(0, 80) +
-                                      ": not of the expected type");
-  }
+  return study_fingerprint(problem, options_to_json(options), {"progress_interval", "checkpoint_interval", "max_designs"});
 }
 
 // What a run resumes from: the ledger, the counts and time so far (the mode's own part is read
@@ -181,33 +165,33 @@ struct Resumed {
 
 Resumed read_common(const SolverContext& context, const Json& state, const GridShape& grid, const char* mode) {
   Resumed r;
-  const std::string m = field<std::string>(context, state, "state", "mode");
+  const std::string m = checkpoint_field<std::string>(context, state, "state", "mode");
   if (m != mode) throw bad_checkpoint(context, "state.mode = \"" + m + "\", this run's mode is \"" + mode + "\"");
-  if (field<long long>(context, state, "state", "grid_designs") != grid.total ||
-      field<long long>(context, state, "state", "chunk_size") != kChunk) {
+  if (checkpoint_field<long long>(context, state, "state", "grid_designs") != grid.total ||
+      checkpoint_field<long long>(context, state, "state", "chunk_size") != kChunk) {
     throw bad_checkpoint(context, "state.grid_designs / state.chunk_size do not match this grid (" +
                                       std::to_string(grid.total) + " designs in chunks of " + std::to_string(kChunk) + ")");
   }
   r.ledger.chunks = (grid.total + kChunk - 1) / kChunk;
-  r.ledger.prefix = field<long long>(context, state, "state", "finished_prefix");
+  r.ledger.prefix = checkpoint_field<long long>(context, state, "state", "finished_prefix");
   if (r.ledger.prefix < 0 || r.ledger.prefix > r.ledger.chunks) {
     throw bad_checkpoint(context, "state.finished_prefix = " + std::to_string(r.ledger.prefix) + ": must lie in [0, " +
                                       std::to_string(r.ledger.chunks) + "]");
   }
-  for (long long c : field<std::vector<long long>>(context, state, "state", "finished_chunks")) {
+  for (long long c : checkpoint_field<std::vector<long long>>(context, state, "state", "finished_chunks")) {
     if (c <= r.ledger.prefix || c >= r.ledger.chunks) {
       throw bad_checkpoint(context, "state.finished_chunks: chunk " + std::to_string(c) + " must lie in (" +
                                         std::to_string(r.ledger.prefix) + ", " + std::to_string(r.ledger.chunks) + ")");
     }
     r.ledger.beyond.insert(c);
   }
-  const Json tally = field<Json>(context, state, "state", "tally");
-  r.tally.feasible = field<long long>(context, tally, "state.tally", "feasible");
-  r.tally.constraint_violated = field<long long>(context, tally, "state.tally", "constraint_violated");
-  r.tally.sample_failed = field<long long>(context, tally, "state.tally", "sample_failed");
-  r.tally.pruned = field<long long>(context, tally, "state.tally", "pruned");
-  r.tally.samples = field<long long>(context, tally, "state.tally", "samples");
-  r.seconds = field<double>(context, state, "state", "elapsed_seconds");
+  const Json tally = checkpoint_field<Json>(context, state, "state", "tally");
+  r.tally.feasible = checkpoint_field<long long>(context, tally, "state.tally", "feasible");
+  r.tally.constraint_violated = checkpoint_field<long long>(context, tally, "state.tally", "constraint_violated");
+  r.tally.sample_failed = checkpoint_field<long long>(context, tally, "state.tally", "sample_failed");
+  r.tally.pruned = checkpoint_field<long long>(context, tally, "state.tally", "pruned");
+  r.tally.samples = checkpoint_field<long long>(context, tally, "state.tally", "samples");
+  r.seconds = checkpoint_field<double>(context, state, "state", "elapsed_seconds");
   return r;
 }
 
@@ -323,10 +307,10 @@ using BestThread = SweepThread<BestDesign>;
 // (a hand-edited score must never become the study's best).
 BestDesign read_best(const Problem& problem, const GridShape& grid, const SolverContext& context, const Json& state) {
   BestDesign best;
-  const Json claimed = field<Json>(context, state, "state", "best");
+  const Json claimed = checkpoint_field<Json>(context, state, "state", "best");
   if (claimed.is_null()) return best;
-  best.best_index = field<long long>(context, claimed, "state.best", "index");
-  best.best_score = field<double>(context, claimed, "state.best", "score");
+  best.best_index = checkpoint_field<long long>(context, claimed, "state.best", "index");
+  best.best_score = checkpoint_field<double>(context, claimed, "state.best", "score");
   if (best.best_index < 0 || best.best_index >= grid.total) {
     throw bad_checkpoint(context, "state.best.index = " + std::to_string(best.best_index) + ": not a grid design (0.." +
                                       std::to_string(grid.total - 1) + ")");
@@ -429,14 +413,14 @@ using FrontThread = SweepThread<FrontSnapshot>;
 // values differ from the claimed ones, offered to `shared`.
 void read_front(const Problem& problem, const GridShape& grid, const SolverContext& context, const Json& state,
                 SharedFront& shared) {
-  const Json points = field<Json>(context, state, "state", "front");
+  const Json points = checkpoint_field<Json>(context, state, "state", "front");
   if (!points.is_array()) throw bad_checkpoint(context, "state.front is not an array");
   auto ws = problem.make_eval_scratch();
   std::vector<double> x(problem.design_space().free_size());
   for (std::size_t i = 0; i < points.size(); ++i) {
     const std::string path = "state.front[" + std::to_string(i) + "]";
-    const long long index = field<long long>(context, points[i], path, "index");
-    const std::vector<double> claimed = field<std::vector<double>>(context, points[i], path, "objectives");
+    const long long index = checkpoint_field<long long>(context, points[i], path, "index");
+    const std::vector<double> claimed = checkpoint_field<std::vector<double>>(context, points[i], path, "objectives");
     if (index < 0 || index >= grid.total || claimed.size() != shared.sign.size()) {
       throw bad_checkpoint(context, path + ": index " + std::to_string(index) + " or " + std::to_string(claimed.size()) +
                                         " objective values do not fit this grid and study");
