@@ -230,6 +230,19 @@ TEST(Cli, CoarseGridStudyFindsAFeasibleOptimum) {
   fs::remove_all(out);
 }
 
+TEST(Cli, AnOptimumAtTheMechanismsHardLimitIsNoHintToWiden) {
+  const fs::path out = fresh_dir("hard-limit");
+  // The shipped study (10 mm grid, under a second): its optimum has l0 = 0, the hard limit of a length.
+  const Output o = hapsyn_cli("run " + problem("fivebar-gii-coarse.json") + " --quiet --out " + out.string());
+  ASSERT_EQ(o.code, 0) << o.out;
+  const Json result = read_json(out / "result.json");
+  ASSERT_EQ(result["best"]["design"]["l0"], 0.0);
+  ASSERT_TRUE(result.contains("warnings"));
+  for (const Json& w : result["warnings"]) EXPECT_EQ(w.get<std::string>().find("design.l0"), std::string::npos) << w;
+  EXPECT_NE(o.out.find("warning: design.l1 = 0.3 is at its upper bound"), std::string::npos) << o.out;
+  fs::remove_all(out);
+}
+
 TEST(Cli, UsageErrorsExitWithTwo) {
   EXPECT_EQ(hapsyn_cli("").code, 2);
   EXPECT_EQ(hapsyn_cli("run").code, 2);

@@ -393,6 +393,19 @@ int bound_side(const DesignSpace& space, std::size_t k, double x) {
   return 0;
 }
 
+// True when the bound on `side` of `c` is the mechanism's hard limit (a length's 0): it cannot
+// be widened, so an optimum there is no hint to widen the box.
+bool at_hard_limit(const Mechanism& mechanism, const DesignComponent& c, int side) {
+  for (const VariableDecl& d : mechanism.variables()) {
+    if (d.name != c.variable) continue;
+    const std::vector<double>& hard = side < 0 ? d.hard_lower : d.hard_upper;
+    if (hard.empty()) return false;
+    const double limit = hard.size() == 1 ? hard[0] : hard[static_cast<std::size_t>(c.index)];
+    return (side < 0 ? c.lower : c.upper) == limit;
+  }
+  return false;
+}
+
 }  // namespace
 
 std::vector<std::string> bound_warnings(const Problem& problem, const SolverResult& result) {
@@ -403,6 +416,7 @@ std::vector<std::string> bound_warnings(const Problem& problem, const SolverResu
     const DesignComponent& c = space.components()[static_cast<std::size_t>(index)];
     if (c.integer) continue;  // integer codes (sizes, gears) are enumerations: an end is no hint
     for (const int side : {-1, 1}) {
+      if (at_hard_limit(problem.mechanism(), c, side)) continue;
       const char* name = side < 0 ? "lower" : "upper";
       const std::string widen = "; widen " + bound_path(c, name) + " to check";
       const std::string at = " is at its " + std::string(name) + " bound";

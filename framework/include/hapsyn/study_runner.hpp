@@ -77,7 +77,9 @@ int run_threads(const Json& resolved, const RunOptions& options, std::vector<std
 /// continuous or grid component (within half a step of the grid's end, or 1e-9 of the range):
 /// "design.l1 = 0.3 is at its upper bound: the optimum may lie beyond it; widen design.l1.upper
 /// to check"; for the front "design.l1 is at its upper bound in 3 of 12 front points: ...".
-/// Integer components (codes, sizes) are skipped: their ends are choices, not hints.
+/// Integer components (codes, sizes) are skipped: their ends are choices, not hints; so is a
+/// bound that is the mechanism's hard limit (VariableDecl::hard_lower/upper: a length's 0), which
+/// cannot be widened.
 std::vector<std::string> bound_warnings(const Problem& problem, const SolverResult& result);
 
 /// Runs a loaded study: checks and locks the output directory, solves, then writes result.json
