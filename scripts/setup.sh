@@ -11,6 +11,7 @@ packages=(
   libnlopt-cxx-dev liborocos-kdl-dev liburdfdom-dev libtinyxml-dev
   gnuplot-nox
   python3-dev python3-numpy python3-pytest pybind11-dev
+  openmpi-bin libopenmpi-dev
 )
 # Extra packages requested through the environment (e.g. HAPSYN_EXTRA_PACKAGES="gnuplot").
 if [[ -n "${HAPSYN_EXTRA_PACKAGES:-}" ]]; then

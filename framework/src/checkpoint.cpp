@@ -58,7 +58,7 @@ std::string study_fingerprint(const Problem& problem, Json solver_options, std::
 
 void write_checkpoint(const SolverContext& context, const std::string& solver, const std::string& fingerprint,
                       const Json& state) {
-  if (context.checkpoint_file.empty()) return;
+  if (context.checkpoint_file.empty() || !context.cluster().root()) return;  // rank 0 owns the files
   Json c;
   c["format"] = "hapsyn-checkpoint";
   c["version"] = kFormatVersion;
@@ -78,16 +78,26 @@ std::optional<Json> read_checkpoint(const SolverContext& context, const std::str
                                     const std::string& fingerprint) {
   const std::string& file = context.checkpoint_file;
   if (!context.resume || file.empty()) return std::nullopt;
-  boost::system::error_code ec;
-  if (!boost::filesystem::exists(file, ec)) return std::nullopt;
-  std::string text;
-  try {
-    text = read_regular_file(file, "checkpoint", "checkpoint", kMaxCheckpointBytes);
-  } catch (const Error& e) {
-    throw Error("checkpoint", std::string(e.what()).substr(std::string("checkpoint: ").size()) +
-                                  "; delete it, or run without --resume");
+  // Under MPI rank 0 reads the file and every rank parses rank 0's bytes: all ranks resume from
+  // the same state, even when rank 0 writes the next checkpoint while another still reads.
+  // "N": no file; "T<text>"; "E<error>".
+  std::string message;
+  if (context.cluster().root()) {
+    boost::system::error_code ec;
+    if (!boost::filesystem::exists(file, ec)) {
+      message = "N";
+    } else {
+      try {
+        message = "T" + read_regular_file(file, "checkpoint", "checkpoint", kMaxCheckpointBytes);
+      } catch (const Error& e) {
+        message = "E" + std::string(e.what()).substr(std::string("checkpoint: ").size());
+      }
+    }
   }
-  Json c = Json::parse(text, nullptr, false);
+  context.cluster().broadcast(message);
+  if (message.empty() || message[0] == 'N') return std::nullopt;
+  if (message[0] == 'E') throw Error("checkpoint", message.substr(1) + "; delete it, or run without --resume");
+  Json c = Json::parse(message.begin() + 1, message.end(), nullptr, false);
   if (c.is_discarded()) throw bad_checkpoint(context, "not valid JSON (truncated or damaged)");
   if (!c.is_object() || c.value("format", Json()) != "hapsyn-checkpoint") {
     throw bad_checkpoint(context, "not a hapsyn checkpoint (no \"format\": \"hapsyn-checkpoint\")");

@@ -1,5 +1,6 @@
 // Running a loaded study: output-directory guards and lock, seed, run log, the solver call, and
 // the result files (staged, then committed with result.json last), each a named step of run_study.
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/groups.hpp>
 #include <hapsyn/maps.hpp>
@@ -43,6 +44,7 @@ struct RunSetup {
   int threads = 1;
   std::uint64_t seed = 0;
   std::vector<std::string> warnings;
+  Cluster* cluster = nullptr;  // the run's processes (null: this one alone)
 };
 
 constexpr int kThreadsPerHardwareThread = 4;
@@ -262,6 +264,14 @@ Json result_document(const Study& study, const RunSetup& run, const SolverResult
   doc["plugins"] = plugins;
   doc["seed"] = run.seed;
   doc["threads"] = run.threads;
+  if (run.cluster != nullptr && run.cluster->size() > 1) {
+    Json hosts = Json::array();
+    for (int r = 0; r < run.cluster->size(); ++r) hosts.push_back(run.cluster->host(r));
+    doc["ranks"] = {{"count", run.cluster->size()}, {"hosts", hosts}, {"distributed", study.solver->distributed()}};
+  }
+  if (run.cluster != nullptr && run.cluster->shard().second > 1) {
+    doc["shard"] = {{"index", run.cluster->shard().first + 1}, {"count", run.cluster->shard().second}};
+  }
   doc["machine"] = machine_info();
   doc["started"] = started;
   doc["status"] = to_string(result.status);
@@ -622,6 +632,11 @@ Json solve_and_write(Study& study, const RunOptions& options, const RunSetup& ru
   context.log = &log;
   context.checkpoint_file = run.checkpoint_file.string();
   context.resume = options.resume && !options.force;
+  if (study.solver->distributed()) {
+    context.ranks = run.cluster;
+  } else if (options.signal != nullptr) {
+    context.stop = options.signal;  // rank 0 alone: its own signal, at once
+  }
 
   const std::string started = iso_time_now();
   const auto t0 = std::chrono::steady_clock::now();
@@ -651,9 +666,12 @@ Json solve_and_write(Study& study, const RunOptions& options, const RunSetup& ru
 
 }  // namespace
 
-Json run_study(Study& study, const RunOptions& options) {
+namespace {
+
+Json run_here(Study& study, const RunOptions& options, Cluster* cluster, const std::function<void(const RunSetup&)>& started) {
   const Json& resolved = study.resolved;
   RunSetup run;
+  run.cluster = cluster;
   run.out_dir = output_directory_of(study, options);
   run.result_file = fs::path(run.out_dir) / "result.json";
   run.checkpoint_file = fs::path(run.out_dir) / "checkpoint.json";
@@ -678,6 +696,11 @@ Json run_study(Study& study, const RunOptions& options) {
     warn << "hapsyn: warning: " << w << "\n";
     log << "warning: " << w << "\n";
   }
+  if (cluster != nullptr && cluster->size() > 1) {
+    log << "ranks: " << cluster->size() << " (" << (study.solver->distributed() ? "distributed" : "solver on rank 0 alone")
+        << ")\n";
+  }
+  started(run);
   try {
     Json doc = solve_and_write(study, options, run, log);
     log << "finished: status " << doc["status"].get<std::string>() << ", wall time " << doc["wall_time_s"].get<double>()
@@ -685,6 +708,64 @@ Json run_study(Study& study, const RunOptions& options) {
     return doc;
   } catch (const std::exception& e) {
     log << "failed: " << e.what() << "\n";
+    throw;
+  }
+}
+
+// What rank 0 tells the other ranks before the solve: the seed and checkpoint it chose, or the
+// error that ended the run before it started.
+std::string go_message(const RunSetup& run) {
+  return Json{{"seed", run.seed}, {"checkpoint", run.checkpoint_file.string()}, {"out", run.out_dir}}.dump();
+}
+
+// Ranks 1..N-1: no output directory, no log, no files; the same solve as rank 0 (a distributed
+// solver) or none (rank 0 solves alone), then rank 0's result.
+Json follow_rank0(Study& study, const RunOptions& options, Cluster& cluster) {
+  std::string go;
+  cluster.broadcast(go);
+  Json message = Json::parse(go);
+  if (message.contains("error")) throw Error("mpi", "rank 0 ended the run: " + message["error"].get<std::string>());
+  if (study.solver->distributed()) {
+    std::vector<std::string> ignored;
+    SolverContext context;
+    context.threads = run_threads(study.resolved, options, ignored);
+    context.seed = message["seed"].get<std::uint64_t>();
+    context.stop = options.stop;
+    context.checkpoint_file = message["checkpoint"].get<std::string>();  // read (on resume), never written
+    context.resume = options.resume && !options.force;
+    context.ranks = &cluster;
+    (void)study.solver->solve(*study.problem, context);
+  }
+  std::string result;
+  cluster.broadcast(result);
+  message = Json::parse(result);
+  if (message.contains("error")) throw Error("mpi", "rank 0 ended the run: " + message["error"].get<std::string>());
+  return message;
+}
+
+}  // namespace
+
+Json run_study(Study& study, const RunOptions& options) {
+  Cluster* cluster = options.cluster;
+  if (cluster == nullptr || cluster->size() == 1) return run_here(study, options, cluster, [](const RunSetup&) {});
+  if (!cluster->root()) return follow_rank0(study, options, *cluster);
+  // Rank 0: every path past this point broadcasts twice (go, then the result or an error), so
+  // that the other ranks never wait for a message that does not come.
+  bool went = false;
+  try {
+    Json doc = run_here(study, options, cluster, [&](const RunSetup& run) {
+      std::string go = go_message(run);
+      cluster->broadcast(go);
+      went = true;
+    });
+    std::string result = doc.dump();
+    cluster->broadcast(result);
+    return doc;
+  } catch (const std::exception& e) {
+    // The other ranks wait for exactly one more message: the go (not sent yet) or the result.
+    (void)went;
+    std::string error = Json{{"error", e.what()}}.dump();
+    cluster->broadcast(error);
     throw;
   }
 }

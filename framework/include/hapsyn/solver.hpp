@@ -3,6 +3,7 @@
 /// Solvers: single-objective (maximize a metric or a weighted sum) or Pareto (a front).
 /// An optimizer outcome (converged, budget spent, infeasible) is a status and a message in
 /// the SolverResult, never an exception; exceptions are for bad input only.
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/json.hpp>
 #include <hapsyn/problem.hpp>
 
@@ -62,8 +63,25 @@ struct SolverContext {
   /// checkpoints starts over.
   bool resume = false;
 
+  /// The processes of this run (MPI ranks or a shard; hapsyn/cluster.hpp); null: this process
+  /// alone. Read it through cluster().
+  Cluster* ranks = nullptr;
+
   /// True once a stop was requested (see `stop`).
   bool stop_requested() const { return stop != nullptr && stop->load(std::memory_order_relaxed); }
+  /// The processes of this run: *ranks, else Cluster::local().
+  Cluster& cluster() const { return ranks != nullptr ? *ranks : Cluster::local(); }
+  /// This context for a sub-solver that runs inside one task of a farm: the same, on this
+  /// process alone (Cluster::local()), without progress lines or a checkpoint of its own.
+  SolverContext in_task() const {
+    SolverContext c = *this;
+    c.ranks = nullptr;
+    c.progress = nullptr;
+    c.log = nullptr;
+    c.checkpoint_file.clear();
+    c.resume = false;
+    return c;
+  }
 };
 
 /// Solver plugin: the one pure virtual is solve(); everything else has a default.
@@ -95,6 +113,20 @@ class Solver {
   /// against the problems they will see (check_sub_solver in plugins/solvers/shared). Called
   /// once at load, before solve(); the message is reported as "problem: solver: <message>".
   virtual void check(const Problem& problem) const {}
+  /// True when solve() spreads its work over the ranks of an MPI job through
+  /// context.cluster().run_tasks (and follows the rules of hapsyn/cluster.hpp: deterministic
+  /// between farms, stop checks that see the agreed flag). False (the default): under mpirun
+  /// the framework runs solve() on rank 0 alone and the other ranks wait.
+  virtual bool distributed() const { return false; }
+  /// True when `hapsyn run --shard i/N` can split this solver's job (it has a shardable task
+  /// farm) and merge_shards() combines the shares' checkpoints.
+  virtual bool shardable() const { return false; }
+  /// Combines the checkpoint states ("state" of each shard's checkpoint.json, by shard index)
+  /// of a sharded run into the state of one checkpoint from which `--resume` finishes the study
+  /// with the result of a single run (every claimed value is re-checked there).
+  /// 	hrows Error("merge", ...) when the shares overlap, leave tasks out or disagree; the
+  ///         default throws "solver does not support --shard".
+  virtual Json merge_shards(const Problem& problem, const std::vector<Json>& states) const;
 };
 
 }  // namespace hapsyn

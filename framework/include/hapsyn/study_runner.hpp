@@ -15,6 +15,7 @@
 /// - run.log and checkpoint.json live in the directory itself: the checkpoint must survive a
 ///   stop or a kill, and the log shows how far a failed run got (its error is its last line).
 /// - `<out>/.lock` is flock'ed for the whole run: a second run into the directory fails at once.
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/json.hpp>
 #include <hapsyn/solver.hpp>
 #include <hapsyn/study.hpp>
@@ -47,6 +48,14 @@ struct RunOptions {
   /// Handed to the solver as SolverContext::stop: setting it asks the run to stop (status
   /// "stopped", best so far). Null: no stop request possible.
   const std::atomic<bool>* stop = nullptr;
+  /// The processes of the run (an MPI job or a shard; hapsyn/cluster.hpp); null: this one.
+  /// Under MPI every rank calls run_study: rank 0 does everything below, the others take part
+  /// in the solve of a distributed solver (Solver::distributed; else rank 0 solves alone) and
+  /// return rank 0's result document.
+  Cluster* cluster = nullptr;
+  /// Under MPI: the flag this rank's signal handlers set (`stop` is then the agreed flag the
+  /// cluster sets inside task farms). A solver that runs on rank 0 alone watches this one.
+  const std::atomic<bool>* signal = nullptr;
   /// Seconds the caller spent loading the study (validation and the scene build): result.json's
   /// "phases.scene_s", counted in "wall_time_s". 0 when not measured.
   double scene_time_s = 0.0;
