@@ -69,7 +69,7 @@ Json run_to_json(const RunState& state, const pagmo::algorithm& algorithm, const
   current["switched"] = state.switched;
   current["best_score"] = state.best_x.empty() ? Json(nullptr) : Json(state.best_score);
   current["best_x"] = state.best_x;
-  current["designs_before"] = state.designs_before;
+  current["run_designs"] = state.designs;
   current["run_seconds"] = state.seconds_before;
   current["algorithm"] = pa::save_algorithm(algorithm);
   current["population_seed"] = population.get_seed();
@@ -86,7 +86,7 @@ void restore_run(const SolverContext& context, const Json& current, const pagmo:
     state.switched = current.at("switched");
     state.best_x = current.at("best_x").get<pagmo::vector_double>();
     if (!state.best_x.empty()) state.best_score = current.at("best_score");
-    state.designs_before = current.at("designs_before");
+    state.designs = current.at("run_designs");
     state.seconds_before = current.at("run_seconds");
     algorithm = pa::load_algorithm(current.at("algorithm").get<std::string>());
     pagmo::population restored(problem, 0u, current.at("population_seed").get<unsigned>());

@@ -7,7 +7,8 @@
 /// The file is the framework's checkpoint (hapsyn/checkpoint.hpp: format, seed, solver "ga",
 /// fingerprint, checksum); its "state" holds "completed_runs" (the run records of
 /// statistics.runs), "run_seconds", "evaluations" {"designs", "samples"}, "elapsed_seconds", and
-/// "current" (the run in progress, absent between runs).
+/// "current" (the run in progress, absent between runs). "completed_runs" are by run index but
+/// need not be consecutive: a shard (`--shard i/N`) holds its share of the runs.
 #include "ga_options.hpp"
 
 #include <hapsyn/json.hpp>
@@ -36,7 +37,7 @@ struct RunState {
   bool switched = false;   ///< on the full scene (or never on a subset)
   double best_score = -std::numeric_limits<double>::infinity();
   pagmo::vector_double best_x;   ///< best full-fidelity individual seen (pagmo order); empty: none
-  long long designs_before = 0;  ///< study design evaluations when the run started
+  long long designs = 0;         ///< the run's design evaluations before a resume
   double seconds_before = 0.0;   ///< run time before a resume [s]
 };
 
