@@ -632,6 +632,8 @@ int main(int argc, char** argv) {
   } catch (const hapsyn::Error& e) {
     // Under MPI an error rank 0 passed on is rank 0's to report; another rank's own error names
     // the rank and ends the job (rank 0 may be waiting for this one).
+    // Refused before the cluster exists (the same on every rank): the launcher's rank 0 says it.
+    if (run_cluster == nullptr && hapsyn_cli::launcher_rank() > 0) return 1;
     if (const int rank = hapsyn_cli::rank_of(run_cluster.get()); rank != 0) {
       if (e.component() == "mpi" && std::string(e.what()).find("rank 0 ended the run") != std::string::npos) return 1;
       std::cerr << "hapsyn: error: rank " << rank << " on " << run_cluster->host(rank) << ": " << e.what() << "\n";

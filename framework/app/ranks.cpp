@@ -2,6 +2,7 @@
 
 #include <hapsyn/error.hpp>
 
+#include <cstdlib>
 #include <exception>
 #include <optional>
 
@@ -22,6 +23,13 @@ std::unique_ptr<hapsyn::Cluster> make_run_cluster(const std::string& shard, doub
     return std::make_unique<hapsyn::ShardCluster>(index, count);
   }
   return nullptr;
+}
+
+int launcher_rank() {
+  for (const char* name : {"OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK"}) {
+    if (const char* v = std::getenv(name)) return std::atoi(v);
+  }
+  return 0;
 }
 
 hapsyn::Study load_on_ranks(hapsyn::Cluster* cluster, const std::function<hapsyn::Study()>& load) {

@@ -29,6 +29,10 @@ std::unique_ptr<hapsyn::Cluster> make_run_cluster(const std::string& shard, doub
 /// rethrows the first one (naming the rank when it is not 0), the others throw QuietExit{1}.
 hapsyn::Study load_on_ranks(hapsyn::Cluster* cluster, const std::function<hapsyn::Study()>& load);
 
+/// This process's rank as the launcher's environment gives it (OMPI_COMM_WORLD_RANK, PMIX_RANK,
+/// PMI_RANK), 0 outside a launcher: who reports an error found before the cluster exists.
+int launcher_rank();
+
 /// The rank of this process in `cluster` (0 when null).
 inline int rank_of(const hapsyn::Cluster* cluster) { return cluster != nullptr ? cluster->rank() : 0; }
 
