@@ -15,6 +15,8 @@ faults   A distributed grid search that a signal stops (SIGUSR1 to mpirun: exit 
 input    Bad input: --shard 3/2, 0/0, a solver that cannot be sharded, --shard under mpirun, and
          `hapsyn merge` of shares of different problems or seeds, a missing, a repeated, an
          unfinished share and a directory that holds no share: clear errors naming the rule.
+         Then docs/slurm/array.sbatch (3 array tasks) and merge.sbatch run as SLURM runs them
+         (its environment variables, hapsyn on PATH): the merged result equals one process.
 
 Exit status 0 when every check passed; each failure is printed with the command and its output.
 """
@@ -281,6 +283,35 @@ def part_input(r, grid_problem, other_problem):
                    ["was stopped before it finished its share", "--shard 2/2", "--resume"])
 
 
+def part_slurm(r, problem, docs):
+    """docs/slurm/array.sbatch (3 tasks) and merge.sbatch as SLURM runs them (its environment),
+    with hapsyn on PATH: the merged result equals one process."""
+    work = r.out("slurm")
+    os.makedirs(work)
+    bindir = os.path.join(work, "bin")
+    os.makedirs(bindir)
+    os.symlink(r.hapsyn, os.path.join(bindir, "hapsyn"))
+    env = dict(r.env, PATH=bindir + os.pathsep + r.env.get("PATH", ""), SLURM_CPUS_PER_TASK="1",
+               SLURM_ARRAY_TASK_COUNT="3", SLURM_ARRAY_JOB_ID="7")
+    for task in range(3):
+        e = dict(env, SLURM_ARRAY_TASK_ID=str(task))
+        p = subprocess.run(["bash", os.path.join(docs, "array.sbatch"), problem], cwd=work, env=e, capture_output=True,
+                           text=True, timeout=300)
+        if p.returncode != 0:
+            fail(f"slurm: array.sbatch task {task}: exit {p.returncode}", p.stderr[-2000:])
+            return
+    p = subprocess.run(["bash", os.path.join(docs, "merge.sbatch"), problem], cwd=work, env=env, capture_output=True,
+                       text=True, timeout=300)
+    if p.returncode != 0:
+        fail(f"slurm: merge.sbatch: exit {p.returncode}", p.stderr[-2000:])
+        return
+    study = os.path.splitext(os.path.basename(problem))[0]
+    single = r.out("slurm-single")
+    if run_checked(r, "slurm: single process", [r.hapsyn, "run", problem, "--threads", "1", "--out", single, "--quiet"]):
+        same_result("slurm: the job array's 3 shares merged by merge.sbatch equal one process", result_of(single),
+                    result_of(os.path.join(work, "results", study)))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--hapsyn", required=True)
@@ -290,6 +321,8 @@ def main():
     ap.add_argument("--fault-set", action="append", default=[], help="--set for the fault problem")
     ap.add_argument("--other-problem", help="a study whose solver cannot be sharded (input part)")
     ap.add_argument("--work", required=True)
+    ap.add_argument("--docs", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "docs", "slurm"),
+                    help="folder of the sbatch examples (input part)")
     ap.add_argument("--part", choices=["results", "faults", "input"], required=True)
     args = ap.parse_args()
     r = Runner(args)
@@ -301,6 +334,7 @@ def main():
         part_faults(r, args.fault_problem, [x for s in args.fault_set for x in ("--set", s)])
     else:
         part_input(r, os.path.join(args.problems, "grid-best.json"), args.other_problem)
+        part_slurm(r, os.path.join(args.problems, "grid-best.json"), args.docs)
     print(f"{args.part}: {len(FAILURES)} failure(s) in {time.time() - t0:.1f} s")
     return 1 if FAILURES else 0
 
