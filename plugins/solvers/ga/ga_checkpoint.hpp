@@ -61,7 +61,8 @@ Json checkpoint_to_state(const Checkpoint& checkpoint);
 Checkpoint checkpoint_from_state(const SolverContext& context, const Json& state);
 
 /// The run in progress as the checkpoint's "current": its state, the algorithm with its random
-/// engine (pagmo_adapter::save_algorithm), the population's seed, decision and fitness vectors.
+/// engine (pagmo_adapter::save_algorithm), the population's seed, decision and fitness vectors
+/// and its champion (the best individual it ever held: gaco's stall count compares champions).
 Json run_to_json(const RunState& state, const pagmo::algorithm& algorithm, const pagmo::population& population);
 
 /// Restores a run in progress from a checkpoint's "current" (run_to_json): fills `state`
