@@ -320,15 +320,28 @@ Json run_compare_cases(const CompareOptions& options, const Registry& registry, 
   // Every file is read and named before any study runs, on every rank alike. A study is loaded
   // (validated) just before it runs: an earlier study may write the reference front it names.
   std::vector<CompareCase> cases;
-  std::set<std::string> names;
-  for (const std::string& file : options.files) {
-    Json doc = read_problem_file(file);
-    for (const std::string& s : options.overrides) apply_override(doc, s);
-    const std::string name = doc.value("name", fs::path(file).stem().string());
-    if (!names.insert(name).second) {
-      throw Error("compare", file + ": a study named '" + name + "' is already in this comparison (give each a distinct \"name\")");
+  Json read_error = nullptr;
+  try {
+    std::set<std::string> names;
+    for (const std::string& file : options.files) {
+      Json doc = read_problem_file(file);
+      for (const std::string& s : options.overrides) apply_override(doc, s);
+      const std::string name = doc.value("name", fs::path(file).stem().string());
+      if (!names.insert(name).second) {
+        throw Error("compare", file + ": a study named '" + name + "' is already in this comparison (give each a distinct \"name\")");
+      }
+      cases.push_back({file, std::move(doc), name});
     }
-    cases.push_back({file, std::move(doc), name});
+  } catch (const std::exception& e) {
+    if (cluster.size() == 1) throw;
+    read_error = error_record(e);
+  }
+  if (cluster.size() > 1) {
+    // A file one rank cannot read is every rank's error (the lowest rank's is reported).
+    for (const std::string& bytes : cluster.all_gather(read_error.dump())) {
+      const Json record = Json::parse(bytes);
+      if (!record.is_null()) throw_record(record);
+    }
   }
   const auto [first, last] = shard_tasks(cluster, static_cast<long long>(cases.size()));
   const fs::path out(options.output_directory);
@@ -505,6 +518,10 @@ void print_compare(const Json& summary, std::ostream& out) {
   }
   if (summary.value("status", "") == "stopped") out << "stopped: " << summary["message"].get<std::string>() << "\n";
   out << "written: " << summary["output_directory"].get<std::string>() << "/compare.csv, compare.json\n";
+  if (summary.contains("shard") && summary.value("status", "") != "stopped") {
+    out << "shard " << summary["shard"]["index"] << "/" << summary["shard"]["count"]
+        << " done; when every share is, combine them: hapsyn merge DIR1 DIR2 ... --out DIR\n";
+  }
 }
 
 }  // namespace hapsyn

@@ -13,6 +13,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 
 #include <chrono>
 #include <cmath>
@@ -343,6 +344,33 @@ Json axes_record(const std::vector<SweepAxis>& axes) {
   return out;
 }
 
+// Runs `work` on every rank (the first rank of each node first: it builds the scene caches the
+// node's other ranks then read) and throws on every rank alike when it failed on any: rank 0's
+// error as it is, else the first other rank's, naming it.
+void on_every_rank(Cluster& cluster, const std::function<void()>& work, const std::string& component) {
+  if (cluster.size() == 1) return work();
+  Json error = nullptr;
+  const auto attempt = [&] {
+    try {
+      work();
+    } catch (const std::exception& e) {
+      error = error_record(e, component);
+    }
+  };
+  const bool first = first_on_node(cluster);
+  if (first) attempt();
+  node_barrier(cluster);
+  if (!first) attempt();
+  const std::vector<std::string> errors = cluster.all_gather(error.dump());
+  for (std::size_t r = 0; r < errors.size(); ++r) {
+    const Json record = Json::parse(errors[r]);
+    if (record.is_null()) continue;
+    if (r == 0) throw_record(record);
+    throw Error(component, "rank " + std::to_string(r) + " on " + cluster.host(static_cast<int>(r)) + ": " +
+                               record["component"].get<std::string>() + ": " + record["message"].get<std::string>());
+  }
+}
+
 Json run_sweep_cases(const Json& problem, const SweepOptions& options, const Registry& registry, bool reuse_only) {
   if (options.axes.empty()) throw Error("sweep", "at least one --vary is required");
   Cluster& cluster = options.cluster != nullptr ? *options.cluster : Cluster::local();
@@ -359,19 +387,22 @@ Json run_sweep_cases(const Json& problem, const SweepOptions& options, const Reg
     return doc;
   };
   std::vector<SweepCase> cases;
-  for (std::size_t c = 0; c < combos.size(); ++c) {
-    try {
-      cases.push_back({combos[c], combo_values[c], "run-" + std::to_string(c),
-                       load_study(make_doc(combos[c]), registry, {}, settings).resolved});
-    } catch (const Error& e) {
-      throw Error("sweep", "run with " + combo_values[c].dump() + ": " + e.what());
-    }
-  }
   const bool separate_reference = !options.reference.empty();
-  if (separate_reference) {
-    cases.push_back({options.reference, Json::object(), "reference",
-                     load_study(make_doc(options.reference), registry, {}, settings).resolved});
-  }
+  const auto validate = [&] {
+    for (std::size_t c = 0; c < combos.size(); ++c) {
+      try {
+        cases.push_back({combos[c], combo_values[c], "run-" + std::to_string(c),
+                         load_study(make_doc(combos[c]), registry, {}, settings).resolved});
+      } catch (const Error& e) {
+        throw Error("sweep", "run with " + combo_values[c].dump() + ": " + e.what());
+      }
+    }
+    if (separate_reference) {
+      cases.push_back({options.reference, Json::object(), "reference",
+                       load_study(make_doc(options.reference), registry, {}, settings).resolved});
+    }
+  };
+  on_every_rank(cluster, validate, "sweep");
   const std::size_t reference_case = cases.size() - 1;
   const auto [first, last] = shard_tasks(cluster, static_cast<long long>(cases.size()));
 
