@@ -217,10 +217,9 @@ Study load_case(const CompareCase& k, const CompareOptions& options, const Regis
   }
 }
 
-
 // Rank 0: the rows (file order) of this share's finished studies, the plots, compare.csv and
 // compare.json.
-Json tabulate(const std::vector<CompareCase>& cases, std::vector<std::optional<Json>>& results,
+Json tabulate(const std::vector<CompareCase>& cases, const std::vector<std::optional<Json>>& results,
               const std::vector<std::string>& solvers, const std::vector<char>& reused, const std::vector<char>& started,
               long long first, long long last, const Cluster& cluster, const CompareOptions& options) {
   const fs::path out(options.output_directory);
