@@ -402,3 +402,24 @@ TEST(Sweep, AMergeRunsNothingAgain) {
   EXPECT_FALSE(fs::exists(merged / "run-0" / "checkpoint.json"));
   fs::remove_all(root);
 }
+
+TEST(Sweep, TheCommandRunsOneShareAndRefusesAMalformedShard) {
+  const fs::path root = fresh("cli-shard");
+  write_json(root / "study.json", culling_study());
+  const std::string command = "sweep " + (root / "study.json").string() +
+                              " --vary design.l0.step=0.1,0.05 --threads 1 --seed 3 --out " + (root / "out").string();
+  const hapsyn::test::Output bad = hapsyn::test::hapsyn_cli(command + " --shard 3/2");
+  EXPECT_EQ(bad.code, 1) << bad.out;
+  EXPECT_NE(bad.out.find("hapsyn: error: shard: --shard 3/2: the share i must lie in 1..N (N = 2)"), std::string::npos)
+      << bad.out;
+  EXPECT_FALSE(fs::exists(root / "out"));
+  const hapsyn::test::Output share = hapsyn::test::hapsyn_cli(command + " --shard 2/2");
+  EXPECT_EQ(share.code, 0) << share.out;
+  EXPECT_NE(share.out.find("shard 2/2 done; when every share is, combine them: hapsyn merge"), std::string::npos)
+      << share.out;
+  const Json summary = read_json(root / "out" / "sweep.json");
+  EXPECT_EQ(summary["shard"], Json({{"index", 2}, {"count", 2}, {"cases", {"run-1"}}}));
+  EXPECT_EQ(summary["problem_directory"], fs::absolute(root).lexically_normal().string());
+  EXPECT_FALSE(fs::exists(root / "out" / "run-0"));
+  fs::remove_all(root);
+}
