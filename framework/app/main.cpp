@@ -53,6 +53,10 @@ std::atomic<bool> stop_requested{false};
 // that all ranks leave a loop together); solvers see this one, the handlers set the one above.
 std::atomic<bool> stop_agreed{false};
 
+// Under mpirun every rank gets the signal: only the launcher's rank 0 says so (set before the
+// handlers are installed).
+bool signal_notes = true;
+
 // Async-signal-safe: an atomic store and write(2). A second signal ends the process at once
 // (exit status 128 + signal, as a shell reports a killed job).
 extern "C" void on_stop_signal(int signal_number) {
@@ -64,10 +68,12 @@ extern "C" void on_stop_signal(int signal_number) {
   static const char kFirst[] =
       "\nhapsyn: stop requested: finishing the current step, writing the checkpoint and the best so far "
       "(signal again to stop at once)\n";
+  if (!signal_notes) return;
   [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, kFirst, sizeof kFirst - 1);
 }
 
 void install_stop_handlers() {
+  signal_notes = hapsyn_cli::launcher_rank() == 0;
   struct sigaction action {};
   action.sa_handler = on_stop_signal;
   sigemptyset(&action.sa_mask);
