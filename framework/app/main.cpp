@@ -546,6 +546,17 @@ int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& r
 }
 
 int merge_command(const Arguments& a, const hapsyn::Registry& registry) {
+  // A sweep's or a comparison's shares (their cases), else a study's.
+  if (hapsyn::is_sweep_output(a.merge_dirs.front())) {
+    const Json summary = hapsyn::merge_sweep_shards(a.merge_dirs, a.out_dir, registry, a.threads);
+    print_sweep(summary, std::cout);
+    return 0;
+  }
+  if (hapsyn::is_compare_output(a.merge_dirs.front())) {
+    const Json summary = hapsyn::merge_compare_shards(a.merge_dirs, a.out_dir, registry, a.threads);
+    hapsyn::print_compare(summary, std::cout);
+    return 0;
+  }
   hapsyn::RunOptions options;
   options.output_directory = a.out_dir;
   options.threads = a.threads;
