@@ -222,6 +222,16 @@ void GaSearch::resume_from_checkpoint() {
       }
     }
   }
+  if (checkpoint.current) {
+    // Restored here once, so that a damaged run in progress is refused before any task farm,
+    // alike on every rank (inside a farm an exception ends an MPI job).
+    ga::RunState trial;
+    pagmo::algorithm algorithm;
+    pagmo::population population;
+    const auto evaluator =
+        std::make_shared<pa::Evaluator>(problem_, encoding_, evaluation_settings(options_, 1), false);
+    ga::restore_run(context_, *checkpoint.current, pa::make_problem(evaluator), trial, algorithm, population);
+  }
   if (checkpoint.current && checkpoint.current->contains("best_x")) {
     try {
       const pagmo::vector_double x = checkpoint.current->at("best_x").get<pagmo::vector_double>();

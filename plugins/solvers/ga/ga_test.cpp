@@ -844,3 +844,26 @@ TEST(Ga, GacoResumedAnywhereContinuesExactly) {
   EXPECT_EQ(compared, 3);
   fs::remove_all(dir);
 }
+
+TEST(Ga, RunStoppedInOneProcessResumesAsRankTasks) {
+  // A single process stops in the middle of run 2 (a checkpoint with a run in progress); the
+  // resume on two ranks runs the remaining runs as tasks and gives the uninterrupted result.
+  Json options = kShardOptions;
+  options["checkpoint_every"] = 3;
+  const auto plain = solve_toy_on(options, nullptr, 2);
+  const fs::path dir = fresh_dir("stop-then-ranks");
+  fs::create_directories(dir);
+  const std::string file = (dir / "checkpoint.json").string();
+  EXPECT_EQ(solve_toy_with(options, file, false, 22).status, hapsyn::SolverStatus::kStopped);
+  const Json state = read_json(file)["state"];
+  ASSERT_TRUE(state.contains("current"));
+  EXPECT_EQ(state["current"]["run"], 1);
+  PretendTwoRanks ranks;
+  const auto resumed = solve_toy_on(options, &ranks, 2, file, true);
+  EXPECT_EQ(ranks.farms, 1);
+  ASSERT_TRUE(resumed.best.has_value()) << resumed.message;
+  EXPECT_EQ(resumed.status, plain.status);
+  EXPECT_TRUE(resumed.best->design == plain.best->design);
+  EXPECT_EQ(runs_without_counts(resumed.statistics["runs"]), runs_without_counts(plain.statistics["runs"]));
+  fs::remove_all(dir);
+}
