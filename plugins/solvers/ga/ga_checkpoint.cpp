@@ -92,7 +92,8 @@ void restore_run(const SolverContext& context, const Json& current, const pagmo:
     state.switched = current.at("switched");
     state.best_x = current.at("best_x").get<pagmo::vector_double>();
     if (!state.best_x.empty()) state.best_score = current.at("best_score");
-    state.designs = current.at("run_designs");
+    // Absent in checkpoints of earlier versions (they counted the study's designs instead).
+    state.designs = current.contains("run_designs") ? current.at("run_designs").get<long long>() : 0;
     state.seconds_before = current.at("run_seconds");
     algorithm = pa::load_algorithm(current.at("algorithm").get<std::string>());
     pagmo::population restored(problem, 0u, current.at("population_seed").get<unsigned>());
