@@ -508,8 +508,13 @@ int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& r
   const bool several = cluster != nullptr && cluster->size() > 1;
   const bool quiet = a.quiet || !(cluster == nullptr || cluster->root());
   const auto t0 = std::chrono::steady_clock::now();
-  hapsyn::Study study = hapsyn_cli::load_on_ranks(
-      cluster, [&] { return load(a.file, a.sets, registry, load_settings(a.threads, quiet)); });
+  Json document;  // the problem as given (with --set), recorded for hapsyn merge in a share
+  hapsyn::Study study = hapsyn_cli::load_on_ranks(cluster, [&] {
+    document = hapsyn::read_problem_file(a.file);
+    for (const std::string& s : a.sets) hapsyn::apply_override(document, s);
+    const hapsyn::ProblemDirectoryScope scope(a.file);
+    return hapsyn::load_study(document, registry, {}, load_settings(a.threads, quiet));
+  });
   if (!a.shard.empty() && !study.solver->shardable()) {
     throw hapsyn::Error("shard", "--shard " + a.shard + ": solver " + study.solver_plugin +
                                      " cannot be split into shares (grid, culling and ga can; sweep and compare split "
@@ -525,6 +530,7 @@ int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& r
   options.force = a.force;
   options.cluster = cluster;
   options.problem_file = a.file;
+  options.problem_document = document;
   options.stop = several ? &stop_agreed : &stop_requested;
   options.signal = &stop_requested;
   const Json result = hapsyn::run_study(study, options);

@@ -116,7 +116,11 @@ Json merge_shard_directories(const std::vector<std::string>& dirs, const Registr
   LoadSettings settings;
   settings.threads = options.threads;
   settings.progress = options.quiet ? nullptr : options.progress;
-  Study study = load_study(first.result["problem"], registry, {}, settings);
+  // The document as given: the resolved "problem" carries annotations (units) a problem file
+  // may not have.
+  const Json document = first.result["shard"].value("problem_document", Json());
+  if (!document.is_object()) throw Error("merge", first.dir + "/result.json: the share records no problem document");
+  Study study = load_study(document, registry, {}, settings);
   std::vector<Json> states;
   for (const Share& s : shares) states.push_back(s.checkpoint["state"]);
   const Json merged = study.solver->merge_shards(*study.problem, states);

@@ -46,6 +46,7 @@ struct RunSetup {
   std::vector<std::string> warnings;
   Cluster* cluster = nullptr;  // the run's processes (null: this one alone)
   std::string problem_file;    // absolute, or ""
+  Json problem_document;       // as given (RunOptions::problem_document)
   bool stop_seen = false;      // a stop was requested during the solve
 };
 
@@ -276,7 +277,8 @@ Json result_document(const Study& study, const RunSetup& run, const SolverResult
     doc["shard"] = {{"index", run.cluster->shard().first + 1},
                     {"count", run.cluster->shard().second},
                     {"complete", !run.stop_seen},
-                    {"problem_file", run.problem_file}};
+                    {"problem_file", run.problem_file},
+                    {"problem_document", run.problem_document}};
   }
   doc["machine"] = machine_info();
   doc["started"] = started;
@@ -680,6 +682,7 @@ Json run_here(Study& study, const RunOptions& options, Cluster* cluster, const s
   RunSetup run;
   run.cluster = cluster;
   if (!options.problem_file.empty()) run.problem_file = fs::absolute(options.problem_file).string();
+  run.problem_document = options.problem_document;
   run.out_dir = output_directory_of(study, options);
   run.result_file = fs::path(run.out_dir) / "result.json";
   run.checkpoint_file = fs::path(run.out_dir) / "checkpoint.json";

@@ -4,7 +4,7 @@
 /// each into its own output directory) combined into the result one run gives.
 ///
 /// Each share leaves result.json (with "shard": {"index", "count", "complete",
-/// "problem_file"}) and checkpoint.json. merge checks that the shares belong together, lets the
+/// "problem_file", "problem_document"}) and checkpoint.json. merge checks that the shares belong together, lets the
 /// solver combine their checkpoint states (Solver::merge_shards), writes the combined checkpoint
 /// into the output directory and finishes the study there with `--resume`: the solver finds
 /// every task done, re-checks every claimed value as on any resume, and writes result.json and

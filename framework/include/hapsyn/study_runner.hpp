@@ -59,6 +59,9 @@ struct RunOptions {
   /// The problem file's path (recorded for `hapsyn merge` in a share's result.json, which loads
   /// the resolved problem again with relative paths resolved as the run resolved them).
   std::string problem_file;
+  /// The problem document as given (after --set overrides, before defaults): what a share's
+  /// result.json records for `hapsyn merge` to load the study again.
+  Json problem_document;
   /// Seconds the caller spent loading the study (validation and the scene build): result.json's
   /// "phases.scene_s", counted in "wall_time_s". 0 when not measured.
   double scene_time_s = 0.0;
