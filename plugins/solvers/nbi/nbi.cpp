@@ -14,6 +14,7 @@
 #include <limits>
 #include <map>
 #include <sstream>
+#include <string>
 
 namespace hapsyn::plugins {
 
@@ -168,6 +169,7 @@ std::vector<double> free_design(const DesignSpace& space, const Eigen::VectorXd&
 struct Solved {
   std::vector<double> beta;
   std::vector<double> x;  // free design
+  std::string name;       // "shadows[j]" or "subproblems[j]": its entry in the statistics
 };
 
 double l1_distance(const std::vector<double>& a, const std::vector<double>& b) {
@@ -199,7 +201,7 @@ constexpr double kSameDistance = 1e-9;
 // subproblems before k, ties to the first in that order (shadows, then grid order); this is
 // the start the one-by-one run in grid order gives it. nullopt while a subproblem before k that
 // is not finished could change it: one nearer, or as near and earlier than the one chosen so far.
-std::optional<std::vector<double>> start_of(std::size_t k, const std::vector<Solved>& shadow_starts,
+std::optional<Solved> start_of(std::size_t k, const std::vector<Solved>& shadow_starts,
                                             const std::vector<std::vector<double>>& interior,
                                             const SubproblemSlots& subproblems, const DesignSpace& space) {
   std::vector<Solved> solved = shadow_starts;
@@ -207,7 +209,7 @@ std::optional<std::vector<double>> start_of(std::size_t k, const std::vector<Sol
   for (std::size_t j = 0; j < shadow_starts.size(); ++j) order.push_back(j);
   for (std::size_t j = 0; j < k; ++j) {
     if (subproblems[j] && subproblems[j]->point) {
-      solved.push_back({interior[j], free_design(space, subproblems[j]->point->design)});
+      solved.push_back({interior[j], free_design(space, subproblems[j]->point->design), "subproblems[" + std::to_string(j) + "]"});
       order.push_back(shadow_starts.size() + j);
     }
   }
@@ -220,7 +222,7 @@ std::optional<std::vector<double>> start_of(std::size_t k, const std::vector<Sol
     if (dist < nearest - kSameDistance) return std::nullopt;
     if (dist <= nearest + kSameDistance && shadow_starts.size() + j < chosen_order) return std::nullopt;
   }
-  return chosen.x;
+  return chosen;
 }
 
 // The interior points of the simplex grid (the others are the shadow optima), in grid order:
@@ -233,10 +235,10 @@ std::vector<std::vector<double>> interior_points(const std::vector<std::vector<d
   return interior;
 }
 
-// One subproblem: the SQP from x0 (start_of), then the full evaluation of its design.
+// One subproblem: the SQP from its start (start_of), then the full evaluation of its design.
 // `sub` is this subproblem's own copy (its scratch is written): subproblems run concurrently.
 FinishedSubproblem solve_subproblem(const Problem& problem, const NbiOptions& options, const Chim& chim, Subproblem sub,
-                                    const std::vector<double>& beta, const std::vector<double>& x0) {
+                                    const std::vector<double>& beta, const Solved& start) {
   const std::size_t m = problem.objectives().size();
   const DesignSpace& space = problem.design_space();
   std::vector<double> lower(space.free_size()), upper(space.free_size());
@@ -252,11 +254,11 @@ FinishedSubproblem solve_subproblem(const Problem& problem, const NbiOptions& op
     for (std::size_t k = 0; k < m; ++k) sub.a[i] -= chim.phibar[i][k] * beta[k];
   }
   sub.d = chim.normal;
-  const SqpOutcome sqp = run_minmax_sqp(problem, x0, lower, upper, sqp_settings(options, problem), nbi_goal(sub));
+  const SqpOutcome sqp = run_minmax_sqp(problem, start.x, lower, upper, sqp_settings(options, problem), nbi_goal(sub));
   FinishedSubproblem f;
   f.design_evaluations = sqp.evaluations;
   f.sample_evaluations = sqp.samples;
-  f.record = {{"beta", beta}, {"status", sqp.status}, {"t", sqp.x.empty() ? Json(nullptr) : Json(sqp.merit)},
+  f.record = {{"beta", beta}, {"start", start.name}, {"status", sqp.status}, {"t", sqp.x.empty() ? Json(nullptr) : Json(sqp.merit)},
               {"design_evaluations", sqp.evaluations}, {"rounds", sqp.rounds}};
   if (!sqp.x.empty()) {
     std::vector<double> values;
@@ -575,7 +577,7 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
   for (std::size_t j = 0; j < m; ++j) {
     std::vector<double> beta(m, 0.0);
     beta[j] = 1.0;
-    shadow_starts.push_back({beta, free_design(problem.design_space(), shadows.designs[j])});
+    shadow_starts.push_back({beta, free_design(problem.design_space(), shadows.designs[j]), "shadows[" + std::to_string(j) + "]"});
   }
   for (;;) {
     const std::size_t done = finished_count(progress.subproblems);
@@ -585,12 +587,11 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
                      " subproblems (all shadow optima found)");
     }
     SubproblemFarm farm;
-    std::map<std::size_t, std::vector<double>> starts;
+    std::map<std::size_t, Solved> starts;
     for (std::size_t k = 0; k < interior.size(); ++k) {
       if (progress.subproblems[k]) continue;
-      if (std::optional<std::vector<double>> x0 =
-              start_of(k, shadow_starts, interior, progress.subproblems, problem.design_space())) {
-        starts[k] = std::move(*x0);
+      if (std::optional<Solved> start = start_of(k, shadow_starts, interior, progress.subproblems, problem.design_space())) {
+        starts[k] = std::move(*start);
         farm.tasks.push_back(k);
       }
     }

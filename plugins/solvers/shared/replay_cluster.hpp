@@ -4,12 +4,13 @@
 /// other in one process, to check that a distributed solver's replicated code gives every rank
 /// the same result through the same collectives, without MPI.
 ///
-/// Rank 0 (ReplayCluster(0, tape)) runs every task of every farm on a LocalCluster and records
-/// each farm's outcome and each broadcast on the tape. Rank 1 (ReplayCluster(1, tape), run
-/// afterwards) runs only the odd tasks and throws their results away (a non-root rank's
-/// results reach rank 0 only), takes the recorded outcomes (the agreed stop: it sets `visible`,
-/// the flag its context.stop points to, as the MPI cluster does) and receives rank 0's bytes
-/// for each broadcast. A collective that rank 1 calls in another order than rank 0 (under MPI,
+/// Rank 0 (ReplayCluster(0, tape, &stop)) runs every task of every farm on a LocalCluster and
+/// records each farm's outcome and each broadcast on the tape; as the MPI cluster agrees, a farm
+/// is stopped also when `stop` (the flag of rank 0's context) was set by its end. Rank 1
+/// (ReplayCluster(1, tape, &visible), run afterwards) runs only the odd tasks and throws their
+/// results away (a non-root rank's results reach rank 0 only), takes the recorded outcomes (the
+/// agreed stop: it sets `visible`, the flag its context.stop points to, as the MPI cluster
+/// does) and receives rank 0's bytes for each broadcast. A collective that rank 1 calls in another order than rank 0 (under MPI,
 /// a hang) throws std::logic_error naming both.
 #include <hapsyn/cluster.hpp>
 
@@ -29,8 +30,8 @@ struct ReplayTape {
 
 class ReplayCluster : public LocalCluster {
  public:
-  ReplayCluster(int rank, std::shared_ptr<ReplayTape> tape, std::atomic<bool>* visible = nullptr)
-      : rank_(rank), tape_(std::move(tape)), visible_(visible) {}
+  ReplayCluster(int rank, std::shared_ptr<ReplayTape> tape, std::atomic<bool>* stop = nullptr)
+      : rank_(rank), tape_(std::move(tape)), stop_(stop) {}
   int rank() const override { return rank_; }
   int size() const override { return 2; }
   int farms() const { return farms_; }
@@ -38,7 +39,8 @@ class ReplayCluster : public LocalCluster {
   FarmOutcome run_tasks(const TaskFarm& farm, int threads) override {
     ++farms_;
     if (rank_ == 0) {
-      const FarmOutcome outcome = LocalCluster::run_tasks(farm, threads);
+      FarmOutcome outcome = LocalCluster::run_tasks(farm, threads);
+      outcome.stopped = outcome.stopped || (stop_ != nullptr && stop_->load());
       tape_->events.push_back(farm_event(farm, outcome.stopped));
       return outcome;
     }
@@ -52,7 +54,7 @@ class ReplayCluster : public LocalCluster {
     if (!outcome.stopped && expected != farm_event(farm, false)) {
       throw std::logic_error("rank 1 ran " + farm_event(farm, false) + " where rank 0 ran " + expected);
     }
-    if (visible_ != nullptr) visible_->store(outcome.stopped);
+    if (stop_ != nullptr) stop_->store(outcome.stopped);
     return outcome;
   }
 
@@ -81,7 +83,7 @@ class ReplayCluster : public LocalCluster {
 
   int rank_;
   std::shared_ptr<ReplayTape> tape_;
-  std::atomic<bool>* visible_;
+  std::atomic<bool>* stop_;
   int farms_ = 0;
 };
 
