@@ -270,3 +270,24 @@ TEST(Sequential, ResumeFromValuesFinishedOutOfOrderGivesTheUninterruptedResult) 
                {"finished[1].record.value = 0.5: this study's value 7 of x0 is 0.35"});
   boost::filesystem::remove(file);
 }
+
+TEST(Sequential, StopOnRanksIsTheSameOnEveryRankAndResumeFinishesIt) {
+  Counter full;
+  const auto reference = run_sequential(*counted_problem(full), "", false, nullptr);
+  const std::string file = temp_file("hapsyn-sequential-ranks-stop");
+  boost::filesystem::remove(file);
+  const auto tape = std::make_shared<hapsyn::plugins::test::ReplayTape>();
+  std::atomic<bool> visible{false};
+  Counter c0, c1;
+  hapsyn::plugins::test::ReplayCluster rank0(0, tape, &c0.stop), rank1(1, tape, &visible);
+  c0.stop_after = full.calls / 2;
+  const auto r0 = run_sequential(*counted_problem(c0), file, false, &c0.stop, &rank0);
+  const auto r1 = run_sequential(*counted_problem(c1), file, false, &visible, &rank1);
+  ASSERT_EQ(r0.status, hapsyn::SolverStatus::kStopped) << r0.message;
+  EXPECT_EQ(r1.status, hapsyn::SolverStatus::kStopped) << r1.message;
+  EXPECT_EQ(r1.statistics["per_value"], r0.statistics["per_value"]);
+  EXPECT_TRUE(tape->events.empty());
+  Counter again;
+  expect_same_choice(run_sequential(*counted_problem(again), file, true, nullptr), reference);
+  boost::filesystem::remove(file);
+}
