@@ -2,7 +2,9 @@
 /// \file
 /// Running a solver inside a solver (nbi's shadow optima, weighted_sum's weights, sequential's
 /// per-value optima): checking the sub-solver the framework created from a
-/// `{"plugin", "options"}` option (hapsyn::SubSolver), and making the problems it solves.
+/// `{"plugin", "options"}` option (hapsyn::SubSolver), and making the problems it solves; their
+/// checkpoints (finished subproblems by task index) and their task farms over the run's ranks
+/// (run_subproblem_farm: results collected on rank 0, then handed to every rank).
 /// Shared by the solver plugins; not a plugin itself.
 #include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
