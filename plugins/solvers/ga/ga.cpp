@@ -18,7 +18,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -68,63 +70,6 @@ long long best_feasible(const pagmo::population& population) {
   return best;
 }
 
-// One call of GaSolver::solve: the runs one after the other, with their checkpoints and
-// progress lines, then the summary. Holds what the steps share. The evaluator keeps a pointer
-// to subset_, so a search is neither copied nor moved.
-class GaSearch {
- public:
-  GaSearch(const GaOptions& options, const Problem& problem, const SolverContext& context);
-  GaSearch(const GaSearch&) = delete;
-  GaSearch& operator=(const GaSearch&) = delete;
-
-  /// With SolverContext::resume: the finished runs, counters and the run in progress from the
-  /// checkpoint file (or a log line that there is none). \throws Error for a bad checkpoint
-  void resume_from_checkpoint();
-  /// Runs the runs not finished yet, until the stop flag is set.
-  void run_remaining();
-  /// The result over the finished runs (ga_summary.hpp).
-  SolverResult summary();
-
- private:
-  // A run in progress.
-  struct Run {
-    ga::RunState state;
-    pagmo::algorithm algorithm;
-    pagmo::population population;
-    Clock::time_point clock;
-    std::string status = "budget_exhausted";
-  };
-
-  void start_run(Run& run, std::uint64_t seed);
-  void evolve(Run& run);
-  bool note_best(ga::RunState& state, const pagmo::population& population) const;
-  void switch_to_full(Run& run);
-  void report_generation(const Run& run);
-  void finish_run(const Run& run, std::uint64_t seed);
-  void write_checkpoint(const Run* run) const;
-  void check_claimed_best(const pagmo::vector_double& x, double claimed, const std::string& what) const;
-
-  const GaOptions& options_;
-  const Problem& problem_;
-  const SolverContext& context_;
-  const Clock::time_point start_;
-  std::shared_ptr<pa::Evaluator> evaluator_;
-  pagmo::problem pagmo_problem_;
-  const bool multi_fidelity_;
-  const std::vector<int> subset_;  // the multi-fidelity subset (empty without one)
-  pa::ProgressReporter reporter_;
-  const std::string fingerprint_;
-
-  Json runs_ = Json::array();  // records of the finished runs
-  std::vector<double> run_seconds_;
-  long long designs_before_resume_ = 0, samples_before_resume_ = 0;
-  double seconds_before_resume_ = 0.0;
-  std::optional<Json> resumed_;  // the checkpoint's run in progress, until it is restored
-  bool stopped_ = false;
-  int total_generations_done_ = 0;
-  Clock::time_point solve_clock_;
-};
-
 pa::EvaluationSettings evaluation_settings(const GaOptions& options, int threads) {
   pa::EvaluationSettings settings;
   settings.threads = threads;
@@ -133,15 +78,90 @@ pa::EvaluationSettings evaluation_settings(const GaOptions& options, int threads
   return settings;
 }
 
+// One call of GaSolver::solve: the runs, with their checkpoints and progress lines, then the
+// summary. Holds what the steps share; the multi-fidelity subset is a member the runs'
+// evaluators point to, so a search is neither copied nor moved.
+//
+// Runs go one after another (each generation's batches a task farm over the ranks), or, under
+// --shard or with at least as many runs as ranks, as one shardable task farm: one run per task,
+// evaluated on its rank alone. Every run has its own evaluator and the evaluator's cache is
+// exact (shared/pagmo_adapter.hpp), so a run's result depends only on the seed and its index.
+class GaSearch {
+ public:
+  GaSearch(const GaOptions& options, const Problem& problem, const SolverContext& context);
+  GaSearch(const GaSearch&) = delete;
+  GaSearch& operator=(const GaSearch&) = delete;
+
+  /// With SolverContext::resume: the finished runs, counters and the run in progress from the
+  /// checkpoint file (or a log line that there is none). Collective (read_checkpoint).
+  /// \throws Error for a bad checkpoint (on every rank alike)
+  void resume_from_checkpoint();
+  /// Runs the runs not finished yet, until the stop flag is set or the shard's share is done.
+  void run_remaining();
+  /// The result over the finished runs (ga_summary.hpp).
+  SolverResult summary();
+
+ private:
+  // A run in progress.
+  struct Run {
+    ga::RunState state;
+    std::shared_ptr<pa::Evaluator> evaluator;
+    pagmo::problem problem;
+    pagmo::algorithm algorithm;
+    pagmo::population population;
+    Clock::time_point clock;
+    std::string status = "budget_exhausted";
+    const SolverContext* context = nullptr;  // what the run sees (SolverContext::in_task() in a farm)
+    bool in_task = false;                    // a task of the runs farm: no progress lines, no checkpoints
+  };
+  // A finished run: its record (statistics.runs) and time.
+  struct Finished {
+    Json record;
+    double seconds = 0.0;
+  };
+
+  std::unique_ptr<Run> make_run(int index, const SolverContext& context, int threads, Cluster* cluster,
+                                bool in_task) const;
+  void start_run(Run& run) const;
+  bool evolve(Run& run);
+  bool note_best(ga::RunState& state, const pagmo::population& population) const;
+  void switch_to_full(Run& run);
+  void report_generation(const Run& run);
+  Json run_record(const Run& run) const;
+  void add_finished(const Json& record, double seconds);
+  void run_one_after_another(const std::vector<int>& todo);
+  void run_as_farm(const std::vector<int>& todo);
+  void write_checkpoint(const Run* run) const;
+  void check_claimed_best(const pagmo::vector_double& x, double claimed, const std::string& what) const;
+
+  const GaOptions& options_;
+  const Problem& problem_;
+  const SolverContext& context_;
+  const Clock::time_point start_;
+  const pa::Encoding encoding_;
+  const bool multi_fidelity_;
+  const std::vector<int> subset_;  // the multi-fidelity subset (empty without one)
+  pa::ProgressReporter reporter_;
+  const std::string fingerprint_;
+
+  std::map<int, Finished> finished_;  // by run index
+  // Evaluations of every run so far (the checkpoint's before a resume, then the finished runs'
+  // of this process); cache hits of this process.
+  long long designs_ = 0, samples_ = 0, cache_hits_ = 0;
+  double seconds_before_resume_ = 0.0;
+  std::optional<Json> resumed_;  // the checkpoint's run in progress
+  bool stopped_ = false;
+  bool partial_ = false;  // a shard's share done
+  int total_generations_done_ = 0;
+  Clock::time_point solve_clock_;
+};
+
 GaSearch::GaSearch(const GaOptions& options, const Problem& problem, const SolverContext& context)
     : options_(options),
       problem_(problem),
       context_(context),
       start_(Clock::now()),
-      evaluator_(std::make_shared<pa::Evaluator>(
-          problem, pa::Encoding(problem, options.sort_descending, options.sort_ascending, "ga"),
-          evaluation_settings(options, context.threads), false)),
-      pagmo_problem_(pa::make_problem(evaluator_)),
+      encoding_(problem, options.sort_descending, options.sort_ascending, "ga"),
       multi_fidelity_(options.fidelity.generations > 0),
       subset_(multi_fidelity_ ? stratified_subset(problem.samples().size(), options.fidelity.subset_fraction)
                               : std::vector<int>{}),
@@ -157,6 +177,8 @@ void GaSearch::resume_from_checkpoint() {
   }
   ga::Checkpoint checkpoint = ga::checkpoint_from_state(context_, *state);
   // The claimed optima are re-evaluated: an edited score must never become the study's best.
+  // Finished runs are listed by run index (all of them, or a shard's share, or a merge of shards).
+  int previous = -1;
   for (std::size_t i = 0; i < checkpoint.completed_runs.size(); ++i) {
     const Json& run = checkpoint.completed_runs[i];
     const std::string path = "state.completed_runs[" + std::to_string(i) + "]";
@@ -166,7 +188,16 @@ void GaSearch::resume_from_checkpoint() {
     double score = 0.0;
     std::vector<double> free;
     try {
-      if (run.at("run").get<int>() != static_cast<int>(i)) throw std::invalid_argument("run is not " + std::to_string(i));
+      const int index = run.at("run").get<int>();
+      if (index <= previous || index >= options_.runs) {
+        throw std::invalid_argument("run " + std::to_string(index) + " is not after the previous record's (" +
+                                    std::to_string(previous) + ") and below options.runs (" +
+                                    std::to_string(options_.runs) + ")");
+      }
+      previous = index;
+      if (run.at("seed").get<std::uint64_t>() != pa::derive_seed(context_.seed, static_cast<std::uint64_t>(index))) {
+        throw std::invalid_argument("seed is not the one of run " + std::to_string(index) + " of the study seed");
+      }
       if (run.at("status").get<std::string>() == "infeasible") continue;  // no optimum to check
       x = run.at("x").get<pagmo::vector_double>();
       score = run.at("score").get<double>();
@@ -177,9 +208,29 @@ void GaSearch::resume_from_checkpoint() {
       throw bad_checkpoint(context_, path + ": " + e.what());
     }
     check_claimed_best(x, score, path);
-    if (free != evaluator_->encoding().decode(x)) {
-      throw bad_checkpoint(context_, path + ": free does not match the decoded x");
+    if (free != encoding_.decode(x)) throw bad_checkpoint(context_, path + ": free does not match the decoded x");
+  }
+  if (checkpoint.current) {
+    const int index = checkpoint.current->at("run").get<int>();
+    if (index < 0 || index >= options_.runs) {
+      throw bad_checkpoint(context_, "state.current: run " + std::to_string(index) + " outside 0.." +
+                                         std::to_string(options_.runs - 1));
     }
+    for (const Json& run : checkpoint.completed_runs) {
+      if (run.at("run").get<int>() == index) {
+        throw bad_checkpoint(context_, "state.current: run " + std::to_string(index) + " is also a finished run");
+      }
+    }
+  }
+  if (checkpoint.current) {
+    // Restored here once, so that a damaged run in progress is refused before any task farm,
+    // alike on every rank (inside a farm an exception ends an MPI job).
+    ga::RunState trial;
+    pagmo::algorithm algorithm;
+    pagmo::population population;
+    const auto evaluator =
+        std::make_shared<pa::Evaluator>(problem_, encoding_, evaluation_settings(options_, 1), false);
+    ga::restore_run(context_, *checkpoint.current, pa::make_problem(evaluator), trial, algorithm, population);
   }
   if (checkpoint.current && checkpoint.current->contains("best_x")) {
     try {
@@ -189,30 +240,33 @@ void GaSearch::resume_from_checkpoint() {
       throw bad_checkpoint(context_, std::string("state.current: ") + e.what());
     }
   }
-  runs_ = std::move(checkpoint.completed_runs);
-  run_seconds_ = std::move(checkpoint.run_seconds);
-  designs_before_resume_ = checkpoint.designs;
-  samples_before_resume_ = checkpoint.samples;
+  for (std::size_t i = 0; i < checkpoint.completed_runs.size(); ++i) {
+    const Json& run = checkpoint.completed_runs[i];
+    finished_[run.at("run").get<int>()] = Finished{run, checkpoint.run_seconds[i]};
+  }
+  designs_ = checkpoint.designs;
+  samples_ = checkpoint.samples;
   seconds_before_resume_ = checkpoint.elapsed_seconds;
-  evaluator_->add_counts(designs_before_resume_, samples_before_resume_);
   resumed_ = std::move(checkpoint.current);
-  reporter_.line("ga: resuming from " + context_.checkpoint_file + ": " + std::to_string(runs_.size()) + " run(s) finished" +
+  reporter_.line("ga: resuming from " + context_.checkpoint_file + ": " + std::to_string(finished_.size()) +
+                     " run(s) finished" +
                      (resumed_ ? ", run " + std::to_string(resumed_->at("run").get<int>() + 1) + " at generation " +
                                      std::to_string(resumed_->at("generation").get<int>())
                                : std::string()),
                  true);
 }
 
-// Re-evaluates a claimed optimum (pagmo vector) on the full scene, outside the evaluator (its
-// cache and counters stay those of an uninterrupted run), and refuses the checkpoint when the
-// score differs. 1e-9 relative: the evaluator's paths (one design per thread, or split over
-// sample chunks) may round an averaging metric's sum differently; an edit is far larger.
+// Re-evaluates a claimed optimum (pagmo vector) on the full scene, outside the runs' evaluators
+// (their caches and counters stay those of an uninterrupted run), and refuses the checkpoint
+// when the score differs. 1e-9 relative: over the individuals a run evaluates each design in
+// sample order, this check splits it over sample chunks, and an averaging metric's sum may
+// round differently (worst-case metrics agree exactly); an edit is far larger.
 void GaSearch::check_claimed_best(const pagmo::vector_double& x, double claimed, const std::string& what) const {
-  if (x.size() != evaluator_->encoding().size()) {
+  if (x.size() != encoding_.size()) {
     throw bad_checkpoint(context_, what + ": best has " + std::to_string(x.size()) + " components, the study " +
-                                       std::to_string(evaluator_->encoding().size()));
+                                       std::to_string(encoding_.size()));
   }
-  const std::vector<double> free = evaluator_->encoding().decode(x);
+  const std::vector<double> free = encoding_.decode(x);
   Problem::ParallelOptions options;
   options.chunks = options_.sample_chunks;
   const Evaluation e = problem_.evaluate_parallel(free.data(), context_.threads, options);
@@ -227,70 +281,192 @@ void GaSearch::check_claimed_best(const pagmo::vector_double& x, double claimed,
 
 void GaSearch::run_remaining() {
   solve_clock_ = Clock::now();
-  for (int r = static_cast<int>(runs_.size()); r < options_.runs && !stopped_; ++r) {
+  std::vector<int> todo;
+  for (int r = 0; r < options_.runs; ++r) {
+    if (!finished_.count(r)) todo.push_back(r);
+  }
+  if (todo.empty()) return;
+  const Cluster& cluster = context_.cluster();
+  // The same choice on every rank (the finished runs come from the same checkpoint).
+  const bool farm = cluster.shard().second > 1 || (cluster.size() > 1 && static_cast<int>(todo.size()) >= cluster.size());
+  if (farm) {
+    run_as_farm(todo);
+  } else {
+    run_one_after_another(todo);
+  }
+}
+
+// A run's evaluation: its own evaluator (and cache) on `threads` threads, its batches farmed
+// over `cluster` (null: this process).
+std::unique_ptr<GaSearch::Run> GaSearch::make_run(int index, const SolverContext& context, int threads,
+                                                  Cluster* cluster, bool in_task) const {
+  auto run = std::make_unique<Run>();
+  pa::EvaluationSettings settings = evaluation_settings(options_, threads);
+  settings.cluster = cluster;
+  run->evaluator = std::make_shared<pa::Evaluator>(problem_, encoding_, settings, false);
+  run->problem = pa::make_problem(run->evaluator);
+  run->state.run = index;
+  run->clock = Clock::now();
+  run->context = &context;
+  run->in_task = in_task;
+  return run;
+}
+
+void GaSearch::run_one_after_another(const std::vector<int>& todo) {
+  for (int r : todo) {
     if (context_.stop_requested()) {
       // Before a run starts: the checkpoint on disk (between runs, or the resumed one) stands.
       stopped_ = true;
       break;
     }
-    const std::uint64_t run_seed = pa::derive_seed(context_.seed, static_cast<std::uint64_t>(r));
-    Run run;
-    run.state.run = r;
-    run.clock = Clock::now();
-    start_run(run, run_seed);
-    evolve(run);
-    if (!run.state.switched) switch_to_full(run);  // the final ranking on the full scene
-    if (stopped_ && run.state.best_x.empty()) break;
-    finish_run(run, run_seed);
+    const std::unique_ptr<Run> run = make_run(r, context_, context_.threads, &context_.cluster(), false);
+    start_run(*run);
+    if (!evolve(*run)) stopped_ = true;  // the checkpoint is written
+    if (!run->state.switched) switch_to_full(*run);  // the final ranking on the full scene
+    if (stopped_ && run->state.best_x.empty()) break;
+    // A stopped run's best so far is in the result; the checkpoint keeps the run in progress.
+    designs_ += run->evaluator->design_evaluations();
+    samples_ += run->evaluator->sample_evaluations();
+    cache_hits_ += run->evaluator->cache_hits();
+    add_finished(run_record(*run), run->state.seconds_before + seconds_since(run->clock));
+    if (stopped_) break;
+    write_checkpoint(nullptr);
   }
 }
 
+// The runs as one shardable task farm over the run indices (a shard runs its contiguous share):
+// each task a whole run on its rank (SolverContext::in_task()), its record collected on rank 0
+// and checkpointed there, then broadcast so every rank returns the same result. A run a stop
+// interrupts is not done: it starts over on resume (the checkpoint keeps the finished runs, and
+// a resumed run in progress until it finishes).
+void GaSearch::run_as_farm(const std::vector<int>& todo) {
+  Cluster& cluster = context_.cluster();
+  if (context_.stop_requested()) {
+    stopped_ = true;
+    return;
+  }
+  // Several runs per rank: one per thread; fewer: each run splits its batches over the threads.
+  const long long ranks = static_cast<long long>(cluster.size()) * cluster.shard().second;
+  const long long per_rank = (static_cast<long long>(todo.size()) + ranks - 1) / ranks;
+  const int farm_threads = static_cast<int>(std::max(1LL, std::min<long long>(context_.threads, per_rank)));
+  const int run_threads = std::max(1, context_.threads / farm_threads);
+  reporter_.line("ga: " + std::to_string(todo.size()) + " run(s) as tasks over " + std::to_string(cluster.size()) +
+                     " rank(s), " + std::to_string(farm_threads) + " run(s) at a time per rank, " +
+                     std::to_string(run_threads) + " thread(s) each",
+                 true);
+  std::mutex mutex;  // collect and on_abort
+  TaskFarm farm;
+  farm.count = options_.runs;
+  farm.shardable = true;
+  // Done before the farm (collect adds to finished_ while tasks run).
+  std::vector<char> done(static_cast<std::size_t>(options_.runs), 1);
+  for (int r : todo) done[static_cast<std::size_t>(r)] = 0;
+  farm.done = [&done](long long index) { return done[static_cast<std::size_t>(index)] != 0; };
+  farm.run = [this, run_threads](long long index, int) -> std::optional<std::string> {
+    const SolverContext task = context_.in_task();
+    const std::unique_ptr<Run> run = make_run(static_cast<int>(index), task, run_threads, nullptr, true);
+    start_run(*run);
+    if (!evolve(*run)) return std::nullopt;
+    if (!run->state.switched) switch_to_full(*run);
+    Json result;
+    result["record"] = run_record(*run);
+    result["seconds"] = run->state.seconds_before + seconds_since(run->clock);
+    result["designs"] = run->evaluator->design_evaluations();
+    result["samples"] = run->evaluator->sample_evaluations();
+    result["cache_hits"] = run->evaluator->cache_hits();
+    return result.dump();
+  };
+  farm.collect = [this, &mutex](long long, std::string&& bytes) {
+    const Json result = Json::parse(bytes);
+    std::lock_guard<std::mutex> lock(mutex);
+    designs_ += result.at("designs").get<long long>();
+    samples_ += result.at("samples").get<long long>();
+    cache_hits_ += result.at("cache_hits").get<long long>();
+    add_finished(result.at("record"), result.at("seconds").get<double>());
+    write_checkpoint(nullptr);
+  };
+  farm.on_abort = [this, &mutex] {
+    std::lock_guard<std::mutex> lock(mutex);
+    write_checkpoint(nullptr);
+  };
+  const FarmOutcome outcome = cluster.run_tasks(farm, farm_threads);
+  stopped_ = outcome.stopped;
+  partial_ = outcome.partial;
+  if (cluster.size() > 1) {
+    // What rank 0 collected, on every rank (the same result everywhere).
+    std::string bytes;
+    if (cluster.root()) {
+      Json all = Json::array();
+      for (const auto& [index, f] : finished_) all.push_back({{"record", f.record}, {"seconds", f.seconds}});
+      bytes = Json{{"finished", all}, {"designs", designs_}, {"samples", samples_}, {"cache_hits", cache_hits_}}.dump();
+    }
+    cluster.broadcast(bytes);
+    if (!cluster.root()) {
+      const Json all = Json::parse(bytes);
+      finished_.clear();
+      for (const Json& f : all.at("finished")) {
+        finished_[f.at("record").at("run").get<int>()] = Finished{f.at("record"), f.at("seconds").get<double>()};
+      }
+      designs_ = all.at("designs").get<long long>();
+      samples_ = all.at("samples").get<long long>();
+      cache_hits_ = all.at("cache_hits").get<long long>();
+    }
+  }
+  write_checkpoint(nullptr);
+}
+
 // A fresh run (random population from the run's seed), or the checkpoint's run in progress.
-void GaSearch::start_run(Run& run, std::uint64_t seed) {
+void GaSearch::start_run(Run& run) const {
   ga::RunState& state = run.state;
+  pa::Evaluator& evaluator = *run.evaluator;
   if (resumed_ && resumed_->at("run").get<int>() == state.run) {
-    ga::restore_run(context_, *resumed_, pagmo_problem_, state, run.algorithm, run.population);
+    ga::restore_run(context_, *resumed_, run.problem, state, run.algorithm, run.population);
     const bool on_subset = multi_fidelity_ && !state.switched;
-    evaluator_->set_subset(on_subset ? &subset_ : nullptr, on_subset ? 1 : 0);
-    resumed_.reset();
+    evaluator.set_subset(on_subset ? &subset_ : nullptr, on_subset ? 1 : 0);
   } else {
+    const std::uint64_t seed = pa::derive_seed(context_.seed, static_cast<std::uint64_t>(state.run));
     state.switched = !multi_fidelity_;
-    state.designs_before = evaluator_->design_evaluations();
-    evaluator_->set_subset(multi_fidelity_ ? &subset_ : nullptr, multi_fidelity_ ? 1 : 0);
+    evaluator.set_subset(multi_fidelity_ ? &subset_ : nullptr, multi_fidelity_ ? 1 : 0);
     run.algorithm = make_algorithm(options_, seed);
     run.population =
-        pa::random_population(pagmo_problem_, *evaluator_, static_cast<std::size_t>(options_.population), seed);
+        pa::random_population(run.problem, evaluator, static_cast<std::size_t>(options_.population), seed);
   }
   if (state.switched && state.generation == 0) note_best(state, run.population);
 }
 
-// Generations until the limit, convergence or the stop flag; checkpoints on the way.
-void GaSearch::evolve(Run& run) {
+// Generations until the limit, convergence or the stop flag (false: stopped; outside a farm the
+// checkpoint is written); checkpoints on the way. Under MPI the flag changes inside task farms
+// only, on every rank alike, so every rank leaves the loop at the same generation.
+bool GaSearch::evolve(Run& run) {
   ga::RunState& state = run.state;
   while (state.generation < options_.generations) {
-    if (context_.stop_requested()) {
-      stopped_ = true;
+    if (run.context->stop_requested()) {
       run.status = "stopped";
-      write_checkpoint(&run);  // between generations: a resumed run continues exactly from here
-      return;
+      if (!run.in_task) write_checkpoint(&run);  // between generations: a resumed run continues exactly from here
+      return false;
     }
     if (!state.switched && state.generation >= options_.fidelity.generations) switch_to_full(run);
+    // sga asks for its offspring one at a time: evaluated first as one batch (over the ranks).
+    if (options_.algorithm == "sga") run.evaluator->prefetch(run.algorithm, run.population);
     run.population = run.algorithm.evolve(run.population);
     ++state.generation;
-    ++total_generations_done_;
     if (state.switched) {
       state.stall = note_best(state, run.population) ? 0 : state.stall + 1;
     }
-    report_generation(run);
+    if (!run.in_task) {
+      ++total_generations_done_;
+      report_generation(run);
+    }
     if (state.switched && state.stall >= options_.stall_generations) {
       run.status = "converged";
-      return;
+      return true;
     }
-    if (options_.checkpoint_every > 0 && state.generation % options_.checkpoint_every == 0 &&
+    if (!run.in_task && options_.checkpoint_every > 0 && state.generation % options_.checkpoint_every == 0 &&
         state.generation < options_.generations) {
       write_checkpoint(&run);
     }
   }
+  return true;
 }
 
 // The population's best at full fidelity becomes the run's best when better; true when it
@@ -316,11 +492,12 @@ void GaSearch::switch_to_full(Run& run) {
   ga::RunState& state = run.state;
   const long long b = best_feasible(run.population);
   const double subset_best = b >= 0 ? -run.population.get_f()[static_cast<std::size_t>(b)][0] : -INFINITY;
-  evaluator_->set_subset(nullptr, 0);
-  pa::reevaluate(run.population, *evaluator_);
+  run.evaluator->set_subset(nullptr, 0);
+  pa::reevaluate(run.population, *run.evaluator);
   state.switched = true;
   state.stall = 0;
   note_best(state, run.population);
+  if (run.in_task) return;
   reporter_.line("ga: run " + std::to_string(state.run + 1) + " generation " + std::to_string(state.generation) +
                      ": fidelity switch, population re-evaluated on the full scene (best " + with_digits(subset_best) +
                      " on the subset, " + with_digits(state.best_score) + " on the full scene)",
@@ -344,8 +521,7 @@ void GaSearch::report_generation(const Run& run) {
   const double per_generation = elapsed / std::max(1, total_generations_done_);
   const double left =
       per_generation * ((generations - state.generation) + static_cast<double>(options_.runs - state.run - 1) * generations);
-  const double designs_per_second =
-      (evaluator_->design_evaluations() - designs_before_resume_) / std::max(1e-9, seconds_since(start_));
+  const double designs_per_second = run.evaluator->design_evaluations() / std::max(1e-9, seconds_since(run.clock));
   std::ostringstream line;
   line << "ga: run " << (state.run + 1) << "/" << options_.runs << " gen " << state.generation << "/" << generations
        << (state.switched ? "" : " (subset)") << " best " << with_digits(best) << " mean "
@@ -356,19 +532,19 @@ void GaSearch::report_generation(const Run& run) {
   reporter_.line(line.str());
 }
 
-// The run's record (statistics.runs), its time, its log line, and a checkpoint between runs.
-void GaSearch::finish_run(const Run& run, std::uint64_t seed) {
+// The run's record (statistics.runs).
+Json GaSearch::run_record(const Run& run) const {
   const ga::RunState& state = run.state;
   Json record;
   record["run"] = state.run;
-  record["seed"] = seed;
+  record["seed"] = pa::derive_seed(context_.seed, static_cast<std::uint64_t>(state.run));
   record["generations"] = state.generation;
-  record["designs"] = evaluator_->design_evaluations() - state.designs_before;
+  record["designs"] = state.designs + run.evaluator->design_evaluations();
   if (state.best_x.empty()) {
     record["status"] = "infeasible";
   } else {
-    const pa::DesignRecord& best = evaluator_->record(state.best_x);
-    const std::vector<double> free = evaluator_->encoding().decode(state.best_x);
+    const pa::DesignRecord& best = run.evaluator->record(state.best_x);
+    const std::vector<double> free = encoding_.decode(state.best_x);
     const Eigen::VectorXd full = problem_.full_design(free.data());
     record["status"] = run.status;
     record["x"] = state.best_x;
@@ -379,45 +555,68 @@ void GaSearch::finish_run(const Run& run, std::uint64_t seed) {
     for (std::size_t i = 0; i < problem_.objectives().size(); ++i) objectives[problem_.objectives()[i].name] = best.objectives[i];
     record["objectives"] = objectives;
   }
-  runs_.push_back(record);
-  run_seconds_.push_back(state.seconds_before + seconds_since(run.clock));
-  reporter_.line("ga: run " + std::to_string(state.run + 1) + "/" + std::to_string(options_.runs) + " " +
-                     record["status"].get<std::string>() + " after " + std::to_string(state.generation) +
-                     " generations, " + std::to_string(record["designs"].get<long long>()) + " designs, " +
-                     pa::format_duration(run_seconds_.back()) +
-                     (record.contains("score") ? ": score " + with_digits(record["score"].get<double>(), 8) : std::string()),
-                 true);
-  if (!stopped_) write_checkpoint(nullptr);
+  return record;
 }
 
-// The checkpoint file: the finished runs and counters, and `run` when one is in progress.
+// A finished run: kept by index, with its log line.
+void GaSearch::add_finished(const Json& record, double seconds) {
+  const int index = record.at("run").get<int>();
+  finished_[index] = Finished{record, seconds};
+  reporter_.line("ga: run " + std::to_string(index + 1) + "/" + std::to_string(options_.runs) + " " +
+                     record.at("status").get<std::string>() + " after " +
+                     std::to_string(record.at("generations").get<int>()) + " generations, " +
+                     std::to_string(record.at("designs").get<long long>()) + " designs, " +
+                     pa::format_duration(seconds) +
+                     (record.contains("score") ? ": score " + with_digits(record.at("score").get<double>(), 8)
+                                               : std::string()) +
+                     " (" + std::to_string(finished_.size()) + " of " + std::to_string(options_.runs) + " done)",
+                 true);
+}
+
+// The checkpoint file: the finished runs and counters, and the run in progress: `run`, or the
+// resumed one while it is not finished.
 void GaSearch::write_checkpoint(const Run* run) const {
   if (context_.checkpoint_file.empty()) return;
   ga::Checkpoint checkpoint;
-  checkpoint.completed_runs = runs_;
-  checkpoint.run_seconds = run_seconds_;
-  checkpoint.designs = evaluator_->design_evaluations();
-  checkpoint.samples = evaluator_->sample_evaluations();
+  for (const auto& [index, f] : finished_) {
+    checkpoint.completed_runs.push_back(f.record);
+    checkpoint.run_seconds.push_back(f.seconds);
+  }
+  checkpoint.designs = designs_;
+  checkpoint.samples = samples_;
   checkpoint.elapsed_seconds = seconds_before_resume_ + seconds_since(start_);
   if (run) {
     ga::RunState saved = run->state;
     saved.seconds_before += seconds_since(run->clock);
+    saved.designs += run->evaluator->design_evaluations();
+    checkpoint.designs += run->evaluator->design_evaluations();
+    checkpoint.samples += run->evaluator->sample_evaluations();
     checkpoint.current = ga::run_to_json(saved, run->algorithm, run->population);
+  } else if (resumed_ && !finished_.count(resumed_->at("run").get<int>())) {
+    checkpoint.current = *resumed_;
   }
   hapsyn::write_checkpoint(context_, "ga", fingerprint_, ga::checkpoint_to_state(checkpoint));
 }
 
 SolverResult GaSearch::summary() {
   ga::SolveFigures figures;
-  figures.stopped = stopped_;
+  figures.stopped = stopped_ || partial_;
   figures.solve_seconds = seconds_before_resume_ + seconds_since(start_);
-  figures.design_evaluations = evaluator_->design_evaluations();
-  figures.sample_evaluations = evaluator_->sample_evaluations();
-  figures.cache_hits = evaluator_->cache_hits();
-  figures.repair = evaluator_->encoding().describe_repair(problem_);
+  figures.design_evaluations = designs_;
+  figures.sample_evaluations = samples_;
+  figures.cache_hits = cache_hits_;
+  figures.repair = encoding_.describe_repair(problem_);
   figures.subset_samples = subset_.size();
-  SolverResult result = ga::summarise_runs(problem_, options_, runs_, run_seconds_, figures, context_.seed, reporter_);
-  if (stopped_) {
+  Json runs = Json::array();
+  std::vector<double> run_seconds;
+  for (const auto& [index, f] : finished_) {
+    runs.push_back(f.record);
+    run_seconds.push_back(f.seconds);
+  }
+  SolverResult result = ga::summarise_runs(problem_, options_, runs, run_seconds, figures, context_.seed, reporter_);
+  if (partial_ && !stopped_) {
+    result.message = context_.cluster().shard_message();
+  } else if (stopped_) {
     result.message += context_.checkpoint_file.empty()
                           ? "; best so far; no checkpoint file, a new run starts over"
                           : "; best so far; checkpoint " + context_.checkpoint_file + " written, resume with --resume";
@@ -473,6 +672,59 @@ void GaSolver::check(const Problem& problem) const {
                             "\": no such design variable");
     }
   }
+}
+
+Json GaSolver::merge_shards(const Problem& problem, const std::vector<Json>& states) const {
+  (void)problem;
+  ga::Checkpoint merged;
+  std::map<int, std::pair<Json, double>> runs;
+  std::map<int, std::size_t> owner;  // run -> shard
+  for (std::size_t s = 0; s < states.size(); ++s) {
+    const std::string shard = "shard " + std::to_string(s + 1) + " of " + std::to_string(states.size());
+    const Json& state = states[s];
+    try {
+      const Json& completed = state.at("completed_runs");
+      const auto seconds = state.at("run_seconds").get<std::vector<double>>();
+      if (!completed.is_array() || seconds.size() != completed.size()) {
+        throw std::invalid_argument("completed_runs and run_seconds do not match");
+      }
+      if (state.contains("current")) {
+        throw Error("merge", shard + " has run " + std::to_string(state.at("current").at("run").get<int>() + 1) +
+                                 " in progress: finish the shard (hapsyn run --shard i/N --resume) before merging");
+      }
+      for (std::size_t i = 0; i < completed.size(); ++i) {
+        const int r = completed[i].at("run").get<int>();
+        if (r < 0 || r >= options_.runs) {
+          throw Error("merge", shard + ": run " + std::to_string(r + 1) + " outside 1.." +
+                                   std::to_string(options_.runs) + " (options.runs)");
+        }
+        if (owner.count(r)) {
+          throw Error("merge", "shards " + std::to_string(owner[r] + 1) + " and " + std::to_string(s + 1) +
+                                   " both hold run " + std::to_string(r + 1) +
+                                   ": the shares overlap (give each shard of one job array once)");
+        }
+        owner[r] = s;
+        runs[r] = {completed[i], seconds[i]};
+      }
+      merged.designs += state.at("evaluations").at("designs").get<long long>();
+      merged.samples += state.at("evaluations").at("samples").get<long long>();
+      merged.elapsed_seconds = std::max(merged.elapsed_seconds, state.at("elapsed_seconds").get<double>());
+    } catch (const Error&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw Error("merge", shard + ": damaged ga state: " + e.what());
+    }
+  }
+  for (int r = 0; r < options_.runs; ++r) {
+    if (!runs.count(r)) {
+      throw Error("merge", "run " + std::to_string(r + 1) + " of " + std::to_string(options_.runs) +
+                               " is in no shard: every shard must finish (hapsyn run --shard i/N --resume) "
+                               "before merging");
+    }
+    merged.completed_runs.push_back(runs[r].first);
+    merged.run_seconds.push_back(runs[r].second);
+  }
+  return ga::checkpoint_to_state(merged);
 }
 
 SolverResult GaSolver::solve(const Problem& problem, const SolverContext& context) const {

@@ -22,6 +22,14 @@
 ///   and the run continues there, so the final ranking is on the full scene.
 /// - Progress (generation, best, mean, evaluations per second, time left) on
 ///   SolverContext::progress and every generation in SolverContext::log.
+/// - Ranks and shards (hapsyn/cluster.hpp): with at least as many runs as MPI ranks, or under
+///   `--shard i/N`, the runs are one shardable task farm (a run per task, on its rank's threads;
+///   a shard runs its contiguous share of the run indices and checkpoints them, merge_shards
+///   joins the shares); otherwise the runs follow one another and every batch of designs is a
+///   task farm over the ranks (shared/pagmo_adapter.hpp). Each run has its own evaluator and
+///   its result depends only on the seed and its index: the result is the same for any rank,
+///   thread or shard count. Inside the runs farm a stop interrupts the runs in progress, which
+///   start over on resume (a resumed run in progress stays in the checkpoint until it ends).
 #include "ga_options.hpp"
 
 #include <hapsyn/solver.hpp>
@@ -38,6 +46,14 @@ class GaSolver : public Solver {
   /// \throws Error when there is no free design variable, or a repair/cluster variable is unknown.
   void check(const Problem& problem) const override;
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
+  bool distributed() const override { return true; }
+  bool shardable() const override { return true; }
+  /// The shards' finished runs as one checkpoint state ("completed_runs" by run index, the
+  /// evaluations summed, the longest elapsed time); --resume then re-checks every run's claimed
+  /// optimum and summarises.
+  /// \throws Error("merge", ...) when a state is damaged, holds a run in progress, a run outside
+  ///         0..runs-1, a run another shard also holds, or when a run is in no shard.
+  Json merge_shards(const Problem& problem, const std::vector<Json>& states) const override;
 
  private:
   GaOptions options_;

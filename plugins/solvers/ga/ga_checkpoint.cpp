@@ -69,12 +69,18 @@ Json run_to_json(const RunState& state, const pagmo::algorithm& algorithm, const
   current["switched"] = state.switched;
   current["best_score"] = state.best_x.empty() ? Json(nullptr) : Json(state.best_score);
   current["best_x"] = state.best_x;
-  current["designs_before"] = state.designs_before;
+  current["run_designs"] = state.designs;
   current["run_seconds"] = state.seconds_before;
   current["algorithm"] = pa::save_algorithm(algorithm);
   current["population_seed"] = population.get_seed();
   current["x"] = pa::matrix_to_json(population.get_x());
   current["f"] = pa::matrix_to_json(population.get_f());
+  // The population's champion is the best individual it ever held, not the best of the current
+  // ones; gaco steers by it (its stall counter compares champions), so it is part of the state.
+  if (population.size() > 0) {
+    current["champion_x"] = population.champion_x();
+    current["champion_f"] = population.champion_f();
+  }
   return current;
 }
 
@@ -86,15 +92,25 @@ void restore_run(const SolverContext& context, const Json& current, const pagmo:
     state.switched = current.at("switched");
     state.best_x = current.at("best_x").get<pagmo::vector_double>();
     if (!state.best_x.empty()) state.best_score = current.at("best_score");
-    state.designs_before = current.at("designs_before");
+    // Absent in checkpoints of earlier versions (they counted the study's designs instead).
+    state.designs = current.contains("run_designs") ? current.at("run_designs").get<long long>() : 0;
     state.seconds_before = current.at("run_seconds");
     algorithm = pa::load_algorithm(current.at("algorithm").get<std::string>());
     pagmo::population restored(problem, 0u, current.at("population_seed").get<unsigned>());
     const auto xs = pa::matrix_from_json(current.at("x"));
     const auto fs = pa::matrix_from_json(current.at("f"));
     if (xs.size() != fs.size()) throw std::invalid_argument("x and f have different sizes");
-    // push_back checks the vectors' sizes against the problem (std::invalid_argument).
-    for (std::size_t i = 0; i < xs.size(); ++i) restored.push_back(xs[i], fs[i]);
+    // push_back checks the vectors' sizes against the problem (std::invalid_argument). The
+    // champion goes in first, in the place of the first individual, which then takes its place
+    // back by set_xf: a champion is only ever replaced by a strictly better individual, so the
+    // restored one is the saved one.
+    const bool champion = current.contains("champion_x") && !xs.empty();
+    if (champion) {
+      restored.push_back(current.at("champion_x").get<pagmo::vector_double>(),
+                         current.at("champion_f").get<pagmo::vector_double>());
+    }
+    for (std::size_t i = champion ? 1 : 0; i < xs.size(); ++i) restored.push_back(xs[i], fs[i]);
+    if (champion) restored.set_xf(0, xs[0], fs[0]);
     population = restored;
     return 0;
   });

@@ -7,7 +7,8 @@
 /// The file is the framework's checkpoint (hapsyn/checkpoint.hpp: format, seed, solver "ga",
 /// fingerprint, checksum); its "state" holds "completed_runs" (the run records of
 /// statistics.runs), "run_seconds", "evaluations" {"designs", "samples"}, "elapsed_seconds", and
-/// "current" (the run in progress, absent between runs).
+/// "current" (the run in progress, absent between runs). "completed_runs" are by run index but
+/// need not be consecutive: a shard (`--shard i/N`) holds its share of the runs.
 #include "ga_options.hpp"
 
 #include <hapsyn/json.hpp>
@@ -36,7 +37,7 @@ struct RunState {
   bool switched = false;   ///< on the full scene (or never on a subset)
   double best_score = -std::numeric_limits<double>::infinity();
   pagmo::vector_double best_x;   ///< best full-fidelity individual seen (pagmo order); empty: none
-  long long designs_before = 0;  ///< study design evaluations when the run started
+  long long designs = 0;         ///< the run's design evaluations before a resume
   double seconds_before = 0.0;   ///< run time before a resume [s]
 };
 
@@ -60,7 +61,8 @@ Json checkpoint_to_state(const Checkpoint& checkpoint);
 Checkpoint checkpoint_from_state(const SolverContext& context, const Json& state);
 
 /// The run in progress as the checkpoint's "current": its state, the algorithm with its random
-/// engine (pagmo_adapter::save_algorithm), the population's seed, decision and fitness vectors.
+/// engine (pagmo_adapter::save_algorithm), the population's seed, decision and fitness vectors
+/// and its champion (the best individual it ever held: gaco's stall count compares champions).
 Json run_to_json(const RunState& state, const pagmo::algorithm& algorithm, const pagmo::population& population);
 
 /// Restores a run in progress from a checkpoint's "current" (run_to_json): fills `state`

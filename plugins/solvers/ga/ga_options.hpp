@@ -105,8 +105,8 @@ struct GaOptions {
         "(sort_descending / sort_ascending) and penalties. Several independent runs with k-means/silhouette "
         "clustering of their optima, checkpoints for hapsyn run --resume, multi-fidelity on a scene subset.");
     d.add(&GaOptions::algorithm, "algorithm", "sga",
-          "pagmo algorithm: sga (simple genetic algorithm; one design at a time, each split over the samples) or gaco "
-          "(extended ant colony; batches over the individuals)")
+          "pagmo algorithm: sga (simple genetic algorithm) or gaco (extended ant colony); either evaluates each "
+          "generation as one batch of designs")
         .one_of({"sga", "gaco"});
     d.add(&GaOptions::population, "population", 50, "Individuals per generation").range(2, 100000);
     d.add(&GaOptions::generations, "generations", 100,
@@ -125,7 +125,7 @@ struct GaOptions {
           "Generations between checkpoints (output directory's checkpoint.json, for hapsyn run --resume); 0 = none")
         .minimum(0);
     d.add(&GaOptions::parallel_over, "parallel_over", "individuals",
-          "How a batch of designs (initial population, gaco generations, re-rankings) uses the threads: one design "
+          "How a batch of designs (initial population, generations, re-rankings) uses the threads: one design "
           "per thread, or each design split over the samples")
         .one_of({"individuals", "samples"});
     d.add(&GaOptions::sample_chunks, "sample_chunks", 16,

@@ -37,7 +37,7 @@ void report_best_run(const Problem& problem, const Json& runs, int best_run, Sol
   std::vector<double> objectives;
   for (const Objective& obj : problem.objectives()) objectives.push_back(b["objectives"][obj.name]);
   result.best = SolutionPoint{problem.full_design(free.data()), objectives, b["score"].get<double>()};
-  statistics["best_run"] = best_run;
+  statistics["best_run"] = b["run"];
   double lo = INFINITY, hi = -INFINITY;
   for (const Json& run : runs) {
     if (!run.contains("score")) continue;
@@ -97,6 +97,7 @@ Json cluster_entry(const Problem& problem, const Json& runs, const std::vector<s
   Json members = Json::array();
   double score_sum = 0.0, score_best = -INFINITY;
   int best_member = -1;
+  std::size_t best_position = 0;  // in `runs` (a shard's runs are not all runs)
   std::vector<double> objective_sum(objectives.size(), 0.0);
   for (std::size_t i = 0; i < feasible_runs.size(); ++i) {
     if (a.best.labels[i] != c) continue;
@@ -107,6 +108,7 @@ Json cluster_entry(const Problem& problem, const Json& runs, const std::vector<s
     if (s > score_best) {
       score_best = s;
       best_member = run["run"];
+      best_position = feasible_runs[i];
     }
     for (std::size_t q = 0; q < objectives.size(); ++q) objective_sum[q] += run["objectives"][objectives[q].name].get<double>();
   }
@@ -125,7 +127,7 @@ Json cluster_entry(const Problem& problem, const Json& runs, const std::vector<s
   entry["mean_score"] = score_sum / size;
   entry["best_score"] = score_best;
   entry["best_run"] = best_member;
-  entry["best_design"] = runs[static_cast<std::size_t>(best_member)]["design"];
+  entry["best_design"] = runs[best_position]["design"];
 
   std::ostringstream line;
   line << std::setw(7) << (c + 1) << "  " << std::setw(4) << size << "  " << std::setw(11) << with_digits(score_sum / size, 6)
@@ -204,7 +206,7 @@ void set_status_and_message(const GaOptions& options, const Json& runs, int best
   }
   if (best_run >= 0) {
     message << "; best score " << with_digits(runs[static_cast<std::size_t>(best_run)]["score"].get<double>(), 8)
-            << " (run " << best_run + 1 << ")";
+            << " (run " << runs[static_cast<std::size_t>(best_run)]["run"].get<int>() + 1 << ")";
   }
   result.message = message.str();
 }

@@ -8,8 +8,12 @@
 #include "test_support.hpp"
 
 #include <hapsyn/checkpoint.hpp>
+#include <hapsyn/cluster.hpp>
+#include <hapsyn/options.hpp>
 
 #include <hapsyn/problem.hpp>
+
+#include <pagmo/algorithms/sga.hpp>
 
 #include <boost/filesystem.hpp>
 
@@ -602,5 +606,264 @@ TEST(Ga, DamagedEditedAndForeignCheckpointsAreRefused) {
   Json other = options;
   other["population"] = 20;
   expect_error([&] { solve_toy_with(other, file, true, 0); }, {"checkpoint: " + file + ": written for another study"});
+  fs::remove_all(dir);
+}
+
+namespace {
+
+// Rank 0 of a pretend two-rank job, in one process: farms run every task here (or, with
+// `skip_odd`, leave the odd tasks out as a stopped MPI farm does), broadcasts keep rank 0's
+// bytes. The solvers take their multi-rank paths: results serialized and collected, rank 0's
+// records broadcast, run tasks.
+class PretendTwoRanks : public hapsyn::LocalCluster {
+ public:
+  explicit PretendTwoRanks(bool skip_odd = false) : skip_odd_(skip_odd) {}
+  int size() const override { return 2; }
+  hapsyn::FarmOutcome run_tasks(const hapsyn::TaskFarm& farm, int threads) override {
+    ++farms;
+    if (!skip_odd_ || farm.shardable) return LocalCluster::run_tasks(farm, threads);
+    hapsyn::TaskFarm even = farm;
+    even.done = [&farm](long long i) { return i % 2 == 1 || (farm.done && farm.done(i)); };
+    hapsyn::FarmOutcome outcome = LocalCluster::run_tasks(even, threads);
+    outcome.stopped = farm.count > 1;
+    return outcome;
+  }
+  int farms = 0;
+
+ private:
+  bool skip_odd_;
+};
+
+hapsyn::SolverResult solve_toy_on(const Json& overrides, hapsyn::Cluster* cluster, int threads,
+                                  const std::string& checkpoint = "", bool resume = false) {
+  const auto problem = toy_problem();
+  hapsyn::plugins::GaSolver solver(ga_options(overrides));
+  solver.check(*problem);
+  hapsyn::SolverContext context;
+  context.threads = threads;
+  context.seed = 11;
+  context.ranks = cluster;
+  context.checkpoint_file = checkpoint;
+  context.resume = resume;
+  return solver.solve(*problem, context);
+}
+
+void expect_same_result(const hapsyn::SolverResult& a, const hapsyn::SolverResult& b) {
+  ASSERT_TRUE(a.best.has_value()) << a.message;
+  ASSERT_TRUE(b.best.has_value()) << b.message;
+  EXPECT_EQ(a.status, b.status);
+  EXPECT_TRUE(a.best->design == b.best->design);
+  EXPECT_EQ(a.best->score, b.best->score);
+  EXPECT_EQ(a.statistics["runs"], b.statistics["runs"]);
+  EXPECT_EQ(a.statistics.contains("clusters"), b.statistics.contains("clusters"));
+  if (a.statistics.contains("clusters")) {
+    EXPECT_EQ(a.statistics.at("clusters"), b.statistics.at("clusters"));
+  }
+  EXPECT_EQ(a.design_evaluations, b.design_evaluations);
+}
+
+const Json kShardOptions = {{"algorithm", "sga"}, {"population", 12}, {"generations", 12}, {"runs", 5},
+                            {"stall_generations", 100}, {"sort_descending", {"s"}}};
+
+// The checkpoint states of the shards of a `count`-way split, each run as `hapsyn run --shard`.
+std::vector<Json> shard_states(const Json& options, int count, const fs::path& dir) {
+  std::vector<Json> states;
+  for (int i = 0; i < count; ++i) {
+    hapsyn::ShardCluster shard(i, count);
+    const std::string file = (dir / ("shard" + std::to_string(i) + ".json")).string();
+    const auto r = solve_toy_on(options, &shard, 2, file);
+    if (count > 1) {
+      EXPECT_EQ(r.status, hapsyn::SolverStatus::kStopped);
+      EXPECT_EQ(r.message, shard.shard_message());
+    }
+    states.push_back(read_json(file)["state"]);
+  }
+  return states;
+}
+
+}  // namespace
+
+TEST(PagmoAdapter, PrefetchedOffspringCountAsEvaluationsNotCacheHits) {
+  const auto problem = toy_problem();
+  const pa::Encoding encoding(*problem, {}, {}, "ga");
+  auto plain = std::make_shared<pa::Evaluator>(*problem, encoding, pa::EvaluationSettings{}, false);
+  auto fetched = std::make_shared<pa::Evaluator>(*problem, encoding, pa::EvaluationSettings{2, true, 4}, false);
+  const pagmo::problem p = pa::make_problem(plain), q = pa::make_problem(fetched);
+  pagmo::algorithm a{pagmo::sga(1u, 0.9, 10., 0.1, 10., 2u, "sbx", "polynomial", "tournament", 7u)};
+  pagmo::algorithm b = a;
+  pagmo::population pa_ = pa::random_population(p, *plain, 10, 3), pb = pa::random_population(q, *fetched, 10, 3);
+  for (int g = 0; g < 5; ++g) {
+    pa_ = a.evolve(pa_);
+    const long long before = fetched->design_evaluations();
+    fetched->prefetch(b, pb);
+    const long long prefetched = fetched->design_evaluations() - before;
+    pb = b.evolve(pb);
+    EXPECT_EQ(fetched->design_evaluations(), before + prefetched) << "evolve found every offspring in the cache";
+  }
+  EXPECT_EQ(pa_.get_x(), pb.get_x());
+  EXPECT_EQ(pa_.get_f(), pb.get_f());
+  EXPECT_EQ(plain->design_evaluations(), fetched->design_evaluations());
+  EXPECT_EQ(plain->cache_hits(), fetched->cache_hits());
+}
+
+TEST(PagmoAdapter, BatchesOverRanksAndStoppedFarmsGiveTheLocalValues) {
+  const auto problem = toy_problem();
+  pagmo::vector_double xs;
+  for (int i = 0; i < 9; ++i) {
+    const pagmo::vector_double x = {0.1 * i, 0.2 * i, 3, 2, 1.0 + i % 3, 1, 1.0 + i % 6, 6.0 - i % 6};
+    xs.insert(xs.end(), x.begin(), x.end());
+  }
+  pa::EvaluationSettings local{2, true, 4}, ranks = local, stopped = local;
+  PretendTwoRanks two, half(true);
+  ranks.cluster = &two;
+  stopped.cluster = &half;
+  pa::Evaluator a(*problem, pa::Encoding(*problem, {}, {}, "ga"), local, false);
+  pa::Evaluator b(*problem, pa::Encoding(*problem, {}, {}, "ga"), ranks, false);
+  pa::Evaluator c(*problem, pa::Encoding(*problem, {}, {}, "ga"), stopped, false);
+  const auto f = a.batch_fitness(xs);
+  EXPECT_EQ(b.batch_fitness(xs), f);
+  EXPECT_EQ(c.batch_fitness(xs), f);
+  EXPECT_EQ(two.farms, 1);
+  EXPECT_EQ(b.design_evaluations(), a.design_evaluations());
+  EXPECT_EQ(c.sample_evaluations(), a.sample_evaluations());
+}
+
+TEST(Ga, RunsAsRankTasksAndBatchesOverRanksGiveThePlainResult) {
+  for (const char* algorithm : {"sga", "gaco"}) {
+    Json options = kShardOptions;
+    options["algorithm"] = algorithm;
+    options["gaco"] = {{"ker", 8}};
+    const auto plain = solve_toy_on(options, nullptr, 2);
+    PretendTwoRanks farm;  // 5 runs >= 2 ranks: the runs farm
+    expect_same_result(solve_toy_on(options, &farm, 2), plain);
+    EXPECT_EQ(farm.farms, 1) << "one farm of runs; their batches stay on their rank";
+    options["runs"] = 1;  // fewer runs than ranks: one after another, batches over the ranks
+    const auto single = solve_toy_on(options, nullptr, 1);
+    PretendTwoRanks batches;
+    expect_same_result(solve_toy_on(options, &batches, 2), single);
+    EXPECT_GT(batches.farms, 12);
+  }
+}
+
+TEST(Ga, ShardsMergedAndResumedGiveThePlainResult) {
+  const auto plain = solve_toy_on(kShardOptions, nullptr, 2);
+  EXPECT_EQ(plain.statistics["runs"].size(), 5u);
+  const auto problem = toy_problem();
+  hapsyn::plugins::GaSolver solver(ga_options(kShardOptions));
+  const std::string fingerprint =
+      hapsyn::study_fingerprint(*problem, hapsyn::options_to_json(ga_options(kShardOptions)));
+  for (int count = 1; count <= 3; ++count) {
+    const fs::path dir = fresh_dir("shards" + std::to_string(count));
+    fs::create_directories(dir);
+    const std::vector<Json> states = shard_states(kShardOptions, count, dir);
+    // Each shard holds its contiguous share of the runs.
+    for (int i = 0; i < count; ++i) {
+      const Json& runs = states[static_cast<std::size_t>(i)]["completed_runs"];
+      ASSERT_EQ(runs.size(), static_cast<std::size_t>(5 * (i + 1) / count - 5 * i / count));
+      EXPECT_EQ(runs[0]["run"], 5 * i / count);
+    }
+    const Json merged = solver.merge_shards(*problem, states);
+    hapsyn::SolverContext context;
+    context.seed = 11;
+    context.checkpoint_file = (dir / "checkpoint.json").string();
+    hapsyn::write_checkpoint(context, "ga", fingerprint, merged);
+    const auto resumed = solve_toy_on(kShardOptions, nullptr, 1, context.checkpoint_file, true);
+    expect_same_result(resumed, plain);
+    EXPECT_EQ(resumed.message, plain.message);
+    fs::remove_all(dir);
+  }
+}
+
+TEST(Ga, MergeRefusesOverlappingMissingUnfinishedAndDamagedShards) {
+  const auto problem = toy_problem();
+  hapsyn::plugins::GaSolver solver(ga_options(kShardOptions));
+  const fs::path dir = fresh_dir("merge");
+  fs::create_directories(dir);
+  const std::vector<Json> states = shard_states(kShardOptions, 2, dir);
+  using hapsyn::test::expect_error;
+  const auto merge = [&](const std::vector<Json>& s) { return [&solver, &problem, s] { solver.merge_shards(*problem, s); }; };
+  expect_error(merge({states[0], states[1], states[1]}),
+               {"merge: shards 2 and 3 both hold run 3: the shares overlap (give each shard of one job array once)"});
+  expect_error(merge({states[0]}),
+               {"merge: run 3 of 5 is in no shard: every shard must finish (hapsyn run --shard i/N --resume) "
+                "before merging"});
+  Json unfinished = states[1];
+  unfinished["current"] = {{"run", 4}};
+  expect_error(merge({states[0], unfinished}),
+               {"merge: shard 2 of 2 has run 5 in progress: finish the shard (hapsyn run --shard i/N --resume) "
+                "before merging"});
+  Json outside = states[1];
+  outside["completed_runs"][0]["run"] = 7;
+  expect_error(merge({states[0], outside}), {"merge: shard 2 of 2: run 8 outside 1..5 (options.runs)"});
+  Json damaged = states[0];
+  damaged.erase("run_seconds");
+  expect_error(merge({damaged, states[1]}), {"merge: shard 1 of 2: damaged ga state: ", "run_seconds"});
+
+  // A merged state whose runs another seed made is refused on resume.
+  Json foreign = solver.merge_shards(*problem, states);
+  foreign["completed_runs"][1]["seed"] = 1;
+  hapsyn::SolverContext context;
+  context.seed = 11;
+  context.checkpoint_file = (dir / "checkpoint.json").string();
+  hapsyn::write_checkpoint(context, "ga", hapsyn::study_fingerprint(*problem, hapsyn::options_to_json(ga_options(kShardOptions))),
+                           foreign);
+  expect_error([&] { solve_toy_on(kShardOptions, nullptr, 1, context.checkpoint_file, true); },
+               {"state.completed_runs[1]: seed is not the one of run 1 of the study seed"});
+  fs::remove_all(dir);
+}
+
+TEST(Ga, GacoResumedAnywhereContinuesExactly) {
+  // gaco's stall count compares the population's champion (the best it ever held, which gaco's
+  // populations of fresh ants seldom contain): a resumed run must reach every later generation
+  // in the state (the algorithm's archive and counters included) of an uninterrupted one.
+  const Json options = {{"algorithm", "gaco"}, {"population", 12}, {"generations", 200}, {"stall_generations", 1000},
+                        {"checkpoint_every", 1000}, {"gaco", {{"ker", 6}}}};
+  const fs::path dir = fresh_dir("gaco-resume");
+  fs::create_directories(dir);
+  const std::string file = (dir / "checkpoint.json").string();
+  const auto state_after = [&](int lines, bool resume) {
+    EXPECT_EQ(solve_toy_with(options, file, resume, lines).status, hapsyn::SolverStatus::kStopped);
+    return read_json(file)["state"]["current"];
+  };
+  int compared = 0;
+  for (int first : {10, 40, 90}) {
+    (void)state_after(first, false);
+    const Json resumed = state_after(60, true);
+    // The uninterrupted run stopped at the same generation (one log line per generation).
+    const int generation = resumed["generation"].get<int>();
+    for (int lines = generation - 5; lines <= generation + 5; ++lines) {
+      const Json plain = state_after(lines, false);
+      if (plain["generation"] != generation) continue;
+      EXPECT_EQ(plain["algorithm"], resumed["algorithm"]) << "resumed after " << first << " lines";
+      EXPECT_EQ(plain["x"], resumed["x"]);
+      EXPECT_EQ(plain["champion_f"], resumed["champion_f"]);
+      ++compared;
+      break;
+    }
+  }
+  EXPECT_EQ(compared, 3);
+  fs::remove_all(dir);
+}
+
+TEST(Ga, RunStoppedInOneProcessResumesAsRankTasks) {
+  // A single process stops in the middle of run 2 (a checkpoint with a run in progress); the
+  // resume on two ranks runs the remaining runs as tasks and gives the uninterrupted result.
+  Json options = kShardOptions;
+  options["checkpoint_every"] = 3;
+  const auto plain = solve_toy_on(options, nullptr, 2);
+  const fs::path dir = fresh_dir("stop-then-ranks");
+  fs::create_directories(dir);
+  const std::string file = (dir / "checkpoint.json").string();
+  EXPECT_EQ(solve_toy_with(options, file, false, 22).status, hapsyn::SolverStatus::kStopped);
+  const Json state = read_json(file)["state"];
+  ASSERT_TRUE(state.contains("current"));
+  EXPECT_EQ(state["current"]["run"], 1);
+  PretendTwoRanks ranks;
+  const auto resumed = solve_toy_on(options, &ranks, 2, file, true);
+  EXPECT_EQ(ranks.farms, 1);
+  ASSERT_TRUE(resumed.best.has_value()) << resumed.message;
+  EXPECT_EQ(resumed.status, plain.status);
+  EXPECT_TRUE(resumed.best->design == plain.best->design);
+  EXPECT_EQ(runs_without_counts(resumed.statistics["runs"]), runs_without_counts(plain.statistics["runs"]));
   fs::remove_all(dir);
 }

@@ -215,6 +215,7 @@ SolverResult Nsga2Solver::solve(const Problem& problem, const SolverContext& con
   settings.threads = context.threads;
   settings.over_individuals = o.parallel_over == "individuals";
   settings.sample_chunks = o.sample_chunks;
+  settings.cluster = &context.cluster();  // every batch a task farm over the ranks
   auto evaluator = std::make_shared<pa::Evaluator>(
       problem, pa::Encoding(problem, o.sort_descending, o.sort_ascending, "nsga2"), settings, true);
   const pagmo::problem prob = pa::make_problem(evaluator);

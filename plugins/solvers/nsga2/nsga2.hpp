@@ -17,6 +17,11 @@
 /// and fitness vectors and the counts; `--resume` re-evaluates the population, refuses the
 /// checkpoint when a fitness vector differs, and continues: the front is exactly the one of an
 /// uninterrupted run with the seed.
+///
+/// Under MPI (distributed()): every rank runs the same NSGA-II; each generation's batch is a task
+/// farm over the ranks whose fitness values rank 0 broadcasts (shared/pagmo_adapter.hpp), and
+/// the stop check between generations sees the agreed flag, so the front does not depend on the
+/// rank count. Not shardable: the generations follow one another.
 #include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
 
@@ -80,6 +85,7 @@ class Nsga2Solver : public Solver {
   /// \throws Error("nsga2: options.population = 10: must be a multiple of 4 ...") and pagmo's refusals.
   explicit Nsga2Solver(const Nsga2Options& options);
   bool pareto() const override { return true; }
+  bool distributed() const override { return true; }
   /// \throws Error with fewer than two objectives or no free design variable, or an unknown
   ///         repair variable.
   void check(const Problem& problem) const override;

@@ -5,6 +5,7 @@
 #include "test_support.hpp"
 
 #include <hapsyn/checkpoint.hpp>
+#include <hapsyn/cluster.hpp>
 
 #include <atomic>
 #include <filesystem>
@@ -65,6 +66,47 @@ TEST(Nsga2, SameSeedSameFrontWhateverTheThreadCount) {
     EXPECT_TRUE(a.front[i].design == b.front[i].design);
   }
   EXPECT_NE(solve(doc, 2, 4).front.front().objectives, a.front.front().objectives);
+}
+
+namespace {
+// Rank 0 of a pretend two-rank job, in one process: each farm runs its even tasks only and
+// reports a stop (as a stopped MPI farm leaves tasks out), so the adapter takes its multi-rank
+// path (results serialized, collected, broadcast) and evaluates what the farm left out.
+class PretendTwoRanks : public hapsyn::LocalCluster {
+ public:
+  int size() const override { return 2; }
+  hapsyn::FarmOutcome run_tasks(const hapsyn::TaskFarm& farm, int threads) override {
+    ++farms;
+    hapsyn::TaskFarm even = farm;
+    even.done = [&farm](long long i) { return i % 2 == 1 || (farm.done && farm.done(i)); };
+    hapsyn::FarmOutcome outcome = LocalCluster::run_tasks(even, threads);
+    outcome.stopped = farm.count > 1;
+    return outcome;
+  }
+  int farms = 0;
+};
+}  // namespace
+
+TEST(Nsga2, BatchesOverRanksGiveTheSingleProcessFront) {
+  const Json doc = pareto_study({{"population", 16}, {"generations", 6}});
+  const auto plain = solve(doc, 2);
+  hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  EXPECT_TRUE(study.solver->distributed());
+  EXPECT_FALSE(study.solver->shardable());
+  PretendTwoRanks ranks;
+  hapsyn::SolverContext context;
+  context.threads = 2;
+  context.seed = 3;
+  context.ranks = &ranks;
+  const auto r = study.solver->solve(*study.problem, context);
+  EXPECT_EQ(ranks.farms, 7);  // the initial population and one batch per generation
+  EXPECT_EQ(r.status, plain.status);
+  EXPECT_EQ(r.design_evaluations, plain.design_evaluations);
+  ASSERT_EQ(r.front.size(), plain.front.size());
+  for (std::size_t i = 0; i < r.front.size(); ++i) {
+    EXPECT_EQ(r.front[i].objectives, plain.front[i].objectives);
+    EXPECT_TRUE(r.front[i].design == plain.front[i].design);
+  }
 }
 
 TEST(Nsga2, BadInputNamesThePathTheValueAndTheRule) {

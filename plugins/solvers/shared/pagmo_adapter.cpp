@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <limits>
 #include <random>
@@ -154,16 +155,23 @@ DesignRecord Evaluator::make_record(const Evaluation& e) const {
   return r;
 }
 
-DesignRecord Evaluator::evaluate_split(const std::vector<double>& free) {
-  Problem::ParallelOptions options;
-  options.chunks = settings_.sample_chunks;
-  options.subset = subset_;
-  const Evaluation e = problem_.evaluate_parallel(free.data(), settings_.threads, options);
-  ++designs_;
-  samples_ += e.samples_evaluated;
-  DesignRecord r = make_record(e);
-  if (e.status == EvalStatus::kConstraintViolated) add_violation(free, r);
-  return r;
+Evaluator::Outcome Evaluator::evaluate(const std::vector<double>& free, int thread) {
+  Outcome out;
+  Evaluation e;
+  if (settings_.over_individuals) {
+    EvalOptions options;
+    options.subset = subset_;
+    e = problem_.evaluate(free.data(), *workspaces_[static_cast<std::size_t>(thread)], options);
+  } else {
+    Problem::ParallelOptions options;
+    options.chunks = settings_.sample_chunks;
+    options.subset = subset_;
+    e = problem_.evaluate_parallel(free.data(), settings_.threads, options);
+  }
+  out.samples = e.samples_evaluated;
+  out.record = make_record(e);
+  if (e.status == EvalStatus::kConstraintViolated) add_violation(free, out.record);
+  return out;
 }
 
 void Evaluator::add_violation(const std::vector<double>& free, DesignRecord& record) const {
@@ -176,60 +184,226 @@ void Evaluator::add_violation(const std::vector<double>& free, DesignRecord& rec
 
 const DesignRecord& Evaluator::record(const pagmo::vector_double& x) {
   std::vector<double> free = encoding_.decode(x);
-  auto key = std::make_pair(fidelity_level_, free);
+  Key key(fidelity_level_, std::move(free));
   const auto found = cache_.find(key);
   if (found != cache_.end()) {
-    ++cache_hits_;
+    // A prefetched design's first look-up stands for the evaluation fitness() would have made.
+    if (prefetched_.erase(key) == 0) ++cache_hits_;
     return found->second;
   }
-  return cache_.emplace(std::move(key), evaluate_split(free)).first->second;
+  Outcome o = evaluate(key.second, 0);
+  ++designs_;
+  samples_ += o.samples;
+  return cache_.emplace(std::move(key), std::move(o.record)).first->second;
 }
 
-pagmo::vector_double Evaluator::fitness(const pagmo::vector_double& x) { return record(x).fitness; }
+pagmo::vector_double Evaluator::fitness(const pagmo::vector_double& x) {
+  if (recording_) {
+    // prefetch()'s probe: the design is noted; the value only steers the probe's reinsertion,
+    // which is thrown away.
+    recorded_.insert(recorded_.end(), x.begin(), x.end());
+    const auto found = cache_.find(Key(fidelity_level_, encoding_.decode(x)));
+    return found != cache_.end() ? found->second.fitness : pagmo::vector_double(objective_count(), kSampleFailedFitness);
+  }
+  return record(x).fitness;
+}
+
+namespace {
+
+// Exact binary records for the farm's results and rank 0's broadcast.
+class Writer {
+ public:
+  template <class T>
+  void put(const T& v) {
+    bytes_.append(reinterpret_cast<const char*>(&v), sizeof v);
+  }
+  void put_vector(const std::vector<double>& v) {
+    put(static_cast<std::uint64_t>(v.size()));
+    if (!v.empty()) bytes_.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(double));
+  }
+  void put_string(const std::string& s) {
+    put(static_cast<std::uint64_t>(s.size()));
+    bytes_ += s;
+  }
+  std::string take() { return std::move(bytes_); }
+
+ private:
+  std::string bytes_;
+};
+
+class Reader {
+ public:
+  explicit Reader(const std::string& bytes) : bytes_(bytes) {}
+  template <class T>
+  T get() {
+    T v;
+    take(&v, sizeof v);
+    return v;
+  }
+  std::vector<double> get_vector() {
+    std::vector<double> v(static_cast<std::size_t>(get<std::uint64_t>()));
+    if (!v.empty()) take(v.data(), v.size() * sizeof(double));
+    return v;
+  }
+  std::string get_string() {
+    std::string s(static_cast<std::size_t>(get<std::uint64_t>()), '\0');
+    if (!s.empty()) take(&s[0], s.size());
+    return s;
+  }
+
+ private:
+  void take(void* out, std::size_t n) {
+    if (n > bytes_.size() - at_) throw Error("pagmo_adapter", "truncated evaluation record from another rank");
+    std::memcpy(out, bytes_.data() + at_, n);
+    at_ += n;
+  }
+  const std::string& bytes_;
+  std::size_t at_ = 0;
+};
+
+void put_record(Writer& w, const DesignRecord& r, long long samples) {
+  w.put_vector(r.fitness);
+  w.put_vector(r.objectives);
+  w.put(r.score);
+  w.put(static_cast<char>(r.feasible ? 1 : 0));
+  w.put_string(r.failure);
+  w.put(samples);
+}
+
+void get_record(Reader& in, DesignRecord& r, long long& samples) {
+  r.fitness = in.get_vector();
+  r.objectives = in.get_vector();
+  r.score = in.get<double>();
+  r.feasible = in.get<char>() != 0;
+  r.failure = in.get_string();
+  samples = in.get<long long>();
+}
+
+}  // namespace
+
+std::vector<std::vector<double>> Evaluator::fill_cache(const std::vector<std::vector<double>>& decoded) {
+  // Distinct phenotypes not in the cache, in order of first appearance.
+  std::vector<std::vector<double>> todo;
+  std::set<std::vector<double>> queued;
+  for (const auto& free : decoded) {
+    if (cache_.count(Key(fidelity_level_, free)) || !queued.insert(free).second) continue;
+    todo.push_back(free);
+  }
+  const std::size_t n = todo.size();
+  std::vector<DesignRecord> records(n);
+  std::vector<long long> samples(n, 0);
+  std::vector<char> have(n, 0);
+  Cluster& cluster = settings_.cluster != nullptr ? *settings_.cluster : Cluster::local();
+  const bool several = cluster.size() > 1;
+  // One task per design: the same split whatever the rank count, and each design evaluated by
+  // the one path of the settings, so the values do not depend on where it ran.
+  TaskFarm farm;
+  farm.count = static_cast<long long>(n);
+  farm.run = [&](long long i, int thread) -> std::optional<std::string> {
+    Outcome o = evaluate(todo[static_cast<std::size_t>(i)], thread);
+    if (!several) {
+      records[static_cast<std::size_t>(i)] = std::move(o.record);
+      samples[static_cast<std::size_t>(i)] = o.samples;
+      have[static_cast<std::size_t>(i)] = 1;
+      return std::string();
+    }
+    Writer w;
+    put_record(w, o.record, o.samples);
+    return w.take();
+  };
+  farm.collect = [&](long long i, std::string&& bytes) {
+    if (!several) return;
+    Reader in(bytes);
+    get_record(in, records[static_cast<std::size_t>(i)], samples[static_cast<std::size_t>(i)]);
+    have[static_cast<std::size_t>(i)] = 1;
+  };
+  // Over the samples each design takes every thread of its rank: one task per rank at a time.
+  (void)cluster.run_tasks(farm, settings_.over_individuals ? settings_.threads : 1);
+  if (several) {
+    std::string all;
+    if (cluster.root()) {
+      Writer w;
+      for (std::size_t i = 0; i < n; ++i) {
+        w.put(have[i]);
+        if (have[i]) put_record(w, records[i], samples[i]);
+      }
+      all = w.take();
+    }
+    cluster.broadcast(all);
+    if (!cluster.root()) {
+      Reader in(all);
+      for (std::size_t i = 0; i < n; ++i) {
+        have[i] = in.get<char>();
+        if (have[i]) get_record(in, records[i], samples[i]);
+      }
+    }
+  }
+  // A stop ends an MPI farm early; the designs it left out are evaluated here, on every rank
+  // alike (no collective), so that the batch, and the generation, complete identically.
+  std::vector<long long> missing;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!have[i]) missing.push_back(static_cast<long long>(i));
+  }
+  if (!missing.empty()) {
+    const auto one = [&](long long k, int thread) {
+      const std::size_t i = static_cast<std::size_t>(missing[static_cast<std::size_t>(k)]);
+      Outcome o = evaluate(todo[i], thread);
+      records[i] = std::move(o.record);
+      samples[i] = o.samples;
+    };
+    if (settings_.over_individuals) {
+      parallel_for_dynamic(static_cast<long long>(missing.size()), settings_.threads, 1, one);
+    } else {
+      for (long long k = 0; k < static_cast<long long>(missing.size()); ++k) one(k, 0);
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    ++designs_;
+    samples_ += samples[i];
+    cache_.emplace(Key(fidelity_level_, todo[i]), std::move(records[i]));
+  }
+  return todo;
+}
 
 pagmo::vector_double Evaluator::batch_fitness(const pagmo::vector_double& xs) {
   const std::size_t dim = encoding_.size();
   const std::size_t n = dim == 0 ? 0 : xs.size() / dim;
   const std::size_t nf = objective_count();
-  pagmo::vector_double out(n * nf);
-  // Distinct phenotypes not in the cache, in order of first appearance.
-  std::vector<std::vector<double>> todo;
-  std::map<std::vector<double>, std::size_t> position;
   std::vector<std::vector<double>> decoded(n);
   for (std::size_t i = 0; i < n; ++i) {
     decoded[i] = encoding_.decode(pagmo::vector_double(xs.begin() + static_cast<std::ptrdiff_t>(i * dim),
                                                        xs.begin() + static_cast<std::ptrdiff_t>((i + 1) * dim)));
-    if (cache_.count({fidelity_level_, decoded[i]}) || position.count(decoded[i])) continue;
-    position.emplace(decoded[i], todo.size());
-    todo.push_back(decoded[i]);
   }
-  std::vector<DesignRecord> records(todo.size());
-  if (settings_.over_individuals) {
-    std::vector<long long> samples(todo.size(), 0);
-    std::vector<int> constraint_failed(todo.size(), 0);
-    parallel_for_dynamic(static_cast<long long>(todo.size()), settings_.threads, 1, [&](long long i, int t) {
-      EvalOptions options;
-      options.subset = subset_;
-      const Evaluation& e = problem_.evaluate(todo[static_cast<std::size_t>(i)].data(), *workspaces_[static_cast<std::size_t>(t)], options);
-      records[static_cast<std::size_t>(i)] = make_record(e);
-      samples[static_cast<std::size_t>(i)] = e.samples_evaluated;
-      constraint_failed[static_cast<std::size_t>(i)] = e.status == EvalStatus::kConstraintViolated;
-    });
-    for (std::size_t i = 0; i < todo.size(); ++i) {
-      ++designs_;
-      samples_ += samples[i];
-      if (constraint_failed[i]) add_violation(todo[i], records[i]);
-    }
-  } else {
-    for (std::size_t i = 0; i < todo.size(); ++i) records[i] = evaluate_split(todo[i]);
-  }
-  for (std::size_t i = 0; i < todo.size(); ++i) cache_.emplace(std::make_pair(fidelity_level_, todo[i]), std::move(records[i]));
+  const std::size_t evaluated = fill_cache(decoded).size();
+  pagmo::vector_double out(n * nf);
   for (std::size_t i = 0; i < n; ++i) {
-    const DesignRecord& r = cache_.at({fidelity_level_, decoded[i]});
+    const DesignRecord& r = cache_.at(Key(fidelity_level_, decoded[i]));
     std::copy(r.fitness.begin(), r.fitness.end(), out.begin() + static_cast<std::ptrdiff_t>(i * nf));
   }
-  cache_hits_ += static_cast<long long>(n - todo.size());
+  cache_hits_ += static_cast<long long>(n - evaluated);
   return out;
+}
+
+void Evaluator::prefetch(const pagmo::algorithm& algorithm, const pagmo::population& population) {
+  recorded_.clear();
+  prefetched_.clear();
+  recording_ = true;
+  try {
+    pagmo::algorithm probe(algorithm);
+    (void)probe.evolve(population);
+  } catch (...) {
+    recording_ = false;
+    throw;
+  }
+  recording_ = false;
+  const std::size_t dim = encoding_.size();
+  const std::size_t n = dim == 0 ? 0 : recorded_.size() / dim;
+  std::vector<std::vector<double>> decoded(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    decoded[i] = encoding_.decode(pagmo::vector_double(recorded_.begin() + static_cast<std::ptrdiff_t>(i * dim),
+                                                       recorded_.begin() + static_cast<std::ptrdiff_t>((i + 1) * dim)));
+  }
+  for (auto& free : fill_cache(decoded)) prefetched_.emplace(fidelity_level_, std::move(free));
 }
 
 pagmo::problem make_problem(const std::shared_ptr<Evaluator>& evaluator) { return pagmo::problem{Udp(evaluator)}; }

@@ -17,12 +17,19 @@
 ///   maximise, f for minimise. Infeasible designs: kSampleFailedFitness when a sample fails
 ///   (worst-case metrics), kConstraintFitness + the sum of the violations when a design
 ///   constraint fails, in every component: worse than any feasible design with |score| < 1e9.
-/// - Evaluation: batch_fitness (used by pagmo algorithms with a batch evaluator: gaco, nsga2,
-///   and by the solvers for initial populations and re-rankings) runs over individuals on the
-///   threads, one Problem::EvalScratch per thread, or one design after another each split over
-///   the samples ("samples"); fitness() (sga calls it one design at a time) splits one design
-///   over the samples in a fixed number of chunks. Results never depend on the thread count.
-///   Phenotypes already evaluated at the same fidelity come from a cache.
+/// - Evaluation: batch_fitness (used by pagmo algorithms with a batch evaluator: gaco, nsga2;
+///   by the solvers for initial populations and re-rankings; and for sga's offspring through
+///   Evaluator::prefetch) is a task farm over the ranks of EvaluationSettings::cluster (one task
+///   per design, on the threads of every rank; hapsyn/cluster.hpp), whose fitness values rank 0
+///   broadcasts so that every rank's replicated pagmo algorithm goes on with the same values.
+///   Each design is evaluated by one path, fixed by the settings: "individuals" one design per
+///   thread (Problem::evaluate, samples in sample order), "samples" one design after another
+///   split over the samples in a fixed number of chunks (Problem::evaluate_parallel). The same
+///   path serves single designs (fitness(), record()). Phenotypes already evaluated at the same
+///   fidelity come from a cache, which therefore returns exactly what a fresh evaluation would
+///   (bit for bit): a run's trajectory depends neither on the cache's content (other runs, a
+///   resume) nor on the thread or rank count.
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/json.hpp>
 #include <hapsyn/problem.hpp>
 
@@ -36,6 +43,7 @@
 #include <mutex>
 #include <optional>
 #include <ostream>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -78,13 +86,17 @@ class Encoding {
 
 /// How designs are evaluated.
 struct EvaluationSettings {
+  /// Threads of this process.
   int threads = 1;
-  /// Batches: "individuals" (one design per thread at a time) or "samples" (each design split
-  /// over the samples).
+  /// The path of every evaluation: "individuals" (one design per thread at a time, each on one
+  /// thread) or "samples" (one design at a time, split over the threads by sample chunks).
   bool over_individuals = true;
   /// Chunks of the sample order when one design is split over the samples (fixed: the result
   /// does not depend on the thread count).
   int sample_chunks = 16;
+  /// The ranks batches are farmed over (SolverContext::cluster(): an MPI job); null: this
+  /// process alone. Every rank must then make the same evaluator calls in the same order.
+  Cluster* cluster = nullptr;
 };
 
 /// A decoded design's outcome, as the cache keeps it.
@@ -111,13 +123,25 @@ class Evaluator {
   void set_subset(const std::vector<int>* subset, int fidelity_level);
   bool full_fidelity() const { return subset_ == nullptr; }
 
-  /// One design (split over the samples).
+  /// One design (from the cache, or evaluated on this process alone: no collective).
   pagmo::vector_double fitness(const pagmo::vector_double& x);
-  /// Concatenated decision vectors in, concatenated fitness vectors out (over individuals or
-  /// samples, see EvaluationSettings).
+  /// Concatenated decision vectors in, concatenated fitness vectors out. Collective when
+  /// EvaluationSettings::cluster has several ranks: the designs not cached are a task farm over
+  /// the ranks, their records broadcast from rank 0; designs a stopped farm left out are
+  /// evaluated on every rank alike, so the batch is always complete (the caller sees the agreed
+  /// stop flag afterwards).
   pagmo::vector_double batch_fitness(const pagmo::vector_double& xs);
-  /// The record of a design at the current fidelity (evaluated when not cached).
+  /// The record of a design at the current fidelity (evaluated when not cached, as fitness()).
   const DesignRecord& record(const pagmo::vector_double& x);
+  /// For algorithms that ask fitness() one design at a time (sga): evolves a copy of
+  /// `algorithm` (random engine included) on a copy of `population` while recording the designs
+  /// asked for, and evaluates them as one batch (batch_fitness), so that the real evolve() that
+  /// follows finds every offspring in the cache. Exact for algorithms whose offspring of a
+  /// generation do not depend on the fitness of other offspring of the same generation (sga
+  /// with one generation per evolve(): selection, crossover and mutation come before the
+  /// evaluation). Counters and cache hits end up as if the offspring had been evaluated by
+  /// fitness(). Collective as batch_fitness.
+  void prefetch(const pagmo::algorithm& algorithm, const pagmo::population& population);
 
   long long design_evaluations() const { return designs_; }
   long long sample_evaluations() const { return samples_; }
@@ -129,11 +153,22 @@ class Evaluator {
   }
 
  private:
+  using Key = std::pair<int, std::vector<double>>;  // fidelity level, decoded free vector
+  // A fresh evaluation's outcome.
+  struct Outcome {
+    DesignRecord record;
+    long long samples = 0;
+  };
   DesignRecord make_record(const Evaluation& e) const;
-  DesignRecord evaluate_split(const std::vector<double>& free);
+  // Evaluates one design by the settings' path; `thread` picks the scratch of the
+  // over-individuals path (the samples path splits over all threads itself).
+  Outcome evaluate(const std::vector<double>& free, int thread);
   // Adds the design's constraint violation (the sum of its positive constraint values) to
   // every fitness component of a constraint-violating design's record.
   void add_violation(const std::vector<double>& free, DesignRecord& record) const;
+  // Evaluates the distinct designs of `decoded` not in the cache (over the cluster) and caches
+  // them; returns those it evaluated.
+  std::vector<std::vector<double>> fill_cache(const std::vector<std::vector<double>>& decoded);
 
   const Problem& problem_;
   Encoding encoding_;
@@ -141,9 +176,14 @@ class Evaluator {
   bool multi_objective_;
   const std::vector<int>* subset_ = nullptr;
   int fidelity_level_ = 0;
-  std::map<std::pair<int, std::vector<double>>, DesignRecord> cache_;
+  std::map<Key, DesignRecord> cache_;
   std::vector<std::unique_ptr<Problem::EvalScratch>> workspaces_;
   long long designs_ = 0, samples_ = 0, cache_hits_ = 0;
+  // prefetch(): recording the designs fitness() is asked for, and the prefetched designs whose
+  // first look-up is the evaluation fitness() would have made (not a cache hit).
+  bool recording_ = false;
+  pagmo::vector_double recorded_;
+  std::set<Key> prefetched_;
 };
 
 /// The pagmo user-defined problem: a thin, copyable handle on an Evaluator.
