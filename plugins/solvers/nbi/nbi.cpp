@@ -8,10 +8,13 @@
 #include <hapsyn/pareto.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <sstream>
+#include <string>
 
 namespace hapsyn::plugins {
 
@@ -72,11 +75,12 @@ struct ShadowOptima {
   std::vector<std::vector<double>> values;  // natural units, all objectives
 };
 
-ShadowOptima shadow_optima(const std::vector<FinishedSubproblem>& shadows) {
+// \pre every slot holds a shadow optimum with its point.
+ShadowOptima shadow_optima(const SubproblemSlots& shadows) {
   ShadowOptima s;
-  for (const FinishedSubproblem& f : shadows) {
-    s.designs.push_back(f.point->design);
-    s.values.push_back(f.point->objectives);
+  for (const std::optional<FinishedSubproblem>& f : shadows) {
+    s.designs.push_back(f->point->design);
+    s.values.push_back(f->point->objectives);
   }
   return s;
 }
@@ -165,21 +169,60 @@ std::vector<double> free_design(const DesignSpace& space, const Eigen::VectorXd&
 struct Solved {
   std::vector<double> beta;
   std::vector<double> x;  // free design
+  std::string name;       // "shadows[j]" or "subproblems[j]": its entry in the statistics
 };
+
+double l1_distance(const std::vector<double>& a, const std::vector<double>& b) {
+  double dist = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) dist += std::abs(a[i] - b[i]);
+  return dist;
+}
 
 // The solved point nearest to beta (L1; of equally near ones the first solved).
 const Solved& nearest_solved(const std::vector<Solved>& solved, const std::vector<double>& beta) {
   const Solved* start = &solved.front();
   double nearest = kInf;
   for (const Solved& s : solved) {
-    double dist = 0.0;
-    for (std::size_t i = 0; i < beta.size(); ++i) dist += std::abs(s.beta[i] - beta[i]);
+    const double dist = l1_distance(s.beta, beta);
     if (dist < nearest - 1e-12) {
       nearest = dist;
       start = &s;
     }
   }
   return *start;
+}
+
+// Two L1 distances between points of the simplex grid are equal (up to rounding, ~1e-15) or
+// differ by at least 2/divisions >= 2e-3: sum_i |k_i - k'_i| is even, as sum_i k_i is the same
+// for every point. 1e-9 separates the two cases with room to spare.
+constexpr double kSameDistance = 1e-9;
+
+// Where subproblem k starts: the nearest (L1) of the shadow optima and of the feasible
+// subproblems before k, ties to the first in that order (shadows, then grid order); this is
+// the start the one-by-one run in grid order gives it. nullopt while a subproblem before k that
+// is not finished could change it: one nearer, or as near and earlier than the one chosen so far.
+std::optional<Solved> start_of(std::size_t k, const std::vector<Solved>& shadow_starts,
+                                            const std::vector<std::vector<double>>& interior,
+                                            const SubproblemSlots& subproblems, const DesignSpace& space) {
+  std::vector<Solved> solved = shadow_starts;
+  std::vector<std::size_t> order;  // position of each solved point in "shadows, then grid order"
+  for (std::size_t j = 0; j < shadow_starts.size(); ++j) order.push_back(j);
+  for (std::size_t j = 0; j < k; ++j) {
+    if (subproblems[j] && subproblems[j]->point) {
+      solved.push_back({interior[j], free_design(space, subproblems[j]->point->design), "subproblems[" + std::to_string(j) + "]"});
+      order.push_back(shadow_starts.size() + j);
+    }
+  }
+  const Solved& chosen = nearest_solved(solved, interior[k]);
+  const double nearest = l1_distance(chosen.beta, interior[k]);
+  const std::size_t chosen_order = order[static_cast<std::size_t>(&chosen - solved.data())];
+  for (std::size_t j = 0; j < k; ++j) {
+    if (subproblems[j]) continue;
+    const double dist = l1_distance(interior[j], interior[k]);
+    if (dist < nearest - kSameDistance) return std::nullopt;
+    if (dist <= nearest + kSameDistance && shadow_starts.size() + j < chosen_order) return std::nullopt;
+  }
+  return chosen;
 }
 
 // The interior points of the simplex grid (the others are the shadow optima), in grid order:
@@ -192,9 +235,10 @@ std::vector<std::vector<double>> interior_points(const std::vector<std::vector<d
   return interior;
 }
 
-// One subproblem: the SQP from the nearest solved point, then the full evaluation of its design.
-FinishedSubproblem solve_subproblem(const Problem& problem, const NbiOptions& options, const Chim& chim, Subproblem& sub,
-                                    const std::vector<double>& beta, const std::vector<Solved>& solved) {
+// One subproblem: the SQP from its start (start_of), then the full evaluation of its design.
+// `sub` is this subproblem's own copy (its scratch is written): subproblems run concurrently.
+FinishedSubproblem solve_subproblem(const Problem& problem, const NbiOptions& options, const Chim& chim, Subproblem sub,
+                                    const std::vector<double>& beta, const Solved& start) {
   const std::size_t m = problem.objectives().size();
   const DesignSpace& space = problem.design_space();
   std::vector<double> lower(space.free_size()), upper(space.free_size());
@@ -210,12 +254,11 @@ FinishedSubproblem solve_subproblem(const Problem& problem, const NbiOptions& op
     for (std::size_t k = 0; k < m; ++k) sub.a[i] -= chim.phibar[i][k] * beta[k];
   }
   sub.d = chim.normal;
-  const std::vector<double> x0 = nearest_solved(solved, beta).x;
-  const SqpOutcome sqp = run_minmax_sqp(problem, x0, lower, upper, sqp_settings(options, problem), nbi_goal(sub));
+  const SqpOutcome sqp = run_minmax_sqp(problem, start.x, lower, upper, sqp_settings(options, problem), nbi_goal(sub));
   FinishedSubproblem f;
   f.design_evaluations = sqp.evaluations;
   f.sample_evaluations = sqp.samples;
-  f.record = {{"beta", beta}, {"status", sqp.status}, {"t", sqp.x.empty() ? Json(nullptr) : Json(sqp.merit)},
+  f.record = {{"beta", beta}, {"start", start.name}, {"status", sqp.status}, {"t", sqp.x.empty() ? Json(nullptr) : Json(sqp.merit)},
               {"design_evaluations", sqp.evaluations}, {"rounds", sqp.rounds}};
   if (!sqp.x.empty()) {
     std::vector<double> values;
@@ -277,10 +320,10 @@ void NbiSolver::check(const Problem& problem) const {
 
 namespace {
 
-// What one solve() call has done: the finished shadow optima and subproblems (what the
-// checkpoint keeps), and the cost of a subproblem interrupted by a stop request.
+// What one solve() call has done: the finished shadow optima and subproblems by index (what
+// the checkpoint keeps), and the cost of subproblems interrupted by a stop request.
 struct NbiProgress {
-  std::vector<FinishedSubproblem> shadows, subproblems;
+  SubproblemSlots shadows, subproblems;
   long long interrupted_designs = 0, interrupted_samples = 0;
   double seconds_before = 0.0;  // elapsed in the runs before a resume
   Json resumed = nullptr;       // statistics.resumed
@@ -297,54 +340,56 @@ void resume(const Problem& problem, const SolverContext& context, const std::str
   progress.shadows = std::move(checkpoint->lists["shadows"]);
   progress.subproblems = std::move(checkpoint->lists["subproblems"]);
   for (std::size_t i = 0; i < progress.shadows.size(); ++i) {
-    const std::string where = "shadows[" + std::to_string(i) + "]";
-    if (!progress.shadows[i].point) throw bad_checkpoint(context, where + ": no design (a shadow optimum is a design)");
-    if (progress.shadows[i].record.value("objective", Json()) != problem.objectives()[i].name) {
-      throw bad_checkpoint(context, where + ".record.objective = " + progress.shadows[i].record.value("objective", Json()).dump() +
+    if (!progress.shadows[i]) continue;
+    const std::string where = checkpoint->where("shadows", i);
+    if (!progress.shadows[i]->point) throw bad_checkpoint(context, where + ": no design (a shadow optimum is a design)");
+    if (progress.shadows[i]->record.value("objective", Json()) != problem.objectives()[i].name) {
+      throw bad_checkpoint(context, where + ".record.objective = " + progress.shadows[i]->record.value("objective", Json()).dump() +
                                         ": this study's objective " + std::to_string(i) + " is '" +
                                         problem.objectives()[i].name + "'");
     }
   }
-  if (!progress.subproblems.empty() && progress.shadows.size() < m) {
-    throw bad_checkpoint(context, "subproblems: " + std::to_string(progress.subproblems.size()) + " finished with only " +
-                                      std::to_string(progress.shadows.size()) + " of " + std::to_string(m) +
+  const std::size_t shadows = finished_count(progress.shadows), subproblems = finished_count(progress.subproblems);
+  if (subproblems > 0 && shadows < m) {
+    throw bad_checkpoint(context, "subproblems: " + std::to_string(subproblems) + " finished with only " +
+                                      std::to_string(shadows) + " of " + std::to_string(m) +
                                       " shadow optima (the subproblems come after all of them)");
   }
   for (std::size_t k = 0; k < progress.subproblems.size(); ++k) {
-    if (progress.subproblems[k].record.value("beta", Json()) != Json(interior[k])) {
-      throw bad_checkpoint(context, "subproblems[" + std::to_string(k) + "].record.beta = " +
-                                        progress.subproblems[k].record.value("beta", Json()).dump() +
+    if (progress.subproblems[k] && progress.subproblems[k]->record.value("beta", Json()) != Json(interior[k])) {
+      throw bad_checkpoint(context, checkpoint->where("subproblems", k) + ".record.beta = " +
+                                        progress.subproblems[k]->record.value("beta", Json()).dump() +
                                         ": this study's grid point " + std::to_string(k) + " is " + Json(interior[k]).dump());
     }
   }
   progress.seconds_before = checkpoint->seconds;
   progress.resumed = {{"checkpoint", context.checkpoint_file},
-                      {"shadows", progress.shadows.size()},
-                      {"subproblems", progress.subproblems.size()},
+                      {"shadows", shadows},
+                      {"subproblems", subproblems},
                       {"recheck_sample_evaluations", checkpoint->recheck_samples}};
-  solver_line(context, "nbi: resuming from " + context.checkpoint_file + ": " + std::to_string(progress.shadows.size()) +
-                           " of " + std::to_string(m) + " shadow optima and " +
-                           std::to_string(progress.subproblems.size()) + " of " + std::to_string(interior.size()) +
-                           " subproblems finished");
+  solver_line(context, "nbi: resuming from " + context.checkpoint_file + ": " + std::to_string(shadows) + " of " +
+                           std::to_string(m) + " shadow optima and " + std::to_string(subproblems) + " of " +
+                           std::to_string(interior.size()) + " subproblems finished");
 }
 
 // Every candidate front point so far: the shadow optima, then the subproblems' designs.
 std::vector<SolutionPoint> candidates_of(const NbiProgress& progress) {
   std::vector<SolutionPoint> candidates;
   for (const auto* list : {&progress.shadows, &progress.subproblems}) {
-    for (const FinishedSubproblem& f : *list) {
-      if (f.point) candidates.push_back(*f.point);
+    for (const std::optional<FinishedSubproblem>& f : *list) {
+      if (f && f->point) candidates.push_back(*f->point);
     }
   }
   return candidates;
 }
 
-Json records_of(const std::vector<FinishedSubproblem>& list, double& seconds) {
+Json records_of(const SubproblemSlots& list, double& seconds) {
   Json records = Json::array();
   seconds = 0.0;
-  for (const FinishedSubproblem& f : list) {
-    records.push_back(f.record);
-    seconds += f.record.value("seconds", 0.0);
+  for (const std::optional<FinishedSubproblem>& f : list) {
+    if (!f) continue;
+    records.push_back(f->record);
+    seconds += f->record.value("seconds", 0.0);
   }
   return records;
 }
@@ -379,21 +424,29 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
   const std::string fingerprint = study_fingerprint(problem, OptionDeclarations<NbiOptions>::to_json(options_));
 
   NbiProgress progress;
+  progress.shadows.resize(m);
+  progress.subproblems.resize(interior.size());
   resume(problem, context, fingerprint, interior, progress);
   const auto elapsed = [&] { return progress.seconds_before + seconds_since(t_start); };
   const auto checkpoint = [&] {
-    write_subproblem_checkpoint(context, "nbi", fingerprint,
-                                {{"shadows", &progress.shadows}, {"subproblems", &progress.subproblems}}, elapsed());
+    // A shadow objective without a design (not found) is not kept: a resume runs it again.
+    SubproblemSlots shadows = progress.shadows;
+    for (std::optional<FinishedSubproblem>& f : shadows) {
+      if (f && !f->point) f.reset();
+    }
+    write_subproblem_checkpoint(context, "nbi", fingerprint, {{"shadows", &shadows}, {"subproblems", &progress.subproblems}},
+                                elapsed());
   };
-  // The result from what has been done (the counts of every finished unit and of an interrupted
-  // one), with `status` and `message`.
+  // The result from what has been done (the counts of every finished unit and of interrupted
+  // ones), with `status` and `message`.
   const auto finish = [&](SolverStatus status, const std::string& message, bool with_front) {
     result.design_evaluations = progress.interrupted_designs;
     result.sample_evaluations = progress.interrupted_samples;
     for (const auto* list : {&progress.shadows, &progress.subproblems}) {
-      for (const FinishedSubproblem& f : *list) {
-        result.design_evaluations += f.design_evaluations;
-        result.sample_evaluations += f.sample_evaluations;
+      for (const std::optional<FinishedSubproblem>& f : *list) {
+        if (!f) continue;
+        result.design_evaluations += f->design_evaluations;
+        result.sample_evaluations += f->sample_evaluations;
       }
     }
     double shadow_seconds = 0.0, subproblem_seconds = 0.0;
@@ -421,35 +474,83 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
                   true);
   };
 
-  // 1. Shadow optima.
-  for (std::size_t i = progress.shadows.size(); i < m; ++i) {
-    const std::string where = "after " + std::to_string(i) + " of " + std::to_string(m) + " shadow optima";
-    if (context.stop_requested()) return stopped(where);
-    const auto t0 = Clock::now();
-    const SolverResult r = run_sub_solver(*shadow_solver, *single_objective_problem(problem, i), context,
-                                          "nbi: shadow optimum " + std::to_string(i + 1) + " of " + std::to_string(m) + " (" +
-                                              problem.objectives()[i].name + ")");
-    if (r.status == SolverStatus::kStopped) {
-      progress.interrupted_designs += r.design_evaluations;
-      progress.interrupted_samples += r.sample_evaluations;
-      return stopped(where + " (the shadow solver of objective '" + problem.objectives()[i].name + "' was interrupted)");
+  // 1. Shadow optima: one task each, a whole shadow-solver run on one rank's threads.
+  if (finished_count(progress.shadows) < m) {
+    const auto where = [&] {
+      return "after " + std::to_string(finished_count(progress.shadows)) + " of " + std::to_string(m) + " shadow optima";
+    };
+    if (context.stop_requested()) return stopped(where());
+    const SolverContext inner = task_context(context);
+    std::atomic<long long> interrupted_designs{0}, interrupted_samples{0};
+    std::atomic<int> interrupted{-1};  // the objective whose shadow solver a stop interrupted
+    const auto what = [&](std::size_t i) {
+      return "nbi: shadow optimum " + std::to_string(i + 1) + " of " + std::to_string(m) + " (" +
+             problem.objectives()[i].name + ")";
+    };
+    SubproblemFarm farm;
+    farm.what = what;
+    farm.run = [&](std::size_t i) -> std::optional<FinishedSubproblem> {
+      if (inner.stop_requested()) return std::nullopt;
+      const auto t0 = Clock::now();
+      const SolverResult r = run_sub_solver(*shadow_solver, *single_objective_problem(problem, i), inner, what(i));
+      if (r.status == SolverStatus::kStopped) {
+        interrupted_designs += r.design_evaluations;
+        interrupted_samples += r.sample_evaluations;
+        interrupted = static_cast<int>(i);
+        return std::nullopt;
+      }
+      FinishedSubproblem f;
+      f.design_evaluations = r.design_evaluations;
+      f.sample_evaluations = r.sample_evaluations;
+      std::vector<double> values;
+      if (!r.best || !evaluate_full_design(problem, r.best->design, inner.threads, values, f.sample_evaluations)) {
+        // Not found: no point; the message says why (the record never reaches the statistics).
+        f.record = {{"objective", problem.objectives()[i].name}, {"status", to_string(r.status)},
+                    {"message", r.message}, {"seconds", seconds_since(t0)}};
+        return f;
+      }
+      f.point = SolutionPoint{r.best->design, values, problem.score(values)};
+      f.record = {{"objective", problem.objectives()[i].name}, {"design", problem.design_to_json(r.best->design)},
+                  {"objectives", values}, {"status", to_string(r.status)}, {"seconds", seconds_since(t0)},
+                  {"design_evaluations", f.design_evaluations}, {"sample_evaluations", f.sample_evaluations}};
+      return f;
+    };
+    farm.collected = [&](std::size_t) { checkpoint(); };
+    farm.on_abort = checkpoint;
+    run_subproblem_farm(problem, context, progress.shadows, farm);
+    progress.interrupted_designs += interrupted_designs;
+    progress.interrupted_samples += interrupted_samples;
+    // In objective order, as when the shadow optima were found one after the other: the first
+    // one not finished (a stop) or not found ends the run there.
+    for (std::size_t i = 0; i < m; ++i) {
+      if (!progress.shadows[i]) {
+        // A later objective's shadow not found is found again on resume (the checkpoint leaves
+        // it out); only its cost stays.
+        for (std::optional<FinishedSubproblem>& f : progress.shadows) {
+          if (f && !f->point) {
+            progress.interrupted_designs += f->design_evaluations;
+            progress.interrupted_samples += f->sample_evaluations;
+            f.reset();
+          }
+        }
+        std::string note;
+        if (interrupted >= 0) {
+          note = " (the shadow solver of objective '" + problem.objectives()[static_cast<std::size_t>(interrupted.load())].name +
+                 "' was interrupted)";
+        }
+        return stopped(where() + note);
+      }
+      if (!progress.shadows[i]->point) {
+        // The cost of the ones up to this one; those after it do not count (they would not
+        // have run one after the other).
+        progress.interrupted_designs += progress.shadows[i]->design_evaluations;
+        progress.interrupted_samples += progress.shadows[i]->sample_evaluations;
+        const std::string message = progress.shadows[i]->record.value("message", std::string());
+        for (std::size_t j = i; j < m; ++j) progress.shadows[j].reset();
+        return finish(SolverStatus::kInfeasible,
+                      "shadow optimum of objective '" + problem.objectives()[i].name + "' not found: " + message, false);
+      }
     }
-    FinishedSubproblem f;
-    f.design_evaluations = r.design_evaluations;
-    f.sample_evaluations = r.sample_evaluations;
-    std::vector<double> values;
-    if (!r.best || !evaluate_full_design(problem, r.best->design, context.threads, values, f.sample_evaluations)) {
-      progress.interrupted_designs += f.design_evaluations;
-      progress.interrupted_samples += f.sample_evaluations;
-      return finish(SolverStatus::kInfeasible,
-                    "shadow optimum of objective '" + problem.objectives()[i].name + "' not found: " + r.message, false);
-    }
-    f.point = SolutionPoint{r.best->design, values, problem.score(values)};
-    f.record = {{"objective", problem.objectives()[i].name}, {"design", problem.design_to_json(r.best->design)},
-                {"objectives", values}, {"status", to_string(r.status)}, {"seconds", seconds_since(t0)},
-                {"design_evaluations", f.design_evaluations}, {"sample_evaluations", f.sample_evaluations}};
-    progress.shadows.push_back(std::move(f));
-    checkpoint();
   }
 
   // 2. Payoff matrix and CHIM; a degenerate one ends here.
@@ -468,27 +569,48 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
     return finish(SolverStatus::kFailed, degenerate_message(problem, chim, stats["payoff"]), false);
   }
 
-  // 3. One subproblem per interior grid point, warm-started from the nearest solved point.
-  std::vector<Solved> solved;
+  // 3. One subproblem per interior grid point, warm-started from the nearest solved point. Each
+  // depends on the ones before it that could be its start, so they run in waves: a farm of the
+  // subproblems whose start is known (start_of), then the next wave. The starts, and so the
+  // front, are those of the one-by-one run in grid order, whatever the ranks and threads.
+  std::vector<Solved> shadow_starts;
   for (std::size_t j = 0; j < m; ++j) {
     std::vector<double> beta(m, 0.0);
     beta[j] = 1.0;
-    solved.push_back({beta, free_design(problem.design_space(), shadows.designs[j])});
+    shadow_starts.push_back({beta, free_design(problem.design_space(), shadows.designs[j]), "shadows[" + std::to_string(j) + "]"});
   }
-  for (std::size_t k = 0; k < progress.subproblems.size(); ++k) {
-    const FinishedSubproblem& f = progress.subproblems[k];
-    if (f.point) solved.push_back({interior[k], free_design(problem.design_space(), f.point->design)});
-  }
-  for (std::size_t k = progress.subproblems.size(); k < interior.size(); ++k) {
+  for (;;) {
+    const std::size_t done = finished_count(progress.subproblems);
+    if (done == interior.size()) break;
     if (context.stop_requested()) {
-      return stopped("after " + std::to_string(k) + " of " + std::to_string(interior.size()) +
+      return stopped("after " + std::to_string(done) + " of " + std::to_string(interior.size()) +
                      " subproblems (all shadow optima found)");
     }
-    FinishedSubproblem f = solve_subproblem(problem, options_, chim, sub, interior[k], solved);
-    if (f.point) solved.push_back({interior[k], free_design(problem.design_space(), f.point->design)});
-    progress.subproblems.push_back(std::move(f));
-    checkpoint();
-    solver_line(context, "nbi: subproblem " + std::to_string(k + 1) + " of " + std::to_string(interior.size()) + " solved");
+    SubproblemFarm farm;
+    std::map<std::size_t, Solved> starts;
+    for (std::size_t k = 0; k < interior.size(); ++k) {
+      if (progress.subproblems[k]) continue;
+      if (std::optional<Solved> start = start_of(k, shadow_starts, interior, progress.subproblems, problem.design_space())) {
+        starts[k] = std::move(*start);
+        farm.tasks.push_back(k);
+      }
+    }
+    // Single-threaded SQP runs: as many at a time as the rank has threads.
+    farm.threads = context.threads;
+    farm.run = [&](std::size_t k) -> std::optional<FinishedSubproblem> {
+      if (context.stop_requested()) return std::nullopt;
+      return solve_subproblem(problem, options_, chim, sub, interior[k], starts.at(k));
+    };
+    farm.collected = [&](std::size_t k) {
+      checkpoint();
+      solver_line(context, "nbi: subproblem " + std::to_string(k + 1) + " of " + std::to_string(interior.size()) + " solved");
+    };
+    farm.on_abort = checkpoint;
+    const FarmOutcome outcome = run_subproblem_farm(problem, context, progress.subproblems, farm);
+    if (outcome.stopped && finished_count(progress.subproblems) < interior.size()) {
+      return stopped("after " + std::to_string(finished_count(progress.subproblems)) + " of " +
+                     std::to_string(interior.size()) + " subproblems (all shadow optima found)");
+    }
   }
 
   // 4. The front.
@@ -496,7 +618,7 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
   const std::size_t candidates = candidates_of(progress).size();
   finish(SolverStatus::kConverged, "", true);
   message << "NBI: " << result.front.size() << " non-dominated points of " << candidates << " (" << m
-          << " shadow optima, " << progress.subproblems.size() << " subproblems)";
+          << " shadow optima, " << interior.size() << " subproblems)";
   result.message = message.str();
   return result;
 }

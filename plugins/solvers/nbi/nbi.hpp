@@ -12,7 +12,9 @@
 ///    each interior beta, the subproblem (in the normalized min form G = 1 - Ft, Phibar = 1 - Phit,
 ///    quasi-normal n = -Phibar e):
 ///        maximize t   s.t.   G(x) <= Phibar beta + t n     (componentwise), x within bounds
-///    solved by SLSQP (shared min-max SQP), warm-started from the nearest solved grid point.
+///    solved by SLSQP (shared min-max SQP), warm-started from the nearest solved grid point
+///    (L1 distance in beta; of equally near ones the first in the order shadows, then grid
+///    order, among the grid points before it).
 /// 4. Every point is evaluated over the whole workspace; dominated points are dropped
 ///    (`filter_dominated`).
 ///
@@ -83,13 +85,21 @@ class NbiSolver : public Solver {
   using Options = NbiOptions;
   explicit NbiSolver(const NbiOptions& options) : options_(options) {}
   bool pareto() const override { return true; }
+  /// Under MPI (and on several threads) the shadow optima are a task farm (each shadow solver
+  /// runs whole on one rank, with its threads), then the subproblems run in waves: each wave is
+  /// a farm of the subproblems whose warm start is settled (every earlier point that could be
+  /// nearer is finished), one SLSQP run per thread. The starts, and so the front, are those of
+  /// the one-by-one run in grid order, whatever the ranks and threads. With two objectives the
+  /// starts form one chain (each point starts from the one before it), so only the first and
+  /// the last subproblem run side by side; with three or more, the waves grow.
+  bool distributed() const override { return true; }
   /// \throws Error("nbi", ...) with fewer than two objectives, an integer free variable, no free
   ///         variable or a simplex grid too large; or when the shadow solver refuses one of the
   ///         single-objective problems ("<shadow_solver's path> (objective '<name>'): <its message>").
   void check(const Problem& problem) const override;
   /// The front (kConverged; one point, with a message saying so, when every shadow optimum has
   /// the same objective values: the objectives do not conflict); kInfeasible when a shadow
-  /// optimum is not found; kFailed without a shadow solver (options made without a registry) or
+  /// optimum is not found (the first in objective order); kFailed without a shadow solver (options made without a registry) or
   /// when some but not all objectives have no spread in the payoff matrix (the message names
   /// them and what to do; the front would be degenerate); kStopped on a stop request (between
   /// shadow optima and subproblems, and inside the shadow solver), with the front of the points
@@ -99,7 +109,8 @@ class NbiSolver : public Solver {
   /// subproblem (their records, designs, objective values and counts); on --resume the
   /// finished ones are skipped, after their designs are re-evaluated and found to give the
   /// claimed values, and the result is that of an uninterrupted run. The shadow solver runs
-  /// without a checkpoint of its own (an interrupted shadow optimum is solved again).
+  /// without a checkpoint of its own (an interrupted shadow optimum is solved again). The
+  /// finished ones need not be the first ones (each entry names its task).
   /// \throws Error("checkpoint", ...) on --resume with a checkpoint that fails the checks.
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
 

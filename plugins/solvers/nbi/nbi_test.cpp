@@ -2,6 +2,8 @@
 // objectives on a sphere) and against exhaustive search of the five-bar.
 #include "nbi.hpp"
 
+#include "shared/replay_cluster.hpp"
+
 #include "analytic_problems.hpp"
 #include "test_support.hpp"
 
@@ -213,11 +215,13 @@ const Json kNbiOptions = {{"points", 6},
                           {"shadow_solver", {{"plugin", "culling"}, {"options", {{"start_points", 3}, {"progress_interval", 1e9}}}}}};
 
 hapsyn::SolverResult run_nbi(const hapsyn::Problem& problem, const std::string& checkpoint, bool resume,
-                             const std::atomic<bool>* stop) {
-  const auto nbi = hapsyn::test::registry().create_solver("nbi", kNbiOptions, "solver");
+                             const std::atomic<bool>* stop, hapsyn::Cluster* ranks = nullptr, int threads = 1,
+                             const Json& options = kNbiOptions) {
+  const auto nbi = hapsyn::test::registry().create_solver("nbi", options, "solver");
   nbi->check(problem);
   hapsyn::SolverContext context;
-  context.threads = 1;
+  context.threads = threads;
+  context.ranks = ranks;
   context.seed = 5;
   context.checkpoint_file = checkpoint;
   context.resume = resume;
@@ -379,4 +383,132 @@ TEST(Nbi, ObjectivesWithOneCommonOptimumGiveOnePointAndSaySo) {
             std::string::npos)
       << result.message;
   EXPECT_EQ(result.statistics["subproblems"].size(), 0u);
+}
+
+// ---- on several threads and ranks: the warm starts of the one-by-one run ----
+
+namespace {
+
+// The start the one-by-one run in grid order gives subproblem k: the nearest (L1 in beta) of
+// the shadow optima and the feasible subproblems before k, the first of equally near ones.
+std::string one_by_one_start(const Json& subproblems, std::size_t k, std::size_t m) {
+  const auto beta = [&](std::size_t j) { return subproblems[j]["beta"].get<std::vector<double>>(); };
+  const std::vector<double> b = beta(k);
+  std::string start;
+  double nearest = 1e9;
+  const auto consider = [&](const std::vector<double>& other, const std::string& name) {
+    double d = 0;
+    for (std::size_t i = 0; i < m; ++i) d += std::abs(other[i] - b[i]);
+    if (d < nearest - 1e-9) {
+      nearest = d;
+      start = name;
+    }
+  };
+  for (std::size_t j = 0; j < m; ++j) {
+    std::vector<double> corner(m, 0.0);
+    corner[j] = 1.0;
+    consider(corner, "shadows[" + std::to_string(j) + "]");
+  }
+  for (std::size_t j = 0; j < k; ++j) {
+    if (subproblems[j].contains("objectives")) consider(beta(j), "subproblems[" + std::to_string(j) + "]");
+  }
+  return start;
+}
+
+const Json kThreeObjectiveOptions = {
+    {"points", 5},
+    {"shadow_solver", {{"plugin", "culling"}, {"options", {{"start_points", 3}, {"progress_interval", 1e9}}}}}};
+
+}  // namespace
+
+TEST(Nbi, SubproblemsStartWhereTheOneByOneRunStartsThemOnAnyThreadCount) {
+  const auto problem = hapsyn::test::three_objective_problem(0.1);
+  const auto one = run_nbi(*problem, "", false, nullptr, nullptr, 1, kThreeObjectiveOptions);
+  ASSERT_EQ(one.status, hapsyn::SolverStatus::kConverged) << one.message;
+  const Json& subproblems = one.statistics["subproblems"];
+  ASSERT_EQ(subproblems.size(), 12u);  // 15 grid points, 3 of them shadow optima
+  for (std::size_t k = 0; k < subproblems.size(); ++k) {
+    EXPECT_EQ(subproblems[k]["start"], one_by_one_start(subproblems, k, 3)) << k;
+  }
+  for (int threads : {2, 4}) {
+    SCOPED_TRACE(threads);
+    expect_same_result(run_nbi(*problem, "", false, nullptr, nullptr, threads, kThreeObjectiveOptions), one);
+  }
+}
+
+TEST(Nbi, EveryRankEndsWithTheSingleProcessResult) {
+  for (const bool three : {false, true}) {
+    SCOPED_TRACE(three);
+    Counter c;
+    const auto problem = three ? hapsyn::test::three_objective_problem(0.1) : counted_problem(c);
+    const Json& options = three ? kThreeObjectiveOptions : kNbiOptions;
+    const auto reference = run_nbi(*problem, "", false, nullptr, nullptr, 1, options);
+    const auto tape = std::make_shared<hapsyn::plugins::test::ReplayTape>();
+    hapsyn::plugins::test::ReplayCluster rank0(0, tape), rank1(1, tape);
+    const auto r0 = run_nbi(*problem, "", false, nullptr, &rank0, 2, options);
+    const auto r1 = run_nbi(*problem, "", false, nullptr, &rank1, 2, options);
+    EXPECT_TRUE(tape->events.empty());  // the same collectives in the same order
+    expect_same_result(r0, reference);
+    expect_same_result(r1, reference);
+    // One farm of shadow optima, then the waves: fewer than the subproblems when some share a
+    // wave (with two objectives, the first and the last).
+    const int subproblems = static_cast<int>(reference.statistics["subproblems"].size());
+    EXPECT_GE(rank0.farms(), 2);
+    EXPECT_LT(rank0.farms(), 1 + subproblems);
+    EXPECT_EQ(rank1.farms(), rank0.farms());
+  }
+}
+
+TEST(Nbi, StopOnRanksIsTheSameOnEveryRankAndResumeFinishesIt) {
+  Counter full;
+  const auto reference = run_nbi(*counted_problem(full), "", false, nullptr);
+  for (double fraction : {0.02, 0.7}) {  // in the shadow optima, in the subproblems
+    SCOPED_TRACE(fraction);
+    const std::string file = temp_file("hapsyn-nbi-ranks-stop");
+    boost::filesystem::remove(file);
+    const auto tape = std::make_shared<hapsyn::plugins::test::ReplayTape>();
+    std::atomic<bool> visible{false};
+    Counter c0, c1;
+    hapsyn::plugins::test::ReplayCluster rank0(0, tape, &c0.stop), rank1(1, tape, &visible);
+    c0.stop_after = static_cast<long long>(fraction * static_cast<double>(full.calls));
+    const auto r0 = run_nbi(*counted_problem(c0), file, false, &c0.stop, &rank0);
+    const auto r1 = run_nbi(*counted_problem(c1), file, false, &visible, &rank1);
+    ASSERT_EQ(r0.status, hapsyn::SolverStatus::kStopped) << r0.message;
+    EXPECT_EQ(r1.status, hapsyn::SolverStatus::kStopped) << r1.message;
+    EXPECT_EQ(r1.statistics["shadows"], r0.statistics["shadows"]);
+    EXPECT_EQ(r1.statistics["subproblems"], r0.statistics["subproblems"]);
+    EXPECT_EQ(r0.statistics["shadows"].size(), fraction < 0.5 ? 0u : 2u);
+    EXPECT_EQ(r0.statistics["subproblems"].empty(), fraction < 0.5);
+    EXPECT_TRUE(tape->events.empty());
+    Counter again;
+    expect_same_result(run_nbi(*counted_problem(again), file, true, nullptr), reference);
+    boost::filesystem::remove(file);
+  }
+}
+
+TEST(Nbi, ResumeFromSubproblemsFinishedOutOfOrderGivesTheUninterruptedResult) {
+  const std::string file = temp_file("hapsyn-nbi-holes");
+  boost::filesystem::remove(file);
+  Counter c;
+  const auto reference = run_nbi(*counted_problem(c), file, false, nullptr);
+  ASSERT_EQ(reference.status, hapsyn::SolverStatus::kConverged) << reference.message;
+  // Shadow optimum 1 and subproblems 1 and 3 finished, as ranks finish them.
+  edit_checkpoint(file, [](Json& s) {
+    const Json shadows = s["shadows"], subproblems = s["subproblems"];
+    s["shadows"] = Json::array({shadows[1]});
+    s["subproblems"] = Json::array();
+  });
+  Counter again;
+  const auto from_shadow = run_nbi(*counted_problem(again), file, true, nullptr);
+  expect_same_result(from_shadow, reference);
+  EXPECT_EQ(from_shadow.statistics["resumed"]["shadows"], 1);
+  edit_checkpoint(file, [](Json& s) {
+    const Json subproblems = s["subproblems"];
+    s["subproblems"] = Json::array({subproblems[1], subproblems[3]});
+  });
+  Counter third;
+  const auto from_subproblems = run_nbi(*counted_problem(third), file, true, nullptr);
+  expect_same_result(from_subproblems, reference);
+  EXPECT_EQ(from_subproblems.statistics["resumed"]["subproblems"], 2);
+  boost::filesystem::remove(file);
 }

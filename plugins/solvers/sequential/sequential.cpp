@@ -5,6 +5,7 @@
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 
+#include <atomic>
 #include <chrono>
 #include <sstream>
 
@@ -49,7 +50,7 @@ SolverResult SequentialSolver::solve(const Problem& problem, const SolverContext
   const std::string fingerprint = study_fingerprint(problem, OptionDeclarations<SequentialOptions>::to_json(options_));
 
   // The values a checkpoint has finished (their designs re-evaluated on reading).
-  std::vector<FinishedSubproblem> finished;
+  SubproblemSlots finished(values);
   double seconds_before = 0.0;
   Json resumed = nullptr;
   if (std::optional<SubproblemCheckpoint> checkpoint =
@@ -57,54 +58,69 @@ SolverResult SequentialSolver::solve(const Problem& problem, const SolverContext
     finished = std::move(checkpoint->lists["finished"]);
     for (std::size_t i = 0; i < finished.size(); ++i) {
       const double v = problem.design_space().grid_value(k, static_cast<long long>(i));
-      if (finished[i].record.value("value", Json()) != Json(v)) {
-        throw bad_checkpoint(context, "finished[" + std::to_string(i) + "].record.value = " +
-                                          finished[i].record.value("value", Json()).dump() + ": this study's value " +
+      if (finished[i] && finished[i]->record.value("value", Json()) != Json(v)) {
+        throw bad_checkpoint(context, checkpoint->where("finished", i) + ".record.value = " +
+                                          finished[i]->record.value("value", Json()).dump() + ": this study's value " +
                                           std::to_string(i) + " of " + options_.variable + " is " + Json(v).dump());
       }
     }
     seconds_before = checkpoint->seconds;
     resumed = {{"checkpoint", context.checkpoint_file},
-               {"finished", finished.size()},
+               {"finished", finished_count(finished)},
                {"recheck_sample_evaluations", checkpoint->recheck_samples}};
-    solver_line(context, "sequential: resuming from " + context.checkpoint_file + ": " + std::to_string(finished.size()) +
-                             " of " + std::to_string(values) + " values of " + options_.variable + " finished");
+    solver_line(context, "sequential: resuming from " + context.checkpoint_file + ": " +
+                             std::to_string(finished_count(finished)) + " of " + std::to_string(values) + " values of " +
+                             options_.variable + " finished");
   }
   const auto elapsed = [&] { return seconds_before + std::chrono::duration<double>(Clock::now() - t_start).count(); };
+  const auto checkpoint = [&] {
+    write_subproblem_checkpoint(context, "sequential", fingerprint, {{"finished", &finished}}, elapsed());
+  };
 
-  bool stopped = false;
-  for (std::size_t i = finished.size(); i < values; ++i) {
-    if (context.stop_requested()) {
-      stopped = true;
-      break;
-    }
+  // One task per value: a whole sub-solver run on one rank's threads. The values are
+  // independent (no warm start), so the result does not depend on where each one runs.
+  const SolverContext inner = task_context(context);
+  std::atomic<long long> interrupted_designs{0}, interrupted_samples{0};
+  const auto what = [&](std::size_t i) {
+    std::ostringstream name;
+    name << "sequential: " << options_.variable << " = "
+         << problem.design_space().grid_value(k, static_cast<long long>(i)) << " (" << i + 1 << " of " << values << ")";
+    return name.str();
+  };
+  SubproblemFarm farm;
+  farm.what = what;
+  farm.run = [&](std::size_t i) -> std::optional<FinishedSubproblem> {
+    if (inner.stop_requested()) return std::nullopt;
     const auto t0 = Clock::now();
     const double v = problem.design_space().grid_value(k, static_cast<long long>(i));
-    std::ostringstream what;
-    what << "sequential: " << options_.variable << " = " << v << " (" << i + 1 << " of " << values << ")";
-    const SolverResult r = run_sub_solver(*solver, *fixed_component_problem(*first, k, v), context, what.str());
+    const SolverResult r = run_sub_solver(*solver, *fixed_component_problem(*first, k, v), inner, what(i));
     if (r.status == SolverStatus::kStopped) {
       // Its best is not this value's optimum: the value is run again on --resume.
-      result.design_evaluations += r.design_evaluations;
-      result.sample_evaluations += r.sample_evaluations;
-      stopped = true;
-      break;
+      interrupted_designs += r.design_evaluations;
+      interrupted_samples += r.sample_evaluations;
+      return std::nullopt;
     }
     FinishedSubproblem f;
     f.design_evaluations = r.design_evaluations;
     f.sample_evaluations = r.sample_evaluations;
     f.record = {{"value", v}, {"status", to_string(r.status)}};
     std::vector<double> objectives;
-    if (r.best && evaluate_full_design(problem, r.best->design, context.threads, objectives, f.sample_evaluations)) {
+    if (r.best && evaluate_full_design(problem, r.best->design, inner.threads, objectives, f.sample_evaluations)) {
       f.point = SolutionPoint{r.best->design, objectives, problem.score(objectives)};
       f.record["design"] = problem.design_to_json(r.best->design);
       f.record["objectives"] = objectives;
     }
     f.record["seconds"] = std::chrono::duration<double>(Clock::now() - t0).count();
-    finished.push_back(std::move(f));
-    write_subproblem_checkpoint(context, "sequential", fingerprint, {{"finished", &finished}}, elapsed());
-  }
-  if (stopped) write_subproblem_checkpoint(context, "sequential", fingerprint, {{"finished", &finished}}, elapsed());
+    return f;
+  };
+  farm.collected = [&](std::size_t) { checkpoint(); };
+  farm.on_abort = checkpoint;
+  // A stop that came after the last value finished changes nothing.
+  const bool stopped =
+      run_subproblem_farm(problem, context, finished, farm).stopped && finished_count(finished) < finished.size();
+  if (stopped) checkpoint();
+  result.design_evaluations = interrupted_designs;
+  result.sample_evaluations = interrupted_samples;
 
   // The best second objective among the per-value designs (ties: the better first objective),
   // in value order.
@@ -116,11 +132,12 @@ SolverResult SequentialSolver::solve(const Problem& problem, const SolverContext
   };
   Json per_value = Json::array();
   std::optional<SolutionPoint> chosen;
-  for (const FinishedSubproblem& f : finished) {
-    result.design_evaluations += f.design_evaluations;
-    result.sample_evaluations += f.sample_evaluations;
-    per_value.push_back(f.record);
-    if (f.point && (!chosen || better(f.point->objectives, chosen->objectives))) chosen = f.point;
+  for (const std::optional<FinishedSubproblem>& f : finished) {
+    if (!f) continue;
+    result.design_evaluations += f->design_evaluations;
+    result.sample_evaluations += f->sample_evaluations;
+    per_value.push_back(f->record);
+    if (f->point && (!chosen || better(f->point->objectives, chosen->objectives))) chosen = f->point;
   }
   result.statistics = {{"variable", options_.variable},
                        {"per_value", per_value},
@@ -130,7 +147,7 @@ SolverResult SequentialSolver::solve(const Problem& problem, const SolverContext
   result.best = chosen;
   std::ostringstream message;
   if (stopped) {
-    message << "sequential stopped on request after " << finished.size() << " of " << values << " values of "
+    message << "sequential stopped on request after " << per_value.size() << " of " << values << " values of "
             << options_.variable << "; "
             << (chosen ? "the best is that of the finished values" : "none of the finished values gave a feasible design")
             << checkpoint_note(context);

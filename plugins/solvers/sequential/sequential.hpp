@@ -36,6 +36,10 @@ class SequentialSolver : public Solver {
   explicit SequentialSolver(const SequentialOptions& options) : options_(options) {}
   /// Two objectives make a comparison with fronts, not a weighted sum.
   bool pareto() const override { return true; }
+  /// Under MPI the values are a task farm: each one's sub-solver runs whole on one rank (its
+  /// threads, no progress lines of its own), and the design chosen is the same whatever the
+  /// number of ranks (the values are independent).
+  bool distributed() const override { return true; }
   /// \throws Error("sequential", ...) unless there are exactly two objectives and `variable` is a
   ///         free design component with a grid step; or when the sub-solver refuses the first
   ///         objective's problem with the variable fixed ("<sub_solver's path>: <its message>").
@@ -48,7 +52,8 @@ class SequentialSolver : public Solver {
   /// Checkpoint (context.checkpoint_file): written after every value (its record, design,
   /// objective values and counts); on --resume the finished ones are skipped, after their
   /// designs are re-evaluated and found to give the claimed values, and the result is that of
-  /// an uninterrupted run. The sub-solver runs without a checkpoint of its own.
+  /// an uninterrupted run. The sub-solver runs without a checkpoint of its own. Under MPI the
+  /// finished ones need not be the first ones (each entry names its task).
   /// \throws Error("checkpoint", ...) on --resume with a checkpoint that fails the checks.
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
 

@@ -2,6 +2,8 @@
 // value), and its error paths.
 #include "sequential.hpp"
 
+#include "shared/replay_cluster.hpp"
+
 #include "analytic_problems.hpp"
 #include "test_support.hpp"
 
@@ -110,16 +112,17 @@ std::string temp_file(const std::string& name) {
 }
 
 hapsyn::SolverResult run_sequential(const hapsyn::Problem& problem, const std::string& checkpoint, bool resume,
-                                    const std::atomic<bool>* stop) {
+                                    const std::atomic<bool>* stop, hapsyn::Cluster* ranks = nullptr, int threads = 1) {
   const Json options = {{"variable", "x0"}, {"sub_solver", {{"plugin", "grid"}, {"options", {{"progress_interval", 1e9}}}}}};
   const auto solver = hapsyn::test::registry().create_solver("sequential", options, "solver");
   solver->check(problem);
   hapsyn::SolverContext context;
-  context.threads = 1;
+  context.threads = threads;
   context.seed = 5;
   context.checkpoint_file = checkpoint;
   context.resume = resume;
   context.stop = stop;
+  context.ranks = ranks;
   return solver->solve(problem, context);
 }
 
@@ -199,5 +202,92 @@ TEST(Sequential, EditedCheckpointIsRefused) {
           {"finished[2].record.value = 0.25: this study's value 2 of x0 is 0.1"});
   refused([](Json& s) { s["finished"][0]["design_evaluations"] = -1; },
           {"finished[0].design_evaluations: missing or not a count (an integer >= 0)"});
+  boost::filesystem::remove(file);
+}
+
+// ---- on several threads and ranks ----
+
+namespace {
+// The same design, counts and per-value records (times aside).
+void expect_same_choice(const hapsyn::SolverResult& got, const hapsyn::SolverResult& expected) {
+  EXPECT_EQ(got.status, expected.status);
+  EXPECT_EQ(got.message, expected.message);
+  ASSERT_EQ(got.best.has_value(), expected.best.has_value());
+  if (got.best) {
+    EXPECT_EQ(got.best->design, expected.best->design);
+    EXPECT_EQ(got.best->objectives, expected.best->objectives);
+  }
+  EXPECT_EQ(got.design_evaluations, expected.design_evaluations);
+  EXPECT_EQ(without_seconds(got.statistics["per_value"]), without_seconds(expected.statistics["per_value"]));
+}
+}  // namespace
+
+TEST(Sequential, ThreadCountDoesNotChangeTheResult) {
+  Counter a, b;
+  const auto one = run_sequential(*counted_problem(a), "", false, nullptr, nullptr, 1);
+  const auto three = run_sequential(*counted_problem(b), "", false, nullptr, nullptr, 3);
+  ASSERT_EQ(one.status, hapsyn::SolverStatus::kConverged) << one.message;
+  expect_same_choice(three, one);
+}
+
+TEST(Sequential, EveryRankEndsWithTheSingleProcessResult) {
+  Counter reference_calls;
+  const auto reference = run_sequential(*counted_problem(reference_calls), "", false, nullptr);
+  const auto tape = std::make_shared<hapsyn::plugins::test::ReplayTape>();
+  hapsyn::plugins::test::ReplayCluster rank0(0, tape), rank1(1, tape);
+  Counter c0, c1;
+  const auto r0 = run_sequential(*counted_problem(c0), "", false, nullptr, &rank0);
+  const auto r1 = run_sequential(*counted_problem(c1), "", false, nullptr, &rank1);
+  EXPECT_EQ(rank0.farms(), 1);  // one farm of 21 values
+  EXPECT_TRUE(tape->events.empty());
+  expect_same_choice(r0, reference);
+  expect_same_choice(r1, reference);
+  EXPECT_LT(c1.calls.load(), c0.calls.load());  // rank 1 ran its share only
+}
+
+TEST(Sequential, ResumeFromValuesFinishedOutOfOrderGivesTheUninterruptedResult) {
+  const std::string file = temp_file("hapsyn-sequential-holes");
+  boost::filesystem::remove(file);
+  Counter c;
+  const auto reference = run_sequential(*counted_problem(c), file, false, nullptr);
+  ASSERT_EQ(reference.status, hapsyn::SolverStatus::kConverged) << reference.message;
+  edit_checkpoint(file, [](Json& s) {
+    const Json finished = s["finished"];
+    s["finished"] = Json::array({finished[3], finished[7], finished[20]});
+  });
+  Counter again;
+  const auto resumed = run_sequential(*counted_problem(again), file, true, nullptr);
+  expect_same_choice(resumed, reference);
+  EXPECT_EQ(resumed.statistics["resumed"]["finished"], 3);
+  // The study's value 7 is named when an entry's value is edited (the entry's place: 1).
+  edit_checkpoint(file, [](Json& s) {
+    const Json finished = s["finished"];
+    s["finished"] = Json::array({finished[3], finished[7]});
+    s["finished"][1]["record"]["value"] = 0.5;
+  });
+  Counter edited;
+  expect_error([&] { run_sequential(*counted_problem(edited), file, true, nullptr); },
+               {"finished[1].record.value = 0.5: this study's value 7 of x0 is 0.35"});
+  boost::filesystem::remove(file);
+}
+
+TEST(Sequential, StopOnRanksIsTheSameOnEveryRankAndResumeFinishesIt) {
+  Counter full;
+  const auto reference = run_sequential(*counted_problem(full), "", false, nullptr);
+  const std::string file = temp_file("hapsyn-sequential-ranks-stop");
+  boost::filesystem::remove(file);
+  const auto tape = std::make_shared<hapsyn::plugins::test::ReplayTape>();
+  std::atomic<bool> visible{false};
+  Counter c0, c1;
+  hapsyn::plugins::test::ReplayCluster rank0(0, tape, &c0.stop), rank1(1, tape, &visible);
+  c0.stop_after = full.calls / 2;
+  const auto r0 = run_sequential(*counted_problem(c0), file, false, &c0.stop, &rank0);
+  const auto r1 = run_sequential(*counted_problem(c1), file, false, &visible, &rank1);
+  ASSERT_EQ(r0.status, hapsyn::SolverStatus::kStopped) << r0.message;
+  EXPECT_EQ(r1.status, hapsyn::SolverStatus::kStopped) << r1.message;
+  EXPECT_EQ(r1.statistics["per_value"], r0.statistics["per_value"]);
+  EXPECT_TRUE(tape->events.empty());
+  Counter again;
+  expect_same_choice(run_sequential(*counted_problem(again), file, true, nullptr), reference);
   boost::filesystem::remove(file);
 }

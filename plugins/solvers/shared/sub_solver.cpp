@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <mutex>
 #include <ostream>
 #include <sstream>
 
@@ -178,19 +179,44 @@ FinishedSubproblem read_entry(const Problem& problem, const SolverContext& conte
 
 }  // namespace
 
+namespace {
+
+Json entry_json(const FinishedSubproblem& f) {
+  return {{"record", f.record},
+          {"design", point_design_json(f.point)},
+          {"objectives", f.point ? Json(f.point->objectives) : Json(nullptr)},
+          {"design_evaluations", f.design_evaluations},
+          {"sample_evaluations", f.sample_evaluations}};
+}
+
+}  // namespace
+
+std::size_t finished_count(const SubproblemSlots& slots) {
+  return static_cast<std::size_t>(
+      std::count_if(slots.begin(), slots.end(), [](const std::optional<FinishedSubproblem>& f) { return f.has_value(); }));
+}
+
+std::string SubproblemCheckpoint::where(const std::string& list, std::size_t task) const {
+  const auto l = positions.find(list);
+  std::size_t position = task;
+  if (l != positions.end()) {
+    const auto p = l->second.find(task);
+    if (p != l->second.end()) position = p->second;
+  }
+  return list + "[" + std::to_string(position) + "]";
+}
+
 void write_subproblem_checkpoint(const SolverContext& context, const std::string& solver, const std::string& fingerprint,
-                                 const std::map<std::string, const std::vector<FinishedSubproblem>*>& lists,
-                                 double seconds) {
-  if (context.checkpoint_file.empty()) return;
+                                 const std::map<std::string, const SubproblemSlots*>& lists, double seconds) {
+  if (context.checkpoint_file.empty() || !context.cluster().root()) return;
   Json state = Json::object();
-  for (const auto& [name, list] : lists) {
+  for (const auto& [name, slots] : lists) {
     Json entries = Json::array();
-    for (const FinishedSubproblem& f : *list) {
-      entries.push_back({{"record", f.record},
-                         {"design", point_design_json(f.point)},
-                         {"objectives", f.point ? Json(f.point->objectives) : Json(nullptr)},
-                         {"design_evaluations", f.design_evaluations},
-                         {"sample_evaluations", f.sample_evaluations}});
+    for (std::size_t task = 0; task < slots->size(); ++task) {
+      if (!(*slots)[task]) continue;
+      Json entry = entry_json(*(*slots)[task]);
+      entry["task"] = task;
+      entries.push_back(std::move(entry));
     }
     state[name] = entries;
   }
@@ -218,12 +244,136 @@ std::optional<SubproblemCheckpoint> read_subproblem_checkpoint(const Problem& pr
       throw bad_checkpoint(context, name + ": " + std::to_string(entries.size()) + " finished subproblems, this study has " +
                                         std::to_string(limit));
     }
-    std::vector<FinishedSubproblem>& list = checkpoint.lists[name];
+    SubproblemSlots& slots = checkpoint.lists[name];
+    slots.assign(limit, std::nullopt);
+    long long previous = -1;
     for (std::size_t i = 0; i < entries.size(); ++i) {
-      list.push_back(read_entry(problem, context, entries[i], name + "[" + std::to_string(i) + "]", checkpoint.recheck_samples));
+      const std::string where = name + "[" + std::to_string(i) + "]";
+      // Entries without a task index come from checkpoints that kept the finished prefix.
+      long long task = static_cast<long long>(i);
+      if (entries[i].is_object() && entries[i].contains("task")) {
+        const Json& t = entries[i]["task"];
+        if (!is_count(t) || t.get<long long>() >= static_cast<long long>(limit)) {
+          throw bad_checkpoint(context, where + ".task = " + t.dump() + ": must be an integer in 0.." +
+                                            std::to_string(limit - 1) + " (a subproblem of this study)");
+        }
+        task = t.get<long long>();
+      }
+      if (task <= previous) {
+        throw bad_checkpoint(context, where + ".task = " + std::to_string(task) +
+                                          ": the entries must be in increasing task order, each task once (the entry "
+                                          "before is task " + std::to_string(previous) + ")");
+      }
+      previous = task;
+      slots[static_cast<std::size_t>(task)] = read_entry(problem, context, entries[i], where, checkpoint.recheck_samples);
+      checkpoint.positions[name][static_cast<std::size_t>(task)] = i;
     }
   }
   return checkpoint;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Subproblem farms.
+
+SolverContext task_context(const SolverContext& context) {
+  SolverContext c = context.in_task();
+  // One process runs one task at a time per sub-solver farm (SubproblemFarm::threads = 1 for
+  // whole sub-solvers), so its sub-solver may talk to the progress stream and the log as before.
+  if (context.cluster().size() == 1) {
+    c.progress = context.progress;
+    c.log = context.log;
+  }
+  return c;
+}
+
+std::string subproblem_bytes(const FinishedSubproblem& finished) { return entry_json(finished).dump(); }
+
+namespace {
+
+// An entry of entry_json, trusted (it comes from a rank of this run, not from a file).
+FinishedSubproblem entry_from_json(const Problem& problem, const Json& entry) {
+  FinishedSubproblem f;
+  f.record = entry.at("record");
+  f.design_evaluations = entry.at("design_evaluations").get<long long>();
+  f.sample_evaluations = entry.at("sample_evaluations").get<long long>();
+  const Json& design = entry.at("design");
+  if (!design.is_null()) {
+    Eigen::VectorXd full(static_cast<Eigen::Index>(design.size()));
+    for (std::size_t i = 0; i < design.size(); ++i) full[static_cast<Eigen::Index>(i)] = design[i].get<double>();
+    std::vector<double> values = entry.at("objectives").get<std::vector<double>>();
+    const double score = problem.score(values);
+    f.point = SolutionPoint{full, std::move(values), score};
+  }
+  return f;
+}
+
+}  // namespace
+
+FinishedSubproblem subproblem_from_bytes(const Problem& problem, const std::string& bytes) {
+  return entry_from_json(problem, Json::parse(bytes));
+}
+
+FarmOutcome run_subproblem_farm(const Problem& problem, const SolverContext& context, SubproblemSlots& slots,
+                                const SubproblemFarm& farm) {
+  Cluster& cluster = context.cluster();
+  std::vector<std::size_t> tasks = farm.tasks;
+  if (tasks.empty()) {
+    for (std::size_t i = 0; i < slots.size(); ++i) tasks.push_back(i);
+  }
+  // Fixed before the farm: collect fills slots while other threads ask what is done.
+  std::vector<char> done(tasks.size());
+  for (std::size_t t = 0; t < tasks.size(); ++t) done[t] = slots.at(tasks[t]).has_value() ? 1 : 0;
+  // collect and on_abort both reach the slots on rank 0.
+  std::mutex mutex;
+  TaskFarm f;
+  f.count = static_cast<long long>(tasks.size());
+  f.done = [&](long long t) { return done[static_cast<std::size_t>(t)] != 0; };
+  f.run = [&](long long t, int) -> std::optional<std::string> {
+    std::optional<FinishedSubproblem> finished = farm.run(tasks[static_cast<std::size_t>(t)]);
+    if (!finished) return std::nullopt;
+    return subproblem_bytes(*finished);
+  };
+  f.collect = [&](long long t, std::string&& bytes) {
+    const std::size_t index = tasks[static_cast<std::size_t>(t)];
+    std::lock_guard<std::mutex> lock(mutex);
+    slots[index] = subproblem_from_bytes(problem, bytes);
+    if (farm.what && cluster.size() > 1) {
+      std::ostringstream line;
+      line.precision(3);
+      line << farm.what(index) << ": " << slots[index]->record.value("status", std::string("finished")) << " in "
+           << slots[index]->record.value("seconds", 0.0) << " s";
+      solver_line(context, line.str());
+    }
+    if (farm.collected) farm.collected(index);
+  };
+  if (farm.on_abort) {
+    f.on_abort = [&] {
+      std::lock_guard<std::mutex> lock(mutex);
+      farm.on_abort();
+    };
+  }
+  const FarmOutcome outcome = cluster.run_tasks(f, std::max(1, farm.threads));
+  if (cluster.size() > 1) {
+    // Rank 0 alone collected: every rank continues from its slots.
+    std::string bytes;
+    if (cluster.root()) {
+      Json all = Json::array();
+      for (const std::optional<FinishedSubproblem>& s : slots) all.push_back(s ? entry_json(*s) : Json(nullptr));
+      bytes = all.dump();
+    }
+    cluster.broadcast(bytes);
+    if (!cluster.root()) {
+      const Json all = Json::parse(bytes);
+      for (std::size_t i = 0; i < slots.size() && i < all.size(); ++i) {
+        if (all[i].is_null()) {
+          slots[i].reset();
+        } else {
+          slots[i] = entry_from_json(problem, all[i]);
+        }
+      }
+    }
+  }
+  return outcome;
 }
 
 void solver_line(const SolverContext& context, const std::string& line) {

@@ -2,11 +2,14 @@
 /// \file
 /// Running a solver inside a solver (nbi's shadow optima, weighted_sum's weights, sequential's
 /// per-value optima): checking the sub-solver the framework created from a
-/// `{"plugin", "options"}` option (hapsyn::SubSolver), and making the problems it solves.
+/// `{"plugin", "options"}` option (hapsyn::SubSolver), and making the problems it solves; their
+/// checkpoints (finished subproblems by task index) and their task farms over the run's ranks
+/// (run_subproblem_farm: results collected on rank 0, then handed to every rank).
 /// Shared by the solver plugins; not a plugin itself.
 #include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -56,10 +59,10 @@ bool evaluate_full_design(const Problem& problem, const Eigen::VectorXd& full_de
                           std::vector<double>& objectives, long long& samples);
 
 // ---------------------------------------------------------------------------------------------
-// Checkpoints of the solvers that run subproblems one after the other (nbi, weighted_sum,
-// sequential): the finished subproblems, each with its statistics record, its design, its
-// objective values and its evaluation counts. A resumed run skips them and gives exactly the
-// result of an uninterrupted run with the same seed.
+// Checkpoints of the solvers that run subproblems (nbi, weighted_sum, sequential): the finished
+// subproblems, each with its task index, its statistics record, its design, its objective
+// values and its evaluation counts. A resumed run skips them and gives exactly the result of an
+// uninterrupted run with the same seed.
 
 /// One finished subproblem (a shadow optimum, a weight vector, a value of the variable, an NBI
 /// grid point), as the parent's result and checkpoint keep it.
@@ -70,31 +73,90 @@ struct FinishedSubproblem {
   long long sample_evaluations = 0;
 };
 
+/// The subproblems of one list by task index (0 .. count-1); nullopt: not finished. Tasks
+/// finish in any order when they run on several threads or ranks.
+using SubproblemSlots = std::vector<std::optional<FinishedSubproblem>>;
+
 /// The finished subproblems of a checkpoint, by list name (e.g. "finished", or nbi's "shadows"
 /// and "subproblems"), and the run's elapsed seconds when it was written.
 struct SubproblemCheckpoint {
-  std::map<std::string, std::vector<FinishedSubproblem>> lists;
+  std::map<std::string, SubproblemSlots> lists;  ///< each sized to its limit
+  std::map<std::string, std::map<std::size_t, std::size_t>> positions;  ///< list -> task -> its entry
   double seconds = 0.0;
   long long recheck_samples = 0;  ///< samples spent re-evaluating the claimed points on resume
+
+  /// "<list>[<i>]": the file's entry of task `task` (for messages about it).
+  std::string where(const std::string& list, std::size_t task) const;
 };
 
-/// Writes the checkpoint of `solver` (nothing without a checkpoint file): `lists` and `seconds`.
+/// Number of finished subproblems in `slots`.
+std::size_t finished_count(const SubproblemSlots& slots);
+
+/// Writes the checkpoint of `solver` (nothing without a checkpoint file, nothing on ranks other
+/// than 0): for each list, its finished subproblems in task order, each with its "task" index;
+/// and `seconds`.
 /// \throws Error("output", ...) when it cannot be written.
 void write_subproblem_checkpoint(const SolverContext& context, const std::string& solver, const std::string& fingerprint,
-                                 const std::map<std::string, const std::vector<FinishedSubproblem>*>& lists,
-                                 double seconds);
+                                 const std::map<std::string, const SubproblemSlots*>& lists, double seconds);
 
 /// The checkpoint to resume from (nullopt: start over; a line saying so goes to the progress and
-/// the log when context.resume is set). Every claimed point is re-evaluated on `problem` (one
-/// design evaluation per finished subproblem, cheap against a subproblem): a point that is not
-/// feasible or whose objective values differ from the claimed ones is refused, as is a list
-/// longer than `limits` allows or an entry of the wrong shape.
+/// the log when context.resume is set). Collective under MPI (read_checkpoint): every rank calls
+/// it at the same point and gets the same answer. Every claimed point is re-evaluated on
+/// `problem` (one design evaluation per finished subproblem, cheap against a subproblem): a point
+/// that is not feasible or whose objective values differ from the claimed ones is refused, as is
+/// a list longer than `limits` allows, a task index out of range or out of order, or an entry
+/// of the wrong shape. An entry without "task" (checkpoints written before tasks could finish
+/// out of order) is task <its position>.
 /// \throws Error("checkpoint", "<file>: <what is wrong>; delete it, or run without --resume"):
 ///         read_checkpoint's checks, then "<list>[<i>].<field>: ..." for a bad entry and
 ///         "<list>[<i>]: the design re-evaluates to <values>, the checkpoint claims <values>".
 std::optional<SubproblemCheckpoint> read_subproblem_checkpoint(const Problem& problem, const SolverContext& context,
                                                                const std::string& solver, const std::string& fingerprint,
                                                                const std::map<std::string, std::size_t>& limits);
+
+// ---------------------------------------------------------------------------------------------
+// Subproblems as a task farm over the run's ranks (hapsyn/cluster.hpp).
+
+/// The context of a sub-solver that runs inside one task: context.in_task() (this process
+/// alone, no checkpoint), except that a single process (context.cluster().size() == 1) keeps
+/// the progress stream and the log, so its sub-solvers still show how far they are.
+SolverContext task_context(const SolverContext& context);
+
+/// One farm of subproblems (see run_subproblem_farm).
+struct SubproblemFarm {
+  /// The slots the farm runs (indices into the slots; empty: every slot). Those already
+  /// finished are skipped.
+  std::vector<std::size_t> tasks;
+  /// Tasks run at a time on each rank: 1 for tasks that run a whole sub-solver on the rank's
+  /// threads, context.threads for single-threaded tasks.
+  int threads = 1;
+  /// Runs slot `index` on any rank and thread: its finished subproblem, or nullopt when it was
+  /// interrupted by a stop request (it counts as not finished).
+  std::function<std::optional<FinishedSubproblem>(std::size_t index)> run;
+  /// Optional, rank 0, one call at a time: slot `index` was just filled (write the checkpoint,
+  /// a progress line).
+  std::function<void(std::size_t index)> collected;
+  /// Optional, rank 0: the job is about to be aborted (a rank stopped answering): write the
+  /// checkpoint of the slots filled so far.
+  std::function<void()> on_abort;
+  /// Optional: the subproblem's name for the line "<what>: <record.status> in <record.seconds> s"
+  /// that rank 0 writes when it is collected under MPI (a single process's sub-solver says it
+  /// itself through run_sub_solver).
+  std::function<std::string(std::size_t index)> what;
+};
+
+/// Runs the farm's unfinished slots over the ranks of context.cluster() and fills `slots` with
+/// their results, on every rank alike: rank 0 collects them, then broadcasts every slot (the
+/// code after the farm is replicated). `slots` must be the same on every rank before the call.
+/// Collective. Returns the farm's outcome (stopped: some slots are still empty).
+/// The results travel as JSON text, which carries doubles exactly: every rank sees the bits the
+/// running rank computed.
+FarmOutcome run_subproblem_farm(const Problem& problem, const SolverContext& context, SubproblemSlots& slots,
+                                const SubproblemFarm& farm);
+
+/// A finished subproblem as bytes and back (the point's score recomputed by `problem`).
+std::string subproblem_bytes(const FinishedSubproblem& finished);
+FinishedSubproblem subproblem_from_bytes(const Problem& problem, const std::string& bytes);
 
 /// A line for the progress stream and the run log (either may be null).
 void solver_line(const SolverContext& context, const std::string& line);

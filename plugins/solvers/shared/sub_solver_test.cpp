@@ -3,6 +3,8 @@
 // problems change only what their names say.
 #include "shared/sub_solver.hpp"
 
+#include "shared/replay_cluster.hpp"
+
 #include "analytic_problems.hpp"
 #include "test_support.hpp"
 
@@ -13,6 +15,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <fstream>
 #include <functional>
@@ -263,25 +266,65 @@ TEST(SubSolver, RunSubSolverHandsTheSubSolverNoCheckpoint) {
 TEST(SubSolver, FinishedSubproblemsRoundTripThroughTheCheckpointWithTheirPointsRechecked) {
   const auto problem = hapsyn::test::two_objective_problem();
   const std::string file = temp_file("hapsyn-subproblem-roundtrip");
-  std::vector<hapsyn::plugins::FinishedSubproblem> finished = {finished_at(*problem, 0.4, 0.2), {}};
-  finished[1].record = {{"k", 2}};  // an infeasible one: no point
-  finished[1].design_evaluations = 3;
+  // Tasks 1 and 3 of 4 finished (out of order, as on several ranks); task 3 infeasible.
+  hapsyn::plugins::SubproblemSlots finished(4);
+  finished[1] = finished_at(*problem, 0.4, 0.2);
+  finished[3] = hapsyn::plugins::FinishedSubproblem{};
+  finished[3]->record = {{"k", 2}};  // an infeasible one: no point
+  finished[3]->design_evaluations = 3;
   const hapsyn::SolverContext context = checkpoint_context(file);
   hapsyn::plugins::write_subproblem_checkpoint(context, "test", "fp", {{"finished", &finished}}, 12.5);
-  const auto read = hapsyn::plugins::read_subproblem_checkpoint(*problem, context, "test", "fp", {{"finished", 2}});
+  {
+    std::ifstream in(file);
+    const Json entries = Json::parse(in)["state"]["finished"];
+    ASSERT_EQ(entries.size(), 2u);
+    EXPECT_EQ(entries[0]["task"], 1);
+    EXPECT_EQ(entries[1]["task"], 3);
+  }
+  const auto read = hapsyn::plugins::read_subproblem_checkpoint(*problem, context, "test", "fp", {{"finished", 4}});
   ASSERT_TRUE(read);
   EXPECT_EQ(read->seconds, 12.5);
   EXPECT_EQ(read->recheck_samples, 3);  // one design over three samples
   const auto& list = read->lists.at("finished");
-  ASSERT_EQ(list.size(), 2u);
-  EXPECT_EQ(list[0].record, finished[0].record);
-  ASSERT_TRUE(list[0].point);
-  EXPECT_EQ(list[0].point->design, finished[0].point->design);
-  EXPECT_EQ(list[0].point->objectives, finished[0].point->objectives);
-  EXPECT_EQ(list[0].design_evaluations, 7);
-  EXPECT_EQ(list[0].sample_evaluations, 9);
-  EXPECT_FALSE(list[1].point);
-  EXPECT_EQ(list[1].design_evaluations, 3);
+  ASSERT_EQ(list.size(), 4u);
+  EXPECT_FALSE(list[0]);
+  EXPECT_FALSE(list[2]);
+  EXPECT_EQ(hapsyn::plugins::finished_count(list), 2u);
+  ASSERT_TRUE(list[1] && list[3]);
+  EXPECT_EQ(list[1]->record, finished[1]->record);
+  ASSERT_TRUE(list[1]->point);
+  EXPECT_EQ(list[1]->point->design, finished[1]->point->design);
+  EXPECT_EQ(list[1]->point->objectives, finished[1]->point->objectives);
+  EXPECT_EQ(list[1]->design_evaluations, 7);
+  EXPECT_EQ(list[1]->sample_evaluations, 9);
+  EXPECT_FALSE(list[3]->point);
+  EXPECT_EQ(list[3]->design_evaluations, 3);
+  // Messages name the entry in the file, not the task.
+  EXPECT_EQ(read->where("finished", 3), "finished[1]");
+  boost::filesystem::remove(file);
+}
+
+TEST(SubSolver, CheckpointEntriesWithoutATaskAreTheFinishedPrefix) {
+  // Checkpoints written before tasks could finish out of order.
+  const auto problem = hapsyn::test::two_objective_problem();
+  const std::string file = temp_file("hapsyn-subproblem-prefix");
+  hapsyn::plugins::SubproblemSlots finished = {finished_at(*problem, 0.4, 0.2), finished_at(*problem, 0.3, 0.1), std::nullopt};
+  const hapsyn::SolverContext context = checkpoint_context(file);
+  hapsyn::plugins::write_subproblem_checkpoint(context, "test", "fp", {{"finished", &finished}}, 1.0);
+  {
+    std::ifstream in(file);
+    Json c = Json::parse(in);
+    for (Json& entry : c["state"]["finished"]) entry.erase("task");
+    c.erase("checksum");
+    c["checksum"] = hapsyn::fnv1a_hex(c.dump());
+    std::ofstream(file) << c.dump();
+  }
+  const auto read = hapsyn::plugins::read_subproblem_checkpoint(*problem, context, "test", "fp", {{"finished", 3}});
+  ASSERT_TRUE(read);
+  const auto& list = read->lists.at("finished");
+  ASSERT_TRUE(list[0] && list[1]);
+  EXPECT_FALSE(list[2]);
+  EXPECT_EQ(list[1]->point->design, finished[1]->point->design);
   boost::filesystem::remove(file);
 }
 
@@ -303,7 +346,7 @@ TEST(SubSolver, CheckpointEntriesOfTheWrongShapeOrWithEditedValuesAreRefused) {
   const auto problem = hapsyn::test::two_objective_problem();
   const std::string file = temp_file("hapsyn-subproblem-refused");
   const hapsyn::SolverContext context = checkpoint_context(file);
-  const std::vector<hapsyn::plugins::FinishedSubproblem> finished = {finished_at(*problem, 0.4, 0.2)};
+  const hapsyn::plugins::SubproblemSlots finished = {finished_at(*problem, 0.4, 0.2)};
   const auto refused = [&](const hapsyn::Problem& p, const std::function<void(Json&)>& edit,
                            std::initializer_list<std::string> fragments) {
     hapsyn::plugins::write_subproblem_checkpoint(context, "test", "fp", {{"finished", &finished}}, 1.0);
@@ -322,6 +365,10 @@ TEST(SubSolver, CheckpointEntriesOfTheWrongShapeOrWithEditedValuesAreRefused) {
   refused(*problem, [](Json& s) { s["finished"].push_back(s["finished"][0]); },
           {prefix + "finished: 2 finished subproblems, this study has 1"});
   refused(*problem, [](Json& s) { s["finished"][0] = 3; }, {prefix + "finished[0]: not an object"});
+  refused(*problem, [](Json& s) { s["finished"][0]["task"] = 1; },
+          {prefix + "finished[0].task = 1: must be an integer in 0..0 (a subproblem of this study)"});
+  refused(*problem, [](Json& s) { s["finished"][0]["task"] = -1; },
+          {prefix + "finished[0].task = -1: must be an integer in 0..0"});
   refused(*problem, [](Json& s) { s["finished"][0].erase("record"); }, {prefix + "finished[0].record: missing or not an object"});
   refused(*problem, [](Json& s) { s["finished"][0]["sample_evaluations"] = 1.5; },
           {prefix + "finished[0].sample_evaluations: missing or not a count (an integer >= 0)"});
@@ -340,5 +387,184 @@ TEST(SubSolver, CheckpointEntriesOfTheWrongShapeOrWithEditedValuesAreRefused) {
   const auto half = half_reachable_problem();
   refused(*half, [](Json& s) { s["finished"][0]["design"][0] = 0.75; },
           {prefix + "finished[0]: the design is not feasible, the checkpoint claims objectives ["});
+  boost::filesystem::remove(file);
+}
+
+TEST(SubSolver, CheckpointTasksOutOfOrderOrRepeatedAreRefused) {
+  const auto problem = hapsyn::test::two_objective_problem();
+  const std::string file = temp_file("hapsyn-subproblem-order");
+  const hapsyn::SolverContext context = checkpoint_context(file);
+  hapsyn::plugins::SubproblemSlots finished = {finished_at(*problem, 0.4, 0.2), finished_at(*problem, 0.3, 0.1)};
+  for (const int second : {0, -1}) {
+    hapsyn::plugins::write_subproblem_checkpoint(context, "test", "fp", {{"finished", &finished}}, 1.0);
+    std::ifstream in(file);
+    Json c = Json::parse(in);
+    in.close();
+    if (second >= 0) {
+      c["state"]["finished"][1]["task"] = second;  // task 0 twice
+    } else {
+      std::swap(c["state"]["finished"][0], c["state"]["finished"][1]);  // 1, then 0
+    }
+    c.erase("checksum");
+    c["checksum"] = hapsyn::fnv1a_hex(c.dump());
+    std::ofstream(file) << c.dump();
+    hapsyn::test::expect_error(
+        [&] { hapsyn::plugins::read_subproblem_checkpoint(*problem, context, "test", "fp", {{"finished", 2}}); },
+        {"checkpoint: " + file + ": finished[1].task = 0: the entries must be in increasing task order, each task once "
+                                 "(the entry before is task " + std::string(second >= 0 ? "0" : "1") + ")"});
+  }
+  boost::filesystem::remove(file);
+}
+
+// ---- subproblems as a task farm ----
+
+namespace {
+
+// A farm whose task i finds the design (0.1 i, 0.05) of the two-objective problem; task `stop_at`
+// returns nullopt (a stop), and every task notes which thread ran it.
+hapsyn::plugins::SubproblemFarm design_farm(const hapsyn::Problem& problem, long long stop_at = -1) {
+  hapsyn::plugins::SubproblemFarm farm;
+  farm.run = [&problem, stop_at](std::size_t i) -> std::optional<hapsyn::plugins::FinishedSubproblem> {
+    if (static_cast<long long>(i) == stop_at) return std::nullopt;
+    hapsyn::plugins::FinishedSubproblem f = finished_at(problem, 0.1 * static_cast<double>(i), 0.05);
+    f.record = {{"task", i}, {"status", "converged"}, {"seconds", 0.25}};
+    return f;
+  };
+  farm.what = [](std::size_t i) { return "test: task " + std::to_string(i); };
+  return farm;
+}
+
+}  // namespace
+
+TEST(SubSolver, FarmFillsTheUnfinishedSlotsAndSkipsTheFinishedOnes) {
+  const auto problem = hapsyn::test::two_objective_problem();
+  for (int threads : {1, 3}) {
+    hapsyn::plugins::SubproblemSlots slots(5);
+    slots[2] = hapsyn::plugins::FinishedSubproblem{};
+    slots[2]->record = {{"from", "checkpoint"}};
+    hapsyn::plugins::SubproblemFarm farm = design_farm(*problem);
+    farm.threads = threads;
+    std::vector<std::size_t> collected;
+    farm.collected = [&](std::size_t i) { collected.push_back(i); };
+    std::ostringstream progress;
+    hapsyn::SolverContext context;
+    context.progress = &progress;
+    const hapsyn::FarmOutcome outcome = hapsyn::plugins::run_subproblem_farm(*problem, context, slots, farm);
+    EXPECT_FALSE(outcome.stopped);
+    std::sort(collected.begin(), collected.end());
+    EXPECT_EQ(collected, (std::vector<std::size_t>{0, 1, 3, 4}));
+    EXPECT_EQ(slots[2]->record, (Json{{"from", "checkpoint"}}));
+    ASSERT_TRUE(slots[4] && slots[4]->point);
+    EXPECT_EQ(slots[4]->point->design[0], 0.4);
+    EXPECT_EQ(slots[4]->point->score, problem->score(slots[4]->point->objectives));
+    // One process: the sub-solvers name themselves; the farm adds no line.
+    EXPECT_EQ(progress.str(), "");
+  }
+}
+
+TEST(SubSolver, FarmOnRanksGivesEveryRankRankZerosSlots) {
+  const auto problem = hapsyn::test::two_objective_problem();
+  const auto tape = std::make_shared<hapsyn::plugins::test::ReplayTape>();
+  hapsyn::plugins::SubproblemSlots rank0(6), rank1(6);
+  rank0[1] = rank1[1] = finished_at(*problem, 0.9, 0.0);  // from a checkpoint, on both
+  std::ostringstream progress0;
+  std::vector<std::size_t> collected0, collected1;
+  {
+    hapsyn::plugins::test::ReplayCluster cluster(0, tape);
+    hapsyn::SolverContext context;
+    context.ranks = &cluster;
+    context.progress = &progress0;
+    hapsyn::plugins::SubproblemFarm farm = design_farm(*problem);
+    farm.collected = [&](std::size_t i) { collected0.push_back(i); };
+    EXPECT_FALSE(hapsyn::plugins::run_subproblem_farm(*problem, context, rank0, farm).stopped);
+  }
+  {
+    hapsyn::plugins::test::ReplayCluster cluster(1, tape);
+    hapsyn::SolverContext context;
+    context.ranks = &cluster;
+    hapsyn::plugins::SubproblemFarm farm = design_farm(*problem);
+    farm.collected = [&](std::size_t i) { collected1.push_back(i); };
+    EXPECT_FALSE(hapsyn::plugins::run_subproblem_farm(*problem, context, rank1, farm).stopped);
+  }
+  EXPECT_TRUE(tape->events.empty());
+  EXPECT_EQ(collected0.size(), 5u);
+  EXPECT_TRUE(collected1.empty());  // rank 1 collects nothing ...
+  for (std::size_t i = 0; i < 6; ++i) {  // ... and has rank 0's slots, bit for bit
+    ASSERT_TRUE(rank0[i] && rank1[i]) << i;
+    EXPECT_EQ(rank1[i]->record, rank0[i]->record);
+    EXPECT_EQ(rank1[i]->point->design, rank0[i]->point->design);
+    EXPECT_EQ(rank1[i]->point->objectives, rank0[i]->point->objectives);
+    EXPECT_EQ(rank1[i]->point->score, rank0[i]->point->score);
+    EXPECT_EQ(rank1[i]->sample_evaluations, rank0[i]->sample_evaluations);
+  }
+  // Under MPI rank 0 names what it collects (the sub-solvers ran without progress).
+  EXPECT_NE(progress0.str().find("test: task 3: converged in 0.25 s\n"), std::string::npos) << progress0.str();
+}
+
+TEST(SubSolver, StoppedFarmLeavesTheUnfinishedSlotsEmptyOnEveryRank) {
+  const auto problem = hapsyn::test::two_objective_problem();
+  const auto tape = std::make_shared<hapsyn::plugins::test::ReplayTape>();
+  hapsyn::plugins::SubproblemSlots rank0(4), rank1(4);
+  std::atomic<bool> visible{false};
+  {
+    hapsyn::plugins::test::ReplayCluster cluster(0, tape);
+    hapsyn::SolverContext context;
+    context.ranks = &cluster;
+    EXPECT_TRUE(hapsyn::plugins::run_subproblem_farm(*problem, context, rank0, design_farm(*problem, 2)).stopped);
+  }
+  {
+    hapsyn::plugins::test::ReplayCluster cluster(1, tape, &visible);
+    hapsyn::SolverContext context;
+    context.ranks = &cluster;
+    EXPECT_TRUE(hapsyn::plugins::run_subproblem_farm(*problem, context, rank1, design_farm(*problem)).stopped);
+  }
+  EXPECT_TRUE(visible.load());  // the agreed stop reaches rank 1's flag
+  for (std::size_t i = 0; i < 4; ++i) EXPECT_EQ(rank1[i].has_value(), rank0[i].has_value()) << i;
+  EXPECT_TRUE(rank0[0] && rank0[1]);
+  EXPECT_FALSE(rank0[2]);
+}
+
+TEST(SubSolver, TaskContextKeepsProgressInOneProcessOnly) {
+  std::ostringstream progress, log;
+  std::atomic<bool> stop{false};
+  hapsyn::SolverContext context;
+  context.threads = 3;
+  context.progress = &progress;
+  context.log = &log;
+  context.stop = &stop;
+  context.checkpoint_file = "parent.json";
+  context.resume = true;
+  hapsyn::SolverContext one = hapsyn::plugins::task_context(context);
+  EXPECT_EQ(one.progress, &progress);
+  EXPECT_EQ(one.log, &log);
+  EXPECT_EQ(one.threads, 3);
+  EXPECT_EQ(one.stop, &stop);
+  EXPECT_EQ(one.checkpoint_file, "");
+  EXPECT_FALSE(one.resume);
+  const auto tape = std::make_shared<hapsyn::plugins::test::ReplayTape>();
+  hapsyn::plugins::test::ReplayCluster cluster(0, tape);
+  context.ranks = &cluster;
+  hapsyn::SolverContext ranked = hapsyn::plugins::task_context(context);
+  EXPECT_EQ(ranked.progress, nullptr);
+  EXPECT_EQ(ranked.log, nullptr);
+  EXPECT_EQ(ranked.ranks, nullptr);  // the sub-solver runs on this process alone
+  EXPECT_EQ(&ranked.cluster(), &hapsyn::Cluster::local());
+  EXPECT_EQ(ranked.threads, 3);
+}
+
+TEST(SubSolver, CheckpointIsWrittenByRankZeroOnly) {
+  const auto problem = hapsyn::test::two_objective_problem();
+  const std::string file = temp_file("hapsyn-subproblem-rank1");
+  boost::filesystem::remove(file);
+  const auto tape = std::make_shared<hapsyn::plugins::test::ReplayTape>();
+  hapsyn::plugins::test::ReplayCluster cluster(1, tape);
+  hapsyn::SolverContext context = checkpoint_context(file);
+  context.ranks = &cluster;
+  const hapsyn::plugins::SubproblemSlots finished = {finished_at(*problem, 0.4, 0.2)};
+  hapsyn::plugins::write_subproblem_checkpoint(context, "test", "fp", {{"finished", &finished}}, 1.0);
+  EXPECT_FALSE(boost::filesystem::exists(file));
+  context.ranks = nullptr;
+  hapsyn::plugins::write_subproblem_checkpoint(context, "test", "fp", {{"finished", &finished}}, 1.0);
+  EXPECT_TRUE(boost::filesystem::exists(file));
   boost::filesystem::remove(file);
 }

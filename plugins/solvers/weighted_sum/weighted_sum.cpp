@@ -7,6 +7,7 @@
 #include <hapsyn/pareto.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -57,69 +58,84 @@ SolverResult WeightedSumSolver::solve(const Problem& problem, const SolverContex
   const std::string fingerprint = study_fingerprint(problem, OptionDeclarations<WeightedSumOptions>::to_json(options_));
 
   // The weight vectors a checkpoint has finished (their designs re-evaluated on reading).
-  std::vector<FinishedSubproblem> finished;
+  SubproblemSlots finished(all_weights.size());
   double seconds_before = 0.0;
   Json resumed = nullptr;
   if (std::optional<SubproblemCheckpoint> checkpoint =
           read_subproblem_checkpoint(problem, context, "weighted_sum", fingerprint, {{"finished", all_weights.size()}})) {
     finished = std::move(checkpoint->lists["finished"]);
     for (std::size_t k = 0; k < finished.size(); ++k) {
-      if (finished[k].record.value("weights", Json()) != Json(all_weights[k])) {
-        throw bad_checkpoint(context, "finished[" + std::to_string(k) + "].record.weights = " +
-                                          finished[k].record.value("weights", Json()).dump() + ": this study's weight vector " +
-                                          std::to_string(k) + " is " + Json(all_weights[k]).dump());
+      if (finished[k] && finished[k]->record.value("weights", Json()) != Json(all_weights[k])) {
+        throw bad_checkpoint(context, checkpoint->where("finished", k) + ".record.weights = " +
+                                          finished[k]->record.value("weights", Json()).dump() +
+                                          ": this study's weight vector " + std::to_string(k) + " is " +
+                                          Json(all_weights[k]).dump());
       }
     }
     seconds_before = checkpoint->seconds;
     resumed = {{"checkpoint", context.checkpoint_file},
-               {"finished", finished.size()},
+               {"finished", finished_count(finished)},
                {"recheck_sample_evaluations", checkpoint->recheck_samples}};
-    solver_line(context, "weighted_sum: resuming from " + context.checkpoint_file + ": " + std::to_string(finished.size()) +
-                             " of " + std::to_string(all_weights.size()) + " weight vectors finished");
+    solver_line(context, "weighted_sum: resuming from " + context.checkpoint_file + ": " +
+                             std::to_string(finished_count(finished)) + " of " + std::to_string(all_weights.size()) +
+                             " weight vectors finished");
   }
   const auto elapsed = [&] { return seconds_before + std::chrono::duration<double>(Clock::now() - t_start).count(); };
+  const auto checkpoint = [&] {
+    write_subproblem_checkpoint(context, "weighted_sum", fingerprint, {{"finished", &finished}}, elapsed());
+  };
 
-  bool stopped = false;
-  for (std::size_t k = finished.size(); k < all_weights.size(); ++k) {
-    if (context.stop_requested()) {
-      stopped = true;
-      break;
-    }
+  // One task per weight vector: a whole sub-solver run on one rank's threads. The weight vectors
+  // are independent (no warm start), so the result does not depend on where each one runs.
+  const SolverContext inner = task_context(context);
+  std::atomic<long long> interrupted_designs{0}, interrupted_samples{0};
+  const auto what = [&](std::size_t k) {
+    return "weighted_sum: weights " + Json(all_weights[k]).dump() + " (" + std::to_string(k + 1) + " of " +
+           std::to_string(all_weights.size()) + ")";
+  };
+  SubproblemFarm farm;
+  farm.what = what;
+  farm.run = [&](std::size_t k) -> std::optional<FinishedSubproblem> {
+    if (inner.stop_requested()) return std::nullopt;
     const std::vector<double>& w = all_weights[k];
     const auto t0 = Clock::now();
-    const SolverResult r = run_sub_solver(*solver, *reweighted_problem(problem, w), context,
-                                          "weighted_sum: weights " + Json(w).dump() + " (" + std::to_string(k + 1) + " of " +
-                                              std::to_string(all_weights.size()) + ")");
+    const SolverResult r = run_sub_solver(*solver, *reweighted_problem(problem, w), inner, what(k));
     if (r.status == SolverStatus::kStopped) {
       // Its best is not this weight's optimum: the weight is run again on --resume.
-      result.design_evaluations += r.design_evaluations;
-      result.sample_evaluations += r.sample_evaluations;
-      stopped = true;
-      break;
+      interrupted_designs += r.design_evaluations;
+      interrupted_samples += r.sample_evaluations;
+      return std::nullopt;
     }
     FinishedSubproblem f;
     f.design_evaluations = r.design_evaluations;
     f.sample_evaluations = r.sample_evaluations;
     f.record = {{"weights", w}, {"status", to_string(r.status)}};
     std::vector<double> values;
-    if (r.best && evaluate_full_design(problem, r.best->design, context.threads, values, f.sample_evaluations)) {
+    if (r.best && evaluate_full_design(problem, r.best->design, inner.threads, values, f.sample_evaluations)) {
       f.point = SolutionPoint{r.best->design, values, problem.score(values)};
       f.record["design"] = problem.design_to_json(r.best->design);
       f.record["objectives"] = values;
     }
     f.record["seconds"] = std::chrono::duration<double>(Clock::now() - t0).count();
-    finished.push_back(std::move(f));
-    write_subproblem_checkpoint(context, "weighted_sum", fingerprint, {{"finished", &finished}}, elapsed());
-  }
-  if (stopped) write_subproblem_checkpoint(context, "weighted_sum", fingerprint, {{"finished", &finished}}, elapsed());
+    return f;
+  };
+  farm.collected = [&](std::size_t) { checkpoint(); };
+  farm.on_abort = checkpoint;
+  // A stop that came after the last weight vector finished changes nothing.
+  const bool stopped =
+      run_subproblem_farm(problem, context, finished, farm).stopped && finished_count(finished) < finished.size();
+  if (stopped) checkpoint();
+  result.design_evaluations = interrupted_designs;
+  result.sample_evaluations = interrupted_samples;
 
   std::vector<SolutionPoint> points;
   Json runs = Json::array();
-  for (const FinishedSubproblem& f : finished) {
-    result.design_evaluations += f.design_evaluations;
-    result.sample_evaluations += f.sample_evaluations;
-    runs.push_back(f.record);
-    if (f.point) points.push_back(*f.point);
+  for (const std::optional<FinishedSubproblem>& f : finished) {
+    if (!f) continue;
+    result.design_evaluations += f->design_evaluations;
+    result.sample_evaluations += f->sample_evaluations;
+    runs.push_back(f->record);
+    if (f->point) points.push_back(*f->point);
   }
   std::vector<Sense> senses;
   for (const Objective& o : problem.objectives()) senses.push_back(o.sense);
@@ -135,7 +151,7 @@ SolverResult WeightedSumSolver::solve(const Problem& problem, const SolverContex
   if (!resumed.is_null()) result.statistics["resumed"] = resumed;
   std::ostringstream message;
   if (stopped) {
-    message << "weighted sums stopped on request after " << finished.size() << " of " << all_weights.size()
+    message << "weighted sums stopped on request after " << runs.size() << " of " << all_weights.size()
             << " weight vectors; the front is that of the finished ones (" << keep.size() << " distinct non-dominated points)"
             << checkpoint_note(context);
     result.status = SolverStatus::kStopped;

@@ -38,6 +38,10 @@ class WeightedSumSolver : public Solver {
   using Options = WeightedSumOptions;
   explicit WeightedSumSolver(const WeightedSumOptions& options) : options_(options) {}
   bool pareto() const override { return true; }
+  /// Under MPI the weight vectors are a task farm: each one's sub-solver runs whole on one
+  /// rank (its threads, no progress lines of its own), and the front is the same whatever the
+  /// number of ranks (the weight vectors are independent).
+  bool distributed() const override { return true; }
   /// \throws Error("weighted_sum", ...) with fewer than two objectives, or when a weight vector
   ///         has the wrong length, a negative or non-finite entry, or sums to zero; or when the
   ///         sub-solver refuses a reweighted problem ("<sub_solver's path>: <its message>").
@@ -50,7 +54,8 @@ class WeightedSumSolver : public Solver {
   /// Checkpoint (context.checkpoint_file): written after every weight vector (its record,
   /// design, objective values and counts); on --resume the finished ones are skipped, after
   /// their designs are re-evaluated and found to give the claimed values, and the result is
-  /// that of an uninterrupted run. The sub-solver runs without a checkpoint of its own.
+  /// that of an uninterrupted run. The sub-solver runs without a checkpoint of its own. Under
+  /// MPI the finished ones need not be the first ones (each entry names its task).
   /// \throws Error("checkpoint", ...) on --resume with a checkpoint that fails the checks.
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
   /// The weight vectors the options give for `objectives` objectives: `weights` when given,

@@ -2,6 +2,8 @@
 // none in its convex part (where no weight makes an interior point optimal); bad weights.
 #include "weighted_sum.hpp"
 
+#include "shared/replay_cluster.hpp"
+
 #include "analytic_problems.hpp"
 #include "test_support.hpp"
 
@@ -113,16 +115,17 @@ std::string temp_file(const std::string& name) {
 }
 
 hapsyn::SolverResult run_weighted(const hapsyn::Problem& problem, const std::string& checkpoint, bool resume,
-                                  const std::atomic<bool>* stop) {
+                                  const std::atomic<bool>* stop, hapsyn::Cluster* ranks = nullptr, int threads = 1) {
   const Json options = {{"count", 6}, {"sub_solver", {{"plugin", "grid"}, {"options", {{"progress_interval", 1e9}}}}}};
   const auto solver = hapsyn::test::registry().create_solver("weighted_sum", options, "solver");
   solver->check(problem);
   hapsyn::SolverContext context;
-  context.threads = 1;
+  context.threads = threads;
   context.seed = 5;
   context.checkpoint_file = checkpoint;
   context.resume = resume;
   context.stop = stop;
+  context.ranks = ranks;
   return solver->solve(problem, context);
 }
 
@@ -207,5 +210,87 @@ TEST(WeightedSum, EditedCheckpointIsRefused) {
   Counter again;
   expect_error([&] { run_weighted(*counted_problem(again), file, true, nullptr); },
                {"checkpoint: " + file + ": not valid JSON (truncated or damaged)"});
+  boost::filesystem::remove(file);
+}
+
+// ---- on several threads and ranks ----
+
+namespace {
+// The same front, counts and records (times aside).
+void expect_same_front(const hapsyn::SolverResult& got, const hapsyn::SolverResult& expected) {
+  EXPECT_EQ(got.status, expected.status);
+  EXPECT_EQ(got.message, expected.message);
+  ASSERT_EQ(got.front.size(), expected.front.size());
+  for (std::size_t i = 0; i < got.front.size(); ++i) {
+    EXPECT_EQ(got.front[i].design, expected.front[i].design) << i;
+    EXPECT_EQ(got.front[i].objectives, expected.front[i].objectives) << i;
+  }
+  EXPECT_EQ(got.design_evaluations, expected.design_evaluations);
+  EXPECT_EQ(without_seconds(got.statistics["runs"]), without_seconds(expected.statistics["runs"]));
+}
+}  // namespace
+
+TEST(WeightedSum, ThreadCountDoesNotChangeTheResult) {
+  Counter a, b;
+  const auto one = run_weighted(*counted_problem(a), "", false, nullptr, nullptr, 1);
+  const auto three = run_weighted(*counted_problem(b), "", false, nullptr, nullptr, 3);
+  ASSERT_EQ(one.status, hapsyn::SolverStatus::kConverged) << one.message;
+  expect_same_front(three, one);
+}
+
+TEST(WeightedSum, EveryRankEndsWithTheSingleProcessResult) {
+  Counter reference_calls;
+  const auto reference = run_weighted(*counted_problem(reference_calls), "", false, nullptr);
+  const auto tape = std::make_shared<hapsyn::plugins::test::ReplayTape>();
+  hapsyn::plugins::test::ReplayCluster rank0(0, tape), rank1(1, tape);
+  Counter c0, c1;
+  const auto r0 = run_weighted(*counted_problem(c0), "", false, nullptr, &rank0);
+  const auto r1 = run_weighted(*counted_problem(c1), "", false, nullptr, &rank1);
+  EXPECT_EQ(rank0.farms(), 1);  // one farm of six weight vectors
+  EXPECT_TRUE(tape->events.empty());  // rank 1 called the same collectives
+  expect_same_front(r0, reference);
+  expect_same_front(r1, reference);
+  // Rank 1 ran only its share of the weight vectors (the odd ones) and still has every record.
+  EXPECT_LT(c1.calls.load(), c0.calls.load());
+  EXPECT_EQ(r1.statistics["runs"].size(), 6u);
+}
+
+TEST(WeightedSum, ResumeFromWeightVectorsFinishedOutOfOrderGivesTheUninterruptedResult) {
+  const std::string file = temp_file("hapsyn-weighted-holes");
+  boost::filesystem::remove(file);
+  Counter c;
+  const auto reference = run_weighted(*counted_problem(c), file, false, nullptr);
+  ASSERT_EQ(reference.status, hapsyn::SolverStatus::kConverged) << reference.message;
+  // Weight vectors 1 and 4 finished, as ranks finish them.
+  edit_checkpoint(file, [](Json& s) {
+    const Json finished = s["finished"];
+    s["finished"] = Json::array({finished[1], finished[4]});
+  });
+  Counter again;
+  const auto resumed = run_weighted(*counted_problem(again), file, true, nullptr);
+  expect_same_front(resumed, reference);
+  EXPECT_EQ(resumed.statistics["resumed"]["finished"], 2);
+  EXPECT_LT(again.calls.load(), c.calls.load());
+  boost::filesystem::remove(file);
+}
+
+TEST(WeightedSum, StopOnRanksIsTheSameOnEveryRankAndResumeFinishesIt) {
+  Counter full;
+  const auto reference = run_weighted(*counted_problem(full), "", false, nullptr);
+  const std::string file = temp_file("hapsyn-weighted-ranks-stop");
+  boost::filesystem::remove(file);
+  const auto tape = std::make_shared<hapsyn::plugins::test::ReplayTape>();
+  std::atomic<bool> visible{false};
+  Counter c0, c1;
+  hapsyn::plugins::test::ReplayCluster rank0(0, tape, &c0.stop), rank1(1, tape, &visible);
+  c0.stop_after = full.calls / 2;
+  const auto r0 = run_weighted(*counted_problem(c0), file, false, &c0.stop, &rank0);
+  const auto r1 = run_weighted(*counted_problem(c1), file, false, &visible, &rank1);
+  ASSERT_EQ(r0.status, hapsyn::SolverStatus::kStopped) << r0.message;
+  EXPECT_EQ(r1.status, hapsyn::SolverStatus::kStopped) << r1.message;
+  EXPECT_EQ(r1.statistics["runs"], r0.statistics["runs"]);
+  EXPECT_TRUE(tape->events.empty());
+  Counter again;
+  expect_same_front(run_weighted(*counted_problem(again), file, true, nullptr), reference);
   boost::filesystem::remove(file);
 }
