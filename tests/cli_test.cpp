@@ -523,3 +523,18 @@ TEST(Cli, AKilledForcedRunLeavesNoResultOfEitherRun) {
   EXPECT_FALSE(has_staging(out));
   fs::remove_all(out);
 }
+
+#ifdef HAPSYN_TEST_NO_MPI
+// A build without MPI (HAPSYN_WITH_MPI=OFF, as the sanitizer build is): started by mpirun (the
+// launcher's environment says so), `hapsyn run` refuses instead of running the whole study on
+// every rank into the same directory.
+TEST(Cli, RunStartedByMpirunInABuildWithoutMpiSaysSo) {
+  const fs::path out = fresh_dir("no-mpi");
+  const Output o = hapsyn_test_stopped("OMPI_COMM_WORLD_SIZE=3 ", "run " + problem("fivebar-gii-coarse.json") +
+                                                                      " --out " + out.string() + " --quiet");
+  EXPECT_EQ(o.code, 1) << o.out;
+  EXPECT_NE(o.out.find("mpi: this hapsyn was built without MPI (HAPSYN_WITH_MPI=OFF)"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("--shard i/N"), std::string::npos) << o.out;
+  EXPECT_FALSE(fs::exists(out / "result.json"));
+}
+#endif

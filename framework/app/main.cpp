@@ -11,6 +11,7 @@
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/groups.hpp>
+#include <hapsyn/merge.hpp>
 #include <hapsyn/output_files.hpp>
 #include <hapsyn/plot.hpp>
 #include <hapsyn/problem_file.hpp>
@@ -19,6 +20,8 @@
 #include <hapsyn/study.hpp>
 #include <hapsyn/study_runner.hpp>
 #include <hapsyn/sweep.hpp>
+
+#include "ranks.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -46,6 +49,13 @@ using hapsyn::Json;
 
 // Set by the first signal; solvers poll it, write their checkpoint and return "stopped".
 std::atomic<bool> stop_requested{false};
+// Under MPI with several ranks: the stop every rank agreed on (set inside task farms only, so
+// that all ranks leave a loop together); solvers see this one, the handlers set the one above.
+std::atomic<bool> stop_agreed{false};
+
+// Under mpirun every rank gets the signal: only the launcher's rank 0 says so (set before the
+// handlers are installed).
+bool signal_notes = true;
 
 // Async-signal-safe: an atomic store and write(2). A second signal ends the process at once
 // (exit status 128 + signal, as a shell reports a killed job).
@@ -58,10 +68,12 @@ extern "C" void on_stop_signal(int signal_number) {
   static const char kFirst[] =
       "\nhapsyn: stop requested: finishing the current step, writing the checkpoint and the best so far "
       "(signal again to stop at once)\n";
+  if (!signal_notes) return;
   [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, kFirst, sizeof kFirst - 1);
 }
 
 void install_stop_handlers() {
+  signal_notes = hapsyn_cli::launcher_rank() == 0;
   struct sigaction action {};
   action.sa_handler = on_stop_signal;
   sigemptyset(&action.sa_mask);
@@ -350,6 +362,9 @@ struct Arguments {
   int threads = 0;
   std::uint64_t seed = 0;
   bool quiet = false, resume = false, force = false;
+  std::string shard;
+  double rank_timeout = 120.0;
+  std::vector<std::string> merge_dirs;
   std::string plugin_name;
   bool describe_json = false;
   std::string describe_options;
@@ -372,6 +387,7 @@ struct Commands {
   CLI::Option* scene_threads = nullptr;
   CLI::App* sweep = nullptr;
   CLI::App* compare = nullptr;
+  CLI::App* merge = nullptr;
 };
 
 // --seed: a whole number that fits 64 bits. Checked on the text, before CLI11 converts it: a
@@ -397,6 +413,20 @@ void define_study_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.run->add_flag("--quiet,-q", a.quiet, "No progress output");
   c.run->add_flag("--resume", a.resume, "Continue from the output directory's checkpoint (every solver that can run long checkpoints)");
   c.run->add_flag("--force", a.force, "Overwrite a finished study (an existing result.json) in the output directory");
+  c.run->add_option("--shard", a.shard,
+                    "Run only share i of N (1 <= i <= N) of the solver's work into its own --out (a SLURM job array "
+                    "task: --shard $((SLURM_ARRAY_TASK_ID+1))/$SLURM_ARRAY_TASK_COUNT); combine with hapsyn merge");
+  c.run->add_option("--rank-timeout", a.rank_timeout,
+                    "Under mpirun: seconds a rank may stay silent inside a task farm before the job ends naming it")
+      ->check(CLI::PositiveNumber);
+
+  c.merge = app.add_subcommand("merge", "Combine the shares of a --shard run (one output directory each) into one result");
+  c.merge->add_option("dirs", a.merge_dirs, "The shares' output directories")->required();
+  c.merge->add_option("--out", a.out_dir, "Output directory of the merged study")->required();
+  c.merge->add_option("--threads", a.threads, "Worker threads for the final check (default: all cores)")
+      ->check(CLI::NonNegativeNumber);
+  c.merge->add_flag("--quiet,-q", a.quiet, "No progress output");
+  c.merge->add_flag("--force", a.force, "Overwrite a finished study in --out");
 
   c.validate = app.add_subcommand("validate", "Check a problem file completely without running it");
   c.validate->add_option("file", a.file, "Problem file (JSON)")->required();
@@ -452,26 +482,62 @@ void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
                       "Run every study again (default: a folder's finished result of the same problem and seed is reused)");
 }
 
+// The processes of this run (see ranks.hpp); kept for main()'s error report.
+std::unique_ptr<hapsyn::Cluster> run_cluster;
+
 int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& registry) {
+  run_cluster = hapsyn_cli::make_run_cluster(a.shard, a.rank_timeout, &stop_requested, &stop_agreed);
+  hapsyn::Cluster* cluster = run_cluster.get();
+  const bool several = cluster != nullptr && cluster->size() > 1;
+  const bool quiet = a.quiet || !(cluster == nullptr || cluster->root());
   const auto t0 = std::chrono::steady_clock::now();
-  hapsyn::Study study = load(a.file, a.sets, registry, load_settings(a.threads, a.quiet));
+  hapsyn::Study study = hapsyn_cli::load_on_ranks(
+      cluster, [&] { return load(a.file, a.sets, registry, load_settings(a.threads, quiet)); });
+  if (!a.shard.empty() && !study.solver->shardable()) {
+    throw hapsyn::Error("shard", "--shard " + a.shard + ": solver " + study.solver_plugin +
+                                     " cannot be split into shares (grid, culling and ga can; sweep and compare split "
+                                     "their cases); run it whole, or on several ranks with mpirun");
+  }
   hapsyn::RunOptions options;
   options.scene_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   options.output_directory = a.out_dir;
   options.threads = a.threads;
   if (*c.run_seed) options.seed = a.seed;
-  options.quiet = a.quiet;
+  options.quiet = quiet;
   options.resume = a.resume;
   options.force = a.force;
-  options.stop = &stop_requested;
+  options.cluster = cluster;
+  options.problem_file = a.file;
+  options.stop = several ? &stop_agreed : &stop_requested;
+  options.signal = &stop_requested;
   const Json result = hapsyn::run_study(study, options);
+  const bool stopped = result["status"] == "stopped";
+  if (hapsyn_cli::rank_of(cluster) != 0) return stopped ? kExitStopped : 0;  // rank 0 reports
   print_summary(result, std::cout);
-  if (result["status"] != "stopped") return 0;
+  if (result.contains("shard") && result["shard"].value("complete", false)) {
+    std::cout << "shard " << result["shard"]["index"] << "/" << result["shard"]["count"]
+              << " done; when every share is, combine them: hapsyn merge DIR1 DIR2 ... --out DIR\n";
+    return 0;
+  }
+  if (!stopped) return 0;
   std::string again = "hapsyn run " + shell_word(a.file);
   for (const std::string& s : a.sets) again += " --set " + shell_word(s);
   if (!a.out_dir.empty()) again += " --out " + shell_word(a.out_dir);
+  if (!a.shard.empty()) again += " --shard " + a.shard;
   std::cout << "stopped; resume with: " << again << " --resume\n";
   return kExitStopped;
+}
+
+int merge_command(const Arguments& a, const hapsyn::Registry& registry) {
+  hapsyn::RunOptions options;
+  options.output_directory = a.out_dir;
+  options.threads = a.threads;
+  options.quiet = a.quiet;
+  options.force = a.force;
+  options.stop = &stop_requested;
+  const Json result = hapsyn::merge_shard_directories(a.merge_dirs, registry, options);
+  print_summary(result, std::cout);
+  return result["status"] == "stopped" ? kExitStopped : 0;
 }
 
 int validate_command(const Arguments& a, const hapsyn::Registry& registry) {
@@ -524,8 +590,9 @@ int sweep_command(const Arguments& a, const hapsyn::Registry& registry) {
 int dispatch(const Commands& c, Arguments& a, const hapsyn::Registry& registry) {
   // Only the commands that run studies stop gracefully; the others keep the default (Ctrl-C ends
   // them at once, which loses nothing).
-  if (*c.run || *c.sweep || *c.compare) install_stop_handlers();
+  if (*c.run || *c.sweep || *c.compare || *c.merge) install_stop_handlers();
   if (*c.run) return run_command(a, c, registry);
+  if (*c.merge) return merge_command(a, registry);
   if (*c.validate) return validate_command(a, registry);
   if (*c.plugins) return list_plugins(registry);
   if (*c.describe) return describe(a.plugin_name, a.describe_json, a.describe_options, registry);
@@ -559,10 +626,25 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  // The cluster goes before MPI is finalized (after main returns), on every path.
+  struct ClusterReset {
+    ~ClusterReset() { run_cluster.reset(); }
+  } reset;
   try {
     hapsyn::Registry registry;
     return dispatch(commands, arguments, registry);
+  } catch (const hapsyn_cli::QuietExit& e) {
+    return e.code;
   } catch (const hapsyn::Error& e) {
+    // Under MPI an error rank 0 passed on is rank 0's to report; another rank's own error names
+    // the rank and ends the job (rank 0 may be waiting for this one).
+    // Refused before the cluster exists (the same on every rank): the launcher's rank 0 says it.
+    if (run_cluster == nullptr && hapsyn_cli::launcher_rank() > 0) return 1;
+    if (const int rank = hapsyn_cli::rank_of(run_cluster.get()); rank != 0) {
+      if (e.component() == "mpi" && std::string(e.what()).find("rank 0 ended the run") != std::string::npos) return 1;
+      std::cerr << "hapsyn: error: rank " << rank << " on " << run_cluster->host(rank) << ": " << e.what() << "\n";
+      hapsyn::abort_job(*run_cluster, 1);
+    }
     std::cerr << "hapsyn: error: " << e.what() << "\n";
     return 1;
   } catch (const boost::filesystem::filesystem_error& e) {

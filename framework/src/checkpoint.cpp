@@ -125,4 +125,27 @@ std::optional<Json> read_checkpoint(const SolverContext& context, const std::str
   return std::move(c["state"]);
 }
 
+Json read_checkpoint_document(const std::string& file, const std::string& component) {
+  boost::system::error_code ec;
+  if (!boost::filesystem::exists(file, ec)) throw Error(component, file + ": missing");
+  const std::string text = read_regular_file(file, component, "checkpoint", kMaxCheckpointBytes);
+  Json c = Json::parse(text, nullptr, false);
+  if (c.is_discarded()) throw Error(component, file + ": not valid JSON (truncated or damaged)");
+  if (!c.is_object() || c.value("format", Json()) != "hapsyn-checkpoint") {
+    throw Error(component, file + ": not a hapsyn checkpoint (no \"format\": \"hapsyn-checkpoint\")");
+  }
+  if (!c.contains("version") || c["version"] != kFormatVersion) {
+    throw Error(component, file + ": checkpoint format version " + c.value("version", Json()).dump() +
+                               ", this hapsyn reads " + std::to_string(kFormatVersion));
+  }
+  if (!c.contains("checksum") || !c["checksum"].is_string() || c["checksum"] != checksum_of(c)) {
+    throw Error(component, file + ": damaged or edited (its checksum does not match its content)");
+  }
+  if (!c.contains("state") || !c["state"].is_object() || !c.contains("seed") || !c["seed"].is_number_unsigned() ||
+      !c.contains("solver") || !c["solver"].is_string() || !c.contains("fingerprint")) {
+    throw Error(component, file + ": a checkpoint needs \"seed\", \"solver\", \"fingerprint\" and a \"state\" object");
+  }
+  return c;
+}
+
 }  // namespace hapsyn

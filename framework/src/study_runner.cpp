@@ -45,6 +45,8 @@ struct RunSetup {
   std::uint64_t seed = 0;
   std::vector<std::string> warnings;
   Cluster* cluster = nullptr;  // the run's processes (null: this one alone)
+  std::string problem_file;    // absolute, or ""
+  bool stop_seen = false;      // a stop was requested during the solve
 };
 
 constexpr int kThreadsPerHardwareThread = 4;
@@ -270,7 +272,11 @@ Json result_document(const Study& study, const RunSetup& run, const SolverResult
     doc["ranks"] = {{"count", run.cluster->size()}, {"hosts", hosts}, {"distributed", study.solver->distributed()}};
   }
   if (run.cluster != nullptr && run.cluster->shard().second > 1) {
-    doc["shard"] = {{"index", run.cluster->shard().first + 1}, {"count", run.cluster->shard().second}};
+    // complete: the share ran to its end (a signal did not stop it first); merge refuses others.
+    doc["shard"] = {{"index", run.cluster->shard().first + 1},
+                    {"count", run.cluster->shard().second},
+                    {"complete", !run.stop_seen},
+                    {"problem_file", run.problem_file}};
   }
   doc["machine"] = machine_info();
   doc["started"] = started;
@@ -621,7 +627,7 @@ int run_threads(const Json& resolved, const RunOptions& options, std::vector<std
 namespace {
 
 // The solve and the outputs, once the directory is locked and the log open.
-Json solve_and_write(Study& study, const RunOptions& options, const RunSetup& run, std::ostream& log) {
+Json solve_and_write(Study& study, const RunOptions& options, RunSetup& run, std::ostream& log) {
   std::ostream* progress = options.quiet ? nullptr : options.progress ? options.progress : &std::cerr;
   SolverContext context;
   context.threads = run.threads;
@@ -641,6 +647,7 @@ Json solve_and_write(Study& study, const RunOptions& options, const RunSetup& ru
   const std::string started = iso_time_now();
   const auto t0 = std::chrono::steady_clock::now();
   SolverResult result = study.solver->solve(*study.problem, context);
+  run.stop_seen = context.stop_requested();
   const double solve_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   Json doc = result_document(study, run, result, started);
@@ -672,6 +679,7 @@ Json run_here(Study& study, const RunOptions& options, Cluster* cluster, const s
   const Json& resolved = study.resolved;
   RunSetup run;
   run.cluster = cluster;
+  if (!options.problem_file.empty()) run.problem_file = fs::absolute(options.problem_file).string();
   run.out_dir = output_directory_of(study, options);
   run.result_file = fs::path(run.out_dir) / "result.json";
   run.checkpoint_file = fs::path(run.out_dir) / "checkpoint.json";

@@ -57,6 +57,12 @@ void write_checkpoint(const SolverContext& context, const std::string& solver, c
 std::optional<Json> read_checkpoint(const SolverContext& context, const std::string& solver,
                                     const std::string& fingerprint);
 
+/// A checkpoint file read whole, for `hapsyn merge`: the document (seed, solver, fingerprint,
+/// state) after the format, version and checksum checks.
+/// \throws Error(component, "<file>: <what is wrong>") when it is missing, not a regular file,
+///         not JSON, not a hapsyn checkpoint, of another version or damaged.
+Json read_checkpoint_document(const std::string& file, const std::string& component);
+
 /// The error a solver throws when a checkpoint passed the checks above but its state does not
 /// hold together (a field missing or of the wrong type, a best value that re-evaluates
 /// differently): Error("checkpoint", "<file>: <detail>; delete it, or run without --resume").

@@ -56,6 +56,9 @@ struct RunOptions {
   /// Under MPI: the flag this rank's signal handlers set (`stop` is then the agreed flag the
   /// cluster sets inside task farms). A solver that runs on rank 0 alone watches this one.
   const std::atomic<bool>* signal = nullptr;
+  /// The problem file's path (recorded for `hapsyn merge` in a share's result.json, which loads
+  /// the resolved problem again with relative paths resolved as the run resolved them).
+  std::string problem_file;
   /// Seconds the caller spent loading the study (validation and the scene build): result.json's
   /// "phases.scene_s", counted in "wall_time_s". 0 when not measured.
   double scene_time_s = 0.0;

@@ -1,0 +1,139 @@
+// hapsyn merge: check that the shares belong together, combine their checkpoints, finish with
+// --resume (see hapsyn/merge.hpp).
+#include <hapsyn/checkpoint.hpp>
+#include <hapsyn/data_file.hpp>
+#include <hapsyn/error.hpp>
+#include <hapsyn/merge.hpp>
+#include <hapsyn/read_file.hpp>
+#include <hapsyn/study.hpp>
+
+#include <boost/filesystem.hpp>
+
+#include <map>
+
+namespace hapsyn {
+
+namespace fs = boost::filesystem;
+
+namespace {
+
+constexpr std::uint64_t kMaxResultBytes = std::uint64_t{1} << 30;
+
+// One share's result.json and checkpoint.json.
+struct Share {
+  std::string dir;
+  Json result;
+  Json checkpoint;
+  int index = 0, count = 0;  // 1-based, as the user wrote --shard
+};
+
+std::string share_name(const Share& s) { return std::to_string(s.index) + "/" + std::to_string(s.count); }
+
+Share read_share(const std::string& dir) {
+  Share s;
+  s.dir = dir;
+  const std::string result_file = (fs::path(dir) / "result.json").string();
+  boost::system::error_code ec;
+  if (!fs::exists(result_file, ec)) {
+    throw Error("merge", dir + ": no result.json (not a finished share: run `hapsyn run FILE --shard i/N --out " + dir +
+                             "` first, or resume it if it was stopped)");
+  }
+  s.result = Json::parse(read_regular_file(result_file, "merge", "result", kMaxResultBytes), nullptr, false);
+  if (s.result.is_discarded() || !s.result.is_object()) throw Error("merge", result_file + ": not valid JSON");
+  const Json shard = s.result.value("shard", Json());
+  if (!shard.is_object() || !shard.contains("index") || !shard.contains("count")) {
+    throw Error("merge", result_file + ": not a share's result (no \"shard\"; shares are run with --shard i/N)");
+  }
+  s.index = shard["index"].get<int>();
+  s.count = shard["count"].get<int>();
+  if (!shard.value("complete", false)) {
+    throw Error("merge", dir + ": shard " + share_name(s) + " was stopped before it finished its share: resume it with "
+                             "`hapsyn run FILE --shard " + share_name(s) + " --out " + dir + " --resume`");
+  }
+  s.checkpoint = read_checkpoint_document((fs::path(dir) / "checkpoint.json").string(), "merge");
+  return s;
+}
+
+// The first key path where two JSON documents differ ("/solver/options/prune"), "" if none.
+std::string first_difference(const Json& a, const Json& b) {
+  const Json patch = Json::diff(a, b);
+  return patch.empty() ? std::string() : patch[0].value("path", std::string("/"));
+}
+
+// Every share of one study, each once.
+void check_shares_belong_together(const std::vector<Share>& shares) {
+  const Share& first = shares.front();
+  std::map<int, std::string> seen;
+  for (const Share& s : shares) {
+    if (s.count != first.count) {
+      throw Error("merge", s.dir + " is shard " + share_name(s) + ", " + first.dir + " shard " + share_name(first) +
+                               ": the shard counts differ");
+    }
+    if (s.result["seed"] != first.result["seed"]) {
+      throw Error("merge", s.dir + " ran with seed " + s.result["seed"].dump() + ", " + first.dir + " with seed " +
+                               first.result["seed"].dump() + ": shares of one run share its seed (give --seed)");
+    }
+    if (s.result["hapsyn"]["version"] != first.result["hapsyn"]["version"]) {
+      throw Error("merge", s.dir + " was run by hapsyn " + s.result["hapsyn"]["version"].dump() + ", " + first.dir +
+                               " by " + first.result["hapsyn"]["version"].dump() + ": shares must come from one version");
+    }
+    const std::string where = first_difference(first.result["problem"], s.result["problem"]);
+    if (!where.empty()) {
+      throw Error("merge", s.dir + " is a share of a different problem than " + first.dir + " (they differ at " + where +
+                               ")");
+    }
+    if (s.checkpoint["solver"] != first.checkpoint["solver"] ||
+        s.checkpoint["fingerprint"] != first.checkpoint["fingerprint"]) {
+      throw Error("merge", s.dir + "/checkpoint.json belongs to another study or solver than " + first.dir +
+                               "/checkpoint.json (solver or fingerprint differ)");
+    }
+    const auto [at, fresh] = seen.emplace(s.index, s.dir);
+    if (!fresh) throw Error("merge", "shard " + share_name(s) + " given twice (" + at->second + ", " + s.dir + ")");
+  }
+  std::string given;
+  for (const auto& [index, dir] : seen) given += (given.empty() ? "" : ", ") + std::to_string(index) + "/" + std::to_string(first.count);
+  for (int i = 1; i <= first.count; ++i) {
+    if (seen.count(i) == 0) {
+      throw Error("merge", "shard " + std::to_string(i) + "/" + std::to_string(first.count) + " is missing (given: " +
+                               given + ")");
+    }
+  }
+}
+
+}  // namespace
+
+Json merge_shard_directories(const std::vector<std::string>& dirs, const Registry& registry, const RunOptions& options) {
+  if (dirs.empty()) throw Error("merge", "no shard directories given");
+  if (options.output_directory.empty()) throw Error("merge", "--out is required (where the merged study is written)");
+  std::vector<Share> shares;
+  for (const std::string& d : dirs) shares.push_back(read_share(d));
+  check_shares_belong_together(shares);
+  std::sort(shares.begin(), shares.end(), [](const Share& a, const Share& b) { return a.index < b.index; });
+
+  const Share& first = shares.front();
+  const std::string problem_file = first.result["shard"].value("problem_file", std::string());
+  const ProblemDirectoryScope scope(problem_file);  // the shares' relative paths, as they read them
+  LoadSettings settings;
+  settings.threads = options.threads;
+  settings.progress = options.quiet ? nullptr : options.progress;
+  Study study = load_study(first.result["problem"], registry, {}, settings);
+  std::vector<Json> states;
+  for (const Share& s : shares) states.push_back(s.checkpoint["state"]);
+  const Json merged = study.solver->merge_shards(*study.problem, states);
+
+  RunOptions run = options;
+  run.seed = first.result["seed"].get<std::uint64_t>();
+  run.resume = true;
+  run.problem_file = problem_file;
+  const std::string out_dir = output_directory_of(study, run);
+  check_output_directory(out_dir, run);
+  fs::create_directories(out_dir);
+  SolverContext context;
+  context.seed = *run.seed;
+  context.checkpoint_file = (fs::path(out_dir) / "checkpoint.json").string();
+  write_checkpoint(context, first.checkpoint["solver"].get<std::string>(),
+                   first.checkpoint["fingerprint"].get<std::string>(), merged);
+  return run_study(study, run);
+}
+
+}  // namespace hapsyn
