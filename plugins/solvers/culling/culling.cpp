@@ -449,13 +449,9 @@ FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions
   const RangeLedger skip = reference.ledger;  // finished before this run
   auto last_report = Clock::now(), last_checkpoint = Clock::now();
   const auto t_sweep = Clock::now();
-  TaskFarm farm;
-  farm.count = reference.ledger.units();
-  farm.shardable = true;
-  farm.done = [&](long long line) { return skip.finished(line); };
   // A line's result: its counts, its best fully searched design, the critical samples it found
   // and a breach.
-  farm.run = [&](long long line, int thread) -> std::optional<std::string> {
+  const auto run_line = [&](long long line, int thread, bool& breach_found) -> std::optional<std::string> {
     SweepThread& s = states[static_cast<std::size_t>(thread)];
     const SweepCounts before = s.counts;
     s.line_best = Best{};
@@ -466,6 +462,7 @@ FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions
       s.partial.add(s.counts.since(before));
       return std::nullopt;
     }
+    breach_found = s.breach.has_value();
     ByteWriter out;
     put_counts(out, s.counts.since(before));
     out.put(s.line_best.index).put(s.line_best.score);
@@ -473,7 +470,7 @@ FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions
     put_breach(out, s.breach);
     return out.take();
   };
-  farm.collect = [&](long long line, std::string&& bytes) {
+  const auto collect_line = [&](long long line, const std::string& bytes) {
     ByteReader in(bytes);
     const SweepCounts counts = get_counts(in);
     const auto index = in.get<long long>();
@@ -497,6 +494,45 @@ FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions
     if (seconds_since(last_checkpoint) >= options.checkpoint_interval) {
       save();
       last_checkpoint = Clock::now();
+    }
+  };
+  // Each task is units_per_task() consecutive lines (those finished before skipped); its result
+  // is its lines' (index, result) pairs, up to a breach. A stop loses the task's finished lines
+  // (a resumed run sweeps them again); their counts stay in the thread's partial counts.
+  const long long lines = reference.ledger.units();
+  const long long per_task = units_per_task(lines);
+  TaskFarm farm;
+  farm.count = (lines + per_task - 1) / per_task;
+  farm.shardable = true;
+  farm.done = [&](long long task) {
+    for (long long line = task * per_task; line < std::min(lines, (task + 1) * per_task); ++line) {
+      if (!skip.finished(line)) return false;
+    }
+    return true;
+  };
+  farm.run = [&](long long task, int thread) -> std::optional<std::string> {
+    ByteWriter out;
+    SweepCounts finished;  // of the lines of this task finished so far
+    for (long long line = task * per_task; line < std::min(lines, (task + 1) * per_task); ++line) {
+      if (skip.finished(line)) continue;
+      bool breach = false;
+      const std::optional<std::string> result = run_line(line, thread, breach);
+      if (!result) {
+        states[static_cast<std::size_t>(thread)].partial.add(finished);
+        return std::nullopt;
+      }
+      ByteReader in(*result);
+      finished.add(get_counts(in));
+      out.put(line).put_string(*result);
+      if (breach) break;  // this rank's tasks stop; rank 0 learns it from this result
+    }
+    return out.take();
+  };
+  farm.collect = [&](long long, std::string&& bytes) {
+    ByteReader in(bytes);
+    while (!in.at_end()) {
+      const auto line = in.get<long long>();
+      collect_line(line, in.get_string());
     }
   };
   // The reference (a real design's full score: it culls nothing that ties or beats it) and the

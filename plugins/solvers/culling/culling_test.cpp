@@ -405,3 +405,33 @@ TEST(Culling, EmulatedRanksGiveThePlainRun) {
     }
   }
 }
+
+TEST(Culling, LargeGridsRunGroupsOfLinesPerTaskWithTheSameResult) {
+  // 16 x 15 x 15 = 3,600 lines: three per task (hapsyn::plugins::units_per_task).
+  Json doc = hapsyn::test::fivebar_study("culling");
+  doc["design"]["l0"] = {{"lower", 0.0}, {"upper", 0.3}, {"step", 0.02}};
+  doc["design"]["l1"] = {{"lower", 0.02}, {"upper", 0.3}, {"step", 0.02}};
+  doc["design"]["l2"] = {{"lower", 0.02}, {"upper", 0.3}, {"step", 0.02}};
+  doc["design"]["r"] = {{"lower", 0.0}, {"upper", 0.6}, {"step", 0.1}};
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  const hapsyn::plugins::CullingSolver culling(
+      hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(false, false)));
+  const auto plain = solve(culling, *study.problem, 2);
+  ASSERT_EQ(plain.status, hapsyn::SolverStatus::kConverged) << plain.message;
+  const std::string dir = hapsyn::test::fresh_directory("culling-groups");
+  const auto run = [&](const hapsyn::SolverContext& context) { return culling.solve(*study.problem, context); };
+  const auto merged = hapsyn::test::shard_merge_resume(culling, *study.problem, 2, dir, run, [](int, const hapsyn::SolverResult&) {});
+  expect_same_optimum(merged, plain);
+  // The shares are whole tasks: 1,200 tasks of 3 lines, the second share from task 600.
+  const Json state = hapsyn::test::read_json_file(dir + "/shard-1.json")["state"];
+  EXPECT_EQ(state["finished_ranges"], Json::array({Json::array({1800, 3600})}));
+  hapsyn::test::EmulatedRanks job(3);
+  const auto results = job.run([&](hapsyn::Cluster& cluster) {
+    hapsyn::SolverContext context;
+    context.threads = 1;
+    context.ranks = &cluster;
+    return culling.solve(*study.problem, context);
+  });
+  expect_same_optimum(results[0], plain);
+  std::filesystem::remove_all(dir);
+}

@@ -253,13 +253,50 @@ bool visit_chunk(const SweepControl& control, long long chunk, Tally& tally, con
   return true;
 }
 
-// The farm both modes fill in: one task per chunk, the chunks finished before skipped, the whole
-// grid split by --shard.
-TaskFarm chunk_farm(const SweepControl& control) {
+// The farm both modes fill in: each task is units_per_task() consecutive chunks (the chunks
+// finished before skipped), the whole grid split by --shard. run_chunk(chunk, thread, breach)
+// evaluates one chunk and returns its result (starting with its tally), or nullopt when a stop
+// left it unfinished; a task's result is its chunks' (index, result) pairs, up to a breach.
+// collect_chunk(chunk, result) takes one on rank 0; partial(thread, tally) counts the
+// evaluations of chunks whose task a stop left unfinished (a resumed run visits them again).
+template <class RunChunk, class CollectChunk, class Partial>
+TaskFarm chunk_farm(const SweepControl& control, RunChunk run_chunk, CollectChunk collect_chunk, Partial partial) {
+  const long long chunks = control.chunks();
+  const long long per_task = units_per_task(chunks);
   TaskFarm farm;
-  farm.count = control.chunks();
-  farm.done = [&control](long long chunk) { return control.skip.finished(chunk); };
+  farm.count = (chunks + per_task - 1) / per_task;
   farm.shardable = true;
+  farm.done = [&control, chunks, per_task](long long task) {
+    for (long long c = task * per_task; c < std::min(chunks, (task + 1) * per_task); ++c) {
+      if (!control.skip.finished(c)) return false;
+    }
+    return true;
+  };
+  farm.run = [&control, chunks, per_task, run_chunk, partial](long long task, int thread) -> std::optional<std::string> {
+    ByteWriter out;
+    Tally finished;  // of the chunks of this task finished so far
+    for (long long c = task * per_task; c < std::min(chunks, (task + 1) * per_task); ++c) {
+      if (control.skip.finished(c)) continue;
+      bool breach = false;
+      const std::optional<std::string> result = run_chunk(c, thread, breach);
+      if (!result) {
+        partial(thread, finished);
+        return std::nullopt;
+      }
+      ByteReader in(*result);
+      finished.add(get_tally(in));
+      out.put(c).put_string(*result);
+      if (breach) break;  // this rank's tasks stop; rank 0 learns it from this result
+    }
+    return out.take();
+  };
+  farm.collect = [collect_chunk](long long, std::string&& bytes) {
+    ByteReader in(bytes);
+    while (!in.at_end()) {
+      const auto chunk = in.get<long long>();
+      collect_chunk(chunk, in.get_string());
+    }
+  };
   return farm;
 }
 
@@ -603,9 +640,8 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
     write_checkpoint(context, "grid", fingerprint, state);
     control.last_checkpoint = Clock::now();
   };
-  TaskFarm farm = chunk_farm(control);
   // A chunk's result: its tally, its best feasible design (index -1: none) and a breach.
-  farm.run = [&](long long chunk, int thread) -> std::optional<std::string> {
+  const auto run_chunk = [&](long long chunk, int thread, bool& breach_found) -> std::optional<std::string> {
     BestThread& s = states[static_cast<std::size_t>(thread)];
     Tally tally;
     BestDesign chunk_best;
@@ -635,13 +671,14 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
       s.partial.add(tally);
       return std::nullopt;
     }
+    breach_found = breach.has_value();
     ByteWriter out;
     put_tally(out, tally);
     out.put(chunk_best.best_index).put(chunk_best.best_score);
     put_breach(out, breach);
     return out.take();
   };
-  farm.collect = [&](long long chunk, std::string&& bytes) {
+  const auto collect_chunk = [&](long long chunk, const std::string& bytes) {
     ByteReader in(bytes);
     const Tally tally = get_tally(in);
     const auto index = in.get<long long>();
@@ -666,6 +703,8 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
     }
     if (control.checkpoint_due(options_.checkpoint_interval)) save();
   };
+  const auto partial = [&](int thread, const Tally& t) { states[static_cast<std::size_t>(thread)].partial.add(t); };
+  TaskFarm farm = chunk_farm(control, run_chunk, collect_chunk, partial);
   if (prune) {
     farm.share = [&] {
       ByteWriter out;
@@ -758,9 +797,8 @@ SolverResult GridSolver::solve_front(const Problem& problem, const SolverContext
     write_checkpoint(context, "grid", fingerprint, state);
     control.last_checkpoint = Clock::now();
   };
-  TaskFarm farm = chunk_farm(control);
   // A chunk's result: its tally, the front of its feasible designs and a breach.
-  farm.run = [&](long long chunk, int thread) -> std::optional<std::string> {
+  const auto run_chunk = [&](long long chunk, int thread, bool& breach_found) -> std::optional<std::string> {
     FrontThread& s = states[static_cast<std::size_t>(thread)];
     Tally tally;
     std::vector<FrontPoint> chunk_front;
@@ -790,13 +828,14 @@ SolverResult GridSolver::solve_front(const Problem& problem, const SolverContext
       s.partial.add(tally);
       return std::nullopt;
     }
+    breach_found = breach.has_value();
     ByteWriter out;
     put_tally(out, tally);
     put_points(out, chunk_front, m);
     put_breach(out, breach);
     return out.take();
   };
-  farm.collect = [&](long long chunk, std::string&& bytes) {
+  const auto collect_chunk = [&](long long chunk, const std::string& bytes) {
     ByteReader in(bytes);
     const Tally tally = get_tally(in);
     const std::vector<FrontPoint> points = get_points(in, m);
@@ -818,6 +857,8 @@ SolverResult GridSolver::solve_front(const Problem& problem, const SolverContext
     }
     if (control.checkpoint_due(options_.checkpoint_interval)) save();
   };
+  const auto partial = [&](int thread, const Tally& t) { states[static_cast<std::size_t>(thread)].partial.add(t); };
+  TaskFarm farm = chunk_farm(control, run_chunk, collect_chunk, partial);
   if (prune) {
     farm.share = [&] { return shared.bytes(); };
     farm.learn = [&](const std::string& bytes) {

@@ -587,3 +587,29 @@ TEST(Grid, EmulatedRanksGiveThePlainRunInBothModes) {
     std::filesystem::remove_all(dir);
   }
 }
+
+TEST(Grid, LargeGridsRunGroupsOfChunksPerTaskWithTheSameResult) {
+  // 501 x 501 designs: 3,922 chunks, three per task (hapsyn::plugins::units_per_task).
+  hapsyn::test::StopAfter counter;
+  const auto problem = hapsyn::test::stopping_problem(counter, 0.002);
+  const Json options = {{"progress_interval", 1e9}};
+  const hapsyn::plugins::GridSolver solver = grid_solver(options);
+  const auto plain = solve_with(*problem, options, counter, "", false);
+  ASSERT_EQ(plain.status, hapsyn::SolverStatus::kConverged) << plain.message;
+  const std::string dir = hapsyn::test::fresh_directory("grid-groups");
+  const auto solve = [&](const hapsyn::SolverContext& context) { return solver.solve(*problem, context); };
+  const auto merged = hapsyn::test::shard_merge_resume(solver, *problem, 3, dir, solve, [](int, const hapsyn::SolverResult&) {});
+  expect_same_result(merged, plain);
+  // The shares are whole tasks: 1,308 tasks of 3 chunks, the middle share tasks 436..871.
+  const Json state = hapsyn::test::read_json_file(dir + "/shard-1.json")["state"];
+  EXPECT_EQ(state["finished_ranges"], Json::array({Json::array({1308, 2616})}));
+  hapsyn::test::EmulatedRanks job(2);
+  const auto results = job.run([&](hapsyn::Cluster& cluster) {
+    hapsyn::SolverContext context;
+    context.threads = 2;
+    context.ranks = &cluster;
+    return solver.solve(*problem, context);
+  });
+  expect_same_result(results[0], plain);
+  std::filesystem::remove_all(dir);
+}

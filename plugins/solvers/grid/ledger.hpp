@@ -21,6 +21,12 @@
 
 namespace hapsyn::plugins {
 
+/// How many consecutive units one task of a sweep's task farm covers: one for up to 2,048 units,
+/// then about units/1,024 (at most 256), so that a large sweep is about a thousand tasks and the
+/// round trip a task costs under MPI (tens of microseconds) stays small against its work. It
+/// depends on the sweep alone, never on the rank count: a --shard share is whole tasks.
+inline long long units_per_task(long long units) { return std::clamp(units / 1024, 1LL, 256LL); }
+
 class RangeLedger {
  public:
   RangeLedger() = default;
