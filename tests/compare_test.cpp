@@ -1,6 +1,7 @@
 // hapsyn compare: runs studies in order into their own folders, one table, CSV/JSON, plots.
 #include "test_support.hpp"
 
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/compare.hpp>
 #include <hapsyn/plot.hpp>
 
@@ -139,5 +140,60 @@ TEST(Compare, StopWritesTheFinishedStudiesWithStatusStopped) {
   std::ostringstream table;
   hapsyn::print_compare(summary, table);
   EXPECT_NE(table.str().find("stopped: stopped on request at fine"), std::string::npos) << table.str();
+  fs::remove_all(dir);
+}
+
+// ---- several processes: a cluster, shards and their merge ----
+
+TEST(Compare, ShardsMergedGiveTheTableOfASingleRunAndALocalClusterChangesNothing) {
+  const fs::path dir = fs::temp_directory_path() / fs::unique_path("hapsyn-compare-%%%%%%");
+  hapsyn::CompareOptions options = two_grid_studies(dir);
+  options.threads = 1;
+  const Json single = hapsyn::run_compare(options, hapsyn::test::registry());
+  ASSERT_EQ(single["rows"].size(), 2u);
+  const auto same_rows = [&](const Json& summary) {
+    ASSERT_EQ(summary["rows"].size(), 2u);
+    for (std::size_t i = 0; i < 2; ++i) {
+      for (const char* key : {"study", "file", "solver", "status", "points", "hypervolume", "spacing", "designs", "samples"}) {
+        EXPECT_EQ(summary["rows"][i][key], single["rows"][i][key]) << i << " " << key;
+      }
+    }
+  };
+  hapsyn::CompareOptions local = options;
+  local.output_directory = (dir / "local").string();
+  local.cluster = &hapsyn::Cluster::local();
+  const Json on_local = hapsyn::run_compare(local, hapsyn::test::registry());
+  same_rows(on_local);
+  EXPECT_FALSE(on_local.contains("shard"));
+  EXPECT_EQ(on_local["options"]["files"], Json(options.files));
+  EXPECT_EQ(on_local["options"]["seed"], 7);
+
+  std::vector<std::string> shards;
+  for (int i = 0; i < 2; ++i) {
+    hapsyn::ShardCluster cluster(i, 2);
+    hapsyn::CompareOptions share = options;
+    share.output_directory = (dir / ("share" + std::to_string(i + 1))).string();
+    share.cluster = &cluster;
+    const Json summary = hapsyn::run_compare(share, hapsyn::test::registry());
+    EXPECT_EQ(summary["status"], "finished");
+    EXPECT_EQ(summary["message"], cluster.shard_message());
+    ASSERT_EQ(summary["rows"].size(), 1u);
+    EXPECT_EQ(summary["rows"][0]["study"], single["rows"][static_cast<std::size_t>(i)]["study"]);
+    EXPECT_EQ(summary["shard"]["cases"], Json::array({single["rows"][static_cast<std::size_t>(i)]["study"]}));
+    shards.push_back(share.output_directory);
+  }
+  const std::string merged = (dir / "merged").string();
+  hapsyn::test::expect_error(
+      [&] { hapsyn::merge_compare_shards({shards[1]}, merged, hapsyn::test::registry(), 1); },
+      {"merge: shard 1/2 is missing (given: 2/2)"});
+  hapsyn::test::expect_error(
+      [&] { hapsyn::merge_compare_shards({(dir / "local").string()}, merged, hapsyn::test::registry(), 1); },
+      {"merge: " + (dir / "local").string() + " is not a shard of a comparison (its compare.json has no \"shard\" entry"});
+  const Json summary = hapsyn::merge_compare_shards({shards[1], shards[0]}, merged, hapsyn::test::registry(), 1);
+  same_rows(summary);
+  for (const Json& row : summary["rows"]) EXPECT_TRUE(row["reused"].get<bool>());
+  EXPECT_EQ(summary["status"], "finished");
+  EXPECT_TRUE(hapsyn::is_compare_output(merged));
+  EXPECT_FALSE(hapsyn::is_compare_output(shards[0] + "/fine"));
   fs::remove_all(dir);
 }

@@ -1,5 +1,6 @@
 #include "test_support.hpp"
 
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/sweep.hpp>
 
 #include <boost/filesystem.hpp>
@@ -218,4 +219,207 @@ TEST(Sweep, ARunThatFailsIsReportedWithItsFolderAndValues) {
                {"sweep: " + (out / "run-0").string() + " ({\"design.l0.step\":0.1}): output: ",
                 "is not a directory"});
   fs::remove_all(out);
+}
+
+// ---- several processes: a cluster, shards and their merge ----
+
+namespace {
+// Three runs and a separate reference: four cases, shares of 1, 1 and 2 under --shard i/3.
+hapsyn::SweepOptions sharded_sweep(const fs::path& out) {
+  hapsyn::SweepOptions options = small_sweep(out);
+  options.reference = {"design.l0.step=0.025", "design.l1.step=0.025"};
+  options.threads = 1;
+  return options;
+}
+// What must not depend on how the runs were shared out: everything but times and "reused".
+void expect_same_rows(const Json& a, const Json& b) {
+  ASSERT_EQ(a["runs"].size(), b["runs"].size());
+  for (std::size_t i = 0; i < a["runs"].size(); ++i) {
+    for (const char* key : {"values", "objectives", "errors", "status", "evaluations", "case"}) {
+      EXPECT_EQ(a["runs"][i][key], b["runs"][i][key]) << "run " << i << " " << key;
+    }
+  }
+  EXPECT_EQ(a["reference"]["best"], b["reference"]["best"]);
+  EXPECT_EQ(a["reference"]["overrides"], b["reference"]["overrides"]);
+  EXPECT_EQ(a["seed"], b["seed"]);
+  EXPECT_EQ(a["status"], b["status"]);
+}
+void write_json(const fs::path& file, const Json& doc) {
+  fs::create_directories(file.parent_path());
+  std::ofstream(file.string()) << doc.dump(2);
+}
+}  // namespace
+
+TEST(Sweep, ALocalClusterRunGivesTheSummaryOfAPlainRunAndRecordsHowToRunItAgain) {
+  const fs::path plain = fresh("plain"), local = fresh("local");
+  const Json expected = hapsyn::run_sweep(culling_study(), sharded_sweep(plain), hapsyn::test::registry());
+  hapsyn::SweepOptions options = sharded_sweep(local);
+  options.cluster = &hapsyn::Cluster::local();
+  const Json summary = hapsyn::run_sweep(culling_study(), options, hapsyn::test::registry());
+  expect_same_rows(summary, expected);
+  EXPECT_EQ(summary["status"], "finished");
+  EXPECT_FALSE(summary.contains("shard"));
+  EXPECT_FALSE(summary.contains("message"));
+  ASSERT_EQ(summary["runs"].size(), 3u);
+  EXPECT_EQ(summary["runs"][2]["case"], "run-2");
+  EXPECT_FALSE(summary["runs"][0]["errors"]["objective_error"].is_null());
+  EXPECT_TRUE(fs::exists(local / "reference" / "result.json"));
+  // sweep.json holds what a merge needs to run the sweep again.
+  const Json written = read_json(local / "sweep.json");
+  EXPECT_EQ(written["problem"], culling_study());
+  EXPECT_EQ(written["options"]["axes"], Json::parse(R"([{"paths": ["design.l0.step"], "values": [0.1, 0.05, 0.025]}])"));
+  EXPECT_EQ(written["options"]["reference"], Json::parse(R"(["design.l0.step=0.025", "design.l1.step=0.025"])"));
+  EXPECT_EQ(written["options"]["seed"], 3);
+  EXPECT_EQ(written["problem_directory"], "");
+  fs::remove_all(plain);
+  fs::remove_all(local);
+}
+
+TEST(Sweep, ShardsMergedGiveTheSummaryOfASingleRun) {
+  const fs::path whole = fresh("whole"), merged = fresh("merged");
+  const Json expected = hapsyn::run_sweep(culling_study(), sharded_sweep(whole), hapsyn::test::registry());
+  ASSERT_EQ(expected["runs"].size(), 3u);
+  std::vector<std::string> shards;
+  const std::vector<std::vector<std::string>> shares = {{"run-0"}, {"run-1"}, {"run-2", "reference"}};
+  for (int i = 0; i < 3; ++i) {
+    const fs::path out = fresh("shard" + std::to_string(i + 1));
+    hapsyn::ShardCluster cluster(i, 3);
+    hapsyn::SweepOptions options = sharded_sweep(out);
+    options.cluster = &cluster;
+    const Json summary = hapsyn::run_sweep(culling_study(), options, hapsyn::test::registry());
+    EXPECT_EQ(summary["status"], "finished") << i;
+    EXPECT_EQ(summary["message"], cluster.shard_message()) << i;
+    EXPECT_EQ(summary["shard"], Json({{"index", i + 1}, {"count", 3}, {"cases", shares[static_cast<std::size_t>(i)]}})) << i;
+    // Only this share ran: one run each (the last share's reference is not a row).
+    ASSERT_EQ(summary["runs"].size(), 1u) << i;
+    EXPECT_EQ(summary["runs"][0]["case"], shares[static_cast<std::size_t>(i)][0]);
+    EXPECT_EQ(summary["runs"][0]["objectives"], expected["runs"][static_cast<std::size_t>(i)]["objectives"]);
+    for (int j = 0; j < 3; ++j) EXPECT_EQ(fs::exists(out / ("run-" + std::to_string(j))), i == j) << i << " " << j;
+    EXPECT_EQ(fs::exists(out / "reference"), i == 2);
+    // The reference is in the last share alone: the errors are known there only.
+    EXPECT_EQ(summary["runs"][0]["errors"]["objective_error"].is_null(), i < 2) << i;
+    shards.push_back(out.string());
+  }
+  // Given in any order; every run is reused (none runs again), the summary is the single run's.
+  const Json summary = hapsyn::merge_sweep_shards({shards[2], shards[0], shards[1]}, merged.string(),
+                                                  hapsyn::test::registry(), 1);
+  expect_same_rows(summary, expected);
+  for (const Json& run : summary["runs"]) EXPECT_TRUE(run["reused"].get<bool>());
+  EXPECT_FALSE(summary.contains("shard"));
+  EXPECT_TRUE(hapsyn::is_sweep_output(merged.string()));
+  EXPECT_FALSE(hapsyn::is_sweep_output((merged / "run-0").string()));
+  expect_same_rows(read_json(merged / "sweep.json"), expected);
+  EXPECT_EQ(lines(merged / "sweep.csv"), 4);
+  // The shares' folders are untouched by the merge.
+  EXPECT_EQ(read_json(fs::path(shards[0]) / "sweep.json")["runs"].size(), 1u);
+  for (const std::string& s : shards) fs::remove_all(s);
+  fs::remove_all(whole);
+  fs::remove_all(merged);
+}
+
+TEST(Sweep, MergeRefusesMissingDuplicateForeignAndUnfinishedShares) {
+  const fs::path root = fresh("merge-errors");
+  std::vector<std::string> shards;
+  for (int i = 0; i < 3; ++i) {
+    // Summaries alone are enough for the checks, which come before any folder is touched.
+    Json summary = {{"status", "finished"},
+                    {"problem", culling_study()},
+                    {"options", {{"axes", Json::array()}, {"reference", Json::array()}, {"seed", 3}}},
+                    {"hapsyn", {{"version", "1"}}},
+                    {"shard", {{"index", i + 1}, {"count", 3}, {"cases", Json::array()}}}};
+    write_json(root / ("s" + std::to_string(i + 1)) / "sweep.json", summary);
+    shards.push_back((root / ("s" + std::to_string(i + 1))).string());
+  }
+  const std::string out = (root / "out").string();
+  const auto& registry = hapsyn::test::registry();
+  expect_error([&] { hapsyn::merge_sweep_shards({}, out, registry, 1); }, {"merge: no shard directory given"});
+  expect_error([&] { hapsyn::merge_sweep_shards({shards[0], shards[2]}, out, registry, 1); },
+               {"merge: shard 2/3 is missing (given: 1/3, 3/3)"});
+  expect_error([&] { hapsyn::merge_sweep_shards({shards[0], shards[1], shards[0], shards[2]}, out, registry, 1); },
+               {"merge: shard 1/3 is given twice (" + shards[0] + ", " + shards[0] + ")"});
+  expect_error([&] { hapsyn::merge_sweep_shards({shards[0], (root / "none").string()}, out, registry, 1); },
+               {"merge: " + (root / "none" / "sweep.json").string() + ": not a readable sweep summary ("});
+  // A share of another sweep: another seed, another problem, another share count.
+  const fs::path foreign = root / "foreign";
+  Json other = read_json(fs::path(shards[1]) / "sweep.json");
+  other["options"]["seed"] = 4;
+  write_json(foreign / "sweep.json", other);
+  expect_error([&] { hapsyn::merge_sweep_shards({shards[0], foreign.string(), shards[2]}, out, registry, 1); },
+               {"merge: " + foreign.string() + " (shard 2/3) is not of the same sweep as " + shards[0] +
+                " (shard 1/3): its seed differs (4 there, 3 in " + shards[0] + ")"});
+  other = read_json(fs::path(shards[1]) / "sweep.json");
+  other["problem"]["solver"]["options"]["polish"] = true;
+  write_json(foreign / "sweep.json", other);
+  expect_error([&] { hapsyn::merge_sweep_shards({shards[0], foreign.string(), shards[2]}, out, registry, 1); },
+               {"(shard 2/3) is not of the same sweep as ", "its problem differs"});
+  other = read_json(fs::path(shards[1]) / "sweep.json");
+  other["shard"]["count"] = 2;
+  write_json(foreign / "sweep.json", other);
+  expect_error([&] { hapsyn::merge_sweep_shards({shards[0], foreign.string(), shards[2]}, out, registry, 1); },
+               {"merge: " + foreign.string() + " (shard 2/2) is not of the same sweep as " + shards[0] +
+                " (shard 1/3): its shard count differs"});
+  // A plain sweep, a stopped share, the output in a share's folder, a share without its runs.
+  other.erase("shard");
+  write_json(foreign / "sweep.json", other);
+  expect_error([&] { hapsyn::merge_sweep_shards({foreign.string()}, out, registry, 1); },
+               {"merge: " + foreign.string() + " is not a shard of a sweep (its sweep.json has no \"shard\" entry"});
+  other = read_json(fs::path(shards[1]) / "sweep.json");
+  other["status"] = "stopped";
+  write_json(foreign / "sweep.json", other);
+  expect_error([&] { hapsyn::merge_sweep_shards({shards[0], foreign.string(), shards[2]}, out, registry, 1); },
+               {"merge: " + foreign.string() + " (shard 2/3) stopped before its runs finished (status \"stopped\"): run "
+                "its command again to finish it, then merge"});
+  expect_error([&] { hapsyn::merge_sweep_shards(shards, shards[1], registry, 1); },
+               {"merge: " + shards[1] + " is shard 2/3's directory: merge into another directory"});
+  other = read_json(fs::path(shards[1]) / "sweep.json");
+  other["shard"]["cases"] = {"run-1"};
+  write_json(foreign / "sweep.json", other);
+  expect_error([&] { hapsyn::merge_sweep_shards({shards[0], foreign.string(), shards[2]}, out, registry, 1); },
+               {"merge: " + (foreign / "run-1").string() + ": missing, or without result.json (shard 2/3's sweep.json "
+                "lists it as finished)"});
+  fs::remove_all(root);
+}
+
+TEST(Sweep, AMergeRunsNothingAgain) {
+  // A share whose run folder holds a stopped result: the merge refuses instead of running it.
+  const fs::path root = fresh("merge-nothing"), merged = root / "merged";
+  std::vector<std::string> shards;
+  for (int i = 0; i < 2; ++i) {
+    hapsyn::ShardCluster cluster(i, 2);
+    hapsyn::SweepOptions options = small_sweep(root / ("s" + std::to_string(i + 1)));
+    options.axes[0] = hapsyn::parse_sweep_axis("design.l0.step=0.1,0.05");
+    options.cluster = &cluster;
+    const Json summary = hapsyn::run_sweep(culling_study(), options, hapsyn::test::registry());
+    ASSERT_EQ(summary["shard"]["cases"], Json::array({"run-" + std::to_string(i)}));
+    shards.push_back(options.output_directory);
+  }
+  Json stored = read_json(root / "s1" / "run-0" / "result.json");
+  stored["status"] = "stopped";
+  write_json(root / "s1" / "run-0" / "result.json", stored);
+  expect_error([&] { hapsyn::merge_sweep_shards(shards, merged.string(), hapsyn::test::registry(), 1); },
+               {"merge: " + (merged / "run-0").string() + " ({\"design.l0.step\":0.1}): no finished result of this run "
+                "to reuse (a merge runs nothing again)"});
+  EXPECT_FALSE(fs::exists(merged / "run-0" / "checkpoint.json"));
+  fs::remove_all(root);
+}
+
+TEST(Sweep, TheCommandRunsOneShareAndRefusesAMalformedShard) {
+  const fs::path root = fresh("cli-shard");
+  write_json(root / "study.json", culling_study());
+  const std::string command = "sweep " + (root / "study.json").string() +
+                              " --vary design.l0.step=0.1,0.05 --threads 1 --seed 3 --out " + (root / "out").string();
+  const hapsyn::test::Output bad = hapsyn::test::hapsyn_cli(command + " --shard 3/2");
+  EXPECT_EQ(bad.code, 1) << bad.out;
+  EXPECT_NE(bad.out.find("hapsyn: error: shard: --shard 3/2: the share i must lie in 1..N (N = 2)"), std::string::npos)
+      << bad.out;
+  EXPECT_FALSE(fs::exists(root / "out"));
+  const hapsyn::test::Output share = hapsyn::test::hapsyn_cli(command + " --shard 2/2");
+  EXPECT_EQ(share.code, 0) << share.out;
+  EXPECT_NE(share.out.find("shard 2/2 done; when every share is, combine them: hapsyn merge"), std::string::npos)
+      << share.out;
+  const Json summary = read_json(root / "out" / "sweep.json");
+  EXPECT_EQ(summary["shard"], Json({{"index", 2}, {"count", 2}, {"cases", {"run-1"}}}));
+  EXPECT_EQ(summary["problem_directory"], fs::absolute(root).lexically_normal().string());
+  EXPECT_FALSE(fs::exists(root / "out" / "run-0"));
+  fs::remove_all(root);
 }

@@ -350,6 +350,10 @@ void print_sweep(const Json& summary, std::ostream& out) {
         << r["status"].get<std::string>() << "\n";
   }
   out << "written: " << summary["output_directory"].get<std::string>() << "/sweep.csv, sweep.json\n";
+  if (summary.contains("shard") && summary.value("status", "") != "stopped") {
+    out << "shard " << summary["shard"]["index"] << "/" << summary["shard"]["count"]
+        << " done; when every share is, combine them: hapsyn merge DIR1 DIR2 ... --out DIR\n";
+  }
 }
 
 // ---- the command line ----
@@ -470,6 +474,12 @@ void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.sweep->add_flag("--progress", a.sweep_progress, "Show each run's progress");
   c.sweep->add_flag("--force", a.force,
                     "Run every case again (default: a folder's finished result of the same problem and seed is reused)");
+  c.sweep->add_option("--shard", a.shard,
+                      "Run only share i of N (1 <= i <= N) of the runs into its own --out (a SLURM job array task); "
+                      "combine the shares with hapsyn merge");
+  c.sweep->add_option("--rank-timeout", a.rank_timeout,
+                      "Under mpirun: seconds a rank may stay silent inside the farm of runs before the job ends naming it")
+      ->check(CLI::PositiveNumber);
 
   c.compare = app.add_subcommand(
       "compare", "Run several studies on this machine: one table (front quality, evaluations, time) and plots");
@@ -480,6 +490,13 @@ void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.compare->add_option("--seed", a.seed, "Random seed of every study")->check(kSeed);
   c.compare->add_flag("--force", a.compare.force,
                       "Run every study again (default: a folder's finished result of the same problem and seed is reused)");
+  c.compare->add_option("--shard", a.shard,
+                        "Run only share i of N (1 <= i <= N) of the studies into its own --out (a SLURM job array "
+                        "task); combine the shares with hapsyn merge");
+  c.compare->add_option("--rank-timeout", a.rank_timeout,
+                        "Under mpirun: seconds a rank may stay silent inside the farm of studies before the job ends "
+                        "naming it")
+      ->check(CLI::PositiveNumber);
 }
 
 // The processes of this run (see ranks.hpp); kept for main()'s error report.
@@ -529,6 +546,17 @@ int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& r
 }
 
 int merge_command(const Arguments& a, const hapsyn::Registry& registry) {
+  // A sweep's or a comparison's shares (their cases), else a study's.
+  if (hapsyn::is_sweep_output(a.merge_dirs.front())) {
+    const Json summary = hapsyn::merge_sweep_shards(a.merge_dirs, a.out_dir, registry, a.threads);
+    print_sweep(summary, std::cout);
+    return 0;
+  }
+  if (hapsyn::is_compare_output(a.merge_dirs.front())) {
+    const Json summary = hapsyn::merge_compare_shards(a.merge_dirs, a.out_dir, registry, a.threads);
+    hapsyn::print_compare(summary, std::cout);
+    return 0;
+  }
   hapsyn::RunOptions options;
   options.output_directory = a.out_dir;
   options.threads = a.threads;
@@ -570,21 +598,34 @@ int validate_command(const Arguments& a, const hapsyn::Registry& registry) {
 }
 
 int sweep_command(const Arguments& a, const hapsyn::Registry& registry) {
-  Json doc = hapsyn::read_problem_file(a.file);
-  for (const std::string& s : a.sets) hapsyn::apply_override(doc, s);
-  hapsyn::SweepOptions options;
-  for (const std::string& v : a.vary) options.axes.push_back(hapsyn::parse_sweep_axis(v));
-  options.reference = a.reference;
-  options.output_directory = a.sweep_out;
-  options.threads = a.threads;
-  options.seed = a.sweep_seed;
-  options.quiet = !a.sweep_progress;
-  options.stop = &stop_requested;
-  options.force = a.force;
-  const hapsyn::ProblemDirectoryScope scope(a.file);  // the file's relative paths, as `run` reads them
-  const Json summary = hapsyn::run_sweep(doc, options, registry);
-  print_sweep(summary, std::cout);
-  return summary.value("status", "") == "stopped" ? kExitStopped : 0;
+  // Under mpirun the runs are shared out over the ranks; under --shard only this share runs.
+  run_cluster = hapsyn_cli::make_run_cluster(a.shard, a.rank_timeout, &stop_requested, &stop_agreed);
+  hapsyn::Cluster* cluster = run_cluster.get();
+  const bool root = hapsyn_cli::rank_of(cluster) == 0;
+  Json summary;
+  try {
+    Json doc = hapsyn::read_problem_file(a.file);
+    for (const std::string& s : a.sets) hapsyn::apply_override(doc, s);
+    hapsyn::SweepOptions options;
+    for (const std::string& v : a.vary) options.axes.push_back(hapsyn::parse_sweep_axis(v));
+    options.reference = a.reference;
+    options.output_directory = a.sweep_out;
+    options.threads = a.threads;
+    options.seed = a.sweep_seed;
+    options.quiet = !a.sweep_progress;
+    options.stop = cluster != nullptr && cluster->size() > 1 ? &stop_agreed : &stop_requested;
+    options.force = a.force;
+    options.cluster = cluster;
+    const hapsyn::ProblemDirectoryScope scope(a.file);  // the file's relative paths, as `run` reads them
+    summary = hapsyn::run_sweep(doc, options, registry);
+  } catch (const hapsyn::Error&) {
+    // run_sweep throws the same error on every rank: rank 0 reports it.
+    if (!root) throw hapsyn_cli::QuietExit{1};
+    throw;
+  }
+  const int code = summary.value("status", "") == "stopped" ? kExitStopped : 0;
+  if (root) print_sweep(summary, std::cout);
+  return code;
 }
 
 int dispatch(const Commands& c, Arguments& a, const hapsyn::Registry& registry) {
@@ -598,10 +639,20 @@ int dispatch(const Commands& c, Arguments& a, const hapsyn::Registry& registry) 
   if (*c.describe) return describe(a.plugin_name, a.describe_json, a.describe_options, registry);
   if (*c.sweep) return sweep_command(a, registry);
   if (*c.compare) {
+    // As sweep_command: the studies shared out over mpirun's ranks, or this --shard's share.
+    run_cluster = hapsyn_cli::make_run_cluster(a.shard, a.rank_timeout, &stop_requested, &stop_agreed);
+    const bool root = hapsyn_cli::rank_of(run_cluster.get()) == 0;
     if (c.compare->count("--seed") > 0) a.compare.seed = a.seed;
-    a.compare.stop = &stop_requested;
-    const Json summary = hapsyn::run_compare(a.compare, registry);
-    hapsyn::print_compare(summary, std::cout);
+    a.compare.stop = run_cluster != nullptr && run_cluster->size() > 1 ? &stop_agreed : &stop_requested;
+    a.compare.cluster = run_cluster.get();
+    Json summary;
+    try {
+      summary = hapsyn::run_compare(a.compare, registry);
+    } catch (const hapsyn::Error&) {
+      if (!root) throw hapsyn_cli::QuietExit{1};  // the same error on every rank: rank 0 reports it
+      throw;
+    }
+    if (root) hapsyn::print_compare(summary, std::cout);
     return summary.value("status", "") == "stopped" ? kExitStopped : 0;
   }
   if (*c.scene) {

@@ -163,75 +163,81 @@ std::string cell(const Json& v, int precision = 4) {
   return v.dump();
 }
 
-}  // namespace
+// What rank 0 needs of a study's result.json for the table and the plots: no statistics or
+// per-sample data, front points reduced to their objectives, of the problem its objectives and
+// indicators. Small enough to send from any rank.
+Json essentials(const Json& result) {
+  Json e = Json::object();
+  for (const char* key : {"status", "best", "indicators", "evaluations", "wall_time_s"}) {
+    if (result.contains(key)) e[key] = result[key];
+  }
+  if (result.contains("front")) {
+    Json front = Json::array();
+    for (const Json& p : result["front"]) front.push_back({{"objectives", p["objectives"]}});
+    e["front"] = std::move(front);
+  }
+  e["problem"] = Json::object();
+  for (const char* key : {"objectives", "indicators"}) {
+    if (result.contains("problem") && result["problem"].contains(key)) e["problem"][key] = result["problem"][key];
+  }
+  return e;
+}
 
-Json run_compare(const CompareOptions& options, const Registry& registry) {
-  if (options.files.empty()) throw Error("compare", "at least one problem file is required");
-  fs::create_directories(options.output_directory);
-  std::vector<Json> results;
+// An error decided on rank 0, thrown alike on every rank: {"component", "message"}.
+Json error_record(const std::exception& e) {
+  if (const auto* error = dynamic_cast<const Error*>(&e)) {
+    const std::string what = error->what();
+    const std::string prefix = error->component() + ": ";
+    return {{"component", error->component()},
+            {"message", what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what}};
+  }
+  return {{"component", "compare"}, {"message", e.what()}};
+}
+
+[[noreturn]] void throw_record(const Json& record) {
+  throw Error(record["component"].get<std::string>(), record["message"].get<std::string>());
+}
+
+// A study of the comparison: its file, its document (overrides applied) and its name.
+struct CompareCase {
+  std::string file;
+  Json doc;
+  std::string name;
+};
+
+Study load_case(const CompareCase& k, const CompareOptions& options, const Registry& registry) {
+  try {
+    // Relative paths in a problem file are relative to that file first.
+    const ProblemDirectoryScope scope(k.file);
+    LoadSettings settings;
+    settings.threads = options.threads;
+    return load_study(k.doc, registry, {}, settings);
+  } catch (const Error& e) {
+    throw Error("compare", k.file + ": " + e.what());
+  }
+}
+
+// Rank 0: the rows (file order) of this share's finished studies, the plots, compare.csv and
+// compare.json.
+Json tabulate(const std::vector<CompareCase>& cases, const std::vector<std::optional<Json>>& results,
+              const std::vector<std::string>& solvers, const std::vector<char>& reused, const std::vector<char>& started,
+              long long first, long long last, const Cluster& cluster, const CompareOptions& options) {
+  const fs::path out(options.output_directory);
+  std::vector<Json> finished;
   Json rows = Json::array();
-  std::set<std::string> names;
-  std::string stopped_at;  // the study that was stopped, or "" when none was
-  for (const std::string& file : options.files) {
-    Json doc = read_problem_file(file);
-    for (const std::string& s : options.overrides) apply_override(doc, s);
-    const std::string name = doc.value("name", fs::path(file).stem().string());
-    if (!names.insert(name).second) {
-      throw Error("compare", file + ": a study named '" + name + "' is already in this comparison (give each a distinct \"name\")");
+  std::string stopped_at;  // the first study of this share that did not finish
+  for (long long c = first; c < last; ++c) {
+    const std::size_t i = static_cast<std::size_t>(c);
+    if (!results[i]) {
+      if (stopped_at.empty()) stopped_at = cases[i].name + (cluster.size() == 1 && !started[i] ? " (not started)" : "");
+      continue;
     }
-    if (options.stop && options.stop->load()) {
-      stopped_at = name + " (not started)";
-      break;
-    }
-    Study study;
-    try {
-      // Relative paths in a problem file are relative to that file first.
-      const ProblemDirectoryScope scope(file);
-      LoadSettings settings;
-      settings.threads = options.threads;
-      study = load_study(doc, registry, {}, settings);
-    } catch (const Error& e) {
-      throw Error("compare", file + ": " + e.what());
-    }
-    RunOptions run;
-    run.output_directory = (fs::path(options.output_directory) / name).string();
-    run.threads = options.threads;
-    run.seed = options.seed;
-    run.quiet = true;
-    run.stop = options.stop;
-    // A finished study of the same problem in its folder is reused; a stopped one is resumed
-    // from its checkpoint; another problem's result is refused (never overwritten silently).
-    std::optional<Json> stored;
-    if (!options.force) {
-      stored = reusable_result(run.output_directory, study.resolved, options.seed, "compare",
-                               "this comparison's " + file);
-    }
-    Json result;
-    if (stored) {
-      result = std::move(*stored);
-    } else {
-      boost::system::error_code ec;
-      if (options.force) {
-        run.force = true;
-      } else {
-        fs::remove(fs::path(run.output_directory) / "result.json", ec);  // a stopped study's
-        run.resume = fs::exists(fs::path(run.output_directory) / "checkpoint.json", ec);
-      }
-      try {
-        result = run_study(study, run);
-      } catch (const Error& e) {
-        throw Error("compare", file + ": " + e.what());
-      }
-    }
-    if (result["status"] == to_string(SolverStatus::kStopped)) {
-      stopped_at = name;
-      break;
-    }
-    Json row = {{"study", name},
-                {"file", file},
-                {"solver", study.solver_plugin},
+    const Json& result = *results[i];
+    Json row = {{"study", cases[i].name},
+                {"file", cases[i].file},
+                {"solver", solvers[i]},
                 {"status", result["status"]},
-                {"reused", stored.has_value()},
+                {"reused", reused[i] != 0},
                 {"points", result.contains("front") ? result["front"].size() : (result.contains("best") ? 1 : 0)},
                 {"hypervolume", indicator(result, "hypervolume")},
                 {"spacing", indicator(result, "spacing")},
@@ -244,16 +250,15 @@ Json run_compare(const CompareOptions& options, const Registry& registry) {
                 {"designs", result["evaluations"]["designs"]},
                 {"samples", result["evaluations"]["samples"]},
                 {"wall_time_s", result["wall_time_s"]},
-                {"output_directory", run.output_directory}};
+                {"output_directory", (out / cases[i].name).string()}};
     rows.push_back(row);
-    results.push_back(result);
+    finished.push_back(result);
   }
   if (!rows.empty()) {
     const double first_time = rows[0]["wall_time_s"].get<double>();
     for (Json& row : rows) row["time_ratio"] = row["wall_time_s"].get<double>() / first_time;
   }
 
-  const fs::path out(options.output_directory);
   Json summary = {{"hapsyn", version()}, {"machine", machine_info()}, {"rows", rows}, {"plots", Json::object()}};
   summary["status"] = stopped_at.empty() ? "finished" : "stopped";
   if (!stopped_at.empty()) {
@@ -262,8 +267,21 @@ Json run_compare(const CompareOptions& options, const Registry& registry) {
                          " studies; run the same command again to continue (finished studies are reused, a stopped "
                          "one resumes from its checkpoint)";
   }
-  if (options.plots && !results.empty()) {
-    const std::string why = plot_fronts(out, results, rows);
+  const auto [shard_index, shard_count] = cluster.shard();
+  if (shard_count > 1) {
+    Json names = Json::array();
+    for (long long c = first; c < last; ++c) names.push_back(cases[static_cast<std::size_t>(c)].name);
+    summary["shard"] = {{"index", shard_index + 1}, {"count", shard_count}, {"cases", names}};
+    if (stopped_at.empty()) summary["message"] = cluster.shard_message();
+  }
+  boost::system::error_code ec;
+  summary["options"] = {{"files", options.files},
+                        {"overrides", options.overrides},
+                        {"seed", options.seed ? Json(*options.seed) : Json(nullptr)},
+                        {"plots", options.plots}};
+  summary["working_directory"] = fs::current_path(ec).string();
+  if (options.plots && !finished.empty()) {
+    const std::string why = plot_fronts(out, finished, rows);
     summary["plots"]["fronts"] = why.empty() ? Json("fronts.png, fronts.svg") : Json("not written: " + why);
     for (const Json& row : rows) {
       const fs::path dir = row["output_directory"].get<std::string>();
@@ -295,6 +313,184 @@ Json run_compare(const CompareOptions& options, const Registry& registry) {
   return summary;
 }
 
+Json run_compare_cases(const CompareOptions& options, const Registry& registry, bool reuse_only) {
+  if (options.files.empty()) throw Error("compare", "at least one problem file is required");
+  Cluster& cluster = options.cluster != nullptr ? *options.cluster : Cluster::local();
+  // Every file is read and named before any study runs, on every rank alike. A study is loaded
+  // (validated) just before it runs: an earlier study may write the reference front it names.
+  std::vector<CompareCase> cases;
+  Json read_error = nullptr;
+  try {
+    std::set<std::string> names;
+    for (const std::string& file : options.files) {
+      Json doc = read_problem_file(file);
+      for (const std::string& s : options.overrides) apply_override(doc, s);
+      const std::string name = doc.value("name", fs::path(file).stem().string());
+      if (!names.insert(name).second) {
+        throw Error("compare", file + ": a study named '" + name + "' is already in this comparison (give each a distinct \"name\")");
+      }
+      cases.push_back({file, std::move(doc), name});
+    }
+  } catch (const std::exception& e) {
+    if (cluster.size() == 1) throw;
+    read_error = error_record(e);
+  }
+  if (cluster.size() > 1) {
+    // A file one rank cannot read is every rank's error (the lowest rank's is reported).
+    for (const std::string& bytes : cluster.all_gather(read_error.dump())) {
+      const Json record = Json::parse(bytes);
+      if (!record.is_null()) throw_record(record);
+    }
+  }
+  const auto [first, last] = shard_tasks(cluster, static_cast<long long>(cases.size()));
+  const fs::path out(options.output_directory);
+  auto folder = [&](const CompareCase& k) { return (out / k.name).string(); };
+
+  // Rank 0 finds the finished studies to reuse (a folder with a result.json: loaded and checked;
+  // another problem's result is refused, never overwritten silently) and tells the other ranks
+  // which are done, or the error every rank throws.
+  std::vector<std::optional<Json>> results(cases.size());  // rank 0: per study, its essentials
+  std::vector<std::string> solvers(cases.size());           // rank 0: per study, its solver plugin
+  std::vector<char> reused(cases.size(), 0);
+  {
+    Json decision = Json::object();
+    if (cluster.root()) {
+      try {
+        fs::create_directories(out);
+        boost::system::error_code ec;
+        for (long long c = first; c < last && !options.force; ++c) {
+          const CompareCase& k = cases[static_cast<std::size_t>(c)];
+          if (!fs::exists(fs::path(folder(k)) / "result.json", ec)) {
+            if (reuse_only) throw Error("merge", folder(k) + ": no result.json of this study to reuse");
+            continue;
+          }
+          std::optional<Study> study;
+          try {
+            study = load_case(k, options, registry);
+          } catch (const Error&) {
+            if (reuse_only) throw;
+            continue;  // it may need an earlier study's output: its task loads it again
+          }
+          std::optional<Json> stored =
+              reusable_result(folder(k), study->resolved, options.seed, "compare", "this comparison's " + k.file);
+          if (!stored) {
+            if (reuse_only) throw Error("merge", folder(k) + ": no finished result of this study to reuse (a merge runs nothing again)");
+            continue;
+          }
+          results[static_cast<std::size_t>(c)] = essentials(*stored);
+          solvers[static_cast<std::size_t>(c)] = study->solver_plugin;
+          decision["reused"].push_back(c);
+        }
+      } catch (const std::exception& e) {
+        decision = {{"error", error_record(e)}};
+      }
+    }
+    std::string bytes = decision.dump();
+    cluster.broadcast(bytes);
+    decision = Json::parse(bytes);
+    if (decision.contains("error")) throw_record(decision["error"]);
+    if (decision.contains("reused")) {
+      for (const Json& c : decision["reused"]) reused[c.get<std::size_t>()] = 1;
+    }
+  }
+
+  const auto stop_requested = [&] { return options.stop != nullptr && options.stop->load(); };
+  std::vector<char> started(cases.size(), 0);  // by this process
+  TaskFarm farm;
+  farm.count = static_cast<long long>(cases.size());
+  farm.shardable = true;
+  farm.done = [&](long long c) { return reused[static_cast<std::size_t>(c)] != 0; };
+  farm.run = [&](long long c, int) -> std::optional<std::string> {
+    if (stop_requested()) return std::nullopt;
+    const CompareCase& k = cases[static_cast<std::size_t>(c)];
+    started[static_cast<std::size_t>(c)] = 1;
+    Study study = load_case(k, options, registry);
+    RunOptions run;
+    run.output_directory = folder(k);
+    run.threads = options.threads;
+    run.seed = options.seed;
+    run.quiet = true;
+    run.stop = options.stop;
+    // A stopped study is resumed from its checkpoint. It runs on this process alone.
+    boost::system::error_code ec;
+    if (options.force) {
+      run.force = true;
+    } else {
+      fs::remove(fs::path(run.output_directory) / "result.json", ec);  // a stopped study's
+      run.resume = fs::exists(fs::path(run.output_directory) / "checkpoint.json", ec);
+    }
+    Json result;
+    try {
+      result = run_study(study, run);
+    } catch (const Error& e) {
+      throw Error("compare", k.file + ": " + e.what());
+    }
+    if (result["status"] == to_string(SolverStatus::kStopped)) return std::nullopt;
+    return Json{{"solver", study.solver_plugin}, {"result", essentials(result)}}.dump();
+  };
+  farm.collect = [&](long long c, std::string&& bytes) {
+    Json message = Json::parse(bytes);
+    solvers[static_cast<std::size_t>(c)] = message["solver"];
+    results[static_cast<std::size_t>(c)] = std::move(message["result"]);
+  };
+  (void)cluster.run_tasks(farm, 1);  // one study at a time per rank, each with options.threads
+
+  // Rank 0 tabulates (rows in file order, whoever ran them) and writes the files; every rank
+  // returns its summary.
+  Json message = Json::object();
+  if (cluster.root()) {
+    try {
+      message = {{"summary", tabulate(cases, results, solvers, reused, started, first, last, cluster, options)}};
+    } catch (const std::exception& e) {
+      message = {{"error", error_record(e)}};
+    }
+  }
+  std::string bytes = message.dump();
+  cluster.broadcast(bytes);
+  if (!cluster.root()) message = Json::parse(bytes);
+  if (message.contains("error")) throw_record(message["error"]);
+  return std::move(message["summary"]);
+}
+
+}  // namespace
+
+Json run_compare(const CompareOptions& options, const Registry& registry) {
+  return run_compare_cases(options, registry, false);
+}
+
+bool is_compare_output(const std::string& dir) {
+  boost::system::error_code ec;
+  return fs::is_regular_file(fs::path(dir) / "compare.json", ec);
+}
+
+Json merge_compare_shards(const std::vector<std::string>& dirs, const std::string& out_dir, const Registry& registry,
+                          int threads) {
+  const std::vector<Json> shards = gather_shards(dirs, out_dir, "compare.json", "comparison",
+                                                 {{"/options/files", "files"},
+                                                  {"/options/overrides", "overrides"},
+                                                  {"/options/seed", "seed"},
+                                                  {"/hapsyn", "hapsyn version"}});
+  const Json& first = shards.front();
+  CompareOptions options;
+  try {
+    const fs::path working = first.value("working_directory", std::string());
+    boost::system::error_code ec;
+    for (const std::string& file : first.at("options").at("files").get<std::vector<std::string>>()) {
+      // A relative file is read from here when it is here, else from where the shares ran.
+      const bool elsewhere = fs::path(file).is_relative() && !working.empty() && !fs::exists(file, ec);
+      options.files.push_back(elsewhere ? (working / file).string() : file);
+    }
+    options.overrides = first["options"].at("overrides").get<std::vector<std::string>>();
+    if (!first["options"].at("seed").is_null()) options.seed = first["options"]["seed"].get<std::uint64_t>();
+    options.plots = first["options"].value("plots", true);
+  } catch (const Json::exception& e) {
+    throw Error("merge", dirs.front() + "/compare.json: its \"options\" are not a comparison's (" + e.what() + ")");
+  }
+  options.output_directory = out_dir;
+  options.threads = threads;
+  return run_compare_cases(options, registry, true);
+}
+
 void print_compare(const Json& summary, std::ostream& out) {
   out << std::left << std::setw(30) << "study" << std::setw(14) << "solver" << std::right << std::setw(7) << "points"
       << std::setw(12) << "hypervolume" << std::setw(10) << "spacing" << std::setw(10) << "sp./mean" << std::setw(10)
@@ -321,6 +517,10 @@ void print_compare(const Json& summary, std::ostream& out) {
   }
   if (summary.value("status", "") == "stopped") out << "stopped: " << summary["message"].get<std::string>() << "\n";
   out << "written: " << summary["output_directory"].get<std::string>() << "/compare.csv, compare.json\n";
+  if (summary.contains("shard") && summary.value("status", "") != "stopped") {
+    out << "shard " << summary["shard"]["index"] << "/" << summary["shard"]["count"]
+        << " done; when every share is, combine them: hapsyn merge DIR1 DIR2 ... --out DIR\n";
+  }
 }
 
 }  // namespace hapsyn
