@@ -323,7 +323,8 @@ SolverResult result_of_rank_0(const SolverContext& context) {
   return result;
 }
 
-// Reads `field` of shard `shard`'s state the way a resume would, as Error("merge", ...).
+// Runs read(context) on shard `shard`'s state as a resume would read it; its errors become
+// Error("merge", "shard 2/3: ...").
 template <class Read>
 auto merge_read(std::size_t shard, std::size_t shards, const Read& read) {
   SolverContext context;
