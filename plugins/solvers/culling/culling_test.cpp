@@ -435,3 +435,23 @@ TEST(Culling, LargeGridsRunGroupsOfLinesPerTaskWithTheSameResult) {
   expect_same_optimum(results[0], plain);
   std::filesystem::remove_all(dir);
 }
+
+TEST(Culling, ABreachFoundOnAnyRankFailsTheRunOnRankZero) {
+  const auto problem = hapsyn::test::non_monotone_problem();
+  for (bool seed : {false, true}) {
+    const hapsyn::plugins::CullingSolver culling(
+        hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(seed, false)));
+    hapsyn::test::EmulatedRanks job(3);
+    const auto results = job.run([&](hapsyn::Cluster& cluster) {
+      hapsyn::SolverContext context;
+      context.threads = 1;
+      context.ranks = &cluster;
+      return culling.solve(*problem, context);
+    });
+    EXPECT_EQ(results[0].status, hapsyn::SolverStatus::kFailed) << results[0].message;
+    EXPECT_FALSE(results[0].best.has_value());
+    EXPECT_NE(results[0].message.find("metric 'bad' (objective 'bad') breaks the worst-case monotonicity rule"),
+              std::string::npos)
+        << results[0].message;
+  }
+}

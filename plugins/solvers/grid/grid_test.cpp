@@ -613,3 +613,26 @@ TEST(Grid, LargeGridsRunGroupsOfChunksPerTaskWithTheSameResult) {
   expect_same_result(results[0], plain);
   std::filesystem::remove_all(dir);
 }
+
+TEST(Grid, ABreachFoundOnAnyRankFailsTheRunOnRankZero) {
+  const auto one = hapsyn::test::non_monotone_problem();
+  const auto two = hapsyn::test::metric_problem(
+      0.1, {std::make_shared<hapsyn::test::NonMonotoneMetric>(), std::make_shared<hapsyn::test::NonMonotoneMetric>()},
+      {"bad1", "bad2"});
+  for (bool pareto : {false, true}) {
+    const hapsyn::plugins::GridSolver solver = grid_solver({{"pareto", pareto}, {"progress_interval", 1e9}});
+    const hapsyn::Problem& problem = pareto ? *two : *one;
+    for (int ranks : {2, 3}) {
+      hapsyn::test::EmulatedRanks job(ranks);
+      const auto results = job.run([&](hapsyn::Cluster& cluster) {
+        hapsyn::SolverContext context;
+        context.threads = 1;
+        context.ranks = &cluster;
+        return solver.solve(problem, context);
+      });
+      EXPECT_EQ(results[0].status, hapsyn::SolverStatus::kFailed) << results[0].message;
+      EXPECT_NE(results[0].message.find("breaks the worst-case monotonicity rule"), std::string::npos) << results[0].message;
+      EXPECT_NE(results[0].message.find("grid pruning relies on that rule"), std::string::npos) << results[0].message;
+    }
+  }
+}
