@@ -1,11 +1,12 @@
 #include "culling.hpp"
 
+#include "grid/ledger.hpp"
+#include "grid/task_bytes.hpp"
 #include "grid/worst_case_check.hpp"
 #include "shared/minmax_sqp.hpp"
 
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
-#include <hapsyn/parallel.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -15,7 +16,6 @@
 #include <limits>
 #include <mutex>
 #include <optional>
-#include <set>
 #include <sstream>
 
 namespace hapsyn::plugins {
@@ -113,29 +113,10 @@ struct SweepCounts {
   }
 };
 
-// Which grid lines are finished: every line below `prefix` and those in `beyond` (finished by
-// other threads while an earlier one was still running). A line counts only when all its
-// designs are done, so a checkpoint says exactly what a resumed run still has to sweep.
-struct Ledger {
-  long long lines = 0;
-  long long prefix = 0;
-  std::set<long long> beyond;
-
-  bool finished(long long line) const { return line < prefix || beyond.count(line) != 0; }
-  void finish(long long line) {
-    beyond.insert(line);
-    while (!beyond.empty() && *beyond.begin() == prefix) {
-      beyond.erase(beyond.begin());
-      ++prefix;
-    }
-  }
-  long long count() const { return prefix + static_cast<long long>(beyond.size()); }
-};
-
-
-
 // What the seed and the sweep share: the reference (the best fully evaluated feasible grid
-// design so far) and the global critical samples, in the order found.
+// design so far) and the global critical samples, in the order found. Each rank has its own,
+// fed by its threads and by what the other ranks share (TaskFarm::learn); on rank 0 it is also
+// the run's collected state (ledger, counts, breach), which TaskFarm::collect fills.
 struct Reference {
   std::mutex mutex;  // guards best, critical, is_critical, iterations, the members below and the progress stream
   Best best;
@@ -144,10 +125,10 @@ struct Reference {
   std::vector<char> is_critical;
   std::atomic<int> critical_count{0};
   long long iterations = 0;  // reference updates
-  Ledger ledger;              // the sweep's finished lines
+  RangeLedger ledger;         // the sweep's finished lines
   SweepCounts finished;       // the counts of the finished lines (before a resume included)
   std::optional<MonotonicityBreach> breach;
-  std::atomic<bool> failed{false};  // a breach was found: the threads stop
+  std::atomic<bool> failed{false};  // a breach is known on this rank: its threads stop
 
   explicit Reference(int samples) : is_critical(static_cast<std::size_t>(samples), 0) {}
 
@@ -164,12 +145,17 @@ struct Reference {
     critical_count.store(static_cast<int>(critical.size()), std::memory_order_release);
   }
   // Offers a fully evaluated feasible grid design as the reference (caller holds the mutex).
-  void offer(long long index, const Evaluation& e) {
-    if (!best.improves_on(e.score, index)) return;
-    best.score = e.score;
+  // True when it became the reference.
+  bool offer(long long index, double value) {
+    if (!best.improves_on(value, index)) return false;
+    best.score = value;
     best.index = index;
-    score.store(e.score, std::memory_order_relaxed);
-    ++iterations;
+    score.store(value, std::memory_order_relaxed);
+    return true;
+  }
+  // The same, counted as a reference update (caller holds the mutex).
+  void update(long long index, double value) {
+    if (offer(index, value)) ++iterations;
   }
 };
 
@@ -246,7 +232,7 @@ void snap_to_grid(const Problem& problem, const Grid& grid, const std::vector<do
     seed.samples += e.samples_evaluated;
     if (e.status == EvalStatus::kFeasible) {
       std::lock_guard<std::mutex> lock(reference.mutex);
-      reference.offer(index, e);
+      reference.update(index, e.score);
       reference.publish(e.critical_samples);
     }
   }
@@ -278,16 +264,22 @@ Seed seed_reference(const Problem& problem, const Grid& grid, const Bounds& boun
 }
 
 // ---------------------------------------------------------------------------------------------
-// 2. The culling sweep over the grid: lines along the last variable, handed out dynamically.
+// 2. The culling sweep over the grid: lines along the last variable, the tasks of one task farm
+//    (handed out in order to every thread of every rank; a --shard share is a contiguous slice).
 
 struct SweepThread {
   std::unique_ptr<Problem::EvalScratch> eval_scratch;
   std::vector<int> local;  // critical samples, most recently useful first
   int known = 0;           // global critical samples merged so far
   std::vector<double> x;
-  SweepCounts counts;
+  SweepCounts counts;         // this run's, lines finished or not
+  SweepCounts partial;        // of the lines a stop left unfinished
   std::vector<double> bound;  // the objectives' bound at the critical samples of the current design
   bool has_bound = false;
+  // What the current line found, for its task result.
+  Best line_best;
+  std::vector<int> line_critical;
+  std::optional<MonotonicityBreach> breach;
 };
 
 // Merges the global critical samples found since the thread last looked.
@@ -332,9 +324,19 @@ bool ruled_out_by_bound(const Problem& problem, SweepThread& s, double threshold
   return false;
 }
 
+// Adds critical samples to the reference and to the line's result (caller holds reference.mutex).
+void publish(SweepThread& s, Reference& reference, const std::vector<std::vector<int>>& per_metric) {
+  reference.publish(per_metric);
+  for (const auto& list : per_metric) {
+    for (int sample : list) {
+      if (sample >= 0) s.line_critical.push_back(sample);
+    }
+  }
+}
+
 // Searches the whole workspace for the design in s.x (grid `index`) and shares what it found.
 // A feasible result is checked against the design's bound at the critical samples: a bound
-// below the full value breaks the rule culling rests on (recorded in reference.breach).
+// below the full value breaks the rule culling rests on (s.breach; the rank's threads stop).
 void full_search(const Problem& problem, SweepThread& s, long long index, double threshold, Reference& reference) {
   EvalOptions full;
   full.prune_below = threshold;
@@ -352,21 +354,22 @@ void full_search(const Problem& problem, SweepThread& s, long long index, double
       if (s.has_bound) {
         if (auto breach = compare_bounds(problem, s.x.data(), s.bound, e.objectives,
                                          static_cast<long long>(s.local.size()), false)) {
-          if (!reference.breach) reference.breach = breach;
+          if (!s.breach) s.breach = breach;
           reference.failed = true;
           return;
         }
       }
-      reference.offer(index, e);
-      reference.publish(e.critical_samples);
+      reference.update(index, e.score);
+      if (s.line_best.improves_on(e.score, index)) s.line_best = Best{e.score, index};
+      publish(s, reference, e.critical_samples);
       break;
     case EvalStatus::kPruned:
       ++s.counts.full_pruned;
-      reference.publish(e.critical_samples);
+      publish(s, reference, e.critical_samples);
       break;
     case EvalStatus::kSampleFailed:
       ++s.counts.full_failed;
-      reference.publish(std::vector<std::vector<int>>{std::vector<int>{e.failed_sample}});
+      publish(s, reference, std::vector<std::vector<int>>{std::vector<int>{e.failed_sample}});
       break;
     case EvalStatus::kConstraintViolated: break;
   }
@@ -393,56 +396,170 @@ bool cull_line(const Problem& problem, const Grid& grid, long long line, SweepTh
 }
 
 // "culling: P% of N grid designs, ..." (the caller holds the reference's mutex).
-std::string progress_line(const Grid& grid, const std::vector<SweepThread>& states, const Reference& reference,
-                          long long lines_done, long long lines, double elapsed) {
-  const double fraction = static_cast<double>(lines_done) / static_cast<double>(lines);
-  long long culled = 0;
-  for (const SweepThread& st : states) culled += st.counts.culled;
+std::string progress_line(const Grid& grid, const Reference& reference, double elapsed) {
+  const double fraction = static_cast<double>(reference.ledger.count()) / static_cast<double>(reference.ledger.units());
   std::ostringstream out;
   out << std::fixed << std::setprecision(1) << "culling: " << 100.0 * fraction << "% of " << grid.total
       << " grid designs, " << std::setprecision(3) << static_cast<double>(grid.total) * (1 - fraction) / 1e6
-      << "M left, " << std::setprecision(2) << static_cast<double>(culled) / elapsed / 1e6 << "M culled/s, reference "
-      << std::setprecision(6) << reference.score.load() << ", " << reference.critical.size() << " critical samples, "
-      << std::setprecision(1) << elapsed << " s elapsed, ~" << elapsed * (1 - fraction) / fraction << " s left\n";
+      << "M left, " << std::setprecision(2) << static_cast<double>(reference.finished.culled) / elapsed / 1e6
+      << "M culled/s, reference " << std::setprecision(6) << reference.score.load() << ", " << reference.critical.size()
+      << " critical samples, " << std::setprecision(1) << elapsed << " s elapsed, ~" << elapsed * (1 - fraction) / fraction
+      << " s left\n";
   return out.str();
 }
 
-// The sweep of the lines not finished yet on the context's threads; after each finished line
-// (under reference.mutex) a progress line and, when due, save(). Returns the counts of this
-// run summed over the threads (unfinished lines included).
+void put_counts(ByteWriter& out, const SweepCounts& c) {
+  out.put(c.culled).put(c.constraint_violated).put(c.failed_at_bound).put(c.full_searches).put(c.full_feasible);
+  out.put(c.full_pruned).put(c.full_failed).put(c.bound_samples).put(c.full_samples);
+}
+
+SweepCounts get_counts(ByteReader& in) {
+  SweepCounts c;
+  for (long long* v : {&c.culled, &c.constraint_violated, &c.failed_at_bound, &c.full_searches, &c.full_feasible,
+                       &c.full_pruned, &c.full_failed, &c.bound_samples, &c.full_samples}) {
+    *v = in.get<long long>();
+  }
+  return c;
+}
+
+void put_samples(ByteWriter& out, const std::vector<int>& samples) {
+  out.put<std::uint64_t>(samples.size());
+  for (int v : samples) out.put(v);
+}
+
+std::vector<std::vector<int>> get_samples(ByteReader& in) {
+  std::vector<std::vector<int>> samples(1);
+  samples[0].resize(static_cast<std::size_t>(in.get<std::uint64_t>()));
+  for (int& v : samples[0]) v = in.get<int>();
+  return samples;
+}
+
+// The sweep of the lines not finished yet, one task per line on every thread of every rank;
+// rank 0 collects each line's counts, best design and critical samples and, when due, reports
+// progress and calls save(); the ranks share their reference and critical samples as they find
+// them. Returns the farm's outcome and, in `partial`, this rank's counts of unfinished lines.
 template <class Save>
-SweepCounts sweep(const Problem& problem, const Grid& grid, const CullingOptions& options, const SolverContext& context,
-                  Reference& reference, const Save& save) {
+FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions& options, const SolverContext& context,
+                  Reference& reference, const Save& save, SweepCounts& partial) {
   std::vector<SweepThread> states(static_cast<std::size_t>(std::max(1, context.threads)));
   for (SweepThread& s : states) {
     s.eval_scratch = problem.make_eval_scratch();
     s.x.resize(grid.counts.size());
   }
-  const Ledger skip = reference.ledger;  // finished before this run
+  const RangeLedger skip = reference.ledger;  // finished before this run
   auto last_report = Clock::now(), last_checkpoint = Clock::now();
   const auto t_sweep = Clock::now();
-  parallel_for_dynamic(reference.ledger.lines, static_cast<int>(states.size()), 1, [&](long long line, int t) {
-    if (skip.finished(line)) return;
-    SweepThread& s = states[static_cast<std::size_t>(t)];
+  // A line's result: its counts, its best fully searched design, the critical samples it found
+  // and a breach.
+  const auto run_line = [&](long long line, int thread, bool& breach_found) -> std::optional<std::string> {
+    SweepThread& s = states[static_cast<std::size_t>(thread)];
     const SweepCounts before = s.counts;
-    if (!cull_line(problem, grid, line, s, reference, context)) return;
+    s.line_best = Best{};
+    s.line_critical.clear();
+    s.breach.reset();
+    const bool complete = cull_line(problem, grid, line, s, reference, context);
+    if (!complete && !s.breach) {
+      s.partial.add(s.counts.since(before));
+      return std::nullopt;
+    }
+    breach_found = s.breach.has_value();
+    ByteWriter out;
+    put_counts(out, s.counts.since(before));
+    out.put(s.line_best.index).put(s.line_best.score);
+    put_samples(out, s.line_critical);
+    put_breach(out, s.breach);
+    return out.take();
+  };
+  const auto collect_line = [&](long long line, const std::string& bytes) {
+    ByteReader in(bytes);
+    const SweepCounts counts = get_counts(in);
+    const auto index = in.get<long long>();
+    const auto score = in.get<double>();
+    const std::vector<std::vector<int>> critical = get_samples(in);
+    const std::optional<MonotonicityBreach> breach = get_breach(in);
     std::lock_guard<std::mutex> lock(reference.mutex);
+    if (breach) {
+      if (!reference.breach) reference.breach = breach;  // the line stays unfinished
+      reference.failed = true;
+      return;
+    }
     reference.ledger.finish(line);
-    reference.finished.add(s.counts.since(before));
+    reference.finished.add(counts);
+    if (index >= 0) reference.update(index, score);
+    reference.publish(critical);
     if (context.progress && seconds_since(last_report) >= options.progress_interval) {
       last_report = Clock::now();
-      *context.progress << progress_line(grid, states, reference, reference.ledger.count(), reference.ledger.lines,
-                                         seconds_since(t_sweep))
-                        << std::flush;
+      *context.progress << progress_line(grid, reference, seconds_since(t_sweep)) << std::flush;
     }
     if (seconds_since(last_checkpoint) >= options.checkpoint_interval) {
       save();
       last_checkpoint = Clock::now();
     }
-  });
-  SweepCounts sum;
-  for (const SweepThread& s : states) sum.add(s.counts);
-  return sum;
+  };
+  // Each task is units_per_task() consecutive lines (those finished before skipped); its result
+  // is its lines' (index, result) pairs, up to a breach. A stop loses the task's finished lines
+  // (a resumed run sweeps them again); their counts stay in the thread's partial counts.
+  const long long lines = reference.ledger.units();
+  const long long per_task = units_per_task(lines);
+  TaskFarm farm;
+  farm.count = (lines + per_task - 1) / per_task;
+  farm.shardable = true;
+  farm.done = [&](long long task) {
+    for (long long line = task * per_task; line < std::min(lines, (task + 1) * per_task); ++line) {
+      if (!skip.finished(line)) return false;
+    }
+    return true;
+  };
+  farm.run = [&](long long task, int thread) -> std::optional<std::string> {
+    ByteWriter out;
+    SweepCounts finished;  // of the lines of this task finished so far
+    for (long long line = task * per_task; line < std::min(lines, (task + 1) * per_task); ++line) {
+      if (skip.finished(line)) continue;
+      bool breach = false;
+      const std::optional<std::string> result = run_line(line, thread, breach);
+      if (!result) {
+        states[static_cast<std::size_t>(thread)].partial.add(finished);
+        return std::nullopt;
+      }
+      ByteReader in(*result);
+      finished.add(get_counts(in));
+      out.put(line).put_string(*result);
+      if (breach) break;  // this rank's tasks stop; rank 0 learns it from this result
+    }
+    return out.take();
+  };
+  farm.collect = [&](long long, std::string&& bytes) {
+    ByteReader in(bytes);
+    while (!in.at_end()) {
+      const auto line = in.get<long long>();
+      collect_line(line, in.get_string());
+    }
+  };
+  // The reference (a real design's full score: it culls nothing that ties or beats it) and the
+  // critical samples (any subset of samples bounds from above), as the ranks find them.
+  farm.share = [&] {
+    std::lock_guard<std::mutex> lock(reference.mutex);
+    ByteWriter out;
+    out.put(reference.best.index).put(reference.best.score);
+    put_samples(out, reference.critical);
+    return out.take();
+  };
+  farm.learn = [&](const std::string& bytes) {
+    ByteReader in(bytes);
+    const auto index = in.get<long long>();
+    const auto score = in.get<double>();
+    const std::vector<std::vector<int>> critical = get_samples(in);
+    std::lock_guard<std::mutex> lock(reference.mutex);
+    if (index >= 0) reference.offer(index, score);
+    reference.publish(critical);
+  };
+  farm.on_abort = [&] {
+    std::lock_guard<std::mutex> lock(reference.mutex);
+    save();
+  };
+  const FarmOutcome outcome = context.cluster().run_tasks(farm, static_cast<int>(states.size()));
+  for (const SweepThread& s : states) partial.add(s.partial);
+  return outcome;
 }
 
 Json sweep_statistics(const Grid& grid, const SweepCounts& sum, const Reference& reference, int samples) {
@@ -513,9 +630,8 @@ std::string fingerprint_of(const Problem& problem, const CullingOptions& options
 // The checkpoint's state (caller holds reference.mutex, or the sweep is not running).
 Json checkpoint_state(const Reference& reference, const Seed& seed, double seconds) {
   Json state;
-  state["lines"] = reference.ledger.lines;
-  state["finished_prefix"] = reference.ledger.prefix;
-  state["finished_lines"] = std::vector<long long>(reference.ledger.beyond.begin(), reference.ledger.beyond.end());
+  state["lines"] = reference.ledger.units();
+  reference.ledger.write(state, "finished_lines");
   state["reference"] = reference.best.index < 0 ? Json(nullptr)
                                                 : Json{{"index", reference.best.index}, {"score", reference.best.score}};
   state["critical_samples"] = reference.critical;
@@ -541,27 +657,15 @@ SweepCounts counts_from(const SolverContext& context, const Json& state) {
   return n;
 }
 
-// Restores the sweep from a checkpoint's state; the reference is re-evaluated in full and the
-// checkpoint refused when it does not score what it claims (a hand-edited score must never
-// become the reference, let alone the optimum). Returns the seconds spent before.
-double restore(const Problem& problem, const Grid& grid, const SolverContext& context, const Json& state,
-               Reference& reference, Seed& seed) {
-  Ledger& ledger = reference.ledger;
-  if (checkpoint_field<long long>(context, state, "state", "lines") != ledger.lines) {
-    throw bad_checkpoint(context, "state.lines does not match this grid (" + std::to_string(ledger.lines) + " lines)");
+// Reads a checkpoint's state into `reference` (the ledger, the counts, the critical samples and
+// the reference as claimed) and `seed`. Returns the seconds spent before.
+double read_state(const Problem& problem, const Grid& grid, const SolverContext& context, const Json& state,
+                  Reference& reference, Seed& seed) {
+  const long long lines = reference.ledger.units();
+  if (checkpoint_field<long long>(context, state, "state", "lines") != lines) {
+    throw bad_checkpoint(context, "state.lines does not match this grid (" + std::to_string(lines) + " lines)");
   }
-  ledger.prefix = checkpoint_field<long long>(context, state, "state", "finished_prefix");
-  if (ledger.prefix < 0 || ledger.prefix > ledger.lines) {
-    throw bad_checkpoint(context, "state.finished_prefix = " + std::to_string(ledger.prefix) + ": must lie in [0, " +
-                                      std::to_string(ledger.lines) + "]");
-  }
-  for (long long line : checkpoint_field<std::vector<long long>>(context, state, "state", "finished_lines")) {
-    if (line <= ledger.prefix || line >= ledger.lines) {
-      throw bad_checkpoint(context, "state.finished_lines: line " + std::to_string(line) + " must lie in (" +
-                                        std::to_string(ledger.prefix) + ", " + std::to_string(ledger.lines) + ")");
-    }
-    ledger.beyond.insert(line);
-  }
+  reference.ledger = RangeLedger::read(context, state, "finished_lines", "line", lines);
   std::vector<std::vector<int>> critical(1);
   for (int sample : checkpoint_field<std::vector<int>>(context, state, "state", "critical_samples")) {
     if (sample < 0 || sample >= problem.samples().size()) {
@@ -585,17 +689,6 @@ double restore(const Problem& problem, const Grid& grid, const SolverContext& co
       throw bad_checkpoint(context, "state.reference.index = " + std::to_string(index) + ": not a grid design (0.." +
                                         std::to_string(grid.total - 1) + ")");
     }
-    std::vector<double> x(grid.counts.size());
-    grid.decode(index, x.data());
-    auto ws = problem.make_eval_scratch();
-    const Evaluation& e = problem.evaluate(x.data(), *ws);
-    if (e.status != EvalStatus::kFeasible || e.score != score) {
-      std::ostringstream m;
-      m.precision(17);
-      m << "state.reference: grid design " << index << " scores " << e.score << " (" << to_string(e.status)
-        << ") on re-evaluation, the checkpoint claims " << score;
-      throw bad_checkpoint(context, m.str());
-    }
     reference.best.index = index;
     reference.best.score = score;
     reference.score.store(score);
@@ -603,9 +696,32 @@ double restore(const Problem& problem, const Grid& grid, const SolverContext& co
   return checkpoint_field<double>(context, state, "state", "elapsed_seconds");
 }
 
-// "stopped on request after 41.0% of 1,701,900 grid designs; <best>; checkpoint ... written, ...".
-std::string stopped_message(const Grid& grid, const Reference& reference, const SolverContext& context,
+// Restores the sweep from a checkpoint's state; the reference is re-evaluated in full and the
+// checkpoint refused when it does not score what it claims (a hand-edited score must never
+// become the reference, let alone the optimum). Returns the seconds spent before.
+double restore(const Problem& problem, const Grid& grid, const SolverContext& context, const Json& state,
+               Reference& reference, Seed& seed) {
+  const double seconds = read_state(problem, grid, context, state, reference, seed);
+  if (reference.best.index < 0) return seconds;
+  std::vector<double> x(grid.counts.size());
+  grid.decode(reference.best.index, x.data());
+  auto ws = problem.make_eval_scratch();
+  const Evaluation& e = problem.evaluate(x.data(), *ws);
+  if (e.status != EvalStatus::kFeasible || e.score != reference.best.score) {
+    std::ostringstream m;
+    m.precision(17);
+    m << "state.reference: grid design " << reference.best.index << " scores " << e.score << " ("
+      << to_string(e.status) << ") on re-evaluation, the checkpoint claims " << reference.best.score;
+    throw bad_checkpoint(context, m.str());
+  }
+  return seconds;
+}
+
+// "stopped on request after 41.0% of 1,701,900 grid designs; <best>; checkpoint ... written, ...",
+// or when a --shard share is done (not `stopped`), the cluster's message.
+std::string stopped_message(const Grid& grid, const Reference& reference, const SolverContext& context, bool stopped,
                             const std::string& best) {
+  if (!stopped) return context.cluster().shard_message() + "; " + best;
   std::string total = std::to_string(grid.total), commas;
   for (std::size_t i = 0; i < total.size(); ++i) {
     if (i > 0 && (total.size() - i) % 3 == 0) commas += ',';
@@ -613,11 +729,58 @@ std::string stopped_message(const Grid& grid, const Reference& reference, const 
   }
   std::ostringstream s;
   s << "stopped on request after " << std::fixed << std::setprecision(1)
-    << 100.0 * static_cast<double>(reference.ledger.count()) / static_cast<double>(reference.ledger.lines) << "% of "
+    << 100.0 * static_cast<double>(reference.ledger.count()) / static_cast<double>(reference.ledger.units()) << "% of "
     << commas << " grid designs; " << best << "; "
     << (context.checkpoint_file.empty() ? std::string("no checkpoint file, a new run starts over")
                                         : "checkpoint " + context.checkpoint_file + " written, resume with --resume");
   return s.str();
+}
+
+// What ranks other than 0 need of the seed that rank 0 ran: the reference, the critical samples
+// and the seed's figures (doubles survive JSON text exactly).
+Json seed_message(const Reference& reference, const Seed& seed) {
+  return {{"index", reference.best.index}, {"score", reference.best.index < 0 ? Json(nullptr) : Json(reference.best.score)},
+          {"critical", reference.critical}, {"iterations", reference.iterations},
+          {"statistics", seed.statistics}, {"designs", seed.designs}, {"samples", seed.samples}};
+}
+
+void adopt_seed(const Json& message, Reference& reference, Seed& seed) {
+  reference.best.index = message["index"].get<long long>();
+  if (reference.best.index >= 0) {
+    reference.best.score = message["score"].get<double>();
+    reference.score.store(reference.best.score);
+  }
+  reference.publish({message["critical"].get<std::vector<int>>()});
+  reference.iterations = message["iterations"].get<long long>();
+  seed.statistics = message["statistics"];
+  seed.designs = message["designs"].get<long long>();
+  seed.samples = message["samples"].get<long long>();
+}
+
+// The result ranks other than 0 return: the framework keeps rank 0's alone.
+SolverResult result_of_rank_0(const SolverContext& context) {
+  SolverResult result;
+  result.status = SolverStatus::kStopped;
+  result.message = "rank " + std::to_string(context.cluster().rank()) + ": the result is rank 0's";
+  return result;
+}
+
+// Reads shard `shard`'s state the way a resume would; its errors become Error("merge", ...).
+template <class Read>
+auto merge_read(std::size_t shard, std::size_t shards, const Read& read) {
+  SolverContext context;
+  context.checkpoint_file = "shard " + std::to_string(shard + 1) + "/" + std::to_string(shards);
+  try {
+    return read(context);
+  } catch (const Error& e) {
+    std::string what = e.what();
+    const std::string prefix = "checkpoint: ", suffix = "; delete it, or run without --resume";
+    if (what.rfind(prefix, 0) == 0) what = what.substr(prefix.size());
+    if (what.size() >= suffix.size() && what.compare(what.size() - suffix.size(), suffix.size(), suffix) == 0) {
+      what.resize(what.size() - suffix.size());
+    }
+    throw Error("merge", what);
+  }
 }
 
 }  // namespace
@@ -647,19 +810,28 @@ SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& c
   const auto t_start = Clock::now();
   const DesignSpace& space = problem.design_space();
   if (space.free_size() == 0) return evaluate_fixed_design(problem, context);
+  Cluster& cluster = context.cluster();
   const Grid grid(space);
   const Bounds bounds(space);
   Reference reference(problem.samples().size());
-  reference.ledger.lines = grid.total / grid.counts.back();
+  reference.ledger = RangeLedger(grid.total / grid.counts.back());
   const std::string fingerprint = fingerprint_of(problem, options_);
 
   Seed seed;
   double seconds_before = 0.0;
+  // Every rank reads the checkpoint (a collective) and re-evaluates its reference alike.
   const std::optional<Json> state = read_checkpoint(context, "culling", fingerprint);
   if (state) {
     seconds_before = restore(problem, grid, context, *state, reference, seed);
   } else if (options_.seed) {
-    seed = seed_reference(problem, grid, bounds, options_, reference, context);
+    // Rank 0 seeds (the SQP is one sequential run) and the other ranks take its outcome, so that
+    // every rank starts the sweep from the same reference whatever its floating point.
+    if (cluster.root()) seed = seed_reference(problem, grid, bounds, options_, reference, context);
+    if (cluster.size() > 1) {
+      std::string message = cluster.root() ? seed_message(reference, seed).dump() : std::string();
+      cluster.broadcast(message);
+      if (!cluster.root()) adopt_seed(Json::parse(message), reference, seed);
+    }
   }
   auto save = [&] {  // caller holds reference.mutex, or the sweep is not running
     write_checkpoint(context, "culling", fingerprint,
@@ -667,11 +839,13 @@ SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& c
   };
   if (!state) save();  // the seed is done: a resumed run skips it
   const auto t_sweep = Clock::now();
-  const SweepCounts run_counts = sweep(problem, grid, options_, context, reference, save);
+  SweepCounts partial;
+  const FarmOutcome outcome = sweep(problem, grid, options_, context, reference, save, partial);
+  if (!cluster.root()) return result_of_rank_0(context);
   const double sweep_seconds = seconds_since(t_sweep);
-  // This run's counts plus, on resume, those of the lines finished before.
-  SweepCounts sum = run_counts;
-  if (state) sum.add(counts_from(context, *state));
+  // The collected lines' counts (before a resume included) and this rank's unfinished lines'.
+  SweepCounts sum = reference.finished;
+  sum.add(partial);
 
   SolverResult result;
   result.design_evaluations = seed.designs + grid.total;
@@ -686,12 +860,13 @@ SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& c
     result.message = breach_message(problem, *reference.breach, kCullingBreach);
     return result;
   }
-  const bool stopped = context.stop_requested() && reference.ledger.count() < reference.ledger.lines;
+  const bool unfinished = !reference.ledger.complete();
+  const bool stopped = unfinished && (outcome.stopped || context.stop_requested());
   save();
   if (reference.best.index < 0) {
-    result.status = stopped ? SolverStatus::kStopped : SolverStatus::kInfeasible;
-    result.message = stopped ? stopped_message(grid, reference, context, "no feasible design yet")
-                             : "no feasible design among " + std::to_string(grid.total) + " grid designs";
+    result.status = unfinished ? SolverStatus::kStopped : SolverStatus::kInfeasible;
+    result.message = unfinished ? stopped_message(grid, reference, context, stopped, "no feasible design yet")
+                                : "no feasible design among " + std::to_string(grid.total) + " grid designs";
     return result;
   }
   std::vector<double> x(space.free_size());
@@ -708,14 +883,14 @@ SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& c
     result.message = breach_message(problem, *breach, kCullingBreach);
     return result;
   }
-  if (stopped) {
+  if (unfinished) {
     result.best = point;
     result.statistics = stats;
     std::ostringstream best;
     best.precision(10);
     best << "best so far: score " << point.score << " (grid design " << reference.best.index << ", not polished)";
     result.status = SolverStatus::kStopped;
-    result.message = stopped_message(grid, reference, context, best.str());
+    result.message = stopped_message(grid, reference, context, stopped, best.str());
     return result;
   }
   if (options_.polish && !bounds.any_integer) stats["polish"] = polish_cell(problem, x, options_, *ws, point, result);
@@ -728,6 +903,49 @@ SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& c
       << sum.culled << " culled at critical samples";
   result.message = msg.str();
   return result;
+}
+
+Json CullingSolver::merge_shards(const Problem& problem, const std::vector<Json>& states) const {
+  if (states.empty()) throw Error("merge", "no shard states to merge");
+  const DesignSpace& space = problem.design_space();
+  if (space.free_size() == 0) throw Error("merge", "the study has no free design variable: there is nothing to merge");
+  const Grid grid(space);
+  Reference merged(problem.samples().size());
+  merged.ledger = RangeLedger(grid.total / grid.counts.back());
+  std::vector<RangeLedger> ledgers;
+  Seed seed;
+  double seconds = 0.0;
+  for (std::size_t k = 0; k < states.size(); ++k) {
+    Reference shard(problem.samples().size());
+    shard.ledger = RangeLedger(merged.ledger.units());
+    Seed shard_seed;
+    // The claimed reference is re-evaluated by the resume that follows the merge, not here.
+    const double shard_seconds = merge_read(k, states.size(), [&](const SolverContext& c) {
+      return read_state(problem, grid, c, states[k], shard, shard_seed);
+    });
+    const long long line = merged.ledger.first_overlap(shard.ledger);
+    if (line >= 0) {
+      std::size_t other = 0;
+      while (other < k && !ledgers[other].finished(line)) ++other;
+      throw Error("merge", "line " + std::to_string(line) + " (grid designs " +
+                               std::to_string(line * grid.counts.back()) + ".." +
+                               std::to_string((line + 1) * grid.counts.back() - 1) + ") is finished in shard " +
+                               std::to_string(other + 1) + " and in shard " + std::to_string(k + 1) + " of " +
+                               std::to_string(states.size()) +
+                               ": the shares overlap; merge the shards of one --shard i/N split, each once");
+    }
+    for (const auto& [first, end] : shard.ledger.ranges()) merged.ledger.add(first, end);
+    merged.finished.add(shard.finished);
+    if (shard.best.index >= 0) merged.offer(shard.best.index, shard.best.score);
+    merged.publish({shard.critical});
+    merged.iterations += shard.iterations;
+    // Every shard ran the same seed (the same study and options): the first one's stands.
+    if (k == 0) seed = shard_seed;
+    // The shards of a job array run side by side: the merged run took as long as the longest.
+    seconds = std::max(seconds, shard_seconds);
+    ledgers.push_back(shard.ledger);
+  }
+  return checkpoint_state(merged, seed, seconds);
 }
 
 }  // namespace hapsyn::plugins

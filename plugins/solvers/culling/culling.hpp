@@ -23,6 +23,14 @@
 /// `--resume` re-evaluates the reference and refuses the checkpoint when its score differs, then
 /// sweeps the unfinished lines: the grid optimum is bit for bit the uninterrupted run's.
 ///
+/// Ranks and shards: the seed runs on rank 0, which broadcasts its reference; the sweep's lines
+/// are the tasks of one task farm (hapsyn/cluster.hpp) on every thread of every rank, rank 0
+/// collecting each line's counts, best design and critical samples (and writing the
+/// checkpoint). The ranks share their reference and critical samples as they find them. Under
+/// `--shard i/N` the i-th contiguous slice of the lines is swept (after the seed, which every
+/// shard runs alike) and merge_shards() joins the shares' states. The grid optimum does not
+/// depend on the thread count, rank count or shard split; the polish runs on rank 0.
+///
 /// Monotonicity spot check (grid/worst_case_check.hpp): every design that survives its bound
 /// at the critical samples and is then searched in full compares that bound with its full
 /// value, and the grid optimum is checked on half of the samples; a bound below the full value
@@ -86,6 +94,18 @@ class CullingSolver : public Solver {
   /// \throws Error("checkpoint", ...) with context.resume when the checkpoint is damaged, edited,
   ///         foreign or its reference does not re-evaluate to the score it claims.
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
+  /// The lines are one task farm over the ranks of an MPI job; the seed runs on rank 0.
+  bool distributed() const override { return true; }
+  /// `--shard i/N` sweeps the i-th contiguous slice of the lines (status stopped, the shard's
+  /// checkpoint written).
+  bool shardable() const override { return true; }
+  /// One state of the shards' checkpoint states (in shard order): the finished lines joined,
+  /// the counts summed, the best reference (ties to the first grid index), the critical
+  /// samples joined, the first shard's seed. Lines no shard finished stay unfinished.
+  /// \throws Error("merge", "line 17 (grid designs ...) is finished in shard 1 and in shard 2
+  ///         of 3: the shares overlap; ...") and Error("merge", "shard 2/3: state.counts.culled
+  ///         is missing") for a state that does not hold together.
+  Json merge_shards(const Problem& problem, const std::vector<Json>& states) const override;
 
  private:
   CullingOptions options_;

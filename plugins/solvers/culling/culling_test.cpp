@@ -2,6 +2,7 @@
 #include "culling.hpp"
 
 #include "../grid/grid.hpp"
+#include "grid/rank_test_support.hpp"
 #include "grid/stop_test_support.hpp"
 #include "test_support.hpp"
 
@@ -294,4 +295,163 @@ TEST(Culling, RefusesAGridLargerThanMaxDesignsAtLoad) {
   doc["solver"]["options"]["max_designs"] = 1000;  // the test grid has 4 x 6 x 6 x 7 = 1008 designs
   expect_error([&] { hapsyn::load_study(doc, hapsyn::test::registry()); },
                {"culling: the design grid has 1.01e+03 designs", "more than solver.options.max_designs = 1000"});
+}
+
+namespace {
+// Status, best and grid optimum of two culling results, bit for bit.
+void expect_same_optimum(const hapsyn::SolverResult& a, const hapsyn::SolverResult& b) {
+  EXPECT_EQ(a.status, b.status) << a.message << "\n" << b.message;
+  ASSERT_EQ(a.best.has_value(), b.best.has_value());
+  if (!a.best) return;
+  EXPECT_EQ(a.best->design, b.best->design);
+  EXPECT_EQ(a.best->score, b.best->score);
+  EXPECT_EQ(a.best->objectives, b.best->objectives);
+  EXPECT_EQ(a.statistics["grid_optimum"], b.statistics["grid_optimum"]);
+}
+}  // namespace
+
+TEST(Culling, ShardsMergedAndResumedGiveThePlainRun) {
+  for (bool seed : {false, true}) {
+    hapsyn::test::StopAfter counter;
+    const auto problem = hapsyn::test::stopping_problem(counter);  // 51 lines of 51 designs
+    const hapsyn::plugins::CullingSolver culling(
+        hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(seed, true)));
+    const auto plain = cull_with(*problem, culling_options(seed, true), counter, "", false);
+    ASSERT_EQ(plain.status, hapsyn::SolverStatus::kConverged) << plain.message;
+    const auto solve = [&](const hapsyn::SolverContext& context) { return culling.solve(*problem, context); };
+    for (int count : {1, 2, 3}) {
+      SCOPED_TRACE("seed " + std::to_string(seed) + ", shards " + std::to_string(count));
+      const std::string dir = hapsyn::test::fresh_directory("culling-shards");
+      const auto merged = hapsyn::test::shard_merge_resume(culling, *problem, count, dir, solve,
+                                                           [&](int k, const hapsyn::SolverResult& r) {
+        if (count == 1) {
+          expect_same_optimum(r, plain);
+          return;
+        }
+        EXPECT_EQ(r.status, hapsyn::SolverStatus::kStopped);
+        EXPECT_NE(r.message.find("shard " + std::to_string(k + 1) + "/" + std::to_string(count) + " done: "),
+                  std::string::npos)
+            << r.message;
+        EXPECT_NE(r.message.find("not polished"), std::string::npos) << r.message;
+      });
+      expect_same_optimum(merged, plain);
+      if (count == 3) {
+        const Json state = hapsyn::test::read_json_file(dir + "/shard-2.json")["state"];
+        EXPECT_EQ(state["finished_ranges"], Json::array({Json::array({34, 51})}));
+        const auto missing = hapsyn::test::shard_merge_resume(culling, *problem, 3, dir, solve,
+                                                              [](int, const hapsyn::SolverResult&) {}, {1});
+        expect_same_optimum(missing, plain);
+      }
+      std::filesystem::remove_all(dir);
+    }
+  }
+}
+
+TEST(Culling, MergeRefusesOverlappingSharesAndStatesThatDoNotFit) {
+  hapsyn::test::StopAfter counter;
+  const auto problem = hapsyn::test::stopping_problem(counter);
+  const hapsyn::plugins::CullingSolver culling(
+      hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(false, false)));
+  const std::string dir = hapsyn::test::fresh_directory("culling-merge-bad");
+  std::vector<Json> states;
+  for (int k : {0, 1}) {
+    hapsyn::ShardCluster shard(k, 2);
+    hapsyn::SolverContext context;
+    context.ranks = &shard;
+    context.checkpoint_file = dir + "/shard.json";
+    (void)culling.solve(*problem, context);
+    states.push_back(hapsyn::test::read_json_file(context.checkpoint_file)["state"]);
+  }
+  expect_error([&] { culling.merge_shards(*problem, {states[0], states[1], states[0]}); },
+               {"merge: line 0 (grid designs 0..50) is finished in shard 1 and in shard 3 of 3: the shares overlap; "
+                "merge the shards of one --shard i/N split, each once"});
+  expect_error([&] { culling.merge_shards(*problem, {}); }, {"merge: no shard states to merge"});
+  Json broken = states[1];
+  broken["counts"].erase("culled");
+  expect_error([&] { culling.merge_shards(*problem, {states[0], broken}); },
+               {"merge: shard 2/2: state.counts.culled is missing"});
+  broken = states[1];
+  broken["critical_samples"] = Json::array({99});
+  expect_error([&] { culling.merge_shards(*problem, {states[0], broken}); },
+               {"merge: shard 2/2: state.critical_samples: sample 99 is not one of the 8 samples"});
+  const Json merged = culling.merge_shards(*problem, {states[0], states[1]});
+  EXPECT_EQ(merged["finished_prefix"], 51);
+  EXPECT_EQ(merged["counts"]["full_searches"].get<long long>(),
+            states[0]["counts"]["full_searches"].get<long long>() + states[1]["counts"]["full_searches"].get<long long>());
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Culling, EmulatedRanksGiveThePlainRun) {
+  const hapsyn::Study study = hapsyn::load_study(hapsyn::test::fivebar_study("culling"), hapsyn::test::registry());
+  for (bool seed : {false, true}) {
+    const hapsyn::plugins::CullingSolver culling(
+        hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(seed, true)));
+    const auto plain = solve(culling, *study.problem, 2);
+    ASSERT_EQ(plain.status, hapsyn::SolverStatus::kConverged) << plain.message;
+    for (int ranks : {2, 3}) {
+      SCOPED_TRACE("seed " + std::to_string(seed) + ", ranks " + std::to_string(ranks));
+      hapsyn::test::EmulatedRanks job(ranks);
+      const auto results = job.run([&](hapsyn::Cluster& cluster) {
+        hapsyn::SolverContext context;
+        context.threads = 2;
+        context.ranks = &cluster;
+        return culling.solve(*study.problem, context);
+      });
+      expect_same_optimum(results[0], plain);
+      if (seed) {  // rank 0 seeded and broadcast its reference: the seed is the single run's
+        EXPECT_EQ(results[0].statistics["seed"]["reference_score"], plain.statistics["seed"]["reference_score"]);
+      }
+      EXPECT_EQ(results[ranks - 1].message, "rank " + std::to_string(ranks - 1) + ": the result is rank 0's");
+    }
+  }
+}
+
+TEST(Culling, LargeGridsRunGroupsOfLinesPerTaskWithTheSameResult) {
+  // 16 x 15 x 15 = 3,600 lines: three per task (hapsyn::plugins::units_per_task).
+  Json doc = hapsyn::test::fivebar_study("culling");
+  doc["design"]["l0"] = {{"lower", 0.0}, {"upper", 0.3}, {"step", 0.02}};
+  doc["design"]["l1"] = {{"lower", 0.02}, {"upper", 0.3}, {"step", 0.02}};
+  doc["design"]["l2"] = {{"lower", 0.02}, {"upper", 0.3}, {"step", 0.02}};
+  doc["design"]["r"] = {{"lower", 0.0}, {"upper", 0.6}, {"step", 0.1}};
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  const hapsyn::plugins::CullingSolver culling(
+      hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(false, false)));
+  const auto plain = solve(culling, *study.problem, 2);
+  ASSERT_EQ(plain.status, hapsyn::SolverStatus::kConverged) << plain.message;
+  const std::string dir = hapsyn::test::fresh_directory("culling-groups");
+  const auto run = [&](const hapsyn::SolverContext& context) { return culling.solve(*study.problem, context); };
+  const auto merged = hapsyn::test::shard_merge_resume(culling, *study.problem, 2, dir, run, [](int, const hapsyn::SolverResult&) {});
+  expect_same_optimum(merged, plain);
+  // The shares are whole tasks: 1,200 tasks of 3 lines, the second share from task 600.
+  const Json state = hapsyn::test::read_json_file(dir + "/shard-1.json")["state"];
+  EXPECT_EQ(state["finished_ranges"], Json::array({Json::array({1800, 3600})}));
+  hapsyn::test::EmulatedRanks job(3);
+  const auto results = job.run([&](hapsyn::Cluster& cluster) {
+    hapsyn::SolverContext context;
+    context.threads = 1;
+    context.ranks = &cluster;
+    return culling.solve(*study.problem, context);
+  });
+  expect_same_optimum(results[0], plain);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Culling, ABreachFoundOnAnyRankFailsTheRunOnRankZero) {
+  const auto problem = hapsyn::test::non_monotone_problem();
+  for (bool seed : {false, true}) {
+    const hapsyn::plugins::CullingSolver culling(
+        hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(seed, false)));
+    hapsyn::test::EmulatedRanks job(3);
+    const auto results = job.run([&](hapsyn::Cluster& cluster) {
+      hapsyn::SolverContext context;
+      context.threads = 1;
+      context.ranks = &cluster;
+      return culling.solve(*problem, context);
+    });
+    EXPECT_EQ(results[0].status, hapsyn::SolverStatus::kFailed) << results[0].message;
+    EXPECT_FALSE(results[0].best.has_value());
+    EXPECT_NE(results[0].message.find("metric 'bad' (objective 'bad') breaks the worst-case monotonicity rule"),
+              std::string::npos)
+        << results[0].message;
+  }
 }

@@ -1,22 +1,23 @@
 #include "grid.hpp"
 
+#include "ledger.hpp"
+#include "task_bytes.hpp"
 #include "worst_case_check.hpp"
 
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
-#include <hapsyn/parallel.hpp>
 #include <hapsyn/pareto.hpp>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <cmath>
 #include <iomanip>
 #include <limits>
 #include <mutex>
 #include <optional>
 #include <ostream>
-#include <set>
 #include <sstream>
 
 namespace hapsyn::plugins {
@@ -108,36 +109,21 @@ struct Tally {
             {"grid_counts", grid.counts}};
   }
 };
-
 // ---------------------------------------------------------------------------------------------
 // Chunks, checkpoints and the sweep both modes share.
 
-// The grid is visited in chunks of consecutive designs, handed out to the threads in order; a
-// chunk counts as finished only when all its designs are, so that a checkpoint can say exactly
-// which designs a resumed run still has to visit.
+// The grid is visited in chunks of consecutive designs: one chunk is one task of the run's task
+// farm (handed out in order to every thread of every rank; the chunks of one --shard share are a
+// contiguous slice). A chunk counts as finished only when all its designs are, so that a
+// checkpoint can say exactly which designs a resumed run still has to visit.
 constexpr long long kChunk = 64;
 
-// Which chunks are finished: every chunk below `prefix`, and those in `beyond` (the few that
-// other threads finished while an earlier one was still running).
-struct Ledger {
-  long long chunks = 0;
-  long long prefix = 0;
-  std::set<long long> beyond;
-
-  bool finished(long long chunk) const { return chunk < prefix || beyond.count(chunk) != 0; }
-  void finish(long long chunk) {
-    beyond.insert(chunk);
-    while (!beyond.empty() && *beyond.begin() == prefix) {
-      beyond.erase(beyond.begin());
-      ++prefix;
-    }
-  }
-  long long designs(long long total) const {
-    long long n = std::min(total, prefix * kChunk);
-    for (long long c : beyond) n += std::min(kChunk, total - c * kChunk);
-    return n;
-  }
-};
+// The designs of the finished chunks (the last chunk may be short).
+long long finished_designs(const RangeLedger& ledger, long long total) {
+  long long n = 0;
+  for (const auto& [first, end] : ledger.ranges()) n += std::min(total, end * kChunk) - first * kChunk;
+  return n;
+}
 
 // "1,701,900".
 std::string with_commas(long long n) {
@@ -158,7 +144,7 @@ std::string fingerprint_of(const Problem& problem, const GridOptions& options) {
 // What a run resumes from: the ledger, the counts and time so far (the mode's own part is read
 // by the mode).
 struct Resumed {
-  Ledger ledger;
+  RangeLedger ledger;
   Tally tally;
   double seconds = 0.0;
 };
@@ -172,19 +158,7 @@ Resumed read_common(const SolverContext& context, const Json& state, const GridS
     throw bad_checkpoint(context, "state.grid_designs / state.chunk_size do not match this grid (" +
                                       std::to_string(grid.total) + " designs in chunks of " + std::to_string(kChunk) + ")");
   }
-  r.ledger.chunks = (grid.total + kChunk - 1) / kChunk;
-  r.ledger.prefix = checkpoint_field<long long>(context, state, "state", "finished_prefix");
-  if (r.ledger.prefix < 0 || r.ledger.prefix > r.ledger.chunks) {
-    throw bad_checkpoint(context, "state.finished_prefix = " + std::to_string(r.ledger.prefix) + ": must lie in [0, " +
-                                      std::to_string(r.ledger.chunks) + "]");
-  }
-  for (long long c : checkpoint_field<std::vector<long long>>(context, state, "state", "finished_chunks")) {
-    if (c <= r.ledger.prefix || c >= r.ledger.chunks) {
-      throw bad_checkpoint(context, "state.finished_chunks: chunk " + std::to_string(c) + " must lie in (" +
-                                        std::to_string(r.ledger.prefix) + ", " + std::to_string(r.ledger.chunks) + ")");
-    }
-    r.ledger.beyond.insert(c);
-  }
+  r.ledger = RangeLedger::read(context, state, "finished_chunks", "chunk", (grid.total + kChunk - 1) / kChunk);
   const Json tally = checkpoint_field<Json>(context, state, "state", "tally");
   r.tally.feasible = checkpoint_field<long long>(context, tally, "state.tally", "feasible");
   r.tally.constraint_violated = checkpoint_field<long long>(context, tally, "state.tally", "constraint_violated");
@@ -195,14 +169,26 @@ Resumed read_common(const SolverContext& context, const Json& state, const GridS
   return r;
 }
 
-Json common_state(const char* mode, const GridShape& grid, const Ledger& ledger, const Tally& tally, double seconds) {
-  return {{"mode", mode},
-          {"grid_designs", grid.total},
-          {"chunk_size", kChunk},
-          {"finished_prefix", ledger.prefix},
-          {"finished_chunks", std::vector<long long>(ledger.beyond.begin(), ledger.beyond.end())},
-          {"tally", tally.to_json()},
-          {"elapsed_seconds", seconds}};
+Json common_state(const char* mode, const GridShape& grid, const RangeLedger& ledger, const Tally& tally, double seconds) {
+  Json state = {{"mode", mode}, {"grid_designs", grid.total}, {"chunk_size", kChunk}};
+  ledger.write(state, "finished_chunks");
+  state["tally"] = tally.to_json();
+  state["elapsed_seconds"] = seconds;
+  return state;
+}
+
+void put_tally(ByteWriter& out, const Tally& t) {
+  out.put(t.feasible).put(t.constraint_violated).put(t.sample_failed).put(t.pruned).put(t.samples);
+}
+
+Tally get_tally(ByteReader& in) {
+  Tally t;
+  t.feasible = in.get<long long>();
+  t.constraint_violated = in.get<long long>();
+  t.sample_failed = in.get<long long>();
+  t.pruned = in.get<long long>();
+  t.samples = in.get<long long>();
+  return t;
 }
 
 // Per-thread state of a sweep; `Extra` holds what the mode keeps besides the tally.
@@ -211,7 +197,7 @@ struct SweepThread : Extra {
   std::unique_ptr<Problem::EvalScratch> eval_scratch;
   std::vector<double> x;
   std::vector<int> check_subset;  // buffer of the monotonicity spot check
-  Tally tally;                    // every evaluation of this run, finished chunks or not
+  Tally partial;                  // evaluations of chunks this thread left unfinished (a stop)
 };
 
 template <class Extra>
@@ -224,68 +210,165 @@ std::vector<SweepThread<Extra>> make_threads(const Problem& problem, const Solve
   return states;
 }
 
-// What the threads of a sweep share besides the mode's result so far.
+// What the threads of a sweep share besides the mode's result so far. On rank 0 it is also the
+// run's collected state (ledger, counts, breach), which collect() fills.
 struct SweepControl {
   const SolverContext& context;
   const GridShape& grid;
-  const Ledger skip;  // chunks finished before this run (resume)
-  std::mutex mutex;   // guards ledger, finished, last_checkpoint, breach and the progress stream
-  Ledger ledger;
-  Tally finished;     // the evaluations of the finished chunks (before this run included)
+  const RangeLedger skip;  // chunks finished before this run (resume)
+  std::mutex mutex;        // guards ledger, finished, the clocks, breach, the mode's result and the progress stream
+  RangeLedger ledger;
+  Tally finished;          // the evaluations of the finished chunks (before this run included)
   Clock::time_point start = Clock::now();
   Clock::time_point last_checkpoint = start, last_report = start;
   double seconds_before = 0.0;
   std::optional<MonotonicityBreach> breach;
-  std::atomic<bool> failed{false};
+  std::atomic<bool> failed{false};  // a breach is known on this rank: its tasks stop
 
   SweepControl(const SolverContext& c, const GridShape& g, const Resumed& r)
       : context(c), grid(g), skip(r.ledger), ledger(r.ledger), finished(r.tally), seconds_before(r.seconds) {}
   bool halted() const { return context.stop_requested() || failed.load(std::memory_order_relaxed); }
   double seconds() const { return seconds_before + std::chrono::duration<double>(Clock::now() - start).count(); }
+  long long chunks() const { return ledger.units(); }
+  // A task's breach, on rank 0 (caller holds mutex).
   void record_breach(const MonotonicityBreach& b) {
-    std::lock_guard<std::mutex> lock(mutex);
     if (!breach) breach = b;
     failed = true;
   }
+  // Whether a checkpoint is due (caller holds mutex).
+  bool checkpoint_due(double interval) const {
+    return std::chrono::duration<double>(Clock::now() - last_checkpoint).count() >= interval;
+  }
 };
 
-// Every unfinished chunk on the context's threads: visit(index, thread, tally) per design, between
-// designs a stop check; after each finished chunk (under control.mutex) on_chunk(), which reports
-// progress and writes a checkpoint when due.
-template <class Thread, class Visit, class OnChunk>
-void run_chunks(SweepControl& control, std::vector<Thread>& states, const Visit& visit, const OnChunk& on_chunk) {
-  const long long total = control.grid.total;
-  const long long chunks = (total + kChunk - 1) / kChunk;
-  parallel_for_dynamic(chunks, static_cast<int>(states.size()), 1, [&](long long chunk, int t) {
-    if (control.skip.finished(chunk)) return;
-    Thread& s = states[static_cast<std::size_t>(t)];
-    Tally chunk_tally;
-    const long long end = std::min(total, (chunk + 1) * kChunk);
-    for (long long index = chunk * kChunk; index < end; ++index) {
-      if (control.halted()) {
-        s.tally.add(chunk_tally);  // evaluated, but the chunk is not finished: a resumed run redoes it
-        return;
-      }
-      visit(index, s, chunk_tally);
-    }
-    s.tally.add(chunk_tally);
-    std::lock_guard<std::mutex> lock(control.mutex);
-    control.ledger.finish(chunk);
-    control.finished.add(chunk_tally);
-    on_chunk();
-  });
+// Visits the designs of `chunk` (visit(index, tally) each), checking for a stop or a breach
+// between designs. False when that left the chunk unfinished.
+template <class Visit>
+bool visit_chunk(const SweepControl& control, long long chunk, Tally& tally, const Visit& visit) {
+  const long long end = std::min(control.grid.total, (chunk + 1) * kChunk);
+  for (long long index = chunk * kChunk; index < end; ++index) {
+    if (control.halted()) return false;
+    visit(index, tally);
+  }
+  return true;
 }
 
-// The stop message: "stopped on request after 41.0% of 1,701,900 grid designs; <best>; ...".
-std::string stopped_message(const SweepControl& control, const std::string& best) {
+// The farm both modes fill in: each task is units_per_task() consecutive chunks (the chunks
+// finished before skipped), the whole grid split by --shard. run_chunk(chunk, thread, breach)
+// evaluates one chunk and returns its result (starting with its tally), or nullopt when a stop
+// left it unfinished; a task's result is its chunks' (index, result) pairs, up to a breach.
+// collect_chunk(chunk, result) takes one on rank 0; partial(thread, tally) counts the
+// evaluations of chunks whose task a stop left unfinished (a resumed run visits them again).
+template <class RunChunk, class CollectChunk, class Partial>
+TaskFarm chunk_farm(const SweepControl& control, RunChunk run_chunk, CollectChunk collect_chunk, Partial partial) {
+  const long long chunks = control.chunks();
+  const long long per_task = units_per_task(chunks);
+  TaskFarm farm;
+  farm.count = (chunks + per_task - 1) / per_task;
+  farm.shardable = true;
+  farm.done = [&control, chunks, per_task](long long task) {
+    for (long long c = task * per_task; c < std::min(chunks, (task + 1) * per_task); ++c) {
+      if (!control.skip.finished(c)) return false;
+    }
+    return true;
+  };
+  farm.run = [&control, chunks, per_task, run_chunk, partial](long long task, int thread) -> std::optional<std::string> {
+    ByteWriter out;
+    Tally finished;  // of the chunks of this task finished so far
+    for (long long c = task * per_task; c < std::min(chunks, (task + 1) * per_task); ++c) {
+      if (control.skip.finished(c)) continue;
+      bool breach = false;
+      const std::optional<std::string> result = run_chunk(c, thread, breach);
+      if (!result) {
+        partial(thread, finished);
+        return std::nullopt;
+      }
+      ByteReader in(*result);
+      finished.add(get_tally(in));
+      out.put(c).put_string(*result);
+      if (breach) break;  // this rank's tasks stop; rank 0 learns it from this result
+    }
+    return out.take();
+  };
+  farm.collect = [collect_chunk](long long, std::string&& bytes) {
+    ByteReader in(bytes);
+    while (!in.at_end()) {
+      const auto chunk = in.get<long long>();
+      collect_chunk(chunk, in.get_string());
+    }
+  };
+  return farm;
+}
+
+// How far an unfinished sweep got and where its checkpoint is: "stopped on request after 41.0%
+// of 1,701,900 grid designs; <best>; ...", or for a --shard share the cluster's message.
+std::string unfinished_message(const SweepControl& control, bool stopped, const std::string& best) {
+  if (!stopped) return control.context.cluster().shard_message() + "; " + best;
   std::ostringstream s;
   s << "stopped on request after " << std::fixed << std::setprecision(1)
-    << 100.0 * static_cast<double>(control.ledger.designs(control.grid.total)) / static_cast<double>(control.grid.total)
+    << 100.0 * static_cast<double>(finished_designs(control.ledger, control.grid.total)) /
+           static_cast<double>(control.grid.total)
     << "% of " << with_commas(control.grid.total) << " grid designs; " << best << "; "
     << (control.context.checkpoint_file.empty() ? std::string("no checkpoint file, a new run starts over")
                                                 : "checkpoint " + control.context.checkpoint_file +
                                                       " written, resume with --resume");
   return s.str();
+}
+
+// The result ranks other than 0 return: the framework keeps rank 0's alone.
+SolverResult result_of_rank_0(const SolverContext& context) {
+  SolverResult result;
+  result.status = SolverStatus::kStopped;
+  result.message = "rank " + std::to_string(context.cluster().rank()) + ": the result is rank 0's";
+  return result;
+}
+
+// Runs read(context) on shard `shard`'s state as a resume would read it; its errors become
+// Error("merge", "shard 2/3: ...").
+template <class Read>
+auto merge_read(std::size_t shard, std::size_t shards, const Read& read) {
+  SolverContext context;
+  context.checkpoint_file = "shard " + std::to_string(shard + 1) + "/" + std::to_string(shards);
+  try {
+    return read(context);
+  } catch (const Error& e) {
+    // "checkpoint: shard 2/3: state.tally is missing; delete it, ..." -> "merge: shard 2/3: ..."
+    std::string what = e.what();
+    const std::string prefix = "checkpoint: ", suffix = "; delete it, or run without --resume";
+    if (what.rfind(prefix, 0) == 0) what = what.substr(prefix.size());
+    if (what.size() >= suffix.size() && what.compare(what.size() - suffix.size(), suffix.size(), suffix) == 0) {
+      what.resize(what.size() - suffix.size());
+    }
+    throw Error("merge", what);
+  }
+}
+
+// The ledgers, counts and times of the shards' states, merged; Error("merge", ...) naming the
+// first chunk that two shards both claim.
+Resumed merge_common(const std::vector<Json>& states, const GridShape& grid, const char* mode) {
+  if (states.empty()) throw Error("merge", "no shard states to merge");
+  Resumed merged;
+  merged.ledger = RangeLedger((grid.total + kChunk - 1) / kChunk);
+  std::vector<RangeLedger> ledgers;
+  for (std::size_t k = 0; k < states.size(); ++k) {
+    const Resumed r = merge_read(k, states.size(), [&](const SolverContext& c) { return read_common(c, states[k], grid, mode); });
+    const long long chunk = merged.ledger.first_overlap(r.ledger);
+    if (chunk >= 0) {
+      std::size_t other = 0;
+      while (other < k && !ledgers[other].finished(chunk)) ++other;
+      throw Error("merge", "chunk " + std::to_string(chunk) + " (grid designs " + std::to_string(chunk * kChunk) + ".." +
+                               std::to_string(std::min(grid.total, (chunk + 1) * kChunk) - 1) + ") is finished in shard " +
+                               std::to_string(other + 1) + " and in shard " + std::to_string(k + 1) + " of " +
+                               std::to_string(states.size()) +
+                               ": the shares overlap; merge the shards of one --shard i/N split, each once");
+    }
+    for (const auto& [first, end] : r.ledger.ranges()) merged.ledger.add(first, end);
+    merged.tally.add(r.tally);
+    // The shards of a job array run side by side: the merged run took as long as the longest.
+    merged.seconds = std::max(merged.seconds, r.seconds);
+    ledgers.push_back(r.ledger);
+  }
+  return merged;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -295,17 +378,21 @@ struct BestDesign {
   double best_score = -kInf;
   long long best_index = -1;
 
-  // Larger score wins; of equal scores the first in grid order, so neither the thread count
-  // nor the order in which a resumed run visits the designs can matter.
+  // Larger score wins; of equal scores the first in grid order, so neither the thread or rank
+  // count nor the order in which the chunks are visited or collected can matter.
   bool improves_on(double score, long long index) const {
     return score > best_score || (score == best_score && index < best_index);
+  }
+  void take(double score, long long index) {
+    if (!improves_on(score, index)) return;
+    best_score = score;
+    best_index = index;
   }
 };
 using BestThread = SweepThread<BestDesign>;
 
-// The checkpoint's best: re-evaluated in full; refused when it does not score what it claims
-// (a hand-edited score must never become the study's best).
-BestDesign read_best(const Problem& problem, const GridShape& grid, const SolverContext& context, const Json& state) {
+// The checkpoint's best as it claims it (index in the grid, or -1 when none).
+BestDesign claimed_best(const GridShape& grid, const SolverContext& context, const Json& state) {
   BestDesign best;
   const Json claimed = checkpoint_field<Json>(context, state, "state", "best");
   if (claimed.is_null()) return best;
@@ -315,6 +402,14 @@ BestDesign read_best(const Problem& problem, const GridShape& grid, const Solver
     throw bad_checkpoint(context, "state.best.index = " + std::to_string(best.best_index) + ": not a grid design (0.." +
                                       std::to_string(grid.total - 1) + ")");
   }
+  return best;
+}
+
+// The checkpoint's best: re-evaluated in full; refused when it does not score what it claims
+// (a hand-edited score must never become the study's best).
+BestDesign read_best(const Problem& problem, const GridShape& grid, const SolverContext& context, const Json& state) {
+  const BestDesign best = claimed_best(grid, context, state);
+  if (best.best_index < 0) return best;
   std::vector<double> x(problem.design_space().free_size());
   problem.design_space().grid_point(best.best_index, grid.counts, x.data());
   auto ws = problem.make_eval_scratch();
@@ -346,7 +441,8 @@ struct FrontPoint {
 
 // Inserts p into `front` (non-dominated points sorted by the first value, descending) unless a
 // point dominates it (or equals it with a lower index); removes the points it dominates.
-// Returns true when the front changed.
+// Returns true when the front changed. The front of a set of points does not depend on the order
+// they are inserted in: chunks, threads and ranks may offer theirs in any order.
 bool insert_point(std::vector<FrontPoint>& front, const FrontPoint& p) {
   const std::vector<Sense> max(p.values.size(), Sense::kMaximize);
   for (FrontPoint& q : front) {
@@ -366,7 +462,25 @@ bool insert_point(std::vector<FrontPoint>& front, const FrontPoint& p) {
   return true;
 }
 
-// The front the sweep's threads share.
+void put_points(ByteWriter& out, const std::vector<FrontPoint>& points, std::size_t m) {
+  out.put<std::uint64_t>(points.size());
+  for (const FrontPoint& p : points) {
+    out.put(p.index);
+    for (std::size_t o = 0; o < m; ++o) out.put(p.values[o]);
+  }
+}
+
+std::vector<FrontPoint> get_points(ByteReader& in, std::size_t m) {
+  std::vector<FrontPoint> points(static_cast<std::size_t>(in.get<std::uint64_t>()));
+  for (FrontPoint& p : points) {
+    p.index = in.get<long long>();
+    p.values.resize(m);
+    for (std::size_t o = 0; o < m; ++o) p.values[o] = in.get<double>();
+  }
+  return points;
+}
+
+// The front of a rank's threads (and on rank 0, the collected front).
 struct SharedFront {
   std::vector<double> sign;           // +1 maximized, -1 minimized objective
   std::mutex mutex;                   // guards front and flat
@@ -374,12 +488,9 @@ struct SharedFront {
   std::vector<double> flat;           // the front as EvalOptions wants it (natural units)
   std::atomic<long long> version{0};  // bumped when the front changes
 
-  // Offers a feasible design's objectives (natural units) at grid `index`; true when the front
-  // changed.
-  bool offer(const std::vector<double>& objectives, long long index) {
+  // Inserts a sense-signed point; true when the front changed.
+  bool insert(const FrontPoint& p) {
     const std::size_t m = sign.size();
-    FrontPoint p{std::vector<double>(m), index};
-    for (std::size_t o = 0; o < m; ++o) p.values[o] = sign[o] * objectives[o];
     std::lock_guard<std::mutex> lock(mutex);
     if (!insert_point(front, p)) return false;
     flat.clear();
@@ -389,16 +500,33 @@ struct SharedFront {
     version.fetch_add(1, std::memory_order_release);
     return true;
   }
+  FrontPoint signed_point(const std::vector<double>& objectives, long long index) const {
+    FrontPoint p{std::vector<double>(sign.size()), index};
+    for (std::size_t o = 0; o < sign.size(); ++o) p.values[o] = sign[o] * objectives[o];
+    return p;
+  }
+  // Offers a feasible design's objectives (natural units) at grid `index`; true when the front
+  // changed.
+  bool offer(const std::vector<double>& objectives, long long index) { return insert(signed_point(objectives, index)); }
   // The front as the checkpoint holds it: grid index and natural objective values per point.
   Json to_json() {
     std::lock_guard<std::mutex> lock(mutex);
-    Json points = Json::array();
-    for (const FrontPoint& q : front) {
+    return points_to_json(front, sign);
+  }
+  static Json points_to_json(const std::vector<FrontPoint>& points, const std::vector<double>& sign) {
+    Json out = Json::array();
+    for (const FrontPoint& q : points) {
       std::vector<double> natural(sign.size());
       for (std::size_t o = 0; o < sign.size(); ++o) natural[o] = sign[o] * q.values[o];
-      points.push_back({{"index", q.index}, {"objectives", natural}});
+      out.push_back({{"index", q.index}, {"objectives", natural}});
     }
-    return points;
+    return out;
+  }
+  std::string bytes() {
+    std::lock_guard<std::mutex> lock(mutex);
+    ByteWriter out;
+    put_points(out, front, sign.size());
+    return out.take();
   }
 };
 
@@ -409,32 +537,50 @@ struct FrontSnapshot {
 };
 using FrontThread = SweepThread<FrontSnapshot>;
 
+std::vector<double> front_signs(const Problem& problem) {
+  std::vector<double> sign;
+  for (const Objective& o : problem.objectives()) sign.push_back(o.sense == Sense::kMaximize ? 1.0 : -1.0);
+  return sign;
+}
+
+// The checkpoint's front as it claims it: grid index and natural objective values per point.
+std::vector<std::pair<long long, std::vector<double>>> claimed_front(const GridShape& grid, const SolverContext& context,
+                                                                     const Json& state, std::size_t objectives) {
+  const Json points = checkpoint_field<Json>(context, state, "state", "front");
+  if (!points.is_array()) throw bad_checkpoint(context, "state.front is not an array");
+  std::vector<std::pair<long long, std::vector<double>>> claimed;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::string path = "state.front[" + std::to_string(i) + "]";
+    const long long index = checkpoint_field<long long>(context, points[i], path, "index");
+    std::vector<double> values = checkpoint_field<std::vector<double>>(context, points[i], path, "objectives");
+    if (index < 0 || index >= grid.total || values.size() != objectives) {
+      throw bad_checkpoint(context, path + ": index " + std::to_string(index) + " or " + std::to_string(values.size()) +
+                                        " objective values do not fit this grid and study");
+    }
+    claimed.emplace_back(index, std::move(values));
+  }
+  return claimed;
+}
+
 // The checkpoint's front, every point re-evaluated in full and refused when its objective
 // values differ from the claimed ones, offered to `shared`.
 void read_front(const Problem& problem, const GridShape& grid, const SolverContext& context, const Json& state,
                 SharedFront& shared) {
-  const Json points = checkpoint_field<Json>(context, state, "state", "front");
-  if (!points.is_array()) throw bad_checkpoint(context, "state.front is not an array");
+  const auto claimed = claimed_front(grid, context, state, shared.sign.size());
   auto ws = problem.make_eval_scratch();
   std::vector<double> x(problem.design_space().free_size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const std::string path = "state.front[" + std::to_string(i) + "]";
-    const long long index = checkpoint_field<long long>(context, points[i], path, "index");
-    const std::vector<double> claimed = checkpoint_field<std::vector<double>>(context, points[i], path, "objectives");
-    if (index < 0 || index >= grid.total || claimed.size() != shared.sign.size()) {
-      throw bad_checkpoint(context, path + ": index " + std::to_string(index) + " or " + std::to_string(claimed.size()) +
-                                        " objective values do not fit this grid and study");
-    }
+  for (std::size_t i = 0; i < claimed.size(); ++i) {
+    const auto& [index, values] = claimed[i];
     problem.design_space().grid_point(index, grid.counts, x.data());
     const Evaluation& e = problem.evaluate(x.data(), *ws);
-    if (e.status != EvalStatus::kFeasible || e.objectives != claimed) {
+    if (e.status != EvalStatus::kFeasible || e.objectives != values) {
       std::ostringstream s;
       s.precision(17);
-      s << path << ": grid design " << index << " has objectives " << Json(e.objectives).dump() << " ("
-        << to_string(e.status) << ") on re-evaluation, the checkpoint claims " << Json(claimed).dump();
+      s << "state.front[" << i << "]: grid design " << index << " has objectives " << Json(e.objectives).dump() << " ("
+        << to_string(e.status) << ") on re-evaluation, the checkpoint claims " << Json(values).dump();
       throw bad_checkpoint(context, s.str());
     }
-    shared.offer(claimed, index);
+    shared.offer(values, index);
   }
 }
 
@@ -452,10 +598,11 @@ std::vector<SolutionPoint> front_solutions(const Problem& problem, const GridSha
   return solutions;
 }
 
+// The collected counts plus what this rank's threads evaluated in chunks a stop left unfinished.
 template <class Extra>
-Tally run_tally(const std::vector<SweepThread<Extra>>& states, const Tally& before) {
-  Tally sum = before;
-  for (const SweepThread<Extra>& s : states) sum.add(s.tally);
+Tally run_tally(const std::vector<SweepThread<Extra>>& states, const Tally& finished) {
+  Tally sum = finished;
+  for (const SweepThread<Extra>& s : states) sum.add(s.partial);
   return sum;
 }
 
@@ -475,14 +622,16 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
                                            [](const Objective& o) { return o.sense == Sense::kMaximize && o.weight >= 0.0; });
   const std::string fingerprint = fingerprint_of(problem, options_);
 
+  // Every rank reads the checkpoint (a collective) and re-evaluates its best alike.
   Resumed resumed;
-  resumed.ledger.chunks = (grid.total + kChunk - 1) / kChunk;
-  BestDesign shared_best;
+  resumed.ledger = RangeLedger((grid.total + kChunk - 1) / kChunk);
+  BestDesign shared_best;  // guarded by control.mutex: this rank's best, and on rank 0 the collected one
   if (const std::optional<Json> state = read_checkpoint(context, "grid", fingerprint)) {
     resumed = read_common(context, *state, grid, "best");
     shared_best = read_best(problem, grid, context, *state);
   }
   SweepControl control(context, grid, resumed);
+  // The pruning threshold: the best score known on this rank, its own or another rank's.
   std::atomic<double> incumbent{shared_best.best_score};
   std::vector<BestThread> states = make_threads<BestDesign>(problem, context);
 
@@ -492,44 +641,89 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
     write_checkpoint(context, "grid", fingerprint, state);
     control.last_checkpoint = Clock::now();
   };
-  run_chunks(
-      control, states,
-      [&](long long index, BestThread& s, Tally& tally) {
-        space.grid_point(index, grid.counts, s.x.data());
-        EvalOptions options;
-        if (prune) options.prune_below = incumbent.load(std::memory_order_relaxed);
-        const Evaluation& e = problem.evaluate(s.x.data(), *s.eval_scratch, options);
-        tally.count(e);
-        if (e.status != EvalStatus::kFeasible || !s.improves_on(e.score, index)) return;
-        s.best_score = e.score;
-        s.best_index = index;
-        raise_to(incumbent, e.score);
-        {
-          std::lock_guard<std::mutex> lock(control.mutex);
-          if (shared_best.improves_on(s.best_score, index)) {
-            shared_best.best_score = s.best_score;
-            shared_best.best_index = index;
-          }
-        }
-        // A thread's improvements are few (each raises its best): the spot check is cheap there.
-        if (prunes) {
-          if (auto breach = spot_check(problem, s.x.data(), *s.eval_scratch, s.check_subset, false)) {
-            control.record_breach(*breach);
-          }
-        }
-      },
-      [&] {
-        if (context.progress) {
-          report_progress(*context.progress, "grid", control.ledger.designs(grid.total), grid.total, control.start,
-                          control.last_report, options_.progress_interval, [&](std::ostream& out) {
-                            out << "best score " << std::setprecision(6) << incumbent.load();
-                          });
-        }
-        if (std::chrono::duration<double>(Clock::now() - control.last_checkpoint).count() >= options_.checkpoint_interval) {
-          save();
-        }
-      });
-  const Tally sum = run_tally(states, resumed.tally);
+  // A chunk's result: its tally, its best feasible design (index -1: none) and a breach.
+  const auto run_chunk = [&](long long chunk, int thread, bool& breach_found) -> std::optional<std::string> {
+    BestThread& s = states[static_cast<std::size_t>(thread)];
+    Tally tally;
+    BestDesign chunk_best;
+    std::optional<MonotonicityBreach> breach;
+    const bool complete = visit_chunk(control, chunk, tally, [&](long long index, Tally& t) {
+      space.grid_point(index, grid.counts, s.x.data());
+      EvalOptions options;
+      if (prune) options.prune_below = incumbent.load(std::memory_order_relaxed);
+      const Evaluation& e = problem.evaluate(s.x.data(), *s.eval_scratch, options);
+      t.count(e);
+      if (e.status != EvalStatus::kFeasible) return;
+      chunk_best.take(e.score, index);
+      if (!s.improves_on(e.score, index)) return;
+      s.take(e.score, index);
+      raise_to(incumbent, e.score);
+      {
+        std::lock_guard<std::mutex> lock(control.mutex);
+        shared_best.take(e.score, index);
+      }
+      // A thread's improvements are few (each raises its best): the spot check is cheap there.
+      if (prunes && !breach) {
+        breach = spot_check(problem, s.x.data(), *s.eval_scratch, s.check_subset, false);
+        if (breach) control.failed = true;  // this rank's tasks stop; rank 0 learns it from the result
+      }
+    });
+    if (!complete && !breach) {
+      s.partial.add(tally);
+      return std::nullopt;
+    }
+    breach_found = breach.has_value();
+    ByteWriter out;
+    put_tally(out, tally);
+    out.put(chunk_best.best_index).put(chunk_best.best_score);
+    put_breach(out, breach);
+    return out.take();
+  };
+  const auto collect_chunk = [&](long long chunk, const std::string& bytes) {
+    ByteReader in(bytes);
+    const Tally tally = get_tally(in);
+    const auto index = in.get<long long>();
+    const auto score = in.get<double>();
+    const std::optional<MonotonicityBreach> breach = get_breach(in);
+    std::lock_guard<std::mutex> lock(control.mutex);
+    if (breach) {
+      control.record_breach(*breach);  // the chunk stays unfinished
+      return;
+    }
+    control.ledger.finish(chunk);
+    control.finished.add(tally);
+    if (index >= 0) {
+      shared_best.take(score, index);
+      raise_to(incumbent, score);
+    }
+    if (context.progress) {
+      report_progress(*context.progress, "grid", finished_designs(control.ledger, grid.total), grid.total, control.start,
+                      control.last_report, options_.progress_interval, [&](std::ostream& out) {
+                        out << "best score " << std::setprecision(6) << incumbent.load();
+                      });
+    }
+    if (control.checkpoint_due(options_.checkpoint_interval)) save();
+  };
+  const auto partial = [&](int thread, const Tally& t) { states[static_cast<std::size_t>(thread)].partial.add(t); };
+  TaskFarm farm = chunk_farm(control, run_chunk, collect_chunk, partial);
+  if (prune) {
+    farm.share = [&] {
+      ByteWriter out;
+      out.put(incumbent.load(std::memory_order_relaxed));
+      return out.take();
+    };
+    farm.learn = [&](const std::string& bytes) {
+      ByteReader in(bytes);
+      raise_to(incumbent, in.get<double>());  // another rank's real design: cuts nothing that ties or beats it
+    };
+  }
+  farm.on_abort = [&] {
+    std::lock_guard<std::mutex> lock(control.mutex);
+    save();
+  };
+  const FarmOutcome outcome = context.cluster().run_tasks(farm, static_cast<int>(states.size()));
+  if (!context.cluster().root()) return result_of_rank_0(context);
+  const Tally sum = run_tally(states, control.finished);
 
   SolverResult result;
   result.design_evaluations = sum.designs();
@@ -541,14 +735,15 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
     result.message = breach_message(problem, *control.breach, kGridBreach);
     return result;
   }
-  const bool stopped = context.stop_requested() && control.ledger.prefix < control.ledger.chunks;
+  const bool unfinished = !control.ledger.complete();
+  const bool stopped = unfinished && (outcome.stopped || context.stop_requested());
   save();
   if (shared_best.best_index < 0) {
     const std::string none = "no feasible design among " + std::to_string(sum.designs()) + " grid designs (" +
                              std::to_string(sum.constraint_violated) + " violate a design constraint, " +
                              std::to_string(sum.sample_failed) + " fail at a sample)";
-    result.status = stopped ? SolverStatus::kStopped : SolverStatus::kInfeasible;
-    result.message = stopped ? stopped_message(control, "no feasible design yet") : none;
+    result.status = unfinished ? SolverStatus::kStopped : SolverStatus::kInfeasible;
+    result.message = unfinished ? unfinished_message(control, stopped, "no feasible design yet") : none;
     return result;
   }
   // Re-evaluate the winner in full (its running evaluation may have been bounded).
@@ -570,25 +765,26 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
   std::ostringstream best;
   best.precision(10);
   best << "best so far: score " << result.best->score << " (grid design " << shared_best.best_index << ")";
-  result.status = stopped ? SolverStatus::kStopped : SolverStatus::kConverged;
-  result.message = stopped ? stopped_message(control, best.str())
-                           : "exhaustive search of " + std::to_string(grid.total) + " grid designs, " +
-                                 std::to_string(sum.feasible) + " fully evaluated";
+  result.status = unfinished ? SolverStatus::kStopped : SolverStatus::kConverged;
+  result.message = unfinished ? unfinished_message(control, stopped, best.str())
+                              : "exhaustive search of " + std::to_string(grid.total) + " grid designs, " +
+                                    std::to_string(sum.feasible) + " fully evaluated";
   return result;
 }
 
 SolverResult GridSolver::solve_front(const Problem& problem, const SolverContext& context) const {
   const GridShape grid(problem.design_space());
   const DesignSpace& space = problem.design_space();
-  SharedFront shared;
-  for (const Objective& o : problem.objectives()) shared.sign.push_back(o.sense == Sense::kMaximize ? 1.0 : -1.0);
+  SharedFront shared;  // this rank's front, and on rank 0 the collected one
+  shared.sign = front_signs(problem);
+  const std::size_t m = shared.sign.size();
   // Pruning needs upper bounds of maximized worst-case objectives (the evaluator checks too).
   const bool prune = options_.prune && problem.worst_case() &&
                      std::all_of(shared.sign.begin(), shared.sign.end(), [](double s) { return s > 0; });
   const std::string fingerprint = fingerprint_of(problem, options_);
 
   Resumed resumed;
-  resumed.ledger.chunks = (grid.total + kChunk - 1) / kChunk;
+  resumed.ledger = RangeLedger((grid.total + kChunk - 1) / kChunk);
   if (const std::optional<Json> state = read_checkpoint(context, "grid", fingerprint)) {
     resumed = read_common(context, *state, grid, "front");
     read_front(problem, grid, context, *state, shared);
@@ -602,40 +798,83 @@ SolverResult GridSolver::solve_front(const Problem& problem, const SolverContext
     write_checkpoint(context, "grid", fingerprint, state);
     control.last_checkpoint = Clock::now();
   };
-  run_chunks(
-      control, states,
-      [&](long long index, FrontThread& s, Tally& tally) {
-        if (prune && shared.version.load(std::memory_order_acquire) != s.seen) {
-          std::lock_guard<std::mutex> lock(shared.mutex);
-          s.snapshot.assign(shared.flat.begin(), shared.flat.end());
-          s.seen = shared.version.load(std::memory_order_relaxed);
-        }
-        space.grid_point(index, grid.counts, s.x.data());
-        EvalOptions options;
-        if (prune) options.prune_dominated_by = &s.snapshot;
-        const Evaluation& e = problem.evaluate(s.x.data(), *s.eval_scratch, options);
-        tally.count(e);
-        if (e.status != EvalStatus::kFeasible || !shared.offer(e.objectives, index)) return;
-        // Designs that enter the front are few compared with the grid: the spot check is cheap there.
-        if (prune) {
-          if (auto breach = spot_check(problem, s.x.data(), *s.eval_scratch, s.check_subset, true)) {
-            control.record_breach(*breach);
-          }
-        }
-      },
-      [&] {
-        if (context.progress) {
-          report_progress(*context.progress, "grid (pareto)", control.ledger.designs(grid.total), grid.total,
-                          control.start, control.last_report, options_.progress_interval, [&](std::ostream& out) {
-                            std::lock_guard<std::mutex> lock(shared.mutex);
-                            out << "front " << shared.front.size() << " points";
-                          });
-        }
-        if (std::chrono::duration<double>(Clock::now() - control.last_checkpoint).count() >= options_.checkpoint_interval) {
-          save();
-        }
-      });
-  const Tally sum = run_tally(states, resumed.tally);
+  // A chunk's result: its tally, the front of its feasible designs and a breach.
+  const auto run_chunk = [&](long long chunk, int thread, bool& breach_found) -> std::optional<std::string> {
+    FrontThread& s = states[static_cast<std::size_t>(thread)];
+    Tally tally;
+    std::vector<FrontPoint> chunk_front;
+    std::optional<MonotonicityBreach> breach;
+    const bool complete = visit_chunk(control, chunk, tally, [&](long long index, Tally& t) {
+      if (prune && shared.version.load(std::memory_order_acquire) != s.seen) {
+        std::lock_guard<std::mutex> lock(shared.mutex);
+        s.snapshot.assign(shared.flat.begin(), shared.flat.end());
+        s.seen = shared.version.load(std::memory_order_relaxed);
+      }
+      space.grid_point(index, grid.counts, s.x.data());
+      EvalOptions options;
+      if (prune) options.prune_dominated_by = &s.snapshot;
+      const Evaluation& e = problem.evaluate(s.x.data(), *s.eval_scratch, options);
+      t.count(e);
+      if (e.status != EvalStatus::kFeasible) return;
+      const FrontPoint p = shared.signed_point(e.objectives, index);
+      insert_point(chunk_front, p);
+      if (!shared.insert(p)) return;
+      // Designs that enter the front are few compared with the grid: the spot check is cheap there.
+      if (prune && !breach) {
+        breach = spot_check(problem, s.x.data(), *s.eval_scratch, s.check_subset, true);
+        if (breach) control.failed = true;
+      }
+    });
+    if (!complete && !breach) {
+      s.partial.add(tally);
+      return std::nullopt;
+    }
+    breach_found = breach.has_value();
+    ByteWriter out;
+    put_tally(out, tally);
+    put_points(out, chunk_front, m);
+    put_breach(out, breach);
+    return out.take();
+  };
+  const auto collect_chunk = [&](long long chunk, const std::string& bytes) {
+    ByteReader in(bytes);
+    const Tally tally = get_tally(in);
+    const std::vector<FrontPoint> points = get_points(in, m);
+    const std::optional<MonotonicityBreach> breach = get_breach(in);
+    std::lock_guard<std::mutex> lock(control.mutex);
+    if (breach) {
+      control.record_breach(*breach);
+      return;
+    }
+    control.ledger.finish(chunk);
+    control.finished.add(tally);
+    for (const FrontPoint& p : points) shared.insert(p);
+    if (context.progress) {
+      report_progress(*context.progress, "grid (pareto)", finished_designs(control.ledger, grid.total), grid.total,
+                      control.start, control.last_report, options_.progress_interval, [&](std::ostream& out) {
+                        std::lock_guard<std::mutex> front_lock(shared.mutex);
+                        out << "front " << shared.front.size() << " points";
+                      });
+    }
+    if (control.checkpoint_due(options_.checkpoint_interval)) save();
+  };
+  const auto partial = [&](int thread, const Tally& t) { states[static_cast<std::size_t>(thread)].partial.add(t); };
+  TaskFarm farm = chunk_farm(control, run_chunk, collect_chunk, partial);
+  if (prune) {
+    farm.share = [&] { return shared.bytes(); };
+    farm.learn = [&](const std::string& bytes) {
+      ByteReader in(bytes);
+      // Other ranks' points are real designs: pruning against them cuts no point of the final front.
+      for (const FrontPoint& p : get_points(in, m)) shared.insert(p);
+    };
+  }
+  farm.on_abort = [&] {
+    std::lock_guard<std::mutex> lock(control.mutex);
+    save();
+  };
+  const FarmOutcome outcome = context.cluster().run_tasks(farm, static_cast<int>(states.size()));
+  if (!context.cluster().root()) return result_of_rank_0(context);
+  const Tally sum = run_tally(states, control.finished);
 
   SolverResult result;
   result.design_evaluations = sum.designs();
@@ -649,21 +888,55 @@ SolverResult GridSolver::solve_front(const Problem& problem, const SolverContext
     result.message = breach_message(problem, *control.breach, kGridBreach);
     return result;
   }
-  const bool stopped = context.stop_requested() && control.ledger.prefix < control.ledger.chunks;
+  const bool unfinished = !control.ledger.complete();
+  const bool stopped = unfinished && (outcome.stopped || context.stop_requested());
   save();
   result.front = front_solutions(problem, grid, shared);
   if (shared.front.empty()) {
-    result.status = stopped ? SolverStatus::kStopped : SolverStatus::kInfeasible;
-    result.message = stopped ? stopped_message(control, "no feasible design yet")
-                             : "no feasible design among " + std::to_string(grid.total) + " grid designs";
+    result.status = unfinished ? SolverStatus::kStopped : SolverStatus::kInfeasible;
+    result.message = unfinished ? unfinished_message(control, stopped, "no feasible design yet")
+                                : "no feasible design among " + std::to_string(grid.total) + " grid designs";
     return result;
   }
-  result.status = stopped ? SolverStatus::kStopped : SolverStatus::kConverged;
-  result.message = stopped ? stopped_message(control, "front so far: " + std::to_string(shared.front.size()) + " points")
-                           : "exact Pareto front of " + std::to_string(grid.total) + " grid designs: " +
-                                 std::to_string(shared.front.size()) + " points, " + std::to_string(sum.feasible) +
-                                 " designs fully evaluated";
+  result.status = unfinished ? SolverStatus::kStopped : SolverStatus::kConverged;
+  result.message = unfinished
+                       ? unfinished_message(control, stopped, "front so far: " + std::to_string(shared.front.size()) + " points")
+                       : "exact Pareto front of " + std::to_string(grid.total) + " grid designs: " +
+                             std::to_string(shared.front.size()) + " points, " + std::to_string(sum.feasible) +
+                             " designs fully evaluated";
   return result;
+}
+
+Json GridSolver::merge_shards(const Problem& problem, const std::vector<Json>& states) const {
+  const GridShape grid(problem.design_space());
+  const char* mode = options_.pareto ? "front" : "best";
+  const Resumed merged = merge_common(states, grid, mode);
+  Json state = common_state(mode, grid, merged.ledger, merged.tally, merged.seconds);
+  if (options_.pareto) {
+    // Each shard's front is the front of its designs: the front of their union is the front of
+    // the grid's finished part, whatever the order (ties to the first grid index).
+    const std::vector<double> sign = front_signs(problem);
+    std::vector<FrontPoint> front;
+    for (std::size_t k = 0; k < states.size(); ++k) {
+      const auto claimed = merge_read(k, states.size(), [&](const SolverContext& c) {
+        return claimed_front(grid, c, states[k], sign.size());
+      });
+      for (const auto& [index, values] : claimed) {
+        FrontPoint p{std::vector<double>(sign.size()), index};
+        for (std::size_t o = 0; o < sign.size(); ++o) p.values[o] = sign[o] * values[o];
+        insert_point(front, p);
+      }
+    }
+    state["front"] = SharedFront::points_to_json(front, sign);
+  } else {
+    BestDesign best;
+    for (std::size_t k = 0; k < states.size(); ++k) {
+      const BestDesign b = merge_read(k, states.size(), [&](const SolverContext& c) { return claimed_best(grid, c, states[k]); });
+      if (b.best_index >= 0) best.take(b.best_score, b.best_index);
+    }
+    state["best"] = best_to_json(best);
+  }
+  return state;
 }
 
 }  // namespace hapsyn::plugins

@@ -23,6 +23,14 @@
 /// checkpoint when a value differs, then visits the unfinished chunks: the result is bit for
 /// bit the one of an uninterrupted run.
 ///
+/// Ranks and shards: the chunks are the tasks of one task farm (hapsyn/cluster.hpp), handed out
+/// to every thread of every rank of an MPI job; rank 0 collects each chunk's counts and best
+/// (front points), reports progress and writes the checkpoint. The ranks share their best score
+/// (their front) as they find it, so each prunes against what all found. Under `--shard i/N`
+/// the i-th contiguous slice of the chunks runs and merge_shards() joins the shares' states;
+/// the resumed merged state gives the single run's result. Best and front do not depend on the
+/// thread count, rank count or shard split.
+///
 /// With pruning, designs that improve a thread's best (enter the front) and the winner are
 /// spot-checked for the worst-case monotonicity rule (grid/worst_case_check.hpp): a breach
 /// gives status failed naming the metric.
@@ -74,6 +82,18 @@ class GridSolver : public Solver {
   ///         foreign or its best (front) does not re-evaluate to the values it claims.
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
   bool pareto() const override { return options_.pareto; }
+  /// The chunks are one task farm over the ranks of an MPI job (pruning knowledge shared).
+  bool distributed() const override { return true; }
+  /// `--shard i/N` runs the i-th contiguous slice of the chunks (status stopped, the shard's
+  /// checkpoint written).
+  bool shardable() const override { return true; }
+  /// One state of the shards' checkpoint states (in shard order): the finished chunks joined,
+  /// the counts summed, the best by score (ties to the first grid index) or the fronts joined.
+  /// Chunks no shard finished stay unfinished (a resumed run visits them).
+  /// \throws Error("merge", "chunk 17 (grid designs 1088..1151) is finished in shard 1 and in
+  ///         shard 2 of 3: the shares overlap; ...") and Error("merge", "shard 2/3: state.mode
+  ///         is missing") for a state that does not hold together or is of the other mode.
+  Json merge_shards(const Problem& problem, const std::vector<Json>& states) const override;
 
  private:
   SolverResult solve_best(const Problem& problem, const SolverContext& context) const;

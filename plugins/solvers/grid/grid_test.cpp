@@ -2,6 +2,7 @@
 #include "grid.hpp"
 
 #include "analytic_problems.hpp"
+#include "rank_test_support.hpp"
 #include "stop_test_support.hpp"
 #include "test_support.hpp"
 
@@ -434,4 +435,204 @@ TEST(Grid, RefusesAGridLargerThanMaxDesignsAtLoad) {
                               "deliberately"});
   doc["solver"]["options"]["max_designs"] = 1008;
   EXPECT_NO_THROW(hapsyn::load_study(doc, hapsyn::test::registry()));
+}
+
+namespace {
+// Status, best (design, score, objectives) and front of two results, bit for bit.
+void expect_same_result(const hapsyn::SolverResult& a, const hapsyn::SolverResult& b) {
+  EXPECT_EQ(a.status, b.status) << a.message << "\n" << b.message;
+  ASSERT_EQ(a.best.has_value(), b.best.has_value());
+  if (a.best) {
+    EXPECT_EQ(a.best->design, b.best->design);
+    EXPECT_EQ(a.best->score, b.best->score);
+    EXPECT_EQ(a.best->objectives, b.best->objectives);
+  }
+  expect_same_points(a.front, b.front);
+}
+
+// The analytic problem of the stop tests: one objective on a 2,601-design grid (41 chunks), or
+// two on a 441-design grid (7 chunks).
+std::shared_ptr<hapsyn::Problem> shard_problem(hapsyn::test::StopAfter& counter, bool pareto) {
+  return hapsyn::test::stopping_problem(counter, pareto ? 0.05 : 0.02, pareto);
+}
+}  // namespace
+
+TEST(Grid, ShardsMergedAndResumedGiveThePlainRunInBothModes) {
+  for (bool pareto : {false, true}) {
+    for (bool prune : {true, false}) {
+      hapsyn::test::StopAfter counter;
+      const auto problem = shard_problem(counter, pareto);
+      const Json options = {{"pareto", pareto}, {"prune", prune}, {"progress_interval", 1e9}};
+      const hapsyn::plugins::GridSolver solver = grid_solver(options);
+      const auto plain = solve_with(*problem, options, counter, "", false);
+      ASSERT_EQ(plain.status, hapsyn::SolverStatus::kConverged) << plain.message;
+      const auto solve = [&](const hapsyn::SolverContext& context) { return solver.solve(*problem, context); };
+      for (int count : {1, 2, 3}) {
+        SCOPED_TRACE("pareto " + std::to_string(pareto) + ", prune " + std::to_string(prune) + ", shards " +
+                     std::to_string(count));
+        const std::string dir = hapsyn::test::fresh_directory("grid-shards");
+        const auto merged = hapsyn::test::shard_merge_resume(solver, *problem, count, dir, solve,
+                                                             [&](int k, const hapsyn::SolverResult& r) {
+          if (count == 1) {
+            expect_same_result(r, plain);  // one share is the whole run
+            return;
+          }
+          EXPECT_EQ(r.status, hapsyn::SolverStatus::kStopped);
+          EXPECT_NE(r.message.find("shard " + std::to_string(k + 1) + "/" + std::to_string(count) +
+                                   " done: combine the shards' output directories with hapsyn merge"),
+                    std::string::npos)
+              << r.message;
+        });
+        expect_same_result(merged, plain);
+        if (!prune) {  // without pruning the counts do not depend on the split
+          EXPECT_EQ(merged.statistics["feasible"], plain.statistics["feasible"]);
+          EXPECT_EQ(merged.sample_evaluations, plain.sample_evaluations);
+        }
+        if (count == 3 && !pareto) {
+          // The middle share is one range of chunks, 41 * 1/3 .. 41 * 2/3.
+          const Json state = hapsyn::test::read_json_file(dir + "/shard-1.json")["state"];
+          EXPECT_EQ(state["finished_prefix"], 0);
+          EXPECT_EQ(state["finished_ranges"], Json::array({Json::array({13, 27})}));
+          // A share left out of the merge: the resumed run visits its chunks itself.
+          const auto missing = hapsyn::test::shard_merge_resume(solver, *problem, 3, dir, solve,
+                                                                [](int, const hapsyn::SolverResult&) {}, {0, 2});
+          expect_same_result(missing, plain);
+        }
+        std::filesystem::remove_all(dir);
+      }
+    }
+  }
+}
+
+TEST(Grid, MergeRefusesOverlappingSharesAndStatesThatDoNotFit) {
+  hapsyn::test::StopAfter counter;
+  const auto problem = shard_problem(counter, false);
+  const hapsyn::plugins::GridSolver solver = grid_solver({{"progress_interval", 1e9}});
+  const std::string dir = hapsyn::test::fresh_directory("grid-merge-bad");
+  std::vector<Json> states;
+  for (int k : {0, 1}) {
+    hapsyn::ShardCluster shard(k, 2);
+    hapsyn::SolverContext context;
+    context.ranks = &shard;
+    context.checkpoint_file = dir + "/shard.json";
+    (void)solver.solve(*problem, context);
+    states.push_back(hapsyn::test::read_json_file(context.checkpoint_file)["state"]);
+  }
+  using hapsyn::test::expect_error;
+  expect_error([&] { solver.merge_shards(*problem, {states[0], states[0]}); },
+               {"merge: chunk 0 (grid designs 0..63) is finished in shard 1 and in shard 2 of 2: the shares overlap; "
+                "merge the shards of one --shard i/N split, each once"});
+  expect_error([&] { solver.merge_shards(*problem, {states[0], states[1], states[1]}); },
+               {"merge: chunk 20 (grid designs 1280..1343) is finished in shard 2 and in shard 3 of 3"});
+  expect_error([&] { solver.merge_shards(*problem, {}); }, {"merge: no shard states to merge"});
+  Json broken = states[1];
+  broken.erase("tally");
+  expect_error([&] { solver.merge_shards(*problem, {states[0], broken}); }, {"merge: shard 2/2: state.tally is missing"});
+  broken = states[1];
+  broken["finished_ranges"] = Json::array({Json::array({30, 99})});
+  expect_error([&] { solver.merge_shards(*problem, {states[0], broken}); },
+               {"merge: shard 2/2: state.finished_ranges: chunk 98 must lie in (0, 41)"});
+  hapsyn::test::StopAfter counter2;
+  const auto two = shard_problem(counter2, true);
+  expect_error([&] { grid_solver({{"pareto", true}}).merge_shards(*two, {states[0]}); },
+               {"merge: shard 1/1: state.mode = \"best\", this run's mode is \"front\""});
+  // The shares of one split merge whatever their order.
+  EXPECT_EQ(solver.merge_shards(*problem, {states[1], states[0]})["best"],
+            solver.merge_shards(*problem, {states[0], states[1]})["best"]);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Grid, EmulatedRanksGiveThePlainRunInBothModes) {
+  for (bool pareto : {false, true}) {
+    hapsyn::test::StopAfter counter;
+    const auto problem = shard_problem(counter, pareto);
+    const Json options = {{"pareto", pareto}, {"progress_interval", 1e9}};
+    const hapsyn::plugins::GridSolver solver = grid_solver(options);
+    const auto plain = solve_with(*problem, options, counter, "", false);
+    ASSERT_EQ(plain.status, hapsyn::SolverStatus::kConverged) << plain.message;
+    const std::string dir = hapsyn::test::fresh_directory("grid-ranks");
+    for (int ranks : {2, 3}) {
+      SCOPED_TRACE("pareto " + std::to_string(pareto) + ", ranks " + std::to_string(ranks));
+      hapsyn::test::EmulatedRanks job(ranks);
+      const auto results = job.run([&](hapsyn::Cluster& cluster) {
+        hapsyn::SolverContext context;
+        context.threads = 2;
+        context.seed = 11;
+        context.ranks = &cluster;
+        context.checkpoint_file = dir + "/checkpoint.json";
+        return solver.solve(*problem, context);
+      });
+      expect_same_result(results[0], plain);
+      const auto& s = results[0].statistics;
+      EXPECT_EQ(s["feasible"].get<long long>() + s["pruned"].get<long long>() + s["sample_failed"].get<long long>() +
+                    s["constraint_violated"].get<long long>(),
+                s["grid_designs"].get<long long>());
+      EXPECT_EQ(results[1].message, "rank 1: the result is rank 0's");
+    }
+    // A shard's checkpoint resumed on three ranks: they agree on the chunks left and finish them.
+    hapsyn::ShardCluster shard(1, 2);
+    hapsyn::SolverContext context;
+    context.ranks = &shard;
+    context.seed = 11;
+    context.checkpoint_file = dir + "/checkpoint.json";
+    ASSERT_EQ(solver.solve(*problem, context).status, hapsyn::SolverStatus::kStopped);
+    hapsyn::test::EmulatedRanks job(3);
+    const auto resumed = job.run([&](hapsyn::Cluster& cluster) {
+      hapsyn::SolverContext c = context;
+      c.ranks = &cluster;
+      c.resume = true;
+      return solver.solve(*problem, c);
+    });
+    expect_same_result(resumed[0], plain);
+    std::filesystem::remove_all(dir);
+  }
+}
+
+TEST(Grid, LargeGridsRunGroupsOfChunksPerTaskWithTheSameResult) {
+  // 501 x 501 designs: 3,922 chunks, three per task (hapsyn::plugins::units_per_task).
+  hapsyn::test::StopAfter counter;
+  const auto problem = hapsyn::test::stopping_problem(counter, 0.002);
+  const Json options = {{"progress_interval", 1e9}};
+  const hapsyn::plugins::GridSolver solver = grid_solver(options);
+  const auto plain = solve_with(*problem, options, counter, "", false);
+  ASSERT_EQ(plain.status, hapsyn::SolverStatus::kConverged) << plain.message;
+  const std::string dir = hapsyn::test::fresh_directory("grid-groups");
+  const auto solve = [&](const hapsyn::SolverContext& context) { return solver.solve(*problem, context); };
+  const auto merged = hapsyn::test::shard_merge_resume(solver, *problem, 3, dir, solve, [](int, const hapsyn::SolverResult&) {});
+  expect_same_result(merged, plain);
+  // The shares are whole tasks: 1,308 tasks of 3 chunks, the middle share tasks 436..871.
+  const Json state = hapsyn::test::read_json_file(dir + "/shard-1.json")["state"];
+  EXPECT_EQ(state["finished_ranges"], Json::array({Json::array({1308, 2616})}));
+  hapsyn::test::EmulatedRanks job(2);
+  const auto results = job.run([&](hapsyn::Cluster& cluster) {
+    hapsyn::SolverContext context;
+    context.threads = 2;
+    context.ranks = &cluster;
+    return solver.solve(*problem, context);
+  });
+  expect_same_result(results[0], plain);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Grid, ABreachFoundOnAnyRankFailsTheRunOnRankZero) {
+  const auto one = hapsyn::test::non_monotone_problem();
+  const auto two = hapsyn::test::metric_problem(
+      0.1, {std::make_shared<hapsyn::test::NonMonotoneMetric>(), std::make_shared<hapsyn::test::NonMonotoneMetric>()},
+      {"bad1", "bad2"});
+  for (bool pareto : {false, true}) {
+    const hapsyn::plugins::GridSolver solver = grid_solver({{"pareto", pareto}, {"progress_interval", 1e9}});
+    const hapsyn::Problem& problem = pareto ? *two : *one;
+    for (int ranks : {2, 3}) {
+      hapsyn::test::EmulatedRanks job(ranks);
+      const auto results = job.run([&](hapsyn::Cluster& cluster) {
+        hapsyn::SolverContext context;
+        context.threads = 1;
+        context.ranks = &cluster;
+        return solver.solve(problem, context);
+      });
+      EXPECT_EQ(results[0].status, hapsyn::SolverStatus::kFailed) << results[0].message;
+      EXPECT_NE(results[0].message.find("breaks the worst-case monotonicity rule"), std::string::npos) << results[0].message;
+      EXPECT_NE(results[0].message.find("grid pruning relies on that rule"), std::string::npos) << results[0].message;
+    }
+  }
 }
