@@ -131,12 +131,50 @@ def check_problem(r, problem):
             same_result(f"{name}: 3 shares merged equal one process", reference, result_of(merged))
 
 
+def sweep_rows(directory):
+    """sweep.json's rows without what depends on timing or reuse."""
+    with open(os.path.join(directory, "sweep.json")) as f:
+        doc = json.load(f)
+    keep = ("case", "values", "objectives", "errors", "status")
+    return {"status": doc["status"], "runs": [{k: row.get(k) for k in keep} for row in doc["runs"]]}
+
+
+def check_sweep(r, problem):
+    """hapsyn sweep: its cases over ranks and as 3 merged shares equal one process."""
+    vary = ["--vary", "scene.options.step=0.05,0.025,0.02", "--vary", "solver.options.prune=true,false"]
+    single = r.out("sweep/single")
+    if not run_checked(r, "sweep: single process", [r.hapsyn, "sweep", problem, "--threads", "1", "--out", single] + vary):
+        return
+    reference = sweep_rows(single)
+    for n in (2, 3):
+        out = r.out(f"sweep/mpi-{n}")
+        if run_checked(r, f"sweep: mpirun -n {n}", r.mpi(n) + [r.hapsyn, "sweep", problem, "--threads", "1", "--out", out] + vary):
+            if sweep_rows(out) == reference:
+                ok(f"sweep: mpirun -n {n} gives the rows of one process")
+            else:
+                fail(f"sweep: mpirun -n {n} differs", f"{json.dumps(reference)[:800]}\n{json.dumps(sweep_rows(out))[:800]}")
+    shards = []
+    for i in (1, 2, 3):
+        out = r.out(f"sweep/shard-{i}")
+        shards.append(out)
+        if not run_checked(r, f"sweep: --shard {i}/3", [r.hapsyn, "sweep", problem, "--threads", "1", "--shard", f"{i}/3",
+                                                        "--out", out] + vary):
+            return
+    merged = r.out("sweep/merged")
+    if run_checked(r, "sweep: merge", [r.hapsyn, "merge"] + shards + ["--out", merged]):
+        if sweep_rows(merged) == reference:
+            ok("sweep: 3 shares merged give the rows of one process")
+        else:
+            fail("sweep: 3 merged shares differ", f"{json.dumps(reference)[:800]}\n{json.dumps(sweep_rows(merged))[:800]}")
+
+
 def part_results(r, problems_dir):
     problems = sorted(os.path.join(problems_dir, f) for f in os.listdir(problems_dir) if f.endswith(".json"))
     if not problems:
         fail(f"no problem files in {problems_dir}")
     for p in problems:
         check_problem(r, p)
+    check_sweep(r, os.path.join(problems_dir, "grid-best.json"))
 
 
 # ---- faults ----
@@ -177,6 +215,11 @@ def fault_case(r, name, problem, sets, reference, n, act, expect_code, expect_te
         fail(f"{name}: no checkpoint appeared (is the study long enough?)", job.communicate()[1][-2000:])
         return
     ranks = rank_pids(job.pid)
+    if job.poll() is not None or len(ranks) != n:
+        fail(f"{name}: the job ended (or its ranks were not found: {sorted(ranks)}) before the fault: make the study "
+             f"longer", job.communicate()[1][-2000:] if job.poll() is not None else "")
+        job.kill()
+        return
     t0 = time.time()
     act(job, ranks)
     try:
