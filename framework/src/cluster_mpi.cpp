@@ -285,14 +285,23 @@ class MpiCluster : public Cluster {
     }
   }
 
-  // One remote thread's request: the task it finished (or kNoTask) with its result, whether it
-  // saw a stop, and its shared knowledge.
+  // One remote thread's message: the task it finished (or kNoTask) with its result, whether it
+  // saw a stop, whether it asks for a task (a reply follows) and whether it is its last message
+  // in this farm, and its shared knowledge.
   struct Request {
     long long farm = 0, finished = kNoTask;
     int thread = 0, threads = 0;
-    bool stop = false;
+    bool stop = false, ask = false, last = false;
     std::string result, share;
   };
+
+  static std::string encode(const Request& r) {
+    Writer out;
+    out.put(r.farm).put(r.thread).put(r.threads).put(r.finished);
+    out.put(static_cast<char>(r.stop)).put(static_cast<char>(r.ask)).put(static_cast<char>(r.last));
+    out.put_string(r.result).put_string(r.share);
+    return out.bytes();
+  }
 
   static Request parse_request(const std::string& bytes) {
     Reader in(bytes);
@@ -302,6 +311,8 @@ class MpiCluster : public Cluster {
     r.threads = in.get<int>();
     r.finished = in.get<long long>();
     r.stop = in.get<char>() != 0;
+    r.ask = in.get<char>() != 0;
+    r.last = in.get<char>() != 0;
     r.result = in.get_string();
     r.share = in.get_string();
     return r;
@@ -310,8 +321,8 @@ class MpiCluster : public Cluster {
   void serve_remote(Queue& queue, const std::atomic<int>& local_running) {
     const TaskFarm& farm = queue.farm;
     std::vector<Clock::time_point> last_seen(static_cast<std::size_t>(size_), Clock::now());
-    // Per rank, its threads not yet told "no more tasks"; -1 until its first request says how
-    // many it runs (ranks on different nodes may run different thread counts).
+    // Per rank, its threads that have not sent their last message; -1 until its first message
+    // says how many it runs (ranks on different nodes may run different thread counts).
     std::vector<int> open_per_rank(static_cast<std::size_t>(size_), -1);
     open_per_rank[0] = 0;
     const auto remote_open = [&] {
@@ -342,7 +353,7 @@ class MpiCluster : public Cluster {
         int& open = open_per_rank[static_cast<std::size_t>(from)];
         if (open < 0) open = request.threads;
         if (farm.learn && !request.share.empty()) farm.learn(request.share);
-        long long next;
+        long long next = kNoTask;
         {
           std::lock_guard<std::mutex> lock(queue.mutex);
           if (request.stop) {
@@ -350,12 +361,14 @@ class MpiCluster : public Cluster {
             make_visible();
           }
           if (request.finished >= 0 && farm.collect) farm.collect(request.finished, std::string(request.result));
-          next = queue.take();
+          if (request.ask) next = queue.take();
         }
-        Writer reply;
-        reply.put(farm_id_).put(next).put_string(next >= 0 && farm.share ? farm.share() : std::string());
-        send_bytes(reply.bytes(), from, kTagReplyBase + request.thread, comm_);
-        if (next < 0) --open;
+        if (request.ask) {
+          Writer reply;
+          reply.put(farm_id_).put(next).put_string(next >= 0 && farm.share ? farm.share() : std::string());
+          send_bytes(reply.bytes(), from, kTagReplyBase + request.thread, comm_);
+        }
+        if (request.last) --open;
       }
     } catch (const std::exception& e) {
       fail_rank(*this, e.what());
@@ -409,22 +422,31 @@ class MpiCluster : public Cluster {
     return stop_seen.load();
   }
 
+  // Each thread keeps one request in flight besides the task it runs (it asks for the next task
+  // when it starts one), so the round trip to rank 0 overlaps the work instead of adding to it.
+  // It ends once rank 0 said "no more" (or "stop") and no request is in flight, with a last
+  // message (rank 0 counts those to know the farm is over).
   void run_remote_thread(const TaskFarm& farm, int thread, int threads, std::atomic<bool>& stop_seen) {
     try {
-      long long finished = kNoTask;
-      std::string result;
-      bool stop = false;
-      for (;;) {
-        stop = stop || requested() || (visible_ != nullptr && visible_->load());
-        Writer request;
-        request.put(farm_id_).put(thread).put(threads).put(finished).put(static_cast<char>(stop ? 1 : 0));
-        request.put_string(result).put_string(farm.share ? farm.share() : std::string());
-        send_bytes(request.bytes(), 0, kTagRequest, comm_);
-        std::string bytes;
-        if (!receive_polling(bytes, 0, kTagReplyBase + thread, comm_, timeout_)) {
-          fail_rank(*this, "rank 0 on " + host(0) + " has not answered a task request for " +
-                               std::to_string(static_cast<int>(timeout_)) + " s (--rank-timeout): it hung or its node was lost");
-        }
+      Request message;
+      message.farm = farm_id_;
+      message.thread = thread;
+      message.threads = threads;
+      int in_flight = 0;
+      bool no_more = false;
+      std::vector<long long> ready;  // tasks received, not yet run
+      const auto send = [&](bool ask) {
+        message.stop = message.stop || requested() || (visible_ != nullptr && visible_->load());
+        message.ask = ask;
+        message.share = farm.share ? farm.share() : std::string();
+        send_bytes(encode(message), 0, kTagRequest, comm_);
+        message.finished = kNoTask;
+        message.result.clear();
+        if (ask) ++in_flight;
+      };
+      // One reply: a task to run, or "no more" / "stop".
+      const auto take_reply = [&](const std::string& bytes) {
+        --in_flight;
         Reader in(bytes);
         in.get<long long>();  // farm id
         const long long index = in.get<long long>();
@@ -433,19 +455,53 @@ class MpiCluster : public Cluster {
           stop_seen = true;
           make_visible();
         }
-        if (index < 0) return;
+        if (index < 0) {
+          no_more = true;
+          return;
+        }
         if (farm.learn && !share.empty()) farm.learn(share);
-        std::optional<std::string> out = farm.run(index, thread);
+        ready.push_back(index);
+      };
+      const auto wait_reply = [&] {
+        std::string bytes;
+        if (!receive_polling(bytes, 0, kTagReplyBase + thread, comm_, timeout_)) {
+          fail_rank(*this, "rank 0 on " + host(0) + " has not answered a task request for " +
+                               std::to_string(static_cast<int>(timeout_)) + " s (--rank-timeout): it hung or its node was lost");
+        }
+        take_reply(bytes);
+      };
+      const auto poll_reply = [&] {
+        int flag = 0;
+        MPI_Status status;
+        MPI_Iprobe(0, kTagReplyBase + thread, comm_, &flag, &status);
+        if (flag) take_reply(receive_probed(status, comm_));
+      };
+      const auto may_ask = [&] { return !no_more && !message.stop && in_flight == 0; };
+      send(true);
+      for (;;) {
+        if (ready.empty()) {
+          if (in_flight == 0) break;
+          wait_reply();
+          continue;
+        }
+        const long long index = ready.front();
+        ready.erase(ready.begin());
+        if (may_ask()) send(true);  // the next task travels while this one runs
+        std::optional<std::string> out = message.stop ? std::nullopt : farm.run(index, thread);
         if (out) {
-          finished = index;
-          result = std::move(*out);
+          message.finished = index;
+          message.result = std::move(*out);
+          if (in_flight > 0) poll_reply();  // usually here already: then the result asks for the next
+          send(may_ask());
         } else {
-          finished = kNoTask;
-          result.clear();
-          stop = true;
+          message.stop = true;  // not run, nor those received after it: a resumed run does them
           stop_seen = true;
+          ready.clear();
+          send(false);
         }
       }
+      message.last = true;
+      send(false);
     } catch (const std::exception& e) {
       fail_rank(*this, e.what());
     }

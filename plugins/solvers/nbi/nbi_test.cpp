@@ -229,8 +229,10 @@ hapsyn::SolverResult run_nbi(const hapsyn::Problem& problem, const std::string& 
   return nbi->solve(problem, context);
 }
 
-// The same front, counts and per-subproblem records (times aside) as `expected`.
-void expect_same_result(const hapsyn::SolverResult& got, const hapsyn::SolverResult& expected) {
+// The same front, counts and per-subproblem records (times aside) as `expected`. With several
+// threads culling's pruning depends on timing, so its evaluation counts may differ by a few:
+// `counts` false compares everything else.
+void expect_same_result(const hapsyn::SolverResult& got, const hapsyn::SolverResult& expected, bool counts = true) {
   EXPECT_EQ(got.status, expected.status) << got.message;
   EXPECT_EQ(got.message, expected.message);
   ASSERT_EQ(got.front.size(), expected.front.size());
@@ -238,12 +240,20 @@ void expect_same_result(const hapsyn::SolverResult& got, const hapsyn::SolverRes
     EXPECT_EQ(got.front[i].design, expected.front[i].design) << i;
     EXPECT_EQ(got.front[i].objectives, expected.front[i].objectives) << i;
   }
-  EXPECT_EQ(got.design_evaluations, expected.design_evaluations);
-  EXPECT_EQ(got.sample_evaluations, expected.sample_evaluations);
+  if (counts) {
+    EXPECT_EQ(got.design_evaluations, expected.design_evaluations);
+    EXPECT_EQ(got.sample_evaluations, expected.sample_evaluations);
+  }
   for (const char* list : {"shadows", "subproblems"}) {
     Json a = got.statistics[list], b = expected.statistics[list];
     for (Json* records : {&a, &b}) {
-      for (Json& r : *records) r.erase("seconds");
+      for (Json& r : *records) {
+        r.erase("seconds");
+        if (!counts) {
+          r.erase("design_evaluations");
+          r.erase("sample_evaluations");
+        }
+      }
     }
     EXPECT_EQ(a, b) << list;
   }
@@ -432,7 +442,7 @@ TEST(Nbi, SubproblemsStartWhereTheOneByOneRunStartsThemOnAnyThreadCount) {
   }
   for (int threads : {2, 4}) {
     SCOPED_TRACE(threads);
-    expect_same_result(run_nbi(*problem, "", false, nullptr, nullptr, threads, kThreeObjectiveOptions), one);
+    expect_same_result(run_nbi(*problem, "", false, nullptr, nullptr, threads, kThreeObjectiveOptions), one, false);
   }
 }
 
@@ -448,8 +458,8 @@ TEST(Nbi, EveryRankEndsWithTheSingleProcessResult) {
     const auto r0 = run_nbi(*problem, "", false, nullptr, &rank0, 2, options);
     const auto r1 = run_nbi(*problem, "", false, nullptr, &rank1, 2, options);
     EXPECT_TRUE(tape->events.empty());  // the same collectives in the same order
-    expect_same_result(r0, reference);
-    expect_same_result(r1, reference);
+    expect_same_result(r0, reference, false);  // 2 threads per rank
+    expect_same_result(r1, reference, false);
     // One farm of shadow optima, then the waves: fewer than the subproblems when some share a
     // wave (with two objectives, the first and the last).
     const int subproblems = static_cast<int>(reference.statistics["subproblems"].size());
