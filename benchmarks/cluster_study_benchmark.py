@@ -56,7 +56,7 @@ def main():
         run([hapsyn, "validate", os.path.join(ROOT, problem)] + overrides, env)
         entry = {"study": name, "problem": problem, "overrides": sets, "configs": []}
         for label, prefix, threads in (("1 rank x 2 threads", [], 2),
-                                       ("2 ranks x 1 thread", [args.mpiexec, "--oversubscribe", "-n", "2"], 1)):
+                                       ("2 ranks x 1 thread", [args.mpiexec, "--bind-to", "none", "-n", "2"], 1)):
             out = os.path.join(work, re.sub(r"\W+", "-", name + label))
             wall, _ = run(prefix + [hapsyn, "run", os.path.join(ROOT, problem), "--threads", str(threads), "--out", out,
                                     "--quiet"] + overrides, env)
@@ -71,7 +71,7 @@ def main():
             entry["resolved_problem"] = result["problem"]
             rows.append((name, label, solve, designs, 1e6 * solve / max(designs, 1), best))
         report["studies"].append(entry)
-    _, bench = run([args.mpiexec, "--oversubscribe", "-n", "2", os.path.join(args.build, "bin", "cluster_benchmark"),
+    _, bench = run([args.mpiexec, "--bind-to", "none", "-n", "2", os.path.join(args.build, "bin", "cluster_benchmark"),
                     "--tasks", "5000"], env)
     report["cluster_benchmark"] = bench
     shutil.rmtree(work, ignore_errors=True)

@@ -14,6 +14,7 @@
 
 #include <boost/filesystem.hpp>
 
+#include <sched.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -708,6 +709,18 @@ Json run_here(Study& study, const RunOptions& options, Cluster* cluster, const s
     log << "warning: " << w << "\n";
   }
   if (cluster != nullptr && cluster->size() > 1) {
+    // mpirun binds each rank to one core by default when there are at most 2 ranks: the rank's
+    // threads would then share that core.
+    cpu_set_t allowed;
+    CPU_ZERO(&allowed);
+    if (::sched_getaffinity(0, sizeof allowed, &allowed) == 0 && CPU_COUNT(&allowed) < run.threads) {
+      const std::string w = "rank 0 may run on " + std::to_string(CPU_COUNT(&allowed)) + " CPU(s) but runs " +
+                            std::to_string(run.threads) + " threads: start mpirun with --bind-to none (or --map-by " +
+                            "ppr:1:node:PE=" + std::to_string(run.threads) + ") so that each thread has a core";
+      warn << "hapsyn: warning: " << w << "\n";
+      log << "warning: " << w << "\n";
+      run.warnings.push_back(w);
+    }
     log << "ranks: " << cluster->size() << " (" << (study.solver->distributed() ? "distributed" : "solver on rank 0 alone")
         << ")\n";
   }
