@@ -287,16 +287,17 @@ void GaSearch::run_remaining() {
   }
   if (todo.empty()) return;
   const Cluster& cluster = context_.cluster();
-  // Runs over ranks, or each run's fitness batches over ranks: whichever leaves fewer design
-  // evaluations per generation on the busiest thread (ties to the runs, which synchronize
-  // less). 31 runs on 64 ranks of 32 threads: ceil(31/64) * ceil(200/32) = 7 against
-  // 31 * ceil(200/2048) = 31, so the runs. Both give the same result; the choice is the same on
-  // every rank (the finished runs come from the same checkpoint).
+  // Runs over ranks when there are at least as many as ranks (no generation waits for another
+  // rank), and also with fewer runs when that leaves fewer design evaluations per generation on
+  // the busiest thread than spreading each run's batches: 31 runs on 64 ranks of 32 threads:
+  // ceil(31/64) * ceil(200/32) = 7 against 31 * ceil(200/2048) = 31, so the runs. Both give the
+  // same result; the choice is the same on every rank (the finished runs come from the same
+  // checkpoint).
   const auto ceil_div = [](long long a, long long b) { return (a + b - 1) / b; };
   const long long ranks = cluster.size(), threads = std::max(1, context_.threads), population = options_.population;
   const long long runs = static_cast<long long>(todo.size());
   const bool runs_cheaper = ceil_div(runs, ranks) * ceil_div(population, threads) <= runs * ceil_div(population, ranks * threads);
-  const bool farm = cluster.shard().second > 1 || (ranks > 1 && runs_cheaper);
+  const bool farm = cluster.shard().second > 1 || (ranks > 1 && (runs >= ranks || runs_cheaper));
   if (farm) {
     run_as_farm(todo);
   } else {

@@ -22,7 +22,7 @@
 ///   and the run continues there, so the final ranking is on the full scene.
 /// - Progress (generation, best, mean, evaluations per second, time left) on
 ///   SolverContext::progress and every generation in SolverContext::log.
-/// - Ranks and shards (hapsyn/cluster.hpp): under `--shard i/N`, or under MPI when the runs leave
+/// - Ranks and shards (hapsyn/cluster.hpp): under `--shard i/N`, or under MPI with at least as many runs as ranks or when the runs leave
 ///   fewer design evaluations per generation on the busiest thread than batches would
 ///   (ceil(runs/ranks) x ceil(population/threads) <= runs x ceil(population/(ranks x threads))), the runs are one shardable task farm (a run per task, on its rank's threads;
 ///   a shard runs its contiguous share of the run indices and checkpoints them, merge_shards
