@@ -6,6 +6,7 @@
 // cheaper designs simply asks more often) at one round trip per task. Waiting is done by polling
 // with short sleeps, never by a blocking MPI call: Open MPI busy-waits in blocking calls, and an
 // idle rank 0 server spinning on a core would halve the work of a rank sharing it.
+#include <hapsyn/bytes.hpp>
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/error.hpp>
 
@@ -35,53 +36,6 @@ constexpr int kTagReplyBase = 1000;  // + thread index
 constexpr long long kNoTask = -1;    // reply: no task left
 constexpr long long kStopTask = -2;  // reply: the job is stopping
 constexpr double kHeartbeatSeconds = 1.0;
-
-// Byte messages: fixed-size fields, then length-prefixed strings.
-class Writer {
- public:
-  template <class T>
-  Writer& put(const T& v) {
-    const char* p = reinterpret_cast<const char*>(&v);
-    bytes_.append(p, sizeof v);
-    return *this;
-  }
-  Writer& put_string(const std::string& s) {
-    put<std::uint64_t>(s.size());
-    bytes_ += s;
-    return *this;
-  }
-  const std::string& bytes() const { return bytes_; }
-
- private:
-  std::string bytes_;
-};
-
-class Reader {
- public:
-  explicit Reader(const std::string& bytes) : bytes_(bytes) {}
-  template <class T>
-  T get() {
-    T v;
-    check(sizeof v);
-    std::memcpy(&v, bytes_.data() + at_, sizeof v);
-    at_ += sizeof v;
-    return v;
-  }
-  std::string get_string() {
-    const auto n = get<std::uint64_t>();
-    check(n);
-    std::string s = bytes_.substr(at_, n);
-    at_ += n;
-    return s;
-  }
-
- private:
-  void check(std::size_t n) const {
-    if (at_ + n > bytes_.size()) throw std::runtime_error("cluster: truncated message (internal error)");
-  }
-  const std::string& bytes_;
-  std::size_t at_ = 0;
-};
 
 // Sleeps a little longer each time nothing happened (up to 0.2 ms: about 1% of a core at most,
 // and a request waits at most that long for an idle rank 0), so that waiting costs no core.
@@ -296,7 +250,7 @@ class MpiCluster : public Cluster {
   };
 
   static std::string encode(const Request& r) {
-    Writer out;
+    ByteWriter out;
     out.put(r.farm).put(r.thread).put(r.threads).put(r.finished);
     out.put(static_cast<char>(r.stop)).put(static_cast<char>(r.ask)).put(static_cast<char>(r.last));
     out.put_string(r.result).put_string(r.share);
@@ -304,7 +258,7 @@ class MpiCluster : public Cluster {
   }
 
   static Request parse_request(const std::string& bytes) {
-    Reader in(bytes);
+    ByteReader in(bytes);
     Request r;
     r.farm = in.get<long long>();
     r.thread = in.get<int>();
@@ -364,7 +318,7 @@ class MpiCluster : public Cluster {
           if (request.ask) next = queue.take();
         }
         if (request.ask) {
-          Writer reply;
+          ByteWriter reply;
           reply.put(farm_id_).put(next).put_string(next >= 0 && farm.share ? farm.share() : std::string());
           send_bytes(reply.bytes(), from, kTagReplyBase + request.thread, comm_);
         }
@@ -411,7 +365,7 @@ class MpiCluster : public Cluster {
     while (running.load() > 0) {
       if (requested()) make_visible();  // this rank's running tasks stop now; rank 0 hears it next
       if (std::chrono::duration<double>(Clock::now() - last_beat).count() >= kHeartbeatSeconds) {
-        Writer beat;
+        ByteWriter beat;
         beat.put(farm_id_);
         send_bytes(beat.bytes(), 0, kTagHeartbeat, comm_);
         last_beat = Clock::now();
@@ -447,7 +401,7 @@ class MpiCluster : public Cluster {
       // One reply: a task to run, or "no more" / "stop".
       const auto take_reply = [&](const std::string& bytes) {
         --in_flight;
-        Reader in(bytes);
+        ByteReader in(bytes);
         in.get<long long>();  // farm id
         const long long index = in.get<long long>();
         const std::string share = in.get_string();

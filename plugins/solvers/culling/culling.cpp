@@ -1,6 +1,7 @@
 #include "culling.hpp"
 
 #include "grid/ledger.hpp"
+#include "grid/rank_support.hpp"
 #include "grid/task_bytes.hpp"
 #include "grid/worst_case_check.hpp"
 #include "shared/minmax_sqp.hpp"
@@ -757,31 +758,6 @@ void adopt_seed(const Json& message, Reference& reference, Seed& seed) {
   seed.samples = message["samples"].get<long long>();
 }
 
-// The result ranks other than 0 return: the framework keeps rank 0's alone.
-SolverResult result_of_rank_0(const SolverContext& context) {
-  SolverResult result;
-  result.status = SolverStatus::kStopped;
-  result.message = "rank " + std::to_string(context.cluster().rank()) + ": the result is rank 0's";
-  return result;
-}
-
-// Reads shard `shard`'s state the way a resume would; its errors become Error("merge", ...).
-template <class Read>
-auto merge_read(std::size_t shard, std::size_t shards, const Read& read) {
-  SolverContext context;
-  context.checkpoint_file = "shard " + std::to_string(shard + 1) + "/" + std::to_string(shards);
-  try {
-    return read(context);
-  } catch (const Error& e) {
-    std::string what = e.what();
-    const std::string prefix = "checkpoint: ", suffix = "; delete it, or run without --resume";
-    if (what.rfind(prefix, 0) == 0) what = what.substr(prefix.size());
-    if (what.size() >= suffix.size() && what.compare(what.size() - suffix.size(), suffix.size(), suffix) == 0) {
-      what.resize(what.size() - suffix.size());
-    }
-    throw Error("merge", what);
-  }
-}
 
 }  // namespace
 

@@ -1,6 +1,7 @@
 #include "grid.hpp"
 
 #include "ledger.hpp"
+#include "rank_support.hpp"
 #include "task_bytes.hpp"
 #include "worst_case_check.hpp"
 
@@ -315,33 +316,6 @@ std::string unfinished_message(const SweepControl& control, bool stopped, const 
   return s.str();
 }
 
-// The result ranks other than 0 return: the framework keeps rank 0's alone.
-SolverResult result_of_rank_0(const SolverContext& context) {
-  SolverResult result;
-  result.status = SolverStatus::kStopped;
-  result.message = "rank " + std::to_string(context.cluster().rank()) + ": the result is rank 0's";
-  return result;
-}
-
-// Runs read(context) on shard `shard`'s state as a resume would read it; its errors become
-// Error("merge", "shard 2/3: ...").
-template <class Read>
-auto merge_read(std::size_t shard, std::size_t shards, const Read& read) {
-  SolverContext context;
-  context.checkpoint_file = "shard " + std::to_string(shard + 1) + "/" + std::to_string(shards);
-  try {
-    return read(context);
-  } catch (const Error& e) {
-    // "checkpoint: shard 2/3: state.tally is missing; delete it, ..." -> "merge: shard 2/3: ..."
-    std::string what = e.what();
-    const std::string prefix = "checkpoint: ", suffix = "; delete it, or run without --resume";
-    if (what.rfind(prefix, 0) == 0) what = what.substr(prefix.size());
-    if (what.size() >= suffix.size() && what.compare(what.size() - suffix.size(), suffix.size(), suffix) == 0) {
-      what.resize(what.size() - suffix.size());
-    }
-    throw Error("merge", what);
-  }
-}
 
 // The ledgers, counts and times of the shards' states, merged; Error("merge", ...) naming the
 // first chunk that two shards both claim.

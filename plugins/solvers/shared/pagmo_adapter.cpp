@@ -1,5 +1,7 @@
 #include "pagmo_adapter.hpp"
 
+#include <hapsyn/bytes.hpp>
+
 #include <hapsyn/error.hpp>
 #include <hapsyn/parallel.hpp>
 
@@ -210,58 +212,8 @@ pagmo::vector_double Evaluator::fitness(const pagmo::vector_double& x) {
 
 namespace {
 
-// Exact binary records for the farm's results and rank 0's broadcast.
-class Writer {
- public:
-  template <class T>
-  void put(const T& v) {
-    bytes_.append(reinterpret_cast<const char*>(&v), sizeof v);
-  }
-  void put_vector(const std::vector<double>& v) {
-    put(static_cast<std::uint64_t>(v.size()));
-    if (!v.empty()) bytes_.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(double));
-  }
-  void put_string(const std::string& s) {
-    put(static_cast<std::uint64_t>(s.size()));
-    bytes_ += s;
-  }
-  std::string take() { return std::move(bytes_); }
-
- private:
-  std::string bytes_;
-};
-
-class Reader {
- public:
-  explicit Reader(const std::string& bytes) : bytes_(bytes) {}
-  template <class T>
-  T get() {
-    T v;
-    take(&v, sizeof v);
-    return v;
-  }
-  std::vector<double> get_vector() {
-    std::vector<double> v(static_cast<std::size_t>(get<std::uint64_t>()));
-    if (!v.empty()) take(v.data(), v.size() * sizeof(double));
-    return v;
-  }
-  std::string get_string() {
-    std::string s(static_cast<std::size_t>(get<std::uint64_t>()), '\0');
-    if (!s.empty()) take(&s[0], s.size());
-    return s;
-  }
-
- private:
-  void take(void* out, std::size_t n) {
-    if (n > bytes_.size() - at_) throw Error("pagmo_adapter", "truncated evaluation record from another rank");
-    std::memcpy(out, bytes_.data() + at_, n);
-    at_ += n;
-  }
-  const std::string& bytes_;
-  std::size_t at_ = 0;
-};
-
-void put_record(Writer& w, const DesignRecord& r, long long samples) {
+// Exact binary records for the farm's results and rank 0's broadcast (hapsyn/bytes.hpp).
+void put_record(ByteWriter& w, const DesignRecord& r, long long samples) {
   w.put_vector(r.fitness);
   w.put_vector(r.objectives);
   w.put(r.score);
@@ -270,7 +222,7 @@ void put_record(Writer& w, const DesignRecord& r, long long samples) {
   w.put(samples);
 }
 
-void get_record(Reader& in, DesignRecord& r, long long& samples) {
+void get_record(ByteReader& in, DesignRecord& r, long long& samples) {
   r.fitness = in.get_vector();
   r.objectives = in.get_vector();
   r.score = in.get<double>();
@@ -307,13 +259,13 @@ std::vector<std::vector<double>> Evaluator::fill_cache(const std::vector<std::ve
       have[static_cast<std::size_t>(i)] = 1;
       return std::string();
     }
-    Writer w;
+    ByteWriter w;
     put_record(w, o.record, o.samples);
     return w.take();
   };
   farm.collect = [&](long long i, std::string&& bytes) {
     if (!several) return;
-    Reader in(bytes);
+    ByteReader in(bytes);
     get_record(in, records[static_cast<std::size_t>(i)], samples[static_cast<std::size_t>(i)]);
     have[static_cast<std::size_t>(i)] = 1;
   };
@@ -322,7 +274,7 @@ std::vector<std::vector<double>> Evaluator::fill_cache(const std::vector<std::ve
   if (several) {
     std::string all;
     if (cluster.root()) {
-      Writer w;
+      ByteWriter w;
       for (std::size_t i = 0; i < n; ++i) {
         w.put(have[i]);
         if (have[i]) put_record(w, records[i], samples[i]);
@@ -331,7 +283,7 @@ std::vector<std::vector<double>> Evaluator::fill_cache(const std::vector<std::ve
     }
     cluster.broadcast(all);
     if (!cluster.root()) {
-      Reader in(all);
+      ByteReader in(all);
       for (std::size_t i = 0; i < n; ++i) {
         have[i] = in.get<char>();
         if (have[i]) get_record(in, records[i], samples[i]);
