@@ -24,6 +24,7 @@
 #include <climits>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <functional>
 #include <iomanip>
 #include <iostream>
@@ -749,7 +750,10 @@ Json follow_rank0(Study& study, const RunOptions& options, Cluster& cluster) {
   cluster.broadcast(go);
   Json message = Json::parse(go);
   if (message.contains("error")) throw Error("mpi", "rank 0 ended the run: " + message["error"].get<std::string>());
-  if (study.solver->distributed()) {
+  // An error here is (the ranks being alike) rank 0's too: this rank still takes part in the
+  // last broadcast, so that rank 0 is not left waiting, and then lets rank 0 report it.
+  std::exception_ptr own;
+  if (study.solver->distributed()) try {
     std::vector<std::string> ignored;
     SolverContext context;
     context.threads = run_threads(study.resolved, options, ignored);
@@ -759,11 +763,14 @@ Json follow_rank0(Study& study, const RunOptions& options, Cluster& cluster) {
     context.resume = options.resume && !options.force;
     context.ranks = &cluster;
     (void)study.solver->solve(*study.problem, context);
+  } catch (...) {
+    own = std::current_exception();
   }
   std::string result;
   cluster.broadcast(result);
   message = Json::parse(result);
   if (message.contains("error")) throw Error("mpi", "rank 0 ended the run: " + message["error"].get<std::string>());
+  if (own) std::rethrow_exception(own);
   return message;
 }
 
@@ -773,21 +780,17 @@ Json run_study(Study& study, const RunOptions& options) {
   Cluster* cluster = options.cluster;
   if (cluster == nullptr || cluster->size() == 1) return run_here(study, options, cluster, [](const RunSetup&) {});
   if (!cluster->root()) return follow_rank0(study, options, *cluster);
-  // Rank 0: every path past this point broadcasts twice (go, then the result or an error), so
-  // that the other ranks never wait for a message that does not come.
-  bool went = false;
+  // Rank 0: the others wait for the go (sent once the output directory is ready), then for the
+  // result; an error sends what they wait for next, so none waits for a message that never comes.
   try {
     Json doc = run_here(study, options, cluster, [&](const RunSetup& run) {
       std::string go = go_message(run);
       cluster->broadcast(go);
-      went = true;
     });
     std::string result = doc.dump();
     cluster->broadcast(result);
     return doc;
   } catch (const std::exception& e) {
-    // The other ranks wait for exactly one more message: the go (not sent yet) or the result.
-    (void)went;
     std::string error = Json{{"error", e.what()}}.dump();
     cluster->broadcast(error);
     throw;

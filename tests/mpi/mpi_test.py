@@ -324,6 +324,20 @@ def part_input(r, grid_problem, other_problem):
         json.dump(doc, f)
     expect_refusal(r, "merge: an unfinished share", merge + [dirs["a1"], unfinished],
                    ["was stopped before it finished its share", "--shard 2/2", "--resume"])
+    # A damaged checkpoint on resume under mpirun: every rank finds it, rank 0 alone says so (no abort).
+    damaged = r.out("in/damaged")
+    shutil.copytree(dirs["a1"], damaged)
+    path = os.path.join(damaged, "checkpoint.json")
+    with open(path) as f:
+        doc = json.load(f)
+    doc["seed"] = doc["seed"] + 1
+    with open(path, "w") as f:
+        json.dump(doc, f)
+    code, out, err = r.run(r.mpi(2) + [h, "run", grid_problem, "--threads", "1", "--quiet", "--resume", "--out", damaged], 120)
+    if code == 0 or err.count("damaged or edited") != 1 or "MPI_ABORT" in err:
+        fail("resume of a damaged checkpoint on 2 ranks: one message, no abort", f"exit {code}\n{err[-2000:]}")
+    else:
+        ok("resume of a damaged checkpoint on 2 ranks: one message, no abort")
 
 
 def part_slurm(r, problem, docs):
