@@ -342,7 +342,8 @@ Json run_compare_cases(const CompareOptions& options, const Registry& registry, 
       if (!record.is_null()) throw_record(record);
     }
   }
-  const auto [first, last] = shard_tasks(cluster, static_cast<long long>(cases.size()));
+  const auto range = shard_tasks(cluster, static_cast<long long>(cases.size()));
+  const long long first = range.first, last = range.second;  // captured below (C++17: no structured binding)
   const fs::path out(options.output_directory);
   auto folder = [&](const CompareCase& k) { return (out / k.name).string(); };
 

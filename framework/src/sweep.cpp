@@ -286,7 +286,9 @@ std::optional<Json> reusable_result(const std::string& directory, const Json& re
 }
 
 std::pair<long long, long long> shard_tasks(const Cluster& cluster, long long count) {
-  const auto [index, shards] = cluster.shard();
+  // Plain variables: a structured binding cannot be captured by a lambda in C++17.
+  const std::pair<int, int> share = cluster.shard();
+  const int index = share.first, shards = share.second;
   if (shards <= 1) return {0, count};
   // The split ShardCluster::run_tasks makes (contiguous shares, (count*i)/N in long double).
   const auto bound = [&](int i) { return static_cast<long long>(static_cast<long double>(count) * i / shards); };
@@ -404,7 +406,8 @@ Json run_sweep_cases(const Json& problem, const SweepOptions& options, const Reg
   };
   on_every_rank(cluster, validate, "sweep");
   const std::size_t reference_case = cases.size() - 1;
-  const auto [first, last] = shard_tasks(cluster, static_cast<long long>(cases.size()));
+  const auto range = shard_tasks(cluster, static_cast<long long>(cases.size()));
+  const long long first = range.first, last = range.second;  // captured below (C++17: no structured binding)
 
   const fs::path out(options.output_directory);
   // Rank 0 finds the finished runs to reuse (and refuses foreign results) before any run starts,
