@@ -8,6 +8,10 @@
 //   IK + J + D + M and both metrics' local() -- one full GII + GDI design evaluation
 //   gii.local() and gdi.local() alone     -- the metrics' closed-form singular values
 //   the reach constraint                  -- once per design, O(samples)
+//   the same on the block path (hapsyn/sample_block.hpp): the Highway kernel, 8 samples per call,
+//   and the metrics' local_block() -- "Block" rows; the ratio Block / per-sample is the speed-up
+//   of the vectorised, trigonometry-free kernel on this CPU (its instruction set is recorded as
+//   "block_target").
 // Compare the rows with each other (ratios), not as bare times: "per_sample" is the time per
 // sample (inverted rate), so IK+J+D+M / IK+J is the price of the dynamic index; the ratios
 // are printed at the end of the run.
@@ -90,6 +94,77 @@ void BM_FiveBarGiiAndGdiFullEvaluation(benchmark::State& state) {
   per_sample(state);
 }
 
+// The scene's samples, structure of arrays, padded to whole blocks with the last sample (as the
+// evaluator lays them out).
+struct Lanes {
+  std::vector<double> x, y;
+  Lanes() {
+    const SampleSet& set = scene();
+    const int padded = (set.size() + hapsyn::kBlockLanes - 1) / hapsyn::kBlockLanes * hapsyn::kBlockLanes;
+    for (int i = 0; i < padded; ++i) {
+      x.push_back(set.pose(std::min(i, set.size() - 1))[0]);
+      y.push_back(set.pose(std::min(i, set.size() - 1))[1]);
+    }
+  }
+};
+
+void solve_blocks(benchmark::State& state, hapsyn::Needs needs) {
+  static const Lanes lanes;
+  const FiveBarModel& m = model();
+  hapsyn::MechanismScratch scratch;
+  hapsyn::QuantityBlock block;
+  hapsyn::PoseBlock poses;
+  poses.dimension = 2;
+  poses.count = hapsyn::kBlockLanes;
+  for (auto _ : state) {
+    for (std::size_t first = 0; first < lanes.x.size(); first += hapsyn::kBlockLanes) {
+      poses.coordinate[0] = lanes.x.data() + first;
+      poses.coordinate[1] = lanes.y.data() + first;
+      m.solve_block(poses, needs, scratch, block);
+      benchmark::DoNotOptimize(block);
+    }
+    benchmark::ClobberMemory();
+  }
+  per_sample(state);
+}
+
+void BM_FiveBarBlockPoseOnly(benchmark::State& state) { solve_blocks(state, hapsyn::kNeedPose); }
+void BM_FiveBarBlockIkJacobian(benchmark::State& state) { solve_blocks(state, hapsyn::kNeedJacobian); }
+void BM_FiveBarBlockIkJacobianInertiaMass(benchmark::State& state) { solve_blocks(state, hapsyn::kNeedEffectiveMass); }
+
+void BM_FiveBarBlockGiiAndGdiFullEvaluation(benchmark::State& state) {
+  static const Lanes lanes;
+  const FiveBarModel& m = model();
+  const Gii gii;
+  const Gdi gdi;
+  hapsyn::MechanismScratch scratch;
+  hapsyn::QuantityBlock block;
+  hapsyn::PoseBlock poses;
+  poses.dimension = 2;
+  double gii_locals[2 * hapsyn::kBlockLanes], gdi_locals[hapsyn::kBlockLanes];
+  const int n = scene().size();
+  for (auto _ : state) {
+    double sigma_min = 1e300, sigma_max = 0.0, mass = 0.0;
+    for (int first = 0; first < n; first += hapsyn::kBlockLanes) {
+      poses.coordinate[0] = lanes.x.data() + first;
+      poses.coordinate[1] = lanes.y.data() + first;
+      poses.count = std::min(hapsyn::kBlockLanes, n - first);
+      m.solve_block(poses, hapsyn::kNeedJacobian | hapsyn::kNeedEffectiveMass, scratch, block);
+      gii.local_block(block, gii_locals);
+      gdi.local_block(block, gdi_locals);
+      for (int i = 0; i < poses.count; ++i) {
+        sigma_min = std::min(sigma_min, gii_locals[i]);
+        sigma_max = std::max(sigma_max, gii_locals[hapsyn::kBlockLanes + i]);
+        mass = std::max(mass, gdi_locals[i]);
+      }
+    }
+    const double reduced[2] = {sigma_min, sigma_max};
+    benchmark::DoNotOptimize(gii.combine(reduced, n));
+    benchmark::DoNotOptimize(gdi.combine(&mass, n));
+  }
+  per_sample(state);
+}
+
 std::vector<SampleQuantities> solved_samples() {
   std::vector<SampleQuantities> out(scene().size());
   hapsyn::MechanismScratch scratch;
@@ -143,17 +218,27 @@ BENCHMARK(BM_FiveBarGiiAndGdiFullEvaluation);
 BENCHMARK(BM_GiiLocal);
 BENCHMARK(BM_GdiLocal);
 BENCHMARK(BM_FiveBarReachConstraint);
+BENCHMARK(BM_FiveBarBlockPoseOnly);
+BENCHMARK(BM_FiveBarBlockIkJacobian);
+BENCHMARK(BM_FiveBarBlockIkJacobianInertiaMass);
+BENCHMARK(BM_FiveBarBlockGiiAndGdiFullEvaluation);
 
 }  // namespace
 
 int main(int argc, char** argv) {
   hapsyn::bench::record_context(Json{{"mechanism", "fivebar"},
                                      {"design", {0.0004, 0.2997, 0.3000, 0.4196}},
-                                     {"scene", {{"plugin", "planar_square"}, {"side", 0.1}, {"step", 0.005}}}});
+                                     {"scene", {{"plugin", "planar_square"}, {"side", 0.1}, {"step", 0.005}}},
+                                     {"block_target", fivebar_block_target()}});
   // Printed as "ratio <second> / <first>": the cost of each step relative to the cheaper one.
   hapsyn::bench::compare("BM_FiveBarPoseOnly", "BM_FiveBarIkJacobian");
   hapsyn::bench::compare("BM_FiveBarIkJacobian", "BM_FiveBarIkJacobianInertiaMass");
   hapsyn::bench::compare("BM_FiveBarIkJacobian", "BM_FiveBarGiiAndGdiFullEvaluation");
   hapsyn::bench::compare("BM_GdiLocal", "BM_GiiLocal");
+  // The block path against the per-sample path: below 1 is a speed-up.
+  hapsyn::bench::compare("BM_FiveBarPoseOnly", "BM_FiveBarBlockPoseOnly");
+  hapsyn::bench::compare("BM_FiveBarIkJacobian", "BM_FiveBarBlockIkJacobian");
+  hapsyn::bench::compare("BM_FiveBarIkJacobianInertiaMass", "BM_FiveBarBlockIkJacobianInertiaMass");
+  hapsyn::bench::compare("BM_FiveBarGiiAndGdiFullEvaluation", "BM_FiveBarBlockGiiAndGdiFullEvaluation");
   return hapsyn::bench::run_main(argc, argv);
 }

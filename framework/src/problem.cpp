@@ -115,6 +115,26 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
   std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) {
     return distance[static_cast<std::size_t>(a)] > distance[static_cast<std::size_t>(b)];
   });
+  choose_block_path();
+}
+
+void Problem::choose_block_path() {
+  block_path_ = worst_case_ && batch_ == 0 && !twist_ && !twist_rate_ &&
+                samples_->dimension() <= kBlockMaxCoordinates && mechanism_->solves_blocks(needs_);
+  for (std::size_t m = 0; m < metrics_.size() && block_path_; ++m) {
+    block_path_ = metrics_[m].metric->has_local_block() && metric_attributes_[m].empty();
+  }
+  if (!block_path_) return;
+  // The poses in sample order, structure of arrays, padded to whole blocks with the last
+  // sample: a block of the full order is then a pointer per coordinate, no copy per design.
+  const std::size_t n = order_.size();
+  block_stride_ = (n + kBlockLanes - 1) / kBlockLanes * kBlockLanes;
+  const int dimension = samples_->dimension();
+  block_poses_.assign(static_cast<std::size_t>(dimension) * block_stride_, 0.0);
+  for (std::size_t k = 0; k < block_stride_; ++k) {
+    const double* pose = samples_->pose(order_[std::min(k, n - 1)]);
+    for (int c = 0; c < dimension; ++c) block_poses_[static_cast<std::size_t>(c) * block_stride_ + k] = pose[c];
+  }
 }
 
 // The demanded motion (twist, twist rate) is the scene's business; the metrics that need joint
@@ -173,6 +193,13 @@ std::unique_ptr<Problem::EvalScratch> Problem::make_eval_scratch() const {
     ws->batch_quantities.resize(static_cast<std::size_t>(batch_));
     for (const SampleQuantities& q : ws->batch_quantities) ws->batch_pointers.push_back(&q);
     ws->batch_locals.resize(static_cast<std::size_t>(batch_) * local_reduction_.size());
+  }
+  if (block_path_) {
+    ws->block = std::make_unique<QuantityBlock>();
+    ws->block_locals.resize(local_reduction_.size() * kBlockLanes);
+    ws->gathered.resize(static_cast<std::size_t>(kBlockMaxCoordinates) * kBlockLanes);
+    ws->saved_accumulator.resize(local_reduction_.size());
+    ws->saved_argument.resize(local_reduction_.size());
   }
   ws->result.objectives.resize(objectives_.size());
   ws->objective_bound.resize(objectives_.size());
@@ -442,6 +469,9 @@ const Evaluation& Problem::evaluate(const double* free_design, EvalScratch& ws, 
   const std::vector<double>* front = options.prune_dominated_by;
   const bool prune_front = front && !front->empty() && worst_case_ && all_maximized;
   if (batch_ > 0) return evaluate_batched(*model, ws, options, prune, prune_front);
+  if (block_path_ && !options.per_sample && !options.on_sample) {
+    return evaluate_blocks(*model, ws, options, prune, prune_front);
+  }
   const std::vector<int>& indices = options.subset ? *options.subset : order_;
   for (const int sample : indices) {
     // Set before solve(): a mechanism may read the scene (its dimension, its attributes).
@@ -528,6 +558,108 @@ const Evaluation& Problem::evaluate_batched(const MechanismModel& model, EvalScr
   }
   combine_objectives(ws, out);
   return out;
+}
+
+// The per-sample loop of evaluate() on the block path: kBlockLanes samples are solved and their
+// local values computed per call, then reduced lane by lane in sample order with the per-sample
+// loop's tie rule. Pruning is decided once per block: the bounds only fall as samples are added
+// (worst-case metrics), so a block whose end is not pruned had no pruned prefix; a block whose
+// end is pruned is replayed lane by lane from the reductions before it, to stop at the very
+// sample the per-sample loop stops at. A failing sample ends the evaluation after the lanes
+// before it, as in the per-sample loop; samples_evaluated counts the same samples.
+const Evaluation& Problem::evaluate_blocks(const MechanismModel& model, EvalScratch& ws, const EvalOptions& options,
+                                           bool prune, bool prune_front) const {
+  Evaluation& out = ws.result;
+  const std::vector<int>* subset = options.subset;
+  const std::size_t n = subset ? subset->size() : order_.size();
+  const int dimension = samples_->dimension();
+  QuantityBlock& q = *ws.block;
+  PoseBlock poses;
+  poses.dimension = dimension;
+  for (std::size_t first = 0; first < n; first += kBlockLanes) {
+    const int count = static_cast<int>(std::min<std::size_t>(kBlockLanes, n - first));
+    poses.count = count;
+    const int* lane_sample = (subset ? subset->data() : order_.data()) + first;
+    for (int c = 0; c < dimension; ++c) {
+      if (subset) {
+        double* lane = ws.gathered.data() + static_cast<std::size_t>(c) * kBlockLanes;
+        for (int i = 0; i < kBlockLanes; ++i) lane[i] = samples_->pose(lane_sample[std::min(i, count - 1)])[c];
+        poses.coordinate[c] = lane;
+      } else {
+        poses.coordinate[c] = block_poses_.data() + static_cast<std::size_t>(c) * block_stride_ + first;
+      }
+    }
+    model.solve_block(poses, needs_, *ws.scratch, q);
+    int valid = 0;  // reachable lanes before the first failing one
+    while (valid < count && q.lane_status(valid) == SampleStatus::kReachable) ++valid;
+    if (valid > 0 && fold_block(model, ws, options, lane_sample, valid, prune, prune_front)) {
+      mark_pruned(ws, out);
+      return out;
+    }
+    if (valid < count) {
+      ++out.samples_evaluated;
+      out.status = EvalStatus::kSampleFailed;
+      out.failed_sample = lane_sample[valid];
+      out.failed_status = q.lane_status(valid);
+      return out;
+    }
+  }
+  combine_objectives(ws, out);
+  return out;
+}
+
+// Reduces the first `lanes` lanes of the block in ws (all reachable) into the accumulators and
+// counts them in samples_evaluated; true when the evaluation is pruned, with the reductions and
+// the count where the per-sample loop would have stopped.
+bool Problem::fold_block(const MechanismModel& model, EvalScratch& ws, const EvalOptions& options,
+                         const int* lane_sample, int lanes, bool prune, bool prune_front) const {
+  Evaluation& out = ws.result;
+  for (std::size_t m = 0; m < metrics_.size(); ++m) {
+    metrics_[m].metric->local_block(*ws.block, ws.block_locals.data() + static_cast<std::size_t>(local_offset_[m]) * kBlockLanes);
+  }
+  const bool check = prune || prune_front;
+  if (check) {
+    ws.saved_accumulator = ws.accumulator;
+    ws.saved_argument = ws.argument;
+  }
+  const std::size_t k = local_reduction_.size();
+  const auto fold_lane = [&](int lane) {
+    const int sample = lane_sample[lane];
+    for (std::size_t i = 0; i < k; ++i) {
+      const double v = ws.block_locals[i * kBlockLanes + static_cast<std::size_t>(lane)];
+      if (!std::isfinite(v)) refuse_non_finite_block_local(model, ws, sample);
+      if (better(local_reduction_[i], v, sample, ws.accumulator[i], ws.argument[i])) {
+        ws.accumulator[i] = v;
+        ws.argument[i] = sample;
+      }
+    }
+    ++out.samples_evaluated;
+  };
+  const auto pruned = [&] {
+    return (prune_front && front_dominates(*options.prune_dominated_by, ws)) ||
+           (prune && score_bound(ws, out.samples_evaluated) < options.prune_below);
+  };
+  for (int lane = 0; lane < lanes; ++lane) fold_lane(lane);
+  if (!check || !pruned()) return false;
+  ws.accumulator = ws.saved_accumulator;
+  ws.argument = ws.saved_argument;
+  out.samples_evaluated -= lanes;
+  for (int lane = 0; lane < lanes; ++lane) {
+    fold_lane(lane);
+    if (pruned()) return true;
+  }
+  assert(false && "a worst-case bound rose within a block");
+  return true;
+}
+
+// A non-finite local value on the block path: the sample is solved again on the per-sample path
+// (an error path, so its cost does not matter) and reported exactly as the per-sample loop does.
+void Problem::refuse_non_finite_block_local(const MechanismModel& model, EvalScratch& ws, int sample) const {
+  bind_sample(ws.quantities, sample);
+  model.solve(samples_->pose(sample), needs_, *ws.scratch, ws.quantities);
+  accumulate_locals(sample, ws, false);
+  throw Error("problem", "metric block path: sample " + std::to_string(sample) +
+                             " gave a non-finite local value in a block but a finite one alone (docs/design.md section 13)");
 }
 
 Evaluation Problem::evaluate_parallel(const double* free_design, int threads, const ParallelOptions& options) const {

@@ -4,6 +4,7 @@
 /// requested quantities, with per-thread scratch so the per-sample loop is allocation-free.
 #include <hapsyn/design_space.hpp>
 #include <hapsyn/quantities.hpp>
+#include <hapsyn/sample_block.hpp>
 #include <hapsyn/scene.hpp>
 
 #include <memory>
@@ -36,6 +37,13 @@ class MechanismModel {
   /// singularity is kSingular, never a NaN: the evaluator refuses NaN/inf quantities.
   virtual void solve(const double* pose, Needs needs, MechanismScratch& scratch,
                      SampleQuantities& out) const = 0;
+  /// Optional block path (hapsyn/sample_block.hpp): classifies the `poses.count` samples of a
+  /// block and fills, for the reachable lanes, the quantities in `needs`, as solve() would for
+  /// each (to rounding: agreement to 1e-12 relative, the same status). Called only when
+  /// Mechanism::solves_blocks(needs) is true, with the same rules as solve() (concurrent, no
+  /// allocation, lock or throw; no NaN reaches a reachable lane). Lanes at or beyond
+  /// poses.count, and unreachable lanes, may hold any values. Default: solve() per lane.
+  virtual void solve_block(const PoseBlock& poses, Needs needs, MechanismScratch& scratch, QuantityBlock& out) const;
 };
 
 /// Mechanism plugin: the one pure virtual is build(); everything else has a default.
@@ -80,6 +88,10 @@ class Mechanism {
   /// Quantities this mechanism can compute (Need flags); the framework refuses a metric that
   /// needs more. Default: pose and Jacobian.
   virtual Needs provides() const { return kNeedJacobian; }
+  /// True when the models' solve_block() is a real block kernel for these needs (read once per
+  /// study, at load; the evaluator then takes the block path when every metric has one too).
+  /// Default: false.
+  virtual bool solves_blocks(Needs needs) const { return false; }
 };
 
 }  // namespace hapsyn

@@ -10,6 +10,7 @@
 /// value over any subset of samples is then an upper bound of its value over the whole scene
 /// (the per-sample bound that culling uses: GII(p) <= sigma_min(J(p,a)) / sigma_max(J(p,b))).
 #include <hapsyn/quantities.hpp>
+#include <hapsyn/sample_block.hpp>
 
 #include <string>
 #include <vector>
@@ -97,6 +98,16 @@ class Metric {
     const int k = static_cast<int>(locals().size());
     for (int i = 0; i < count; ++i) local(*q[i], out + static_cast<long>(i) * k);
   }
+
+  /// Optional block path (hapsyn/sample_block.hpp), for worst-case metrics that need no scene
+  /// attributes: true when local_block() computes what local() does (read once, at load).
+  /// Default: false.
+  virtual bool has_local_block() const { return false; }
+  /// The local values of every lane of `q`: out[j * kBlockLanes + lane] is the lane's j-th local
+  /// value (to rounding what local() gives: agreement to 1e-12 relative). Lanes whose status
+  /// is not kReachable hold arbitrary quantities; their outputs are ignored, but they must not
+  /// trap. Same rules as local() (concurrent, no allocation, lock or throw). Default: nothing.
+  virtual void local_block(const QuantityBlock& q, double* out) const {}
 };
 
 }  // namespace hapsyn

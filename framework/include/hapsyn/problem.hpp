@@ -78,8 +78,11 @@ struct EvalOptions {
   /// from the samples seen so far) is strictly below this value. Exact: a design whose score
   /// is >= prune_below is never pruned.
   double prune_below = -std::numeric_limits<double>::infinity();
-  /// Called per evaluated sample (sequential evaluation only).
+  /// Called per evaluated sample (sequential evaluation only; takes the per-sample path).
   const SampleCallback* on_sample = nullptr;
+  /// Take the per-sample path even when the study has a block path (Problem::block_path());
+  /// tests and benchmarks compare the two.
+  bool per_sample = false;
   /// Pareto pruning, worst-case studies with every objective maximized: stop with kPruned as
   /// soon as the objectives' upper bounds (from the samples seen so far) are dominated by one of
   /// these points. Flat, objectives().size() natural values per point; the points must be
@@ -121,6 +124,11 @@ class Problem {
   const std::vector<std::string>& constraint_names() const { return constraint_names_; }
   /// True when every metric in the study is worst-case (culling and pruning apply).
   bool worst_case() const { return worst_case_; }
+  /// True when evaluate() solves samples in blocks (hapsyn/sample_block.hpp): the mechanism
+  /// solves blocks for the study's needs, every metric is worst-case with a block local and no
+  /// scene attributes, and the scene has at most kBlockMaxCoordinates coordinates and no
+  /// demanded motion. Same results as the per-sample path (docs/design.md section 13).
+  bool block_path() const { return block_path_; }
   /// Union of the metrics' needs: what the mechanism computes per sample, and nothing else.
   Needs needs() const { return needs_; }
   /// Sample order used for full evaluations. With a worst-case metric: the scene's extreme
@@ -159,6 +167,14 @@ class Problem {
     std::vector<SampleQuantities> batch_quantities;
     std::vector<const SampleQuantities*> batch_pointers;
     std::vector<double> batch_locals;
+    // Block path (Problem::block_path()), null otherwise: the block's quantities, its local
+    // values (local j of lane i at [j * kBlockLanes + i]), gathered poses of a subset, and the
+    // reductions before the block (restored when pruning replays the block lane by lane).
+    std::unique_ptr<QuantityBlock> block;
+    std::vector<double> block_locals;
+    std::vector<double> gathered;
+    std::vector<double> saved_accumulator;
+    std::vector<int> saved_argument;
     Evaluation result;
   };
   std::unique_ptr<EvalScratch> make_eval_scratch() const;
@@ -205,6 +221,12 @@ class Problem {
                                             const SampleQuantities& q) const;
   const Evaluation& evaluate_batched(const MechanismModel& model, EvalScratch& ws, const EvalOptions& options,
                                      bool prune, bool prune_front) const;
+  const Evaluation& evaluate_blocks(const MechanismModel& model, EvalScratch& ws, const EvalOptions& options,
+                                    bool prune, bool prune_front) const;
+  bool fold_block(const MechanismModel& model, EvalScratch& ws, const EvalOptions& options, const int* lane_sample,
+                  int lanes, bool prune, bool prune_front) const;
+  [[noreturn]] void refuse_non_finite_block_local(const MechanismModel& model, EvalScratch& ws, int sample) const;
+  void choose_block_path();
   double score_bound(const EvalScratch& ws, long long samples) const;
   void mark_pruned(const EvalScratch& ws, Evaluation& out) const;
   void combine_objectives(const EvalScratch& ws, Evaluation& out) const;
@@ -232,6 +254,9 @@ class Problem {
   Needs needs_ = 0;
   const AttributeMatrix* twist_ = nullptr;       // the scene's kTwistAttribute, when it has one
   const AttributeMatrix* twist_rate_ = nullptr;  // the scene's kTwistRateAttribute
+  bool block_path_ = false;
+  std::size_t block_stride_ = 0;         // order_ padded to whole blocks
+  std::vector<double> block_poses_;       // coordinate c of order_[k] at [c * block_stride_ + k]
   int batch_ = 0;  // largest Metric::batch_size(); 0 = the per-sample path only
 };
 

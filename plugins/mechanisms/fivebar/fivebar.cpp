@@ -81,6 +81,17 @@ FiveBarModel::FiveBarModel(const FiveBarDesign& design, const FiveBarOptions& op
   inertia_a_ = m1_ * (4.0 * design.l1 * design.l1 + k2) / 12.0;
   inertia_f_ = m2_ * (design.l2 * design.l2 + k2) / 12.0;
   l2_squared_ = design.l2 * design.l2;
+  block_ = FiveBarBlockDesign{h0_, design.l1, design.l2, design.r, options.singularity_tolerance, m2_, inertia_a_, inertia_f_};
+}
+
+void FiveBarModel::solve_block(const PoseBlock& poses, Needs needs, MechanismScratch& scratch,
+                               QuantityBlock& out) const {
+#if HAPSYN_HAVE_HIGHWAY
+  (void)scratch;
+  solve_fivebar_block(block_, poses.coordinate[0], poses.coordinate[1], needs, out);
+#else
+  MechanismModel::solve_block(poses, needs, scratch, out);  // built without Highway: solve() per lane
+#endif
 }
 
 void FiveBarModel::solve(const double* pose, Needs needs, MechanismScratch& /*scratch*/,
@@ -296,5 +307,14 @@ void FiveBar::check_scene(const SampleSet& scene) const {
 }
 
 Needs FiveBar::provides() const { return kNeedJacobian | kNeedInertia | kNeedEffectiveMass; }
+
+bool FiveBar::solves_blocks(Needs needs) const {
+#if HAPSYN_HAVE_HIGHWAY
+  return (needs & ~(kNeedJacobian | kNeedInertia | kNeedEffectiveMass)) == 0;
+#else
+  (void)needs;
+  return false;
+#endif
+}
 
 }  // namespace hapsyn::plugins

@@ -28,6 +28,8 @@
 #include <hapsyn/mechanism.hpp>
 #include <hapsyn/options.hpp>
 
+#include "fivebar_block.hpp"
+
 #include <Eigen/Core>
 #include <memory>
 #include <string>
@@ -107,6 +109,10 @@ class FiveBarModel final : public MechanismModel {
   void solve(const double* pose, Needs needs, MechanismScratch& scratch,
              SampleQuantities& out) const override;
 
+  /// The block path: solve() for kBlockLanes samples at once, without trigonometry
+  /// (fivebar_block.hpp). Fills status and J, D, M; never q.
+  void solve_block(const PoseBlock& poses, Needs needs, MechanismScratch& scratch, QuantityBlock& out) const override;
+
   /// Forward kinematics: the end effector (x, y) [m] in the scene frame from the actuated
   /// angles q1, q4 [rad], on the working-mode branch (sin(q3 - q2) > 0, E to the left of
   /// B1 -> B2). \return false when the elbows are farther apart than 2 l2 or coincide.
@@ -126,6 +132,7 @@ class FiveBarModel final : public MechanismModel {
   double inertia_a_ = 0.0;  // actuated bar about its joint, m1 (4 l1^2 + k^2) / 12 [kg m^2]
   double inertia_f_ = 0.0;  // free bar about its centre, m2 (l2^2 + k^2) / 12 [kg m^2]
   double l2_squared_ = 0.0;
+  FiveBarBlockDesign block_;
 };
 
 /// The five-bar mechanism plugin ("fivebar").
@@ -153,6 +160,8 @@ class FiveBar final : public Mechanism {
   void check_scene(const SampleSet& scene) const override;
   /// kNeedJacobian | kNeedInertia | kNeedEffectiveMass.
   Needs provides() const override;
+  /// True when `needs` asks for nothing beyond J, D and M (the block kernel gives no q).
+  bool solves_blocks(Needs needs) const override;
 
   const FiveBarOptions& options() const { return options_; }
 

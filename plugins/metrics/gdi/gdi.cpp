@@ -1,5 +1,7 @@
 #include "gdi.hpp"
 
+#include <hapsyn/multiversion.hpp>
+
 #include <Eigen/SVD>
 #include <cmath>
 
@@ -18,6 +20,34 @@ double Gdi::largest_singular_value(const TaskMatrix& m) {
 
 void Gdi::local(const SampleQuantities& q, double* out) const {
   out[0] = largest_singular_value(q.effective_mass);
+}
+
+namespace {
+// largest_singular_value()'s 2 x 2 closed form, lane by lane (the loop vectorises).
+HAPSYN_MULTIVERSION_WIDE
+void largest_singular_value_2x2_block(const double (*m)[kBlockLanes], double* out) {
+  for (int i = 0; i < kBlockLanes; ++i) {
+    const double a = m[0][i], b = m[1][i], c = m[2][i], d = m[3][i];
+    const double e = 0.5 * (a + d), f = 0.5 * (a - d), g = 0.5 * (c + b), h = 0.5 * (c - b);
+    out[i] = std::sqrt(e * e + h * h) + std::sqrt(f * f + g * g);
+  }
+}
+}  // namespace
+
+void Gdi::local_block(const QuantityBlock& q, double* out) const {
+  const int n = q.effective_mass_size;
+  if (n == 2) {
+    largest_singular_value_2x2_block(q.effective_mass, out);
+    return;
+  }
+  TaskMatrix m(n, n);
+  for (int lane = 0; lane < kBlockLanes; ++lane) {
+    if (q.lane_status(lane) != SampleStatus::kReachable) continue;
+    for (int r = 0; r < n; ++r) {
+      for (int c = 0; c < n; ++c) m(r, c) = q.effective_mass[r * n + c][lane];
+    }
+    out[lane] = largest_singular_value(m);
+  }
 }
 
 std::vector<LocalValue> Gdi::locals() const { return {LocalValue{"sigma_max_M", Reduction::kMax, "kg"}}; }

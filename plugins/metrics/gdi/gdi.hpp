@@ -20,6 +20,9 @@ class Gdi final : public Metric {
   std::vector<LocalValue> locals() const override;
   /// 1 / (1 + reduced[0]) [-]; 0 for an infinite reduced[0].
   double combine(const double* reduced, int samples) const override;
+  /// The block path: largest_singular_value() per lane (2 x 2: its closed form, vectorised).
+  bool has_local_block() const override { return true; }
+  void local_block(const QuantityBlock& q, double* out) const override;
 
   /// Largest singular value of a matrix. 2 x 2: closed form
   /// sqrt(E^2 + H^2) + sqrt(F^2 + G^2) with E = (a + d)/2, F = (a - d)/2, G = (c + b)/2,

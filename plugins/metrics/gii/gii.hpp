@@ -51,6 +51,10 @@ class Gii final : public Metric {
   void local(const SampleQuantities& q, double* out) const override;
   Needs needs() const override { return kNeedJacobian; }
   std::vector<LocalValue> locals() const override;
+  /// The block path: the 2 x 2 closed form of singular_values() per lane (other shapes: local()
+  /// per lane). Not for rows = rotational (which local() refuses on J without angular rows).
+  bool has_local_block() const override { return rows_ != Rows::kRotational; }
+  void local_block(const QuantityBlock& q, double* out) const override;
   /// reduced[0] / reduced[1]; 0 when reduced[1] is not a positive finite number.
   double combine(const double* reduced, int samples) const override;
 

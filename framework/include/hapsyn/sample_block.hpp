@@ -1,0 +1,48 @@
+#pragma once
+/// \file
+/// Sample blocks: the optional block path of the per-sample loop. A mechanism whose model can
+/// solve several samples at once (MechanismModel::solve_block) and metrics that can compute
+/// their local values for them at once (Metric::local_block) let the evaluator handle
+/// kBlockLanes samples per call, structure of arrays, so that the kernels run one sample per
+/// SIMD lane. The evaluator reduces the lanes one by one in the scene's order, so a study gets
+/// the same statuses, critical samples, pruning decisions and sample counts as on the
+/// per-sample path (docs/design.md section 13); values agree to rounding (a block kernel need
+/// not round like the scalar one).
+#include <hapsyn/quantities.hpp>
+
+#include <cstdint>
+
+namespace hapsyn {
+
+/// Samples per block: 8 doubles, one AVX-512 register (two AVX2 registers).
+constexpr int kBlockLanes = 8;
+/// Largest pose dimension the block path serves (x, y, z, qw, qx, qy, qz).
+constexpr int kBlockMaxCoordinates = 7;
+/// Largest side of a block matrix (J, D, M): kMaxTask x kMaxTask entries.
+constexpr int kBlockMaxEntries = kMaxTask * kMaxTask;
+
+/// The poses of up to kBlockLanes samples, structure of arrays.
+struct PoseBlock {
+  /// coordinate[c][lane]: coordinate c of the lane's sample, in the scene frame and units
+  /// (as SampleSet::pose). Lanes at or beyond `count` hold copies of a valid sample (so that
+  /// a kernel can compute every lane without producing values it must guard against).
+  const double* coordinate[kBlockMaxCoordinates] = {};
+  int dimension = 0;  ///< SampleSet::dimension()
+  int count = 0;      ///< lanes that carry samples, 1..kBlockLanes
+};
+
+/// What a block kernel computes for up to kBlockLanes samples, structure of arrays. Matrices
+/// are row-major per lane: entry (r, c) of lane i is matrix[r * cols + c][i].
+struct QuantityBlock {
+  alignas(64) std::int32_t status[kBlockLanes] = {};  ///< a SampleStatus per lane, always set
+  int jacobian_rows = 0, jacobian_cols = 0;            ///< shape of J (kNeedJacobian)
+  int inertia_size = 0;                                ///< side of D (kNeedInertia)
+  int effective_mass_size = 0;                         ///< side of M (kNeedEffectiveMass)
+  alignas(64) double jacobian[kBlockMaxEntries][kBlockLanes] = {};
+  alignas(64) double inertia[kBlockMaxEntries][kBlockLanes] = {};
+  alignas(64) double effective_mass[kBlockMaxEntries][kBlockLanes] = {};
+
+  SampleStatus lane_status(int lane) const { return static_cast<SampleStatus>(status[lane]); }
+};
+
+}  // namespace hapsyn

@@ -1,0 +1,137 @@
+// The evaluator's block path (Problem::evaluate_blocks, hapsyn/sample_block.hpp) against its
+// per-sample path on the five-bar: the same status, failing sample, sample count, critical
+// samples and pruning decisions for every design, threshold, subset and front; objectives to
+// 1e-12 relative.
+#include "test_support.hpp"
+
+#include <hapsyn/problem.hpp>
+#include <hapsyn/study.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace {
+
+using hapsyn::EvalOptions;
+using hapsyn::EvalStatus;
+using hapsyn::Evaluation;
+using hapsyn::Json;
+using hapsyn::Problem;
+
+std::shared_ptr<Problem> fivebar_problem(const Json& objectives, double step = 0.005) {
+  Json doc = hapsyn::test::fivebar_study();
+  doc["scene"]["options"]["step"] = step;
+  doc["objectives"] = objectives;
+  if (objectives.size() > 1) doc["solver"] = Json{{"plugin", "nsga2"}};
+  return hapsyn::load_study(doc, hapsyn::test::registry()).problem;
+}
+
+// Expects the two evaluations of one design to be the same; `what` names the case.
+void expect_same(const Evaluation& block, const Evaluation& single, const std::string& what) {
+  ASSERT_EQ(block.status, single.status) << what;
+  EXPECT_EQ(block.samples_evaluated, single.samples_evaluated) << what;
+  EXPECT_EQ(block.failed_constraint, single.failed_constraint) << what;
+  EXPECT_EQ(block.failed_sample, single.failed_sample) << what;
+  EXPECT_EQ(block.failed_status, single.failed_status) << what;
+  if (block.status != EvalStatus::kFeasible && block.status != EvalStatus::kPruned) return;
+  EXPECT_EQ(block.critical_samples, single.critical_samples) << what;
+  if (block.status != EvalStatus::kFeasible) return;
+  for (std::size_t o = 0; o < single.objectives.size(); ++o) {
+    EXPECT_EQ(block.objectives[o], single.objectives[o]) << what;  // bit for bit
+  }
+}
+
+// Random free designs inside the study's bounds, weighted towards feasible ones (long links).
+std::vector<std::vector<double>> designs(const Problem& problem, int count, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<std::vector<double>> out;
+  for (int i = 0; i < count; ++i) {
+    out.push_back({0.3 * u(rng), 0.05 + 0.25 * u(rng), 0.05 + 0.25 * u(rng), 0.6 * u(rng)});
+  }
+  (void)problem;
+  return out;
+}
+
+TEST(BlockPath, FiveBarStudiesTakeIt) {
+  EXPECT_TRUE(fivebar_problem(Json::array({Json{{"metric", "gii"}}}))->block_path());
+  EXPECT_TRUE(fivebar_problem(Json::array({Json{{"metric", "gii"}}, Json{{"metric", "gdi"}}}))->block_path());
+}
+
+TEST(BlockPath, EvaluationsEqualThePerSamplePathWithAndWithoutPruning) {
+  const auto problem = fivebar_problem(Json::array({Json{{"metric", "gii"}}}));
+  ASSERT_TRUE(problem->block_path());
+  auto block_scratch = problem->make_eval_scratch();
+  auto single_scratch = problem->make_eval_scratch();
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> threshold(0.0, 0.9);
+  int feasible = 0, pruned = 0, failed = 0;
+  for (const std::vector<double>& x : designs(*problem, 3000, 11)) {
+    for (const double below : {-std::numeric_limits<double>::infinity(), threshold(rng)}) {
+      EvalOptions block, single;
+      block.prune_below = single.prune_below = below;
+      single.per_sample = true;
+      const Evaluation b = problem->evaluate(x.data(), *block_scratch, block);
+      const Evaluation& s = problem->evaluate(x.data(), *single_scratch, single);
+      expect_same(b, s, "threshold " + std::to_string(below));
+      if (HasFatalFailure()) return;
+      feasible += s.status == EvalStatus::kFeasible;
+      pruned += s.status == EvalStatus::kPruned;
+      failed += s.status == EvalStatus::kSampleFailed;
+    }
+  }
+  // Each outcome happened often enough for the comparison to mean something.
+  EXPECT_GT(feasible, 100);
+  EXPECT_GT(pruned, 100);
+  EXPECT_GT(failed, 100);
+}
+
+TEST(BlockPath, SubsetsInAnyOrderEqualThePerSamplePath) {
+  const auto problem = fivebar_problem(Json::array({Json{{"metric", "gii"}}, Json{{"metric", "gdi"}}}));
+  auto block_scratch = problem->make_eval_scratch();
+  auto single_scratch = problem->make_eval_scratch();
+  std::mt19937_64 rng(5);
+  std::vector<int> all(static_cast<std::size_t>(problem->samples().size()));
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+  int nonempty = 0;
+  for (const std::vector<double>& x : designs(*problem, 1500, 13)) {
+    std::shuffle(all.begin(), all.end(), rng);
+    std::vector<int> subset(all.begin(), all.begin() + static_cast<long>(rng() % 40));
+    EvalOptions block, single;
+    block.subset = single.subset = &subset;
+    single.per_sample = true;
+    const Evaluation b = problem->evaluate(x.data(), *block_scratch, block);
+    const Evaluation& s = problem->evaluate(x.data(), *single_scratch, single);
+    expect_same(b, s, "subset of " + std::to_string(subset.size()));
+    if (HasFatalFailure()) return;
+    nonempty += !subset.empty() && s.status == EvalStatus::kFeasible;
+  }
+  EXPECT_GT(nonempty, 50);
+}
+
+TEST(BlockPath, ParetoPruningEqualsThePerSamplePath) {
+  const auto problem = fivebar_problem(Json::array({Json{{"metric", "gii"}}, Json{{"metric", "gdi"}}}));
+  auto block_scratch = problem->make_eval_scratch();
+  auto single_scratch = problem->make_eval_scratch();
+  // A front of two mutually non-dominated points, sorted by the first objective, descending.
+  const std::vector<double> front = {0.6, 0.3, 0.4, 0.5};
+  int pruned = 0;
+  for (const std::vector<double>& x : designs(*problem, 2000, 17)) {
+    EvalOptions block, single;
+    block.prune_dominated_by = single.prune_dominated_by = &front;
+    single.per_sample = true;
+    const Evaluation b = problem->evaluate(x.data(), *block_scratch, block);
+    const Evaluation& s = problem->evaluate(x.data(), *single_scratch, single);
+    expect_same(b, s, "front");
+    if (HasFatalFailure()) return;
+    pruned += s.status == EvalStatus::kPruned;
+  }
+  EXPECT_GT(pruned, 50);
+}
+
+}  // namespace
