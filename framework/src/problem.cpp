@@ -92,6 +92,11 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
     if (!std::isfinite(o.weight)) throw Error("problem", "objective '" + o.name + "': weight must be finite");
   }
 
+  all_maximized_ = std::all_of(objectives_.begin(), objectives_.end(),
+                               [](const Objective& o) { return o.sense == Sense::kMaximize; });
+  prunable_ = worst_case_ && std::all_of(objectives_.begin(), objectives_.end(), [](const Objective& o) {
+                return o.sense == Sense::kMaximize && o.weight >= 0.0;
+              });
   for (int index : space_.free_indices()) {
     const DesignComponent& c = space_.components()[static_cast<std::size_t>(index)];
     const double tol = 1e-9 * std::max(1.0, c.upper - c.lower);  // rounding of lower + i*step
@@ -460,14 +465,9 @@ const Evaluation& Problem::evaluate(const double* free_design, EvalScratch& ws, 
     model = owned.get();
   }
   reset_accumulators(local_reduction_, ws.accumulator, ws.argument);
-  const bool prune = std::isfinite(options.prune_below) && worst_case_ &&
-                     std::all_of(objectives_.begin(), objectives_.end(), [](const Objective& o) {
-                       return o.sense == Sense::kMaximize && o.weight >= 0.0;
-                     });
-  const bool all_maximized = std::all_of(objectives_.begin(), objectives_.end(),
-                                         [](const Objective& o) { return o.sense == Sense::kMaximize; });
+  const bool prune = std::isfinite(options.prune_below) && prunable_;
   const std::vector<double>* front = options.prune_dominated_by;
-  const bool prune_front = front && !front->empty() && worst_case_ && all_maximized;
+  const bool prune_front = front && !front->empty() && worst_case_ && all_maximized_;
   if (batch_ > 0) return evaluate_batched(*model, ws, options, prune, prune_front);
   if (block_path_ && !options.per_sample && !options.on_sample) {
     return evaluate_blocks(*model, ws, options, prune, prune_front);
@@ -618,11 +618,13 @@ bool Problem::fold_block(const MechanismModel& model, EvalScratch& ws, const Eva
     metrics_[m].metric->local_block(*ws.block, ws.block_locals.data() + static_cast<std::size_t>(local_offset_[m]) * kBlockLanes);
   }
   const bool check = prune || prune_front;
-  if (check) {
-    ws.saved_accumulator = ws.accumulator;
-    ws.saved_argument = ws.argument;
-  }
   const std::size_t k = local_reduction_.size();
+  if (check) {  // element by element: a few values, no memmove call per block
+    for (std::size_t i = 0; i < k; ++i) {
+      ws.saved_accumulator[i] = ws.accumulator[i];
+      ws.saved_argument[i] = ws.argument[i];
+    }
+  }
   const auto fold_lane = [&](int lane) {
     const int sample = lane_sample[lane];
     for (std::size_t i = 0; i < k; ++i) {
@@ -641,8 +643,10 @@ bool Problem::fold_block(const MechanismModel& model, EvalScratch& ws, const Eva
   };
   for (int lane = 0; lane < lanes; ++lane) fold_lane(lane);
   if (!check || !pruned()) return false;
-  ws.accumulator = ws.saved_accumulator;
-  ws.argument = ws.saved_argument;
+  for (std::size_t i = 0; i < k; ++i) {
+    ws.accumulator[i] = ws.saved_accumulator[i];
+    ws.argument[i] = ws.saved_argument[i];
+  }
   out.samples_evaluated -= lanes;
   for (int lane = 0; lane < lanes; ++lane) {
     fold_lane(lane);

@@ -14,8 +14,10 @@ namespace hapsyn {
 
 /// Per-thread scratch a model may use (Pinocchio's Data): made once per thread by
 /// Mechanism::make_scratch, reused for every sample and design that thread evaluates, never
-/// shared between threads. Mechanisms that need none use this base as is.
-class MechanismScratch {
+/// shared between threads. Mechanisms that need none use this base as is. Aligned to a cache
+/// line (so its size is a multiple of one): the scratches of two threads, written per sample,
+/// never share a line.
+class alignas(64) MechanismScratch {
  public:
   virtual ~MechanismScratch() = default;
 };
@@ -78,6 +80,18 @@ class Mechanism {
   /// Evaluates the constraints declared by constraints() into g (constraints().size() values;
   /// g <= 0 is satisfied). Called before any sample of the design is solved.
   virtual void evaluate_constraints(const double* design, const SampleSet& scene, double* g) const {}
+  /// Optional block bound for grid solvers: an interval [lower, upper] of design component
+  /// `component` (an index into the full design vector) outside which some constraint is
+  /// violated, the other components as in `design`. It may be wider than the feasible set
+  /// (inside it, evaluate_constraints decides) but never narrower: a solver counts the designs
+  /// outside it as violating a constraint without evaluating them. The framework spot-checks
+  /// the claim (hapsyn/constraint_interval.hpp). An empty interval (lower > upper) means no
+  /// value is feasible. Default: false (no bound known; every design is evaluated).
+  /// Called once per line of a design grid; must not allocate or throw.
+  virtual bool constraint_interval(const double* design, int component, const SampleSet& scene, double& lower,
+                                   double& upper) const {
+    return false;
+  }
   /// Per-thread scratch for MechanismModel::solve (called once per worker thread).
   virtual std::unique_ptr<MechanismScratch> make_scratch() const {
     return std::make_unique<MechanismScratch>();

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <optional>
 #include <limits>
@@ -13,6 +14,7 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr const char* kName = "fivebar";
 
 std::string show(double value) { return Json(value).dump(); }
@@ -69,11 +71,16 @@ void check_length(const char* name, double value, bool allow_zero) {
 }  // namespace
 
 FiveBarModel::FiveBarModel(const FiveBarDesign& design, const FiveBarOptions& options)
-    : design_(design), options_(options) {
-  check_length("l0", design.l0, true);
-  check_length("l1", design.l1, false);
-  check_length("l2", design.l2, false);
-  if (!std::isfinite(design.r)) throw Error(kName, "design r = " + show(design.r) + ": must be finite");
+    : design_(design), singularity_tolerance_(options.singularity_tolerance), rho_(options.rho), k_(options.k) {
+  // One test for the usual case (a model is built per design); the messages only on failure.
+  const bool usable = design.l0 >= 0.0 && design.l1 > 0.0 && design.l2 > 0.0 && design.l0 < kInfinity &&
+                      design.l1 < kInfinity && design.l2 < kInfinity && std::abs(design.r) < kInfinity;
+  if (!usable) {
+    check_length("l0", design.l0, true);
+    check_length("l1", design.l1, false);
+    check_length("l2", design.l2, false);
+    if (!std::isfinite(design.r)) throw Error(kName, "design r = " + show(design.r) + ": must be finite");
+  }
   h0_ = 0.5 * design.l0;
   m1_ = options.rho * design.l1;
   m2_ = options.rho * design.l2;
@@ -128,7 +135,7 @@ void FiveBarModel::solve(const double* pose, Needs needs, MechanismScratch& /*sc
   const double s34 = (right.wx * right.uy - right.wy * right.ux) / l2;  // sin(q3 - q4)
   const double cross12 = w1x * w2y - w1y * w2x;                          // l2^2 sin(q3 - q2)
   const double s23 = cross12 / l2_squared_;
-  const double tol = options_.singularity_tolerance;
+  const double tol = singularity_tolerance_;
   if (!(std::abs(s12) >= tol && std::abs(s34) >= tol && std::abs(s23) >= tol)) {
     out.status = SampleStatus::kSingular;
     return;
@@ -225,8 +232,10 @@ struct FiveBarScratch final : MechanismScratch {
 std::unique_ptr<MechanismScratch> FiveBar::make_scratch() const { return std::make_unique<FiveBarScratch>(); }
 
 const MechanismModel* FiveBar::build_in(const double* design, MechanismScratch& scratch) const {
-  auto* own = dynamic_cast<FiveBarScratch*>(&scratch);
-  if (!own) return nullptr;
+  // The evaluator passes the scratch this mechanism's make_scratch() made (the contract of
+  // build_in); a dynamic_cast per design costs more than the model.
+  assert(dynamic_cast<FiveBarScratch*>(&scratch));
+  auto* own = static_cast<FiveBarScratch*>(&scratch);
   own->model.emplace(design_from(design), options_);
   return &*own->model;
 }
@@ -283,6 +292,38 @@ double FiveBar::reach_constraint(const FiveBarDesign& design, double xmin, doubl
   const double ax = std::max(ax1, ax2);
   const double reach = design.l1 + design.l2;
   return (ax * ax + ay * ay) - reach * reach;
+}
+
+void FiveBar::reach_interval(const FiveBarDesign& design, double xmin, double xmax, double ymin, double ymax,
+                             double& lower, double& upper) {
+  const double h0 = 0.5 * design.l0;
+  const double ax = std::max(std::max(std::abs(xmin + h0), std::abs(xmax + h0)),
+                             std::max(std::abs(xmin - h0), std::abs(xmax - h0)));
+  const double reach = design.l1 + design.l2;
+  const double room = reach * reach - ax * ax;  // R^2: what the y distance may use
+  if (room < -1e-9 * reach * reach) {  // empty, beyond rounding: no corner placement reaches
+    lower = 1.0;
+    upper = -1.0;
+    return;
+  }
+  const double r_max = std::sqrt(std::max(room, 0.0));
+  lower = -r_max - ymin;
+  upper = r_max - ymax;
+}
+
+bool FiveBar::constraint_interval(const double* design, int component, const SampleSet& scene, double& lower,
+                                  double& upper) const {
+  if (component != 3 || scene.dimension() != 2 || scene.size() == 0) return false;
+  const SampleSet::Corner low = scene.lower_corner();
+  const SampleSet::Corner high = scene.upper_corner();
+  reach_interval(design_from(design), low[0], high[0], low[1], high[1], lower, upper);
+  if (lower > upper) return true;
+  // Rounding: reach_constraint and this interval round differently; a margin far above their
+  // few-ulp errors keeps the interval a superset of the designs reach_constraint accepts.
+  const double margin = 1e-9 * (1.0 + std::abs(lower) + std::abs(upper));
+  lower -= margin;
+  upper += margin;
+  return true;
 }
 
 void FiveBar::evaluate_constraints(const double* design, const SampleSet& scene, double* g) const {

@@ -119,13 +119,16 @@ class FiveBarModel final : public MechanismModel {
   bool forward(double q1, double q4, double* xy) const;
 
   const FiveBarDesign& design() const { return design_; }
-  const FiveBarOptions& options() const { return options_; }
+  double rho() const { return rho_; }  ///< linear density of the bars [kg/m] (option rho)
+  double k() const { return k_; }      ///< width of the bars [m] (option k)
   double actuated_mass() const { return m1_; }  ///< m1 = m4 = rho l1 [kg]
   double free_mass() const { return m2_; }      ///< m2 = m3 = rho l2 [kg]
 
  private:
+  // Only numbers: a model is built per design (culling builds ~1e9), so it copies no string.
   FiveBarDesign design_;
-  FiveBarOptions options_;
+  double singularity_tolerance_ = 0.0;
+  double rho_ = 0.0, k_ = 0.0;
   double h0_ = 0.0;         // l0 / 2 [m]
   double m1_ = 0.0;         // actuated bar mass [kg]
   double m2_ = 0.0;         // free bar mass [kg]
@@ -156,6 +159,19 @@ class FiveBar final : public Mechanism {
   /// g[0] = reach_constraint(design, scene bounding box); g[1] = footprint_constraint when
   /// declared. O(1) with the framework's cached scene bounds, no allocation.
   void evaluate_constraints(const double* design, const SampleSet& scene, double* g) const override;
+  /// For r (component 3): the closed-form interval of r where the reach constraint holds for
+  /// the design's l0, l1, l2 (reach_interval), widened by a rounding margin. Other components:
+  /// false. O(1), no allocation.
+  bool constraint_interval(const double* design, int component, const SampleSet& scene, double& lower,
+                           double& upper) const override;
+  /// The interval of r [m] on which reach_constraint(design with that r, box) <= 0, for the
+  /// design's l0, l1, l2 and the box [xmin, xmax] x [ymin, ymax]: with ax the larger x distance
+  /// from an actuated joint to the box and R = sqrt((l1 + l2)^2 - ax^2), the farthest corner
+  /// is within reach iff -R <= ymin + r and ymax + r <= R, i.e. r in [-R - ymin, R - ymax]
+  /// (docs/design.md section 13.3). Empty (lower > upper) when (l1 + l2) < ax. Exact arithmetic;
+  /// the caller widens it for rounding.
+  static void reach_interval(const FiveBarDesign& design, double xmin, double xmax, double ymin, double ymax,
+                             double& lower, double& upper);
   /// \throws Error unless the scene has samples with exactly two coordinates (x, y) [m].
   void check_scene(const SampleSet& scene) const override;
   /// kNeedJacobian | kNeedInertia | kNeedEffectiveMass.

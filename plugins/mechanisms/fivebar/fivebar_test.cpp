@@ -180,7 +180,7 @@ bool bars_at(const FiveBarModel& m, double q1, double q4, Bars& bars) {
 // differences through FK along qdot (Richardson-extrapolated, error O(h^4)).
 double bar_energy(const FiveBarModel& m, double q1, double q4, const Eigen::Vector2d& qdot) {
   const FiveBarDesign& d = m.design();
-  const double rho = m.options().rho, k = m.options().k;
+  const double rho = m.rho(), k = m.k();
   const double length[4] = {d.l1, d.l2, d.l2, d.l1};
   auto rates = [&](double h, Eigen::Vector2d (&v)[4], double (&w)[4]) {
     Bars plus, minus;
@@ -744,6 +744,63 @@ TEST(FiveBarReach, SatisfiedConstraintMeansTheFarCornersAreReachable) {
     } else {
       EXPECT_EQ(q.status, SampleStatus::kUnreachable) << "l1 + l2 = " << total;
     }
+  }
+}
+
+TEST(FiveBarReach, IntervalOfRHoldsExactlyThePlacementsTheConstraintAccepts) {
+  // Random designs and boxes (also off-centre), r on a fine grid and at the interval's ends.
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int inside = 0, outside = 0, empty = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    FiveBarDesign d{0.3 * u(rng), 0.01 + 0.3 * u(rng), 0.01 + 0.3 * u(rng), 0.0};
+    const double xmin = -0.1 * u(rng), xmax = 0.1 * u(rng), ymin = -0.1 * u(rng), ymax = 0.1 * u(rng);
+    double lower = 0.0, upper = 0.0;
+    FiveBar::reach_interval(d, xmin, xmax, ymin, ymax, lower, upper);
+    if (lower > upper) {
+      ++empty;
+      for (double r = -1.0; r <= 1.0; r += 0.01) {
+        d.r = r;
+        ASSERT_GT(FiveBar::reach_constraint(d, xmin, xmax, ymin, ymax), 0.0);
+      }
+      continue;
+    }
+    const double margin = 1e-9 * (1.0 + std::abs(lower) + std::abs(upper));
+    for (double r = lower - 0.2; r <= upper + 0.2; r += 0.005) {
+      d.r = r;
+      const double g = FiveBar::reach_constraint(d, xmin, xmax, ymin, ymax);
+      if (r < lower - margin || r > upper + margin) {
+        ASSERT_GT(g, 0.0) << "r = " << r << " outside [" << lower << ", " << upper << "]";
+        ++outside;
+      } else if (r > lower + margin && r < upper - margin) {
+        ASSERT_LE(g, 0.0) << "r = " << r << " inside [" << lower << ", " << upper << "]";
+        ++inside;
+      }
+    }
+    // At the ends the constraint is zero to rounding.
+    d.r = lower;
+    EXPECT_NEAR(FiveBar::reach_constraint(d, xmin, xmax, ymin, ymax), 0.0, 1e-12);
+    d.r = upper;
+    EXPECT_NEAR(FiveBar::reach_constraint(d, xmin, xmax, ymin, ymax), 0.0, 1e-12);
+  }
+  EXPECT_GT(inside, 10000);
+  EXPECT_GT(outside, 10000);
+  EXPECT_GT(empty, 100);
+}
+
+TEST(FiveBarReach, ConstraintIntervalIsTheReachIntervalWidenedAndOnlyForR) {
+  const FiveBar mechanism = fivebar();
+  const SampleSet scene = square(0.1, 0.01);
+  const double design[4] = {0.1, 0.2, 0.15, 0.3};
+  double lower = 0.0, upper = 0.0, exact_lower = 0.0, exact_upper = 0.0;
+  ASSERT_TRUE(mechanism.constraint_interval(design, 3, scene, lower, upper));
+  FiveBar::reach_interval(FiveBar::design_from(design), -0.05, 0.05, -0.05, 0.05, exact_lower, exact_upper);
+  EXPECT_LT(lower, exact_lower);
+  EXPECT_GT(upper, exact_upper);
+  EXPECT_NEAR(lower, exact_lower, 1e-8);
+  EXPECT_NEAR(upper, exact_upper, 1e-8);
+  for (int component = 0; component < 3; ++component) {
+    EXPECT_FALSE(mechanism.constraint_interval(design, component, scene, lower, upper)) << component;
   }
 }
 

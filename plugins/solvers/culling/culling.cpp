@@ -1,6 +1,7 @@
 #include "culling.hpp"
 
 #include "grid/ledger.hpp"
+#include "grid/line_bound.hpp"
 #include "grid/rank_support.hpp"
 #include "grid/task_bytes.hpp"
 #include "grid/worst_case_check.hpp"
@@ -268,11 +269,13 @@ Seed seed_reference(const Problem& problem, const Grid& grid, const Bounds& boun
 // 2. The culling sweep over the grid: lines along the last variable, the tasks of one task farm
 //    (handed out in order to every thread of every rank; a --shard share is a contiguous slice).
 
-struct SweepThread {
+// Cache-line aligned: each thread writes its own per design, never a line another thread writes.
+struct alignas(64) SweepThread {
   std::unique_ptr<Problem::EvalScratch> eval_scratch;
   std::vector<int> local;  // critical samples, most recently useful first
   int known = 0;           // global critical samples merged so far
   std::vector<double> x;
+  std::optional<LineBound> line_bound;  // designs of the current line the constraints rule out
   SweepCounts counts;         // this run's, lines finished or not
   SweepCounts partial;        // of the lines a stop left unfinished
   std::vector<double> bound;  // the objectives' bound at the critical samples of the current design
@@ -384,8 +387,13 @@ bool cull_line(const Problem& problem, const Grid& grid, long long line, SweepTh
   const long long line_length = grid.counts[n - 1];
   catch_up(s, reference);
   grid.decode(line * line_length, s.x.data());
+  s.line_bound->update(s.x.data());
   for (long long i = 0; i < line_length; ++i) {
     if (context.stop_requested() || reference.failed.load(std::memory_order_relaxed)) return false;
+    if (s.line_bound->excludes(i)) {
+      ++s.counts.constraint_violated;
+      continue;
+    }
     const long long index = line * line_length + i;
     s.x[n - 1] = grid.space->grid_value(n - 1, i);
     const double threshold = reference.score.load(std::memory_order_relaxed);
@@ -446,6 +454,7 @@ FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions
   for (SweepThread& s : states) {
     s.eval_scratch = problem.make_eval_scratch();
     s.x.resize(grid.counts.size());
+    s.line_bound.emplace(problem, options.line_bounds, "culling");
   }
   const RangeLedger skip = reference.ledger;  // finished before this run
   auto last_report = Clock::now(), last_checkpoint = Clock::now();

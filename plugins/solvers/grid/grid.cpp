@@ -1,6 +1,7 @@
 #include "grid.hpp"
 
 #include "ledger.hpp"
+#include "line_bound.hpp"
 #include "rank_support.hpp"
 #include "task_bytes.hpp"
 #include "worst_case_check.hpp"
@@ -193,22 +194,43 @@ Tally get_tally(ByteReader& in) {
 }
 
 // Per-thread state of a sweep; `Extra` holds what the mode keeps besides the tally.
+// Cache-line aligned: each thread writes its own per design, never a line another thread writes.
 template <class Extra>
-struct SweepThread : Extra {
+struct alignas(64) SweepThread : Extra {
   std::unique_ptr<Problem::EvalScratch> eval_scratch;
   std::vector<double> x;
+  std::optional<LineBound> bound;  // of the line `line` (the last free variable varying)
+  long long line = -1;
   std::vector<int> check_subset;  // buffer of the monotonicity spot check
   Tally partial;                  // evaluations of chunks this thread left unfinished (a stop)
 };
 
 template <class Extra>
-std::vector<SweepThread<Extra>> make_threads(const Problem& problem, const SolverContext& context) {
+std::vector<SweepThread<Extra>> make_threads(const Problem& problem, const SolverContext& context, bool line_bounds) {
   std::vector<SweepThread<Extra>> states(static_cast<std::size_t>(std::max(1, context.threads)));
   for (SweepThread<Extra>& s : states) {
     s.eval_scratch = problem.make_eval_scratch();
     s.x.resize(problem.design_space().free_size());
+    s.bound.emplace(problem, line_bounds, "grid");
   }
   return states;
+}
+
+// Whether the line bound rules out grid design `index` (then it is counted as violating a
+// constraint); else s.x holds the design. The line (all but the last variable) is decoded and
+// bounded once per line; within it only the last variable changes.
+template <class Extra>
+bool excluded_by_line_bound(SweepThread<Extra>& s, const DesignSpace& space, const GridShape& grid, long long index) {
+  const long long count = grid.counts.back();
+  const long long line = index / count, i = index - line * count;
+  if (line != s.line) {
+    s.line = line;
+    space.grid_point(index, grid.counts, s.x.data());
+    s.bound->update(s.x.data());
+  }
+  if (s.bound->excludes(i)) return true;
+  s.x.back() = space.grid_value(s.x.size() - 1, i);
+  return false;
 }
 
 // What the threads of a sweep share besides the mode's result so far. On rank 0 it is also the
@@ -607,7 +629,7 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
   SweepControl control(context, grid, resumed);
   // The pruning threshold: the best score known on this rank, its own or another rank's.
   std::atomic<double> incumbent{shared_best.best_score};
-  std::vector<BestThread> states = make_threads<BestDesign>(problem, context);
+  std::vector<BestThread> states = make_threads<BestDesign>(problem, context, options_.line_bounds);
 
   auto save = [&] {  // caller holds control.mutex
     Json state = common_state("best", grid, control.ledger, control.finished, control.seconds());
@@ -622,7 +644,10 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
     BestDesign chunk_best;
     std::optional<MonotonicityBreach> breach;
     const bool complete = visit_chunk(control, chunk, tally, [&](long long index, Tally& t) {
-      space.grid_point(index, grid.counts, s.x.data());
+      if (excluded_by_line_bound(s, space, grid, index)) {
+        ++t.constraint_violated;
+        return;
+      }
       EvalOptions options;
       if (prune) options.prune_below = incumbent.load(std::memory_order_relaxed);
       const Evaluation& e = problem.evaluate(s.x.data(), *s.eval_scratch, options);
@@ -764,7 +789,7 @@ SolverResult GridSolver::solve_front(const Problem& problem, const SolverContext
     read_front(problem, grid, context, *state, shared);
   }
   SweepControl control(context, grid, resumed);
-  std::vector<FrontThread> states = make_threads<FrontSnapshot>(problem, context);
+  std::vector<FrontThread> states = make_threads<FrontSnapshot>(problem, context, options_.line_bounds);
 
   auto save = [&] {  // caller holds control.mutex
     Json state = common_state("front", grid, control.ledger, control.finished, control.seconds());
@@ -784,7 +809,10 @@ SolverResult GridSolver::solve_front(const Problem& problem, const SolverContext
         s.snapshot.assign(shared.flat.begin(), shared.flat.end());
         s.seen = shared.version.load(std::memory_order_relaxed);
       }
-      space.grid_point(index, grid.counts, s.x.data());
+      if (excluded_by_line_bound(s, space, grid, index)) {
+        ++t.constraint_violated;
+        return;
+      }
       EvalOptions options;
       if (prune) options.prune_dominated_by = &s.snapshot;
       const Evaluation& e = problem.evaluate(s.x.data(), *s.eval_scratch, options);

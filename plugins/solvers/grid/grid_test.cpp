@@ -636,3 +636,90 @@ TEST(Grid, ABreachFoundOnAnyRankFailsTheRunOnRankZero) {
     }
   }
 }
+
+namespace {
+
+// The five-bar study on a finer design grid (r in 10 mm steps): many lines start and end with
+// designs the reach constraint rules out.
+Json line_bound_study() {
+  Json doc = hapsyn::test::fivebar_study();
+  doc["design"]["l0"] = {{"lower", 0.0}, {"upper", 0.3}, {"step", 0.05}};
+  doc["design"]["r"] = {{"lower", 0.0}, {"upper", 0.6}, {"step", 0.01}};
+  return doc;
+}
+
+Json without_seconds(Json statistics) {
+  statistics.erase("seconds");
+  return statistics;
+}
+
+// The five-bar with a constraint interval that cuts 0.1 m off the top of the true one.
+class NarrowedBound final : public hapsyn::Mechanism {
+ public:
+  explicit NarrowedBound(std::shared_ptr<const hapsyn::Mechanism> fivebar) : fivebar_(std::move(fivebar)) {}
+  std::unique_ptr<const hapsyn::MechanismModel> build(const double* design) const override { return fivebar_->build(design); }
+  std::vector<hapsyn::VariableDecl> variables() const override { return fivebar_->variables(); }
+  std::vector<hapsyn::ConstraintDecl> constraints() const override { return fivebar_->constraints(); }
+  void evaluate_constraints(const double* design, const hapsyn::SampleSet& scene, double* g) const override {
+    fivebar_->evaluate_constraints(design, scene, g);
+  }
+  hapsyn::Needs provides() const override { return fivebar_->provides(); }
+  bool constraint_interval(const double* design, int component, const hapsyn::SampleSet& scene, double& lower,
+                           double& upper) const override {
+    if (!fivebar_->constraint_interval(design, component, scene, lower, upper)) return false;
+    upper -= 0.1;
+    return true;
+  }
+
+ private:
+  std::shared_ptr<const hapsyn::Mechanism> fivebar_;
+};
+
+}  // namespace
+
+TEST(GridLineBound, SkippingRuledOutDesignsGivesTheSameResultAndStatistics) {
+  const hapsyn::Study study = hapsyn::load_study(line_bound_study(), hapsyn::test::registry());
+  for (const bool prune : {false, true}) {
+    for (const bool pareto : {false, true}) {
+      Json base = {{"prune", prune}, {"pareto", pareto}, {"progress_interval", 2.0}};
+      Json off = base;
+      off["line_bounds"] = false;
+      Json on = base;
+      on["line_bounds"] = true;
+      const hapsyn::Study& s = study;
+      Json doc = line_bound_study();
+      if (pareto) doc["objectives"] = Json::array({Json{{"metric", "gii"}}, Json{{"metric", "gdi"}}});
+      const hapsyn::Study two = hapsyn::load_study(doc, hapsyn::test::registry());
+      const hapsyn::Problem& problem = pareto ? *two.problem : *s.problem;
+      hapsyn::SolverContext context;
+      context.threads = prune ? 1 : 2;  // what pruning cuts depends on the threads' timing
+      const auto with = grid_solver(on).solve(problem, context);
+      const auto without = grid_solver(off).solve(problem, context);
+      EXPECT_EQ(without_seconds(with.statistics), without_seconds(without.statistics)) << base.dump();
+      EXPECT_EQ(with.status, without.status);
+      ASSERT_EQ(with.best.has_value(), without.best.has_value());
+      if (with.best) {
+        EXPECT_EQ(with.best->design, without.best->design);
+      }
+      ASSERT_EQ(with.front.size(), without.front.size());
+      for (std::size_t i = 0; i < with.front.size(); ++i) EXPECT_EQ(with.front[i].design, without.front[i].design);
+      // The bound did rule out designs: most of this grid violates reach.
+      EXPECT_GT(with.statistics["constraint_violated"].get<long long>(), with.statistics["grid_designs"].get<long long>() / 3);
+    }
+  }
+}
+
+TEST(GridLineBound, ABoundThatCutsAFeasibleDesignStopsTheRunNamingIt) {
+  const hapsyn::Study study = hapsyn::load_study(line_bound_study(), hapsyn::test::registry());
+  const hapsyn::Problem& p = *study.problem;
+  const std::shared_ptr<const hapsyn::Mechanism> fivebar(std::shared_ptr<const hapsyn::Mechanism>{}, &p.mechanism());
+  const auto problem = std::make_shared<hapsyn::Problem>(
+      "narrowed", std::make_shared<NarrowedBound>(fivebar), std::make_shared<hapsyn::SampleSet>(p.samples()), p.metrics(),
+      p.objectives(), p.design_space());
+  hapsyn::test::expect_error([&] { grid_solver(Json{{"progress_interval", 2.0}}).solve(*problem, hapsyn::SolverContext{}); },
+                             {"grid: the mechanism's constraint_interval for design component 3 excludes the design",
+                              "whose constraints hold", "line_bounds = false"});
+  // Without the bound the same problem runs.
+  const auto result = grid_solver(Json{{"line_bounds", false}, {"progress_interval", 2.0}}).solve(*problem, hapsyn::SolverContext{});
+  EXPECT_TRUE(result.best.has_value());
+}

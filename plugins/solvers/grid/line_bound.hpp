@@ -1,0 +1,112 @@
+#pragma once
+/// \file
+/// Block bounds of grid lines (header only; grid and culling share it, culling as
+/// "grid/line_bound.hpp"). A grid solver visits the designs in lines along the last free
+/// component; when the mechanism knows an interval of that component outside which a constraint
+/// is violated (Mechanism::constraint_interval), the designs of the line outside it are counted
+/// as violating a constraint without being visited. The interval may be wider than the feasible
+/// set, never narrower; LineBound checks the claim on every line at the excluded grid values
+/// nearest the interval (the designs most likely to expose a wrong bound), so that a mechanism
+/// whose bound cuts a feasible design stops the run with an error instead of a silently wrong
+/// optimum (docs/design.md section 13.3).
+#include <hapsyn/error.hpp>
+#include <hapsyn/problem.hpp>
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace hapsyn::plugins {
+
+class LineBound {
+ public:
+  /// \param problem the study; the bound acts on its last free design component.
+  /// \param enabled false: no bound (every design of a line may be feasible).
+  /// \param solver the solver's name, which prefixes its errors.
+  LineBound(const Problem& problem, bool enabled, const char* solver)
+      : problem_(problem),
+        solver_(solver),
+        enabled_(enabled && problem.design_space().free_size() > 0),
+        full_(static_cast<Eigen::Index>(problem.design_space().size())),
+        g_(problem.constraint_count()) {
+    if (problem.design_space().free_size() > 0) {
+      free_k_ = problem.design_space().free_size() - 1;
+      component_ = problem.design_space().free_indices().back();
+      count_ = problem.design_space().grid_counts().back();
+    }
+    last_ = count_ - 1;
+  }
+
+  /// Sets the range of the line through `free_design` (its last component is ignored). Throws
+  /// Error(solver, ...) when the mechanism's interval excludes a grid design whose constraints
+  /// hold. No allocation.
+  void update(const double* free_design) {
+    first_ = 0;
+    last_ = count_ - 1;
+    if (!enabled_) return;
+    const DesignSpace& space = problem_.design_space();
+    space.expand(free_design, full_.data());
+    double lower = 0.0, upper = 0.0;
+    if (!problem_.mechanism().constraint_interval(full_.data(), component_, problem_.samples(), lower, upper)) return;
+    if (!(lower <= upper)) {  // empty (or NaN: then every design is checked as usual)
+      if (lower > upper) {
+        first_ = count_;
+        last_ = count_ - 1;
+        confirm_violated(count_ / 2);
+      }
+      return;
+    }
+    // Grid values lower + i step grow with i: start from the arithmetic estimate, then step to
+    // the exact first index at or above `lower` and the last at or below `upper`.
+    const DesignComponent& c = space.components()[static_cast<std::size_t>(component_)];
+    first_ = estimate((lower - c.lower) / c.step);
+    while (first_ > 0 && space.grid_value(free_k_, first_ - 1) >= lower) --first_;
+    while (first_ < count_ && space.grid_value(free_k_, first_) < lower) ++first_;
+    last_ = estimate((upper - c.lower) / c.step) - 1;
+    while (last_ + 1 < count_ && space.grid_value(free_k_, last_ + 1) <= upper) ++last_;
+    while (last_ >= 0 && space.grid_value(free_k_, last_) > upper) --last_;
+    if (first_ > 0) confirm_violated(first_ - 1);
+    if (last_ < count_ - 1) confirm_violated(last_ + 1);
+  }
+
+  /// True when grid index `i` of the line's component lies outside the bound.
+  /// (Inline and branch-light: called for every design of the grid.)
+  bool excludes(long long i) const { return i < first_ || i > last_; }
+  /// Designs of the line the bound excludes.
+  long long excluded() const { return count_ - std::max(0LL, last_ - first_ + 1); }
+
+ private:
+  // ceil(steps) clamped to the line: a starting point, made exact by the caller.
+  long long estimate(double steps) const {
+    if (!(steps > 0.0)) return 0;
+    if (steps >= static_cast<double>(count_)) return count_;
+    return static_cast<long long>(std::ceil(steps));
+  }
+
+  // The claim "violates a constraint" at grid index i of the current line (full_ holds the line).
+  void confirm_violated(long long i) {
+    full_(component_) = problem_.design_space().grid_value(free_k_, i);
+    problem_.mechanism().evaluate_constraints(full_.data(), problem_.samples(), g_.data());
+    for (double g : g_) {
+      if (g > 0.0 || std::isnan(g)) return;
+    }
+    throw Error(solver_, "the mechanism's constraint_interval for design component " + std::to_string(component_) +
+                            " excludes the design " + problem_.design_to_json(full_).dump() +
+                            ", whose constraints hold: the bound would cut feasible designs (a plugin bug); "
+                            "set solver.options.line_bounds = false to run without it");
+  }
+
+  const Problem& problem_;
+  const char* solver_;
+  bool enabled_;
+  std::size_t free_k_ = 0;
+  int component_ = -1;
+  long long count_ = 1;
+  Eigen::VectorXd full_;
+  std::vector<double> g_;
+  long long first_ = 0, last_ = 0;
+};
+
+}  // namespace hapsyn::plugins
