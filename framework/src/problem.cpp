@@ -619,6 +619,22 @@ bool Problem::fold_block(const MechanismModel& model, EvalScratch& ws, const Eva
   }
   const bool check = prune || prune_front;
   const std::size_t k = local_reduction_.size();
+  // Most blocks do not move a worst-case reduction: when no lane reaches a reduction's current
+  // value (its block extreme is strictly worse), the lane-by-lane scan of that value is skipped;
+  // a lane that ties or beats it goes through the per-sample tie rule below.
+  bool moves = false;
+  for (std::size_t i = 0; i < k && !moves; ++i) {
+    const double* v = ws.block_locals.data() + i * kBlockLanes;
+    const double current = ws.accumulator[i];
+    for (int lane = 0; lane < lanes; ++lane) {
+      const bool worse = local_reduction_[i] == Reduction::kMin ? v[lane] > current : v[lane] < current;
+      moves = moves || !worse || !std::isfinite(v[lane]);
+    }
+  }
+  if (!moves) {  // the reductions, hence the bounds, are those after the previous block: not pruned
+    out.samples_evaluated += lanes;
+    return false;
+  }
   if (check) {  // element by element: a few values, no memmove call per block
     for (std::size_t i = 0; i < k; ++i) {
       ws.saved_accumulator[i] = ws.accumulator[i];
