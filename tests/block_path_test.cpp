@@ -135,3 +135,75 @@ TEST(BlockPath, ParetoPruningEqualsThePerSamplePath) {
 }
 
 }  // namespace
+
+namespace {
+
+// Groups of up to 8 designs: one grid line (l0, l1, l2 shared, r varying: the five-bar's design
+// lanes) or, every fourth group, designs that differ in l1 (evaluated one by one).
+std::vector<std::vector<std::vector<double>>> design_groups(int groups, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<std::vector<std::vector<double>>> out;
+  for (int g = 0; g < groups; ++g) {
+    const double l0 = 0.3 * u(rng), l1 = 0.05 + 0.25 * u(rng), l2 = 0.05 + 0.25 * u(rng);
+    const int count = 1 + static_cast<int>(rng() % 8);
+    std::vector<std::vector<double>> group;
+    for (int i = 0; i < count; ++i) {
+      group.push_back({l0, g % 4 == 3 ? 0.05 + 0.25 * u(rng) : l1, l2, 0.6 * u(rng)});
+    }
+    out.push_back(group);
+  }
+  return out;
+}
+
+void expect_groups_equal_single_evaluations(const Problem& problem, const EvalOptions& options, int groups,
+                                            unsigned seed, int& decided_in_lanes) {
+  auto lanes_scratch = problem.make_eval_scratch();
+  auto single_scratch = problem.make_eval_scratch();
+  std::vector<Evaluation> outs;
+  for (const auto& group : design_groups(groups, seed)) {
+    const double* designs[hapsyn::kBlockLanes];
+    for (std::size_t i = 0; i < group.size(); ++i) designs[i] = group[i].data();
+    problem.evaluate_designs(designs, static_cast<int>(group.size()), *lanes_scratch, options, outs);
+    for (std::size_t i = 0; i < group.size(); ++i) {
+      EvalOptions single = options;
+      single.per_sample = true;
+      expect_same(outs[i], problem.evaluate(group[i].data(), *single_scratch, single), "design lane " + std::to_string(i));
+      if (::testing::Test::HasFatalFailure()) return;
+      decided_in_lanes += outs[i].status != EvalStatus::kFeasible && outs[i].samples_evaluated > 0 &&
+                          outs[i].samples_evaluated <= hapsyn::kBlockLanes;
+    }
+  }
+}
+
+}  // namespace
+
+TEST(DesignLanes, GroupsOfDesignsEqualTheirSingleEvaluations) {
+  const auto problem = fivebar_problem(Json::array({Json{{"metric", "gii"}}}));
+  int decided = 0;
+  EvalOptions plain;
+  expect_groups_equal_single_evaluations(*problem, plain, 400, 21, decided);
+  EvalOptions pruned;
+  pruned.prune_below = 0.5;
+  expect_groups_equal_single_evaluations(*problem, pruned, 400, 22, decided);
+  EXPECT_GT(decided, 500);  // most designs were decided in the lanes, not by the fallback
+}
+
+TEST(DesignLanes, SubsetsAndFrontsEqualTheirSingleEvaluations) {
+  const auto problem = fivebar_problem(Json::array({Json{{"metric", "gii"}}, Json{{"metric", "gdi"}}}));
+  std::vector<int> subset = {0, 20, 440, 420, 220, 17, 3};  // corners first, as culling's critical samples
+  EvalOptions bound;
+  bound.subset = &subset;
+  bound.prune_below = 1.1;  // weighted sum of GII and GDI
+  int decided = 0;
+  expect_groups_equal_single_evaluations(*problem, bound, 400, 23, decided);
+  const std::vector<double> front = {0.6, 0.3, 0.4, 0.5};
+  EvalOptions pareto;
+  pareto.prune_dominated_by = &front;
+  expect_groups_equal_single_evaluations(*problem, pareto, 400, 24, decided);
+  std::vector<int> none;
+  EvalOptions empty;
+  empty.subset = &none;
+  expect_groups_equal_single_evaluations(*problem, empty, 50, 25, decided);
+  EXPECT_GT(decided, 300);
+}

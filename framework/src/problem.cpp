@@ -205,6 +205,9 @@ std::unique_ptr<Problem::EvalScratch> Problem::make_eval_scratch() const {
     ws->gathered.resize(static_cast<std::size_t>(kBlockMaxCoordinates) * kBlockLanes);
     ws->saved_accumulator.resize(local_reduction_.size());
     ws->saved_argument.resize(local_reduction_.size());
+    ws->lane_full.resize(static_cast<std::size_t>(kBlockLanes) * space_.size());
+    ws->lane_accumulator.resize(static_cast<std::size_t>(kBlockLanes) * local_reduction_.size());
+    ws->lane_argument.resize(static_cast<std::size_t>(kBlockLanes) * local_reduction_.size());
   }
   ws->result.objectives.resize(objectives_.size());
   ws->objective_bound.resize(objectives_.size());
@@ -287,14 +290,13 @@ void reset_accumulators(const std::vector<Reduction>& reductions, std::vector<do
 }
 }  // namespace
 
-bool Problem::front_dominates(const std::vector<double>& front, EvalScratch& ws) const {
+bool Problem::front_dominates(const std::vector<double>& front, const double* accumulator, double* bound) const {
   // Upper bounds of the objectives from the reductions so far (samples seen: a count is only
   // needed by sum reductions, which worst-case metrics do not have).
   const std::size_t m = objectives_.size();
-  double* bound = ws.objective_bound.data();
   for (std::size_t o = 0; o < m; ++o) {
     const std::size_t metric = static_cast<std::size_t>(objectives_[o].metric);
-    bound[o] = metrics_[metric].metric->combine(ws.accumulator.data() + local_offset_[metric], 1);
+    bound[o] = metrics_[metric].metric->combine(accumulator + local_offset_[metric], 1);
   }
   const std::size_t points = front.size() / m;
   if (m == 2) {
@@ -324,9 +326,9 @@ bool Problem::front_dominates(const std::vector<double>& front, EvalScratch& ws)
 // evaluate() in named steps. Each returns early the way evaluate() does; the per-sample steps are
 // in this file so that the compiler can inline them into the sample loop.
 
-bool Problem::constraints_hold(EvalScratch& ws, Evaluation& out) const {
+bool Problem::constraints_hold(const double* full, EvalScratch& ws, Evaluation& out) const {
   if (constraint_names_.empty()) return true;
-  mechanism_->evaluate_constraints(ws.full.data(), *samples_, ws.g.data());
+  mechanism_->evaluate_constraints(full, *samples_, ws.g.data());
   for (std::size_t i = 0; i < constraint_names_.size(); ++i) {
     if (std::isnan(ws.g[i])) {
       throw Error("problem", "mechanism '" + mechanism_plugin_ + "' returned constraint '" + constraint_names_[i] +
@@ -404,22 +406,22 @@ void Problem::fold_locals(int sample, EvalScratch& ws, bool keep_locals, const S
   }
 }
 
-double Problem::score_bound(const EvalScratch& ws, long long samples) const {
+double Problem::score_bound(const double* accumulator, long long samples) const {
   // The metrics over the samples seen so far bound their final values from above.
   double bound = 0.0;
   for (std::size_t o = 0; o < objectives_.size(); ++o) {
     const std::size_t m = static_cast<std::size_t>(objectives_[o].metric);
     bound += objectives_[o].weight *
-             metrics_[m].metric->combine(ws.accumulator.data() + local_offset_[m], static_cast<int>(samples));
+             metrics_[m].metric->combine(accumulator + local_offset_[m], static_cast<int>(samples));
   }
   return bound;
 }
 
-void Problem::mark_pruned(const EvalScratch& ws, Evaluation& out) const {
+void Problem::mark_pruned(const int* argument, Evaluation& out) const {
   // The samples attaining the reductions so far are what made the bound fall: culling collects
   // them as critical samples.
   for (std::size_t m = 0; m < metrics_.size(); ++m) {
-    out.critical_samples[m].assign(ws.argument.begin() + local_offset_[m], ws.argument.begin() + local_offset_[m + 1]);
+    out.critical_samples[m].assign(argument + local_offset_[m], argument + local_offset_[m + 1]);
   }
   out.status = EvalStatus::kPruned;
 }
@@ -456,7 +458,7 @@ const Evaluation& Problem::evaluate(const double* free_design, EvalScratch& ws, 
   out.score = -std::numeric_limits<double>::infinity();
 
   space_.expand(free_design, ws.full.data());
-  if (!constraints_hold(ws, out)) return out;
+  if (!constraints_hold(ws.full.data(), ws, out)) return out;
 
   std::unique_ptr<const MechanismModel> owned;
   const MechanismModel* model = mechanism_->build_in(ws.full.data(), *ws.scratch);
@@ -486,9 +488,9 @@ const Evaluation& Problem::evaluate(const double* free_design, EvalScratch& ws, 
     }
     accumulate_locals(sample, ws, options.on_sample != nullptr);
     if (options.on_sample) (*options.on_sample)(sample, ws.quantities, ws.nested_locals);
-    if ((prune_front && front_dominates(*front, ws)) ||
-        (prune && score_bound(ws, out.samples_evaluated) < options.prune_below)) {
-      mark_pruned(ws, out);
+    if ((prune_front && front_dominates(*front, ws.accumulator.data(), ws.objective_bound.data())) ||
+        (prune && score_bound(ws.accumulator.data(), out.samples_evaluated) < options.prune_below)) {
+      mark_pruned(ws.argument.data(), out);
       return out;
     }
   }
@@ -542,9 +544,9 @@ const Evaluation& Problem::evaluate_batched(const MechanismModel& model, EvalScr
       fold_locals(q.sample, ws, options.on_sample != nullptr, q);
       ++folded;
       if (options.on_sample) (*options.on_sample)(q.sample, q, ws.nested_locals);
-      if ((prune_front && front_dominates(*options.prune_dominated_by, ws)) ||
-          (prune && score_bound(ws, folded) < options.prune_below)) {
-        mark_pruned(ws, out);
+      if ((prune_front && front_dominates(*options.prune_dominated_by, ws.accumulator.data(), ws.objective_bound.data())) ||
+          (prune && score_bound(ws.accumulator.data(), folded) < options.prune_below)) {
+        mark_pruned(ws.argument.data(), out);
         return out;
       }
     }
@@ -593,7 +595,7 @@ const Evaluation& Problem::evaluate_blocks(const MechanismModel& model, EvalScra
     int valid = 0;  // reachable lanes before the first failing one
     while (valid < count && q.lane_status(valid) == SampleStatus::kReachable) ++valid;
     if (valid > 0 && fold_block(model, ws, options, lane_sample, valid, prune, prune_front)) {
-      mark_pruned(ws, out);
+      mark_pruned(ws.argument.data(), out);
       return out;
     }
     if (valid < count) {
@@ -654,8 +656,8 @@ bool Problem::fold_block(const MechanismModel& model, EvalScratch& ws, const Eva
     ++out.samples_evaluated;
   };
   const auto pruned = [&] {
-    return (prune_front && front_dominates(*options.prune_dominated_by, ws)) ||
-           (prune && score_bound(ws, out.samples_evaluated) < options.prune_below);
+    return (prune_front && front_dominates(*options.prune_dominated_by, ws.accumulator.data(), ws.objective_bound.data())) ||
+           (prune && score_bound(ws.accumulator.data(), out.samples_evaluated) < options.prune_below);
   };
   for (int lane = 0; lane < lanes; ++lane) fold_lane(lane);
   if (!check || !pruned()) return false;
@@ -680,6 +682,143 @@ void Problem::refuse_non_finite_block_local(const MechanismModel& model, EvalScr
   accumulate_locals(sample, ws, false);
   throw Error("problem", "metric block path: sample " + std::to_string(sample) +
                              " gave a non-finite local value in a block but a finite one alone (docs/design.md section 13)");
+}
+
+// Design lanes (evaluate_designs). Lane i's state lives in ws.lane_*; the per-design helpers
+// (constraints_hold, score_bound, front_dominates, mark_pruned, combine_objectives) work on
+// ws.full / ws.accumulator / ws.argument, so a lane's state is copied in and out around them.
+void Problem::evaluate_designs(const double* const* free_designs, int count, EvalScratch& ws,
+                               const EvalOptions& options, std::vector<Evaluation>& outs) const {
+  assert(count >= 1 && count <= kBlockLanes);
+  if (outs.size() < static_cast<std::size_t>(count)) outs.resize(static_cast<std::size_t>(count));
+  const auto one_by_one = [&](int from, const bool* pending) {
+    for (int i = from; i < count; ++i) {
+      if (!pending || pending[i]) outs[static_cast<std::size_t>(i)] = evaluate(free_designs[i], ws, options);
+    }
+  };
+  if (!block_path_ || options.per_sample || options.on_sample || count == 1) return one_by_one(0, nullptr);
+  const std::size_t size = space_.size();
+  bool active[kBlockLanes] = {};
+  int left = 0, any = -1;
+  for (int i = 0; i < count; ++i) {
+    active[i] = start_lane(free_designs[i], i, ws, outs[static_cast<std::size_t>(i)]);
+    left += active[i];
+    if (active[i] && any < 0) any = i;
+  }
+  if (left == 0) return;
+  const bool prune = std::isfinite(options.prune_below) && prunable_;
+  const std::vector<double>* front = options.prune_dominated_by;
+  const bool prune_front = front && !front->empty() && worst_case_ && all_maximized_;
+  const std::vector<int>& indices = options.subset ? *options.subset : order_;
+  const std::size_t lane_samples = std::min<std::size_t>(indices.size(), kBlockLanes);
+  const double* designs[kBlockLanes];
+  for (std::size_t t = 0; t < lane_samples && left > 0; ++t) {
+    for (int i = 0; i < kBlockLanes; ++i) {  // decided and unused lanes repeat a live design
+      designs[i] = ws.lane_full.data() + static_cast<std::size_t>(i < count && active[i] ? i : any) * size;
+    }
+    const int sample = indices[t];
+    if (!mechanism_->solve_designs(designs, count, samples_->pose(sample), needs_, *ws.scratch, *ws.block)) {
+      return one_by_one(0, active);  // these designs cannot share a vector: from scratch, one by one
+    }
+    for (std::size_t m = 0; m < metrics_.size(); ++m) {
+      metrics_[m].metric->local_block(*ws.block, ws.block_locals.data() + static_cast<std::size_t>(local_offset_[m]) * kBlockLanes);
+    }
+    for (int i = 0; i < count; ++i) {
+      if (!active[i]) continue;
+      ws.non_finite_lane = -1;
+      if (fold_lane_sample(i, sample, ws, options, prune, prune_front, outs[static_cast<std::size_t>(i)])) continue;
+      if (ws.non_finite_lane == i) {
+        // The per-sample loop meets the same value and reports it with the design and sample.
+        EvalOptions alone = options;
+        alone.per_sample = true;
+        (void)evaluate(free_designs[i], ws, alone);
+        throw Error("problem", "sample " + std::to_string(sample) +
+                                   " gave a non-finite local value in a design lane but not alone (docs/design.md section 13.4)");
+      }
+      active[i] = false;
+      --left;
+      if (any == i) any = -1;
+    }
+    for (int i = 0; any < 0 && i < count; ++i) {
+      if (active[i]) any = i;
+    }
+  }
+  if (left == 0) return;
+  if (lane_samples == indices.size()) {  // every sample seen: the surviving designs are complete
+    const std::size_t k = local_reduction_.size();
+    for (int i = 0; i < count; ++i) {
+      if (!active[i]) continue;
+      std::copy_n(ws.lane_accumulator.begin() + static_cast<std::ptrdiff_t>(i * k), k, ws.accumulator.begin());
+      std::copy_n(ws.lane_argument.begin() + static_cast<std::ptrdiff_t>(i * k), k, ws.argument.begin());
+      std::copy_n(ws.lane_full.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(i) * size), size, ws.full.data());
+      combine_objectives(ws, outs[static_cast<std::size_t>(i)]);
+    }
+    return;
+  }
+  one_by_one(0, active);  // undecided after the first samples: the block path finishes them
+}
+
+// Lane i's evaluate() up to its first sample: bounds, constraints, identity reductions. True
+// when the design goes on to its samples; `out` then holds a reset evaluation. (Element loops,
+// not copies: the values are a handful, and a library call per design costs more.)
+bool Problem::start_lane(const double* free_design, int lane, EvalScratch& ws, Evaluation& out) const {
+  check_design(free_design);
+  out.objectives.resize(objectives_.size());
+  out.critical_samples.resize(metrics_.size());
+  out.reduced.resize(metrics_.size());
+  out.status = EvalStatus::kFeasible;
+  out.failed_constraint = -1;
+  out.failed_sample = -1;
+  out.failed_status = SampleStatus::kReachable;
+  out.samples_evaluated = 0;
+  out.score = -std::numeric_limits<double>::infinity();
+  const std::size_t size = space_.size(), k = local_reduction_.size();
+  double* full = ws.lane_full.data() + static_cast<std::size_t>(lane) * size;
+  space_.expand(free_design, full);
+  if (!constraints_hold(full, ws, out)) return false;
+  double* acc = ws.lane_accumulator.data() + static_cast<std::size_t>(lane) * k;
+  int* arg = ws.lane_argument.data() + static_cast<std::size_t>(lane) * k;
+  for (std::size_t j = 0; j < k; ++j) {
+    acc[j] = local_reduction_[j] == Reduction::kMin   ? std::numeric_limits<double>::infinity()
+             : local_reduction_[j] == Reduction::kMax ? -std::numeric_limits<double>::infinity()
+                                                      : 0.0;
+    arg[j] = -1;
+  }
+  return true;
+}
+
+// One sample of lane i, as the per-sample loop takes it: a failing sample ends the design, the
+// local values are reduced with the tie rule, and the bound may prune it. True while the design
+// goes on.
+bool Problem::fold_lane_sample(int lane, int sample, EvalScratch& ws, const EvalOptions& options, bool prune,
+                               bool prune_front, Evaluation& out) const {
+  ++out.samples_evaluated;
+  if (ws.block->lane_status(lane) != SampleStatus::kReachable) {
+    out.status = EvalStatus::kSampleFailed;
+    out.failed_sample = sample;
+    out.failed_status = ws.block->lane_status(lane);
+    return false;
+  }
+  const std::size_t k = local_reduction_.size();
+  double* acc = ws.lane_accumulator.data() + static_cast<std::size_t>(lane) * k;
+  int* arg = ws.lane_argument.data() + static_cast<std::size_t>(lane) * k;
+  for (std::size_t j = 0; j < k; ++j) {
+    const double v = ws.block_locals[j * kBlockLanes + static_cast<std::size_t>(lane)];
+    if (!std::isfinite(v)) {
+      ws.non_finite_lane = lane;  // evaluate_designs reports it as the per-sample loop does
+      return false;
+    }
+    if (better(local_reduction_[j], v, sample, acc[j], arg[j])) {
+      acc[j] = v;
+      arg[j] = sample;
+    }
+  }
+  if ((prune_front && front_dominates(*options.prune_dominated_by, acc, ws.objective_bound.data())) ||
+      (prune && score_bound(acc, out.samples_evaluated) < options.prune_below)) {
+    mark_pruned(arg, out);
+    return false;
+  }
+  return true;
 }
 
 Evaluation Problem::evaluate_parallel(const double* free_design, int threads, const ParallelOptions& options) const {

@@ -92,6 +92,15 @@ class Mechanism {
                                    double& upper) const {
     return false;
   }
+  /// Optional design-lanes path (docs/design.md section 13.4): solves the one sample `pose` for
+  /// up to kBlockLanes designs at once, lane i for the full design vector designs[i] (lanes at
+  /// or beyond `count` repeat a valid design), filling out as build(designs[i])->solve_block
+  /// would, bit for bit. Returns false when it cannot for these designs (the caller then
+  /// evaluates them one by one). Same rules as solve_block. Default: false.
+  virtual bool solve_designs(const double* const* designs, int count, const double* pose, Needs needs,
+                             MechanismScratch& scratch, QuantityBlock& out) const {
+    return false;
+  }
   /// Per-thread scratch for MechanismModel::solve (called once per worker thread).
   virtual std::unique_ptr<MechanismScratch> make_scratch() const {
     return std::make_unique<MechanismScratch>();

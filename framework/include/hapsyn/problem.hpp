@@ -176,6 +176,11 @@ class Problem {
     std::vector<double> gathered;
     std::vector<double> saved_accumulator;
     std::vector<int> saved_argument;
+    // Design lanes (evaluate_designs): each lane's full design and reductions.
+    std::vector<double> lane_full;      // lane i's full design at [i * design size]
+    std::vector<double> lane_accumulator;  // lane i's reductions at [i * locals]
+    std::vector<int> lane_argument;
+    int non_finite_lane = -1;
     Evaluation result;
   };
   std::unique_ptr<EvalScratch> make_eval_scratch() const;
@@ -186,6 +191,18 @@ class Problem {
   const Evaluation& evaluate(const double* free_design, EvalScratch& eval_scratch,
                              const EvalOptions& options = {}) const;
   /// How evaluate_parallel splits the work.
+  /// Evaluates `count` designs (1..kBlockLanes free vectors) as `count` calls of evaluate() with
+  /// the same options would, into outs[0..count): the same statuses, sample counts, critical
+  /// samples and objectives, bit for bit. `outs` is the caller's and is reused (no allocation
+  /// once its evaluations have their sizes). Where the mechanism solves several designs per
+  /// vector (Mechanism::solve_designs: the five-bar's designs of one grid line), the first
+  /// samples of all the designs are solved together, one vector per sample, and most designs
+  /// are decided there (unreachable, pruned, or culled at a critical sample); a design still
+  /// undecided after kBlockLanes samples is finished by evaluate() (docs/design.md section 13.4).
+  /// \throws Error as evaluate().
+  void evaluate_designs(const double* const* free_designs, int count, EvalScratch& eval_scratch,
+                        const EvalOptions& options, std::vector<Evaluation>& outs) const;
+
   struct ParallelOptions {
     /// Contiguous pieces of the sample order, evaluated on the threads and merged in order;
     /// 0 = one per thread. A fixed count (> 0) makes the result independent of the thread
@@ -214,7 +231,7 @@ class Problem {
  private:
   void check_design(const double* free_design) const;
   // The steps of evaluate().
-  bool constraints_hold(EvalScratch& ws, Evaluation& out) const;
+  bool constraints_hold(const double* full, EvalScratch& ws, Evaluation& out) const;
   void accumulate_locals(int sample, EvalScratch& ws, bool keep_locals) const;
   // `q`: the sample's quantities, blamed instead of the metric when a local value is not finite.
   void fold_locals(int sample, EvalScratch& ws, bool keep_locals, const SampleQuantities& q) const;
@@ -228,10 +245,13 @@ class Problem {
                   int lanes, bool prune, bool prune_front) const;
   [[noreturn]] void refuse_non_finite_block_local(const MechanismModel& model, EvalScratch& ws, int sample) const;
   void choose_block_path();
-  double score_bound(const EvalScratch& ws, long long samples) const;
-  void mark_pruned(const EvalScratch& ws, Evaluation& out) const;
+  bool start_lane(const double* free_design, int lane, EvalScratch& ws, Evaluation& out) const;
+  bool fold_lane_sample(int lane, int sample, EvalScratch& ws, const EvalOptions& options, bool prune,
+                        bool prune_front, Evaluation& out) const;
+  double score_bound(const double* accumulator, long long samples) const;
+  void mark_pruned(const int* argument, Evaluation& out) const;
   void combine_objectives(const EvalScratch& ws, Evaluation& out) const;
-  bool front_dominates(const std::vector<double>& front, EvalScratch& eval_scratch) const;
+  bool front_dominates(const std::vector<double>& front, const double* accumulator, double* bound) const;
 
   void resolve_demanded_motion();
 

@@ -244,6 +244,37 @@ const MechanismModel* FiveBar::build_in(const double* design, MechanismScratch& 
   return &*own->model;
 }
 
+bool FiveBar::solve_designs(const double* const* designs, int count, const double* pose, Needs needs,
+                            MechanismScratch& scratch, QuantityBlock& out) const {
+#if HAPSYN_HAVE_HIGHWAY
+  if (!solves_blocks(needs)) return false;
+  const double* first = designs[0];
+  for (int i = 1; i < kBlockLanes; ++i) {
+    if (designs[i][0] != first[0] || designs[i][1] != first[1] || designs[i][2] != first[2]) return false;
+  }
+  // The model of the line's l0, l1, l2 with r = -0: y + r_i + (-0) is y + r_i exactly, also
+  // when y + r_i is -0, so every lane computes what its own design's model computes.
+  FiveBarDesign line = design_from(first);
+  line.r = -0.0;
+  const FiveBarModel model(line, options_);
+  alignas(64) double x[kBlockLanes], y[kBlockLanes];
+  for (int i = 0; i < kBlockLanes; ++i) {
+    x[i] = pose[0];
+    y[i] = pose[1] + designs[i][3];
+  }
+  PoseBlock poses;
+  poses.coordinate[0] = x;
+  poses.coordinate[1] = y;
+  poses.dimension = 2;
+  poses.count = count;
+  model.solve_block(poses, needs, scratch, out);
+  return true;
+#else
+  (void)designs, (void)count, (void)pose, (void)needs, (void)scratch, (void)out;
+  return false;
+#endif
+}
+
 std::vector<VariableDecl> FiveBar::variables() const {
   auto scalar = [](const char* name, const char* description, double lower, double upper,
                    double hard_lower, double hard_upper) {

@@ -179,6 +179,11 @@ class FiveBar final : public Mechanism {
   Needs provides() const override;
   /// True when `needs` asks for nothing beyond J, D and M (the block kernel gives no q).
   bool solves_blocks(Needs needs) const override;
+  /// Designs that differ only in r: the five-bar depends on r only through y + r, so lane i is
+  /// the sample (x, y + r_i) of the design with r = -0 (bit for bit the same sums). False when
+  /// l0, l1 or l2 differ between lanes, or without the block kernel.
+  bool solve_designs(const double* const* designs, int count, const double* pose, Needs needs,
+                     MechanismScratch& scratch, QuantityBlock& out) const override;
 
   const FiveBarOptions& options() const { return options_; }
 

@@ -201,6 +201,13 @@ struct alignas(64) SweepThread : Extra {
   std::vector<double> x;
   std::optional<LineBound> bound;  // of the line `line` (the last free variable varying)
   long long line = -1;
+  // Designs of the current line waiting to be evaluated together (best mode): grid indices,
+  // their free vectors one after the other, and the evaluations' buffer.
+  std::vector<long long> pending;
+  long long pending_line = -1;
+  std::vector<double> pending_x;           // kBlockLanes rows of free vectors
+  std::vector<long long> row_line;         // the line each row was filled for
+  std::vector<Evaluation> outs;
   std::vector<int> check_subset;  // buffer of the monotonicity spot check
   Tally partial;                  // evaluations of chunks this thread left unfinished (a stop)
 };
@@ -212,6 +219,8 @@ std::vector<SweepThread<Extra>> make_threads(const Problem& problem, const Solve
     s.eval_scratch = problem.make_eval_scratch();
     s.x.resize(problem.design_space().free_size());
     s.bound.emplace(problem, line_bounds, "grid");
+    s.pending_x.assign(static_cast<std::size_t>(kBlockLanes) * s.x.size(), 0.0);
+    s.row_line.assign(static_cast<std::size_t>(kBlockLanes), -1);
   }
   return states;
 }
@@ -643,14 +652,8 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
     Tally tally;
     BestDesign chunk_best;
     std::optional<MonotonicityBreach> breach;
-    const bool complete = visit_chunk(control, chunk, tally, [&](long long index, Tally& t) {
-      if (excluded_by_line_bound(s, space, grid, index)) {
-        ++t.constraint_violated;
-        return;
-      }
-      EvalOptions options;
-      if (prune) options.prune_below = incumbent.load(std::memory_order_relaxed);
-      const Evaluation& e = problem.evaluate(s.x.data(), *s.eval_scratch, options);
+    // One design's outcome (`design` its free vector).
+    const auto take = [&](long long index, const double* design, const Evaluation& e, Tally& t) {
       t.count(e);
       if (e.status != EvalStatus::kFeasible) return;
       chunk_best.take(e.score, index);
@@ -662,11 +665,46 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
         shared_best.take(e.score, index);
       }
       // A thread's improvements are few (each raises its best): the spot check is cheap there.
+      // It compares with the design's full evaluation, which must be the scratch's last one
+      // (e came from a group of designs): evaluate it again, alone.
       if (prunes && !breach) {
-        breach = spot_check(problem, s.x.data(), *s.eval_scratch, s.check_subset, false);
+        (void)problem.evaluate(design, *s.eval_scratch);
+        breach = spot_check(problem, design, *s.eval_scratch, s.check_subset, false);
         if (breach) control.failed = true;  // this rank's tasks stop; rank 0 learns it from the result
       }
+    };
+    // Designs of one line are evaluated kBlockLanes at a time (Problem::evaluate_designs: the
+    // five-bar solves them in one vector per sample), with the incumbent at the group's start.
+    const auto flush = [&](Tally& t) {
+      if (s.pending.empty()) return;
+      const std::size_t dim = s.x.size();
+      const double* designs[kBlockLanes];
+      for (std::size_t i = 0; i < s.pending.size(); ++i) designs[i] = s.pending_x.data() + i * dim;
+      EvalOptions options;
+      if (prune) options.prune_below = incumbent.load(std::memory_order_relaxed);
+      problem.evaluate_designs(designs, static_cast<int>(s.pending.size()), *s.eval_scratch, options, s.outs);
+      for (std::size_t i = 0; i < s.pending.size(); ++i) take(s.pending[i], designs[i], s.outs[i], t);
+      s.pending.clear();
+    };
+    const bool complete = visit_chunk(control, chunk, tally, [&](long long index, Tally& t) {
+      if (excluded_by_line_bound(s, space, grid, index)) {
+        ++t.constraint_violated;
+        return;
+      }
+      if (s.pending_line != s.line || s.pending.size() == static_cast<std::size_t>(kBlockLanes)) flush(t);
+      s.pending_line = s.line;
+      // Row `row` of pending_x holds the line's design once per line; then only r changes.
+      const std::size_t dim = s.x.size(), row = s.pending.size();
+      double* slot = s.pending_x.data() + row * dim;
+      if (s.row_line[row] != s.line) {
+        for (std::size_t k = 0; k < dim; ++k) slot[k] = s.x[k];
+        s.row_line[row] = s.line;
+      }
+      slot[dim - 1] = s.x[dim - 1];
+      s.pending.push_back(index);
     });
+    if (complete) flush(tally);
+    s.pending.clear();
     if (!complete && !breach) {
       s.partial.add(tally);
       return std::nullopt;

@@ -236,7 +236,7 @@ void get_record(ByteReader& in, DesignRecord& r, long long& samples) {
 std::vector<std::vector<double>> Evaluator::fill_cache(const std::vector<std::vector<double>>& decoded) {
   // Distinct phenotypes not in the cache, in order of first appearance.
   std::vector<std::vector<double>> todo;
-  std::set<std::vector<double>> queued;
+  std::unordered_set<std::vector<double>, VectorHash> queued;
   for (const auto& free : decoded) {
     if (cache_.count(Key(fidelity_level_, free)) || !queued.insert(free).second) continue;
     todo.push_back(free);
