@@ -12,6 +12,7 @@ packages=(
   gnuplot-nox
   python3-dev python3-numpy python3-pytest pybind11-dev
   openmpi-bin libopenmpi-dev
+  libhwy-dev
 )
 # Extra packages requested through the environment (e.g. HAPSYN_EXTRA_PACKAGES="gnuplot").
 if [[ -n "${HAPSYN_EXTRA_PACKAGES:-}" ]]; then

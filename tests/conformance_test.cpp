@@ -10,6 +10,7 @@
 
 #include <boost/filesystem.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -143,6 +144,52 @@ TEST_P(Conformance, CreatedWithDefaultsAndDeterministic) {
     }
   }
   EXPECT_TRUE(first.contains("best_design") || first.contains("front")) << first.dump();
+}
+
+// A study on the block path (docs/design.md section 13) must give what the per-sample loop
+// gives, bit for bit: the plugin's block kernels (solve_block, local_block, solve_designs)
+// against its plain ones, at points spread over the free design box.
+TEST_P(Conformance, BlockPathsEqualThePerSampleLoop) {
+  const hapsyn::PluginRecord& plugin = hapsyn::test::registry().find(GetParam());
+  const hapsyn::Study study = hapsyn::load_study(study_for(plugin), hapsyn::test::registry());
+  const hapsyn::Problem& problem = *study.problem;
+  if (!problem.block_path()) return;  // nothing but the per-sample loop to run
+  const hapsyn::DesignSpace& space = problem.design_space();
+  const std::size_t n = space.free_size();
+  std::vector<std::vector<double>> designs;
+  for (int k = 0; k < 24; ++k) {
+    std::vector<double> x(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const hapsyn::DesignComponent& c = space.components()[static_cast<std::size_t>(space.free_indices()[i])];
+      const double t = std::fmod(0.137 * (k + 1) * (i + 3), 1.0);
+      x[i] = c.lower + t * (c.upper - c.lower);
+    }
+    designs.push_back(x);
+  }
+  auto fast = problem.make_eval_scratch(), plain = problem.make_eval_scratch();
+  std::vector<hapsyn::Evaluation> group;
+  const double* pointers[hapsyn::kBlockLanes];
+  for (std::size_t first = 0; first < designs.size(); first += hapsyn::kBlockLanes) {
+    const int count = static_cast<int>(std::min<std::size_t>(hapsyn::kBlockLanes, designs.size() - first));
+    for (int i = 0; i < count; ++i) pointers[i] = designs[first + static_cast<std::size_t>(i)].data();
+    problem.evaluate_designs(pointers, count, *fast, hapsyn::EvalOptions{}, group);
+    for (int i = 0; i < count; ++i) {
+      hapsyn::EvalOptions single;
+      single.per_sample = true;
+      const hapsyn::Evaluation expected = problem.evaluate(pointers[i], *plain, single);
+      const hapsyn::Evaluation block = problem.evaluate(pointers[i], *fast);
+      const hapsyn::Evaluation* both[] = {&block, &group[static_cast<std::size_t>(i)]};
+      for (const hapsyn::Evaluation* e : both) {
+        EXPECT_EQ(e->status, expected.status);
+        EXPECT_EQ(e->samples_evaluated, expected.samples_evaluated);
+        EXPECT_EQ(e->failed_sample, expected.failed_sample);
+        if (expected.status == hapsyn::EvalStatus::kFeasible) {
+          EXPECT_EQ(e->objectives, expected.objectives);
+          EXPECT_EQ(e->critical_samples, expected.critical_samples);
+        }
+      }
+    }
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Registry, Conformance, ::testing::ValuesIn(plugin_names()),

@@ -276,6 +276,9 @@ struct alignas(64) SweepThread {
   int known = 0;           // global critical samples merged so far
   std::vector<double> x;
   std::optional<LineBound> line_bound;  // designs of the current line the constraints rule out
+  std::vector<double> group_x;          // kBlockLanes rows: the line's designs bounded together
+  std::vector<Evaluation> group_outs;   // their bounds
+  std::vector<int> group_order;         // s.local as the group was bounded
   SweepCounts counts;         // this run's, lines finished or not
   SweepCounts partial;        // of the lines a stop left unfinished
   std::vector<double> bound;  // the objectives' bound at the critical samples of the current design
@@ -296,15 +299,11 @@ void catch_up(SweepThread& s, Reference& reference) {
   s.known = count;
 }
 
-// Bounds the design in s.x at the thread's critical samples. True when that rules it out
-// (culled, failed at a critical sample or violating a design constraint).
-bool ruled_out_by_bound(const Problem& problem, SweepThread& s, double threshold) {
+// Takes the bound of the design in s.x at the thread's critical samples (`e`, evaluated on
+// s.group_order, the order s.local had when its group was bounded). True when that rules it
+// out (culled, failed at a critical sample or violating a design constraint).
+bool ruled_out_by_bound(SweepThread& s, const Evaluation& e) {
   s.has_bound = false;
-  if (s.local.empty()) return false;
-  EvalOptions bound;
-  bound.subset = &s.local;
-  bound.prune_below = threshold;
-  const Evaluation& e = problem.evaluate(s.x.data(), *s.eval_scratch, bound);
   s.counts.bound_samples += e.samples_evaluated;
   if (e.status == EvalStatus::kConstraintViolated) {
     ++s.counts.constraint_violated;
@@ -312,9 +311,9 @@ bool ruled_out_by_bound(const Problem& problem, SweepThread& s, double threshold
   }
   if (e.status == EvalStatus::kPruned || e.status == EvalStatus::kSampleFailed) {
     // Move the deciding sample to the front: neighbouring designs tend to fail on it too.
-    const std::size_t j = static_cast<std::size_t>(e.samples_evaluated - 1);
-    std::rotate(s.local.begin(), s.local.begin() + static_cast<std::ptrdiff_t>(j),
-                s.local.begin() + static_cast<std::ptrdiff_t>(j) + 1);
+    const int deciding = s.group_order[static_cast<std::size_t>(e.samples_evaluated - 1)];
+    const auto at = std::find(s.local.begin(), s.local.end(), deciding);
+    std::rotate(s.local.begin(), at, at + 1);
     if (e.status == EvalStatus::kPruned) {
       ++s.counts.culled;
     } else {
@@ -388,18 +387,49 @@ bool cull_line(const Problem& problem, const Grid& grid, long long line, SweepTh
   catch_up(s, reference);
   grid.decode(line * line_length, s.x.data());
   s.line_bound->update(s.x.data());
-  for (long long i = 0; i < line_length; ++i) {
+  for (std::size_t row = 0; row < static_cast<std::size_t>(kBlockLanes); ++row) {
+    std::copy(s.x.begin(), s.x.end(), s.group_x.begin() + static_cast<std::ptrdiff_t>(row * n));
+  }
+  // The designs of the line in groups of up to kBlockLanes, bounded together at the critical
+  // samples (Problem::evaluate_designs: one vector per sample for the five-bar), then taken one
+  // by one in grid order: a design the bound cannot rule out gets its full search at once.
+  long long i = 0;
+  while (i < line_length) {
     if (context.stop_requested() || reference.failed.load(std::memory_order_relaxed)) return false;
-    if (s.line_bound->excludes(i)) {
-      ++s.counts.constraint_violated;
+    long long group_index[kBlockLanes];
+    const double* designs[kBlockLanes];
+    int count = 0;
+    for (; i < line_length && count < kBlockLanes; ++i) {
+      if (s.line_bound->excludes(i)) {
+        ++s.counts.constraint_violated;
+        continue;
+      }
+      double* slot = s.group_x.data() + static_cast<std::size_t>(count) * n;
+      slot[n - 1] = grid.space->grid_value(n - 1, i);
+      designs[count] = slot;
+      group_index[count++] = line * line_length + i;
+    }
+    if (count == 0) break;
+    const double threshold = reference.score.load(std::memory_order_relaxed);
+    if (s.local.empty()) {
+      for (int j = 0; j < count; ++j) {
+        std::copy(designs[j], designs[j] + n, s.x.begin());
+        s.has_bound = false;
+        full_search(problem, s, group_index[j], threshold, reference);
+      }
       continue;
     }
-    const long long index = line * line_length + i;
-    s.x[n - 1] = grid.space->grid_value(n - 1, i);
-    const double threshold = reference.score.load(std::memory_order_relaxed);
-    if (ruled_out_by_bound(problem, s, threshold)) continue;
-    // The bound cannot rule the design out: search the whole workspace.
-    full_search(problem, s, index, threshold, reference);
+    s.group_order.assign(s.local.begin(), s.local.end());
+    EvalOptions bound;
+    bound.subset = &s.group_order;
+    bound.prune_below = threshold;
+    problem.evaluate_designs(designs, count, *s.eval_scratch, bound, s.group_outs);
+    for (int j = 0; j < count; ++j) {
+      std::copy(designs[j], designs[j] + n, s.x.begin());
+      if (ruled_out_by_bound(s, s.group_outs[static_cast<std::size_t>(j)])) continue;
+      // The bound cannot rule the design out: search the whole workspace.
+      full_search(problem, s, group_index[j], reference.score.load(std::memory_order_relaxed), reference);
+    }
   }
   return true;
 }
@@ -455,6 +485,7 @@ FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions
     s.eval_scratch = problem.make_eval_scratch();
     s.x.resize(grid.counts.size());
     s.line_bound.emplace(problem, options.line_bounds, "culling");
+    s.group_x.assign(static_cast<std::size_t>(kBlockLanes) * grid.counts.size(), 0.0);
   }
   const RangeLedger skip = reference.ledger;  // finished before this run
   auto last_report = Clock::now(), last_checkpoint = Clock::now();
