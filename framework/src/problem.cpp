@@ -28,6 +28,16 @@ std::vector<double> weighted_sum_scale(const std::vector<double>& weights) {
   return scale;
 }
 
+// An evaluation's verdict before its design is looked at: feasible until shown otherwise.
+void reset_evaluation(Evaluation& out) {
+  out.status = EvalStatus::kFeasible;
+  out.failed_constraint = -1;
+  out.failed_sample = -1;
+  out.failed_status = SampleStatus::kReachable;
+  out.samples_evaluated = 0;
+  out.score = -std::numeric_limits<double>::infinity();
+}
+
 bool better(Reduction r, double value, int index, double current, int current_index) {
   switch (r) {
     case Reduction::kMin: return value < current || (value == current && index < current_index);
@@ -450,12 +460,7 @@ void Problem::combine_objectives(const EvalScratch& ws, Evaluation& out) const {
 const Evaluation& Problem::evaluate(const double* free_design, EvalScratch& ws, const EvalOptions& options) const {
   check_design(free_design);
   Evaluation& out = ws.result;
-  out.status = EvalStatus::kFeasible;
-  out.failed_constraint = -1;
-  out.failed_sample = -1;
-  out.failed_status = SampleStatus::kReachable;
-  out.samples_evaluated = 0;
-  out.score = -std::numeric_limits<double>::infinity();
+  reset_evaluation(out);
 
   space_.expand(free_design, ws.full.data());
   if (!constraints_hold(ws.full.data(), ws, out)) return out;
@@ -766,12 +771,7 @@ bool Problem::start_lane(const double* free_design, int lane, EvalScratch& ws, E
   out.objectives.resize(objectives_.size());
   out.critical_samples.resize(metrics_.size());
   out.reduced.resize(metrics_.size());
-  out.status = EvalStatus::kFeasible;
-  out.failed_constraint = -1;
-  out.failed_sample = -1;
-  out.failed_status = SampleStatus::kReachable;
-  out.samples_evaluated = 0;
-  out.score = -std::numeric_limits<double>::infinity();
+  reset_evaluation(out);
   const std::size_t size = space_.size(), k = local_reduction_.size();
   double* full = ws.lane_full.data() + static_cast<std::size_t>(lane) * size;
   space_.expand(free_design, full);

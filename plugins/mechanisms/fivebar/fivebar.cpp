@@ -45,12 +45,11 @@ LegResult solve_leg(double dx, double dy, double l1, double l2, Leg& leg) {
   double c = (diff + rho2) / den;  // cosine of the angle between E - A and the actuated link
   // Rounding bound of c: a sample on the reach boundary (|E - A| = l1 + l2 or |l1 - l2|) may
   // compute |c| a few ulps above 1; it is clamped (and then classified singular), never NaN.
-  // |c| <= 1 + 8 eps spread / den, multiplied through by den > 0 (one division less).
-  if (!(std::abs(diff + rho2) <= den + 8.0 * kEps * spread)) return LegResult::kUnreachable;
+  const double tolerance = 8.0 * kEps * spread / den;
+  if (!(std::abs(c) <= 1.0 + tolerance)) return LegResult::kUnreachable;
   c = std::clamp(c, -1.0, 1.0);
   const double s = std::sqrt((1.0 - c) * (1.0 + c));  // sin(acos(c)) >= 0
-  const double inv_rho = 1.0 / rho;
-  const double ex = dx * inv_rho, ey = dy * inv_rho;
+  const double ex = dx / rho, ey = dy / rho;
   leg.ux = c * ex - s * ey;  // E - A rotated counter-clockwise by acos(c): elbow out
   leg.uy = c * ey + s * ex;
   leg.wx = dx - l1 * leg.ux;
@@ -72,7 +71,7 @@ void check_length(const char* name, double value, bool allow_zero) {
 }  // namespace
 
 FiveBarModel::FiveBarModel(const FiveBarDesign& design, const FiveBarOptions& options)
-    : design_(design), rho_(options.rho), k_(options.k) {
+    : design_(design), singularity_tolerance_(options.singularity_tolerance), rho_(options.rho), k_(options.k) {
   // One test for the usual case (a model is built per design); the messages only on failure.
   const bool usable = design.l0 >= 0.0 && design.l1 > 0.0 && design.l2 > 0.0 && design.l0 < kInfinity &&
                       design.l1 < kInfinity && design.l2 < kInfinity && std::abs(design.r) < kInfinity;
@@ -89,10 +88,7 @@ FiveBarModel::FiveBarModel(const FiveBarDesign& design, const FiveBarOptions& op
   inertia_a_ = m1_ * (4.0 * design.l1 * design.l1 + k2) / 12.0;
   inertia_f_ = m2_ * (design.l2 * design.l2 + k2) / 12.0;
   l2_squared_ = design.l2 * design.l2;
-  tolerance_l2_ = options.singularity_tolerance * design.l2;
-  tolerance_l2_squared_ = options.singularity_tolerance * l2_squared_;
-  block_ = FiveBarBlockDesign{h0_, design.l1, design.l2, design.r, tolerance_l2_, tolerance_l2_squared_, m2_, inertia_a_,
-                              inertia_f_};
+  block_ = FiveBarBlockDesign{h0_, design.l1, design.l2, design.r, options.singularity_tolerance, m2_, inertia_a_, inertia_f_};
 }
 
 void FiveBarModel::solve_block(const PoseBlock& poses, Needs needs, MechanismScratch& scratch,
@@ -134,13 +130,13 @@ void FiveBarModel::solve(const double* pose, Needs needs, MechanismScratch& /*sc
   const double u1x = left.ux, u1y = left.uy, w1x = left.wx, w1y = left.wy;
   const double u4x = -right.ux, u4y = right.uy, w2x = -right.wx, w2y = right.wy;
 
-  // Transmission sines as cross products of the link vectors, compared with the tolerance
-  // scaled by the links' lengths (no division): |sin| >= tol.
-  const double cross1 = left.wx * left.uy - left.wy * left.ux;     // l2 sin(q1 - q2)
-  const double cross4 = right.wx * right.uy - right.wy * right.ux;  // l2 sin(q3 - q4)
-  const double cross12 = w1x * w2y - w1y * w2x;                    // l2^2 sin(q3 - q2)
-  if (!(std::abs(cross1) >= tolerance_l2_ && std::abs(cross4) >= tolerance_l2_ &&
-        std::abs(cross12) >= tolerance_l2_squared_)) {
+  // Transmission sines (cross products of the link vectors).
+  const double s12 = (left.wx * left.uy - left.wy * left.ux) / l2;      // sin(q1 - q2)
+  const double s34 = (right.wx * right.uy - right.wy * right.ux) / l2;  // sin(q3 - q4)
+  const double cross12 = w1x * w2y - w1y * w2x;                          // l2^2 sin(q3 - q2)
+  const double s23 = cross12 / l2_squared_;
+  const double tol = singularity_tolerance_;
+  if (!(std::abs(s12) >= tol && std::abs(s34) >= tol && std::abs(s23) >= tol)) {
     out.status = SampleStatus::kSingular;
     return;
   }

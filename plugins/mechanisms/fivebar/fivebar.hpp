@@ -127,6 +127,7 @@ class FiveBarModel final : public MechanismModel {
  private:
   // Only numbers: a model is built per design (culling builds ~1e9), so it copies no string.
   FiveBarDesign design_;
+  double singularity_tolerance_ = 0.0;
   double rho_ = 0.0, k_ = 0.0;
   double h0_ = 0.0;         // l0 / 2 [m]
   double m1_ = 0.0;         // actuated bar mass [kg]
@@ -134,8 +135,6 @@ class FiveBarModel final : public MechanismModel {
   double inertia_a_ = 0.0;  // actuated bar about its joint, m1 (4 l1^2 + k^2) / 12 [kg m^2]
   double inertia_f_ = 0.0;  // free bar about its centre, m2 (l2^2 + k^2) / 12 [kg m^2]
   double l2_squared_ = 0.0;
-  double tolerance_l2_ = 0.0;          // singularity_tolerance l2: bound of |cross products| with one free link
-  double tolerance_l2_squared_ = 0.0;  // singularity_tolerance l2^2: of the two free links' cross product
   FiveBarBlockDesign block_;
 };
 

@@ -60,15 +60,15 @@ HWY_INLINE Leg SolveLeg(D d, V dx, V dy, double l1, double l2) {
   const V spread = hn::Add(hn::Set(d, l1 * l1 + l2 * l2), rho2);
   const V den = hn::Mul(hn::Set(d, 2.0 * l1), rho);
   const V c_raw = hn::Div(hn::Add(hn::Set(d, diff), rho2), den);
-  const V slack = hn::Mul(hn::Set(d, 8.0 * kEps), spread);
+  const V tolerance = hn::Div(hn::Mul(hn::Set(d, 8.0 * kEps), spread), den);
   const M positive = hn::Gt(rho, zero);
   Leg leg;
-  leg.on_joint = hn::AndNot(positive, hn::Le(hn::Set(d, std::abs(diff)), slack));
-  leg.solved = hn::And(positive, hn::Le(hn::Abs(hn::Add(hn::Set(d, diff), rho2)), hn::Add(den, slack)));
+  leg.on_joint = hn::AndNot(positive, hn::Le(hn::Set(d, std::abs(diff)), hn::Mul(hn::Set(d, 8.0 * kEps), spread)));
+  leg.solved = hn::And(positive, hn::Le(hn::Abs(c_raw), hn::Add(one, tolerance)));
   const V c = hn::IfThenElse(positive, hn::Min(hn::Max(c_raw, hn::Set(d, -1.0)), one), one);
   const V s = hn::Sqrt(hn::Mul(hn::Sub(one, c), hn::Add(one, c)));
-  const V inv_rho = hn::Div(one, hn::IfThenElse(positive, rho, one));
-  const V ex = hn::Mul(dx, inv_rho), ey = hn::Mul(dy, inv_rho);
+  const V safe_rho = hn::IfThenElse(positive, rho, one);
+  const V ex = hn::Div(dx, safe_rho), ey = hn::Div(dy, safe_rho);
   leg.ux = hn::Sub(hn::Mul(c, ex), hn::Mul(s, ey));
   leg.uy = hn::Add(hn::Mul(c, ey), hn::Mul(s, ex));
   const V l1v = hn::Set(d, l1);
@@ -84,15 +84,15 @@ HWY_INLINE Leg SolveLeg(D d, V dx, V dy, double l1, double l2) {
 
 // Status per lane (SampleStatus as a double: 0 reachable, 1 unreachable, 2 singular, 3 invalid).
 HWY_INLINE V Classify(D d, const FiveBarBlockDesign& design, const Leg& left, const Leg& right) {
-  const V tol_l2 = hn::Set(d, design.tolerance_l2), tol_l2_squared = hn::Set(d, design.tolerance_l2_squared);
-  const V cross1 = hn::Sub(hn::Mul(left.wx, left.uy), hn::Mul(left.wy, left.ux));     // l2 sin(q1 - q2)
-  const V cross4 = hn::Sub(hn::Mul(right.wx, right.uy), hn::Mul(right.wy, right.ux));  // l2 sin(q3 - q4)
-  const V cross12 = hn::Sub(hn::Mul(left.wx, right.wy), hn::Mul(left.wy, hn::Neg(right.wx)));  // l2^2 sin(q3 - q2)
+  const V l2 = hn::Set(d, design.l2), tol = hn::Set(d, design.singularity_tolerance);
+  const V s12 = hn::Div(hn::Sub(hn::Mul(left.wx, left.uy), hn::Mul(left.wy, left.ux)), l2);
+  const V s34 = hn::Div(hn::Sub(hn::Mul(right.wx, right.uy), hn::Mul(right.wy, right.ux)), l2);
+  const V cross12 = hn::Sub(hn::Mul(left.wx, right.wy), hn::Mul(left.wy, hn::Neg(right.wx)));
+  const V s23 = hn::Div(cross12, hn::Set(d, design.l2 * design.l2));
   const M unreachable = hn::Or(hn::Not(hn::Or(left.solved, left.on_joint)), hn::Not(hn::Or(right.solved, right.on_joint)));
-  const M transmits = hn::And(hn::And(hn::Ge(hn::Abs(cross1), tol_l2), hn::Ge(hn::Abs(cross4), tol_l2)),
-                              hn::Ge(hn::Abs(cross12), tol_l2_squared));
+  const M transmits = hn::And(hn::And(hn::Ge(hn::Abs(s12), tol), hn::Ge(hn::Abs(s34), tol)), hn::Ge(hn::Abs(s23), tol));
   const M singular = hn::Or(hn::Or(left.on_joint, right.on_joint), hn::Not(transmits));
-  const M valid = hn::And(hn::And(left.upright, right.upright), hn::Gt(cross12, hn::Zero(d)));
+  const M valid = hn::And(hn::And(left.upright, right.upright), hn::Gt(s23, hn::Zero(d)));
   return hn::IfThenElse(unreachable, hn::Set(d, 1.0),
                         hn::IfThenElse(singular, hn::Set(d, 2.0), hn::IfThenElse(valid, hn::Zero(d), hn::Set(d, 3.0))));
 }

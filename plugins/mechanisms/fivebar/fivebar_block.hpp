@@ -13,8 +13,7 @@ namespace hapsyn::plugins {
 struct FiveBarBlockDesign {
   double h0 = 0.0;                     ///< l0 / 2 [m]
   double l1 = 0.0, l2 = 0.0, r = 0.0;  ///< link lengths and placement [m]
-  double tolerance_l2 = 0.0;           ///< singularity_tolerance l2 [m]
-  double tolerance_l2_squared = 0.0;   ///< singularity_tolerance l2^2 [m^2]
+  double singularity_tolerance = 0.0;  ///< smallest admissible |sin| of the transmission angles [-]
   double m2 = 0.0;                     ///< free bar mass [kg]
   double inertia_a = 0.0;              ///< actuated bar about its joint [kg m^2]
   double inertia_f = 0.0;              ///< free bar about its centre [kg m^2]
