@@ -290,7 +290,8 @@ double Problem::score(const std::vector<double>& objectives) const {
 }
 
 namespace {
-void reset_accumulators(const std::vector<Reduction>& reductions, std::vector<double>& acc, std::vector<int>& arg) {
+// The reductions' identities (acc, arg: reductions.size() values each; a design lane's too).
+void reset_accumulators(const std::vector<Reduction>& reductions, double* acc, int* arg) {
   for (std::size_t i = 0; i < reductions.size(); ++i) {
     acc[i] = reductions[i] == Reduction::kMin   ? std::numeric_limits<double>::infinity()
              : reductions[i] == Reduction::kMax ? -std::numeric_limits<double>::infinity()
@@ -471,7 +472,7 @@ const Evaluation& Problem::evaluate(const double* free_design, EvalScratch& ws, 
     owned = mechanism_->build(ws.full.data());
     model = owned.get();
   }
-  reset_accumulators(local_reduction_, ws.accumulator, ws.argument);
+  reset_accumulators(local_reduction_, ws.accumulator.data(), ws.argument.data());
   const bool prune = std::isfinite(options.prune_below) && prunable_;
   const std::vector<double>* front = options.prune_dominated_by;
   const bool prune_front = front && !front->empty() && worst_case_ && all_maximized_;
@@ -764,8 +765,7 @@ void Problem::evaluate_designs(const double* const* free_designs, int count, Eva
 }
 
 // Lane i's evaluate() up to its first sample: bounds, constraints, identity reductions. True
-// when the design goes on to its samples; `out` then holds a reset evaluation. (Element loops,
-// not copies: the values are a handful, and a library call per design costs more.)
+// when the design goes on to its samples; `out` then holds a reset evaluation.
 bool Problem::start_lane(const double* free_design, int lane, EvalScratch& ws, Evaluation& out) const {
   check_design(free_design);
   out.objectives.resize(objectives_.size());
@@ -776,14 +776,8 @@ bool Problem::start_lane(const double* free_design, int lane, EvalScratch& ws, E
   double* full = ws.lane_full.data() + static_cast<std::size_t>(lane) * size;
   space_.expand(free_design, full);
   if (!constraints_hold(full, ws, out)) return false;
-  double* acc = ws.lane_accumulator.data() + static_cast<std::size_t>(lane) * k;
-  int* arg = ws.lane_argument.data() + static_cast<std::size_t>(lane) * k;
-  for (std::size_t j = 0; j < k; ++j) {
-    acc[j] = local_reduction_[j] == Reduction::kMin   ? std::numeric_limits<double>::infinity()
-             : local_reduction_[j] == Reduction::kMax ? -std::numeric_limits<double>::infinity()
-                                                      : 0.0;
-    arg[j] = -1;
-  }
+  reset_accumulators(local_reduction_, ws.lane_accumulator.data() + static_cast<std::size_t>(lane) * k,
+                     ws.lane_argument.data() + static_cast<std::size_t>(lane) * k);
   return true;
 }
 
@@ -859,7 +853,7 @@ Evaluation Problem::evaluate_parallel(const double* free_design, int threads, co
   }
   std::vector<double> acc(local_reduction_.size());
   std::vector<int> arg(local_reduction_.size());
-  reset_accumulators(local_reduction_, acc, arg);
+  reset_accumulators(local_reduction_, acc.data(), arg.data());
   for (const auto& ws : spaces) {
     for (std::size_t m = 0; m < metrics_.size(); ++m) {
       for (std::size_t j = 0; j < ws->result.reduced[m].size(); ++j) {
