@@ -5,8 +5,10 @@
 // first build), for one plausible design, single thread unless stated:
 //   per pose, IK + the quantities + coverage local() for the terms
 //     pose only | pose + velocity | + acceleration | + force (all four)
-//   one full four-term design evaluation through Problem::evaluate_parallel (2 threads)  [ms/design]
-//   per configuration: J, H, gravity and the 6-column solve J^-1 M_a, ours vs KDL's
+//   the same four terms on the block path (solve_block + local_block, 8 samples per call)
+//   one full four-term design evaluation through Problem::evaluate_parallel (1 and 2 threads,
+//   block path) and, as its baseline, through the per-sample loop (1 thread)  [ms/design]
+//   per configuration: J, H, gravity and the 6-column solve J^-1 M_a, ours (scalar and block) vs KDL's
 //     ChainJntToJacSolver + ChainDynParam (JntToMass, JntToGravity) + Eigen LU on the same q
 // Read the ratios printed at the end (same run, same machine), not bare times.
 #include "common.hpp"
@@ -100,17 +102,75 @@ void BM_CoverageAllFourTerms(benchmark::State& state) {
   run_terms(state, Json::array({"pose", "velocity", "acceleration", "force"}));
 }
 
-// The full objective J through the framework's evaluator, as a solver sees it.
-void BM_FullObjectivePerDesign(benchmark::State& state) {
+// The same four terms on the block path: solve_block + local_block per 8 samples, scene order,
+// the poses laid out as the evaluator lays them out (structure of arrays, once).
+void BM_CoverageAllFourTermsBlock(benchmark::State& state) {
+  const Coverage metric(hapsyn::make_options<CoverageOptions>(Json::object()));
+  const SampleSet& s = scene();
+  const Haptic6RModel& m = model();
+  auto scratch = mechanism().make_scratch();
+  const int n = s.size();
+  const int padded = (n + hapsyn::kBlockLanes - 1) / hapsyn::kBlockLanes * hapsyn::kBlockLanes;
+  std::vector<double> poses(static_cast<std::size_t>(7 * padded));
+  for (int i = 0; i < padded; ++i) {
+    for (int c = 0; c < 7; ++c) poses[static_cast<std::size_t>(c * padded + i)] = s.pose(std::min(i, n - 1))[c];
+  }
+  std::vector<const hapsyn::AttributeMatrix*> attributes;
+  for (const std::string& name : metric.scene_attributes()) attributes.push_back(&s.attributes.at(name));
+  auto q = std::make_unique<hapsyn::QuantityBlock>();
+  q->attributes = attributes.data();
+  q->attribute_count = static_cast<int>(attributes.size());
+  std::vector<double> out(metric.locals().size() * hapsyn::kBlockLanes);
+  double sum = 0.0;
+  for (auto _ : state) {
+    for (int first = 0; first < n; first += hapsyn::kBlockLanes) {
+      hapsyn::PoseBlock block;
+      block.dimension = 7;
+      block.count = std::min(hapsyn::kBlockLanes, n - first);
+      for (int c = 0; c < 7; ++c) block.coordinate[c] = poses.data() + static_cast<std::size_t>(c * padded + first);
+      int samples[hapsyn::kBlockLanes];
+      for (int lane = 0; lane < hapsyn::kBlockLanes; ++lane) samples[lane] = first + std::min(lane, block.count - 1);
+      q->samples = samples;
+      m.solve_block(block, metric.needs(), *scratch, *q);
+      metric.local_block(*q, out.data());
+      for (int lane = 0; lane < block.count; ++lane) sum += out[static_cast<std::size_t>(hapsyn::kBlockLanes + lane)];
+    }
+  }
+  benchmark::DoNotOptimize(sum);
+  state.counters["poses"] = n;
+  state.counters["per_pose"] = benchmark::Counter(static_cast<double>(n) * static_cast<double>(state.iterations()),
+                                                  benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+hapsyn::Study& full_study() {
   static hapsyn::Registry registry({HAPSYN_PLUGIN_DIR});
   static hapsyn::Study study = hapsyn::load_study(Json::parse(R"({
     "name": "bench", "mechanism": {"plugin": "haptic6r"},
     "scene": {"plugin": "human_arm", "options": {"lattice_step": 0.1, "orientations": 505, "joint3_steps": 17}},
     "design": {"l": {"value": [0.45, 0.45, 0.65, 0.55, 0.15]}, "s": {"value": [3, 3, 2, 2, 1, 1]}, "r": {"value": [2, 2, 3, 2, 3, 3]}},
     "objectives": [{"metric": "coverage"}], "solver": {"plugin": "evaluate"}})"), registry);
+  return study;
+}
+
+// The full objective J through the framework's evaluator, as a solver sees it (the block path:
+// docs/design.md section 14).
+void BM_FullObjectivePerDesign(benchmark::State& state) {
+  const hapsyn::Study& study = full_study();
   const int threads = static_cast<int>(state.range(0));
   double j = 0.0;
   for (auto _ : state) j += study.problem->evaluate_parallel(nullptr, threads).objectives[0];
+  benchmark::DoNotOptimize(j);
+  state.counters["poses"] = study.problem->samples().size();
+}
+
+// The baseline: the same evaluation, one thread, forced onto the per-sample loop.
+void BM_FullObjectivePerDesignPerSample(benchmark::State& state) {
+  const hapsyn::Study& study = full_study();
+  auto ws = study.problem->make_eval_scratch();
+  hapsyn::EvalOptions options;
+  options.per_sample = true;
+  double j = 0.0;
+  for (auto _ : state) j += study.problem->evaluate(nullptr, *ws, options).objectives[0];
   benchmark::DoNotOptimize(j);
   state.counters["poses"] = study.problem->samples().size();
 }
@@ -195,6 +255,43 @@ void run_kdl(benchmark::State& state, bool our_solve) {
   state.counters["per_pose"] = benchmark::Counter(static_cast<double>(qs.size()) * static_cast<double>(state.iterations()),
                                                   benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
+// The block kernels on the same configurations, 8 per call: Haptic6RModel::quantities_block,
+// Coverage::solve_jacobian_block, then H X per lane as above.
+void BM_OursBlockJacobianInertiaGravitySolve(benchmark::State& state) {
+  constexpr int L = hapsyn::kBlockLanes;
+  const auto& qs = configurations();
+  const Haptic6RModel& m = model();
+  auto q = std::make_unique<hapsyn::QuantityBlock>();
+  alignas(64) double x[36][L], regular[L];
+  const hapsyn::Needs needs = hapsyn::kNeedJacobian | hapsyn::kNeedInertia | hapsyn::kNeedGravity;
+  double sum = 0.0;
+  for (auto _ : state) {
+    for (std::size_t first = 0; first < qs.size(); first += L) {
+      const int count = static_cast<int>(std::min<std::size_t>(L, qs.size() - first));
+      m.quantities_block(qs.data() + first, count, needs, *q);
+      for (int e = 0; e < 36; ++e) {
+        for (int lane = 0; lane < L; ++lane) x[e][lane] = e / 6 == e % 6 ? 3.0 : 0.0;
+      }
+      Coverage::solve_jacobian_block(*q, x, regular);
+      for (int r = 0; r < 6; ++r) {
+        for (int c = 0; c < 6; ++c) {
+          double a[L] = {};
+          for (int k = 0; k < 6; ++k) {
+            for (int lane = 0; lane < L; ++lane) a[lane] += q->inertia[r * 6 + k][lane] * x[k * 6 + c][lane];
+          }
+          if (r == 0 && c == 0) {
+            for (int lane = 0; lane < count; ++lane) sum += a[lane] + q->gravity[3][lane];
+          }
+          benchmark::DoNotOptimize(a);
+        }
+      }
+    }
+  }
+  benchmark::DoNotOptimize(sum);
+  state.counters["per_pose"] = benchmark::Counter(static_cast<double>(qs.size()) * static_cast<double>(state.iterations()),
+                                                  benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
 void BM_KdlJacobianInertiaGravitySolve(benchmark::State& state) { run_kdl(state, false); }
 void BM_KdlJacobianInertiaGravityOurSolve(benchmark::State& state) { run_kdl(state, true); }
 
@@ -204,8 +301,11 @@ BENCHMARK(BM_CoveragePoseOnly)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CoveragePoseVelocity)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CoveragePoseVelocityAcceleration)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CoverageAllFourTerms)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CoverageAllFourTermsBlock)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FullObjectivePerDesignPerSample)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_FullObjectivePerDesign)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_OursJacobianInertiaGravitySolve)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_OursBlockJacobianInertiaGravitySolve)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_KdlJacobianInertiaGravitySolve)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_KdlJacobianInertiaGravityOurSolve)->Unit(benchmark::kMicrosecond);
 
@@ -216,7 +316,11 @@ int main(int argc, char** argv) {
   hapsyn::bench::compare("BM_CoveragePoseVelocity", "BM_CoveragePoseOnly");
   hapsyn::bench::compare("BM_CoveragePoseVelocityAcceleration", "BM_CoveragePoseOnly");
   hapsyn::bench::compare("BM_CoverageAllFourTerms", "BM_CoveragePoseOnly");
+  hapsyn::bench::compare("BM_CoverageAllFourTermsBlock", "BM_CoverageAllFourTerms");
+  hapsyn::bench::compare("BM_FullObjectivePerDesign/1/real_time", "BM_FullObjectivePerDesignPerSample/real_time");
+  hapsyn::bench::compare("BM_FullObjectivePerDesign/2/real_time", "BM_FullObjectivePerDesignPerSample/real_time");
   hapsyn::bench::compare("BM_OursJacobianInertiaGravitySolve", "BM_KdlJacobianInertiaGravitySolve");
+  hapsyn::bench::compare("BM_OursBlockJacobianInertiaGravitySolve", "BM_KdlJacobianInertiaGravitySolve");
   hapsyn::bench::compare("BM_OursJacobianInertiaGravitySolve", "BM_KdlJacobianInertiaGravityOurSolve");
   return hapsyn::bench::run_main(argc, argv);
 }

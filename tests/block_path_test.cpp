@@ -1,7 +1,8 @@
 // The evaluator's block path (Problem::evaluate_blocks, hapsyn/sample_block.hpp) against its
-// per-sample path on the five-bar: the same status, failing sample, sample count, critical
-// samples and pruning decisions for every design, threshold, subset and front; objectives to
-// 1e-12 relative.
+// per-sample path. Worst case, on the five-bar: the same status, failing sample, sample count,
+// critical samples and pruning decisions for every design, threshold, subset and front, and the
+// same objectives. Averaging, on the haptic 6R with coverage (scene attributes): the same status
+// and sample count, reductions and objectives to 1e-12 relative.
 #include "test_support.hpp"
 
 #include <hapsyn/problem.hpp>
@@ -206,4 +207,80 @@ TEST(DesignLanes, SubsetsAndFrontsEqualTheirSingleEvaluations) {
   empty.subset = &none;
   expect_groups_equal_single_evaluations(*problem, empty, 50, 25, decided);
   EXPECT_GT(decided, 300);
+}
+
+// ---- Averaging studies: the haptic 6R with the coverage metric (scene attributes M_v, M_a).
+namespace {
+
+std::shared_ptr<Problem> coverage_problem(const Json& terms, const Json& extra_objective = Json()) {
+  Json doc = Json::parse(R"({
+    "name": "block-coverage",
+    "mechanism": {"plugin": "haptic6r"},
+    "scene": {"plugin": "human_arm", "options": {"lattice_step": 0.3, "orientations": 20, "joint3_steps": 5, "cache": false, "threads": 1}},
+    "design": {"l": {"lower": [0.3, 0.3, 0.3, 0.3, 0.12], "upper": [1.0, 1.0, 1.5, 1.0, 0.3]},
+               "s": {"value": [3, 3, 2, 2, 1, 1]}, "r": {"lower": 1, "upper": 6}},
+    "objectives": [{"metric": "coverage"}],
+    "solver": {"plugin": "ga"},
+    "seed": 1
+  })");
+  doc["objectives"][0]["options"] = {{"terms", terms}};
+  if (!extra_objective.is_null()) doc["objectives"].push_back(extra_objective);
+  return hapsyn::load_study(doc, hapsyn::test::registry()).problem;
+}
+
+std::vector<double> haptic6r_design(std::mt19937_64& rng, const Problem& problem) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<double> x;
+  for (const int index : problem.design_space().free_indices()) {
+    const hapsyn::DesignComponent& c = problem.design_space().components()[static_cast<std::size_t>(index)];
+    x.push_back(c.integer ? std::round(c.lower + u(rng) * (c.upper - c.lower)) : c.lower + u(rng) * (c.upper - c.lower));
+  }
+  return x;
+}
+
+}  // namespace
+
+TEST(BlockPath, AveragingStudiesWithSceneAttributesTakeIt) {
+  EXPECT_TRUE(coverage_problem(Json::array({"pose", "velocity", "acceleration", "force"}))->block_path());
+  EXPECT_TRUE(coverage_problem(Json::array({"pose"}))->block_path());
+  // One worst-case metric among averaging ones: the per-sample loop.
+  EXPECT_FALSE(coverage_problem(Json::array({"pose"}), Json{{"metric", "gii"}, {"options", {{"rows", "translational"}}}})->block_path());
+}
+
+TEST(BlockPath, AveragingEvaluationsEqualThePerSamplePath) {
+  std::mt19937_64 rng(31);
+  for (const Json& terms : {Json::array({"pose", "velocity", "acceleration", "force"}), Json::array({"velocity"}),
+                            Json::array({"acceleration", "force"})}) {
+    const auto problem = coverage_problem(terms);
+    ASSERT_TRUE(problem->block_path());
+    auto block_ws = problem->make_eval_scratch(), single_ws = problem->make_eval_scratch();
+    std::vector<int> subset;  // a scattered subset of odd size (a partial last block)
+    for (int i = problem->samples().size() - 1; i >= 0; i -= 7) subset.push_back(i);
+    int reached = 0;
+    for (int k = 0; k < 12; ++k) {
+      const std::vector<double> x = haptic6r_design(rng, *problem);
+      const std::vector<int>* const subsets[] = {nullptr, &subset};
+      for (const std::vector<int>* s : subsets) {
+        EvalOptions fast, slow;
+        fast.subset = slow.subset = s;
+        slow.per_sample = true;
+        const Evaluation block = problem->evaluate(x.data(), *block_ws, fast);
+        const Evaluation single = problem->evaluate(x.data(), *single_ws, slow);
+        ASSERT_EQ(block.status, single.status);
+        EXPECT_EQ(block.samples_evaluated, single.samples_evaluated);
+        if (single.status != EvalStatus::kFeasible) continue;
+        for (std::size_t m = 0; m < single.reduced.size(); ++m) {
+          for (std::size_t i = 0; i < single.reduced[m].size(); ++i) {
+            EXPECT_NEAR(block.reduced[m][i], single.reduced[m][i], 1e-12 * std::max(1.0, std::abs(single.reduced[m][i])))
+                << terms.dump() << ", design " << k << ", local " << i;
+          }
+        }
+        for (std::size_t o = 0; o < single.objectives.size(); ++o) {
+          EXPECT_NEAR(block.objectives[o], single.objectives[o], 1e-12 * std::max(1.0, std::abs(single.objectives[o])));
+        }
+        reached += single.reduced[0][1] > 0.0;
+      }
+    }
+    EXPECT_GT(reached, 6) << "too few designs reach the workspace to test anything";
+  }
 }

@@ -119,7 +119,11 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
   // Without a worst-case metric nothing is decided early, and the scene's own order keeps the
   // per-sample data (poses, attributes) streaming through the cache: 1.4x faster on the 35k-pose
   // human-arm scene than the scattered order below.
-  if (!any_worst_case_) return;
+  if (any_worst_case_) order_extremes_first();
+  choose_block_path();
+}
+
+void Problem::order_extremes_first() {
   // Extreme samples first: far from the centroid (corners of a square) is where reach fails
   // and where worst cases usually sit, so infeasible designs and pruning are decided early.
   const Eigen::RowVectorXd centroid = samples_->poses.colwise().mean();
@@ -130,14 +134,15 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
   std::stable_sort(order_.begin(), order_.end(), [&](int a, int b) {
     return distance[static_cast<std::size_t>(a)] > distance[static_cast<std::size_t>(b)];
   });
-  choose_block_path();
 }
 
 void Problem::choose_block_path() {
-  block_path_ = worst_case_ && batch_ == 0 && !twist_ && !twist_rate_ &&
+  // Worst-case studies reduce per block with pruning (fold_block); averaging ones add every lane
+  // (fold_block_sums). A study mixing both kinds keeps the per-sample loop.
+  block_path_ = (worst_case_ || !any_worst_case_) && batch_ == 0 && !twist_ && !twist_rate_ &&
                 samples_->dimension() <= kBlockMaxCoordinates && mechanism_->solves_blocks(needs_);
   for (std::size_t m = 0; m < metrics_.size() && block_path_; ++m) {
-    block_path_ = metrics_[m].metric->has_local_block() && metric_attributes_[m].empty();
+    block_path_ = metrics_[m].metric->has_local_block();
   }
   if (!block_path_) return;
   // The poses in sample order, structure of arrays, padded to whole blocks with the last
@@ -597,7 +602,15 @@ const Evaluation& Problem::evaluate_blocks(const MechanismModel& model, EvalScra
         poses.coordinate[c] = block_poses_.data() + static_cast<std::size_t>(c) * block_stride_ + first;
       }
     }
+    // The lanes' samples, padded with the last one (a kernel reads every lane).
+    int samples[kBlockLanes];
+    for (int i = 0; i < kBlockLanes; ++i) samples[i] = lane_sample[std::min(i, count - 1)];
+    q.samples = samples;
     model.solve_block(poses, needs_, *ws.scratch, q);
+    if (!worst_case_) {  // averaging: every lane counts, whatever its status; nothing to prune
+      fold_block_sums(model, ws, samples, count);
+      continue;
+    }
     int valid = 0;  // reachable lanes before the first failing one
     while (valid < count && q.lane_status(valid) == SampleStatus::kReachable) ++valid;
     if (valid > 0 && fold_block(model, ws, options, lane_sample, valid, prune, prune_front)) {
@@ -622,9 +635,7 @@ const Evaluation& Problem::evaluate_blocks(const MechanismModel& model, EvalScra
 bool Problem::fold_block(const MechanismModel& model, EvalScratch& ws, const EvalOptions& options,
                          const int* lane_sample, int lanes, bool prune, bool prune_front) const {
   Evaluation& out = ws.result;
-  for (std::size_t m = 0; m < metrics_.size(); ++m) {
-    metrics_[m].metric->local_block(*ws.block, ws.block_locals.data() + static_cast<std::size_t>(local_offset_[m]) * kBlockLanes);
-  }
+  block_locals(ws);
   const bool check = prune || prune_front;
   const std::size_t k = local_reduction_.size();
   // Most blocks do not move a worst-case reduction: when no lane reaches a reduction's current
@@ -680,6 +691,39 @@ bool Problem::fold_block(const MechanismModel& model, EvalScratch& ws, const Eva
   return true;
 }
 
+// Every metric's local values of the block in ws (its samples set), each metric with the scene
+// attributes it listed.
+void Problem::block_locals(EvalScratch& ws) const {
+  QuantityBlock& q = *ws.block;
+  for (std::size_t m = 0; m < metrics_.size(); ++m) {
+    q.attributes = metric_attributes_[m].data();
+    q.attribute_count = static_cast<int>(metric_attributes_[m].size());
+    metrics_[m].metric->local_block(q, ws.block_locals.data() + static_cast<std::size_t>(local_offset_[m]) * kBlockLanes);
+  }
+}
+
+// The block path of an averaging study: the first `lanes` lanes are reduced in sample order
+// exactly as fold_locals() reduces them one by one (sums weighted, extremes by the tie rule).
+void Problem::fold_block_sums(const MechanismModel& model, EvalScratch& ws, const int* lane_sample, int lanes) const {
+  block_locals(ws);
+  const std::size_t k = local_reduction_.size();
+  for (int lane = 0; lane < lanes; ++lane) {
+    const int sample = lane_sample[lane];
+    const double scale = sample_scale_.empty() ? 1.0 : sample_scale_[static_cast<std::size_t>(sample)];
+    for (std::size_t i = 0; i < k; ++i) {
+      const double v = ws.block_locals[i * kBlockLanes + static_cast<std::size_t>(lane)];
+      if (!std::isfinite(v)) refuse_non_finite_block_local(model, ws, sample);
+      if (local_reduction_[i] == Reduction::kSum) {
+        ws.accumulator[i] += v * scale;
+      } else if (better(local_reduction_[i], v, sample, ws.accumulator[i], ws.argument[i])) {
+        ws.accumulator[i] = v;
+        ws.argument[i] = sample;
+      }
+    }
+  }
+  ws.result.samples_evaluated += lanes;
+}
+
 // A non-finite local value on the block path: the sample is solved again on the per-sample path
 // (an error path, so its cost does not matter) and reported exactly as the per-sample loop does.
 void Problem::refuse_non_finite_block_local(const MechanismModel& model, EvalScratch& ws, int sample) const {
@@ -702,7 +746,10 @@ void Problem::evaluate_designs(const double* const* free_designs, int count, Eva
       if (!pending || pending[i]) outs[static_cast<std::size_t>(i)] = evaluate(free_designs[i], ws, options);
     }
   };
-  if (!block_path_ || options.per_sample || options.on_sample || count == 1) return one_by_one(0, nullptr);
+  // Design lanes serve worst-case studies (their first samples decide most designs).
+  if (!block_path_ || !worst_case_ || options.per_sample || options.on_sample || count == 1) {
+    return one_by_one(0, nullptr);
+  }
   const std::size_t size = space_.size();
   bool active[kBlockLanes] = {};
   int left = 0, any = -1;
@@ -726,9 +773,10 @@ void Problem::evaluate_designs(const double* const* free_designs, int count, Eva
     if (!mechanism_->solve_designs(designs, count, samples_->pose(sample), needs_, *ws.scratch, *ws.block)) {
       return one_by_one(0, active);  // these designs cannot share a vector: from scratch, one by one
     }
-    for (std::size_t m = 0; m < metrics_.size(); ++m) {
-      metrics_[m].metric->local_block(*ws.block, ws.block_locals.data() + static_cast<std::size_t>(local_offset_[m]) * kBlockLanes);
-    }
+    int lane_sample[kBlockLanes];
+    std::fill_n(lane_sample, kBlockLanes, sample);
+    ws.block->samples = lane_sample;
+    block_locals(ws);
     for (int i = 0; i < count; ++i) {
       if (!active[i]) continue;
       ws.non_finite_lane = -1;

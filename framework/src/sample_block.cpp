@@ -3,6 +3,8 @@
 // callers that use solve_block() directly (tests, plugins that forward to it).
 #include <hapsyn/mechanism.hpp>
 
+#include <cassert>
+
 namespace hapsyn {
 namespace {
 
@@ -31,6 +33,19 @@ void MechanismModel::solve_block(const PoseBlock& poses, Needs needs, MechanismS
     if (needs & kNeedInertia) store_lane(q.inertia, lane, out.inertia, out.inertia_size, square);
     if (needs & kNeedEffectiveMass) {
       store_lane(q.effective_mass, lane, out.effective_mass, out.effective_mass_size, square);
+    }
+    // The block holds at most kMaxTask joints of gravity and limits: a larger arm cannot use it.
+    if (needs & kNeedGravity) {
+      assert(q.gravity.size() <= kMaxTask);
+      store_lane(q.gravity, lane, out.gravity, out.gravity_size, square);
+    }
+    if (needs & kNeedActuatorLimits) {
+      assert(q.max_velocity.size() <= kMaxTask && q.max_torque.size() == q.max_velocity.size());
+      out.actuator_count = static_cast<int>(q.max_velocity.size());
+      for (int j = 0; j < out.actuator_count; ++j) {
+        out.max_velocity[j] = q.max_velocity(j);
+        out.max_torque[j] = q.max_torque(j);
+      }
     }
   }
   for (int lane = poses.count; lane < kBlockLanes; ++lane) out.status[lane] = static_cast<std::int32_t>(SampleStatus::kUnreachable);

@@ -99,14 +99,17 @@ class Metric {
     for (int i = 0; i < count; ++i) local(*q[i], out + static_cast<long>(i) * k);
   }
 
-  /// Optional block path (hapsyn/sample_block.hpp), for worst-case metrics that need no scene
-  /// attributes: true when local_block() computes what local() does (read once, at load).
-  /// Default: false.
+  /// Optional block path (hapsyn/sample_block.hpp): true when local_block() computes what
+  /// local() does (read once, at load). The evaluator uses it in worst-case studies and in
+  /// averaging ones (not in a study that mixes both kinds). Default: false.
   virtual bool has_local_block() const { return false; }
   /// The local values of every lane of `q`: out[j * kBlockLanes + lane] is the lane's j-th local
-  /// value (to rounding what local() gives: agreement to 1e-12 relative). Lanes whose status
-  /// is not kReachable hold arbitrary quantities; their outputs are ignored, but they must not
-  /// trap. Same rules as local() (concurrent, no allocation, lock or throw). Default: nothing.
+  /// value (to rounding what local() gives: agreement to 1e-12 relative). The lanes' samples and
+  /// this metric's scene attributes are in q.samples / q.attribute_row(). Lanes whose status is
+  /// not kReachable hold arbitrary quantities: a worst-case metric's outputs for them are
+  /// ignored; an averaging metric's are reduced, so they must be what local() gives for such a
+  /// sample. No lane may trap. Same rules as local() (concurrent, no allocation, lock or throw).
+  /// Default: nothing.
   virtual void local_block(const QuantityBlock& q, double* out) const {}
 };
 

@@ -243,8 +243,11 @@ class Problem {
                                     bool prune, bool prune_front) const;
   bool fold_block(const MechanismModel& model, EvalScratch& ws, const EvalOptions& options, const int* lane_sample,
                   int lanes, bool prune, bool prune_front) const;
+  void fold_block_sums(const MechanismModel& model, EvalScratch& ws, const int* lane_sample, int lanes) const;
+  void block_locals(EvalScratch& ws) const;
   [[noreturn]] void refuse_non_finite_block_local(const MechanismModel& model, EvalScratch& ws, int sample) const;
   void choose_block_path();
+  void order_extremes_first();
   bool start_lane(const double* free_design, int lane, EvalScratch& ws, Evaluation& out) const;
   bool fold_lane_sample(int lane, int sample, EvalScratch& ws, const EvalOptions& options, bool prune,
                         bool prune_front, Evaluation& out) const;

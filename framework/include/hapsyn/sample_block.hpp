@@ -38,11 +38,30 @@ struct QuantityBlock {
   int jacobian_rows = 0, jacobian_cols = 0;            ///< shape of J (kNeedJacobian)
   int inertia_size = 0;                                ///< side of D (kNeedInertia)
   int effective_mass_size = 0;                         ///< side of M (kNeedEffectiveMass)
+  int gravity_size = 0;                                ///< joints of the gravity torque (kNeedGravity)
+  int actuator_count = 0;                              ///< joints of the actuator limits (kNeedActuatorLimits)
   alignas(64) double jacobian[kBlockMaxEntries][kBlockLanes] = {};
   alignas(64) double inertia[kBlockMaxEntries][kBlockLanes] = {};
   alignas(64) double effective_mass[kBlockMaxEntries][kBlockLanes] = {};
+  alignas(64) double gravity[kMaxTask][kBlockLanes] = {};  ///< [N m] per joint and lane
+  double max_velocity[kMaxTask] = {};  ///< actuator velocity limits [rad/s]: the design's, the same for every lane
+  double max_torque[kMaxTask] = {};    ///< actuator torque limits [N m]: the design's
+
+  /// Set by the evaluator before each metric's local_block(), like SampleQuantities::sample and
+  /// ::attributes: the scene index of each lane's sample (lanes at or beyond the block's count
+  /// repeat a valid one), and the scene attributes that metric lists in scene_attributes().
+  const int* samples = nullptr;
+  const AttributeMatrix* const* attributes = nullptr;
+  int attribute_count = 0;
 
   SampleStatus lane_status(int lane) const { return static_cast<SampleStatus>(status[lane]); }
+  /// Row of lane `lane`'s sample in the calling metric's k-th scene attribute, or null when the
+  /// evaluator did not resolve it.
+  const double* attribute_row(int k, int lane) const {
+    if (!attributes || !samples || k < 0 || k >= attribute_count || !attributes[k]) return nullptr;
+    const int sample = samples[lane];
+    return sample >= 0 && sample < attributes[k]->rows() ? attributes[k]->row(sample).data() : nullptr;
+  }
 };
 
 }  // namespace hapsyn

@@ -39,6 +39,8 @@
 ///   only when asked for: the other flags run the same code as before.
 #include <hapsyn/mechanism.hpp>
 #include <hapsyn/options.hpp>
+#include <hapsyn/lanes.hpp>
+#include <hapsyn/sample_block.hpp>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -220,6 +222,17 @@ class Haptic6RModel final : public MechanismModel {
 
   void solve(const double* pose, Needs needs, MechanismScratch& scratch,
              SampleQuantities& out) const override;
+  /// The block kernel (docs/design.md section 14): the IK, selection and classification per lane
+  /// as solve() does them (the same statuses), then the Jacobian, inertia and gravity torque of
+  /// every lane at once (haptic6r_block.cpp); agreement with solve() to 1e-12 relative. Serves
+  /// needs within kNeedPose | kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits
+  /// (Haptic6R::solves_blocks).
+  void solve_block(const PoseBlock& poses, Needs needs, MechanismScratch& scratch, QuantityBlock& out) const override;
+  /// The first half of solve() for one pose: its status, q as solve() sets it, and for a
+  /// reachable or singular pose the chosen configuration's DH-angle cosines and sines.
+  SampleStatus configuration(const double* pose, Vector6d& q, JointTrig& trig) const {
+    return configuration_impl(pose, q, trig);
+  }
 
   /// Every closed-form IK solution of the target (joint limits ignored), q [rad] wrapped into
   /// [-pi, pi). \return the count (0..8); solutions[0..count). With `trig`, also each solution's
@@ -240,6 +253,12 @@ class Haptic6RModel final : public MechanismModel {
   /// Jacobian, inertia and gravity at q from one forward pass (what solve() computes for a
   /// reachable sample); any pointer may be null.
   void quantities(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const;
+  /// quantities() for up to kBlockLanes configurations at once, one per SIMD lane: lane i of
+  /// `out` holds the Jacobian, inertia, gravity torque and actuator limits (those in `needs`) at
+  /// q[i], i < count (status kReachable; later lanes kUnreachable). Agreement with quantities()
+  /// to 1e-12 relative. \throws Error("haptic6r: quantities_block: count = ...") unless
+  /// 1 <= count <= kBlockLanes.
+  void quantities_block(const Vector6d* q, int count, Needs needs, QuantityBlock& out) const;
 
   const std::array<Haptic6RBody, 6>& bodies() const { return bodies_; }
   const Vector6d& max_velocity() const { return max_velocity_; }  ///< [rad/s]
@@ -256,6 +275,11 @@ class Haptic6RModel final : public MechanismModel {
   // of its wrapper: solve_sample and inverse_kinematics_impl in haptic6r_kinematics.cpp,
   // quantities_impl in haptic6r_dynamics.cpp.
   void solve_sample(const double* pose, Needs needs, SampleQuantities& out) const;
+  SampleStatus configuration_impl(const double* pose, Vector6d& q, JointTrig& trig) const;
+  SampleStatus configure(const double* pose, Vector6d& q, JointTrig& trig) const;  // inlined into both
+  void solve_block_impl(const PoseBlock& poses, Needs needs, QuantityBlock& out) const;
+  void quantities_block_impl(const Vector6d* q, int count, Needs needs, QuantityBlock& out) const;
+  void fill_block(const Lanes* cosine, const Lanes* sine, Needs needs, QuantityBlock& out) const;  // inlined into both
   int inverse_kinematics_impl(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions,
                               std::array<JointTrig, 8>* trig) const;
   void quantities_impl(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const;
@@ -288,6 +312,9 @@ class Haptic6R final : public Mechanism {
   /// kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits | kNeedJointVelocity |
   /// kNeedJointAcceleration | kNeedVelocityTorque.
   Needs provides() const override;
+  /// True for needs within kNeedPose | kNeedJacobian | kNeedInertia | kNeedGravity |
+  /// kNeedActuatorLimits (Haptic6RModel::solve_block); the demanded motion stays per sample.
+  bool solves_blocks(Needs needs) const override;
 
   const Haptic6RSetup& setup() const { return setup_; }
 

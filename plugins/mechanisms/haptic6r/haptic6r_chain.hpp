@@ -8,6 +8,7 @@
 #include "haptic6r.hpp"
 
 #include <hapsyn/fast_math.hpp>
+#include <hapsyn/lanes.hpp>
 
 #include <Eigen/Core>
 #include <array>
@@ -19,32 +20,47 @@ namespace hapsyn::plugins::haptic6r_chain {
 // Plain arrays, not Eigen 3-vectors: the per-sample kernels are scalar code with many
 // live values, and Eigen's 2-wide packing of 3-vectors spilled halves to the stack and read
 // them back as pairs (store-forwarding stalls that cost more than the arithmetic).
-struct Chain {
-  double x[7][3], y[7][3], z[7][3], o[7][3];
+// T = double for one sample, T = hapsyn::Lanes for a block of samples (hapsyn/lanes.hpp): the
+// kernels below are templates on it, one source for the per-sample and the block path.
+template <typename T>
+struct ChainOf {
+  T x[7][3], y[7][3], z[7][3], o[7][3];
 };
+using Chain = ChainOf<double>;
+
+[[gnu::always_inline]] inline void assign(double& t, double value) { t = value; }
+[[gnu::always_inline]] inline void assign(Lanes& t, double value) { t = Lanes::splat(value); }
 
 // R_{i+1} = R_i Rz(theta) Rx(alpha) column by column, o_{i+1} = o_i + R_i (a ct, a st, d):
 // 24 multiplications per joint instead of a 3x3 product.
-[[gnu::always_inline]] inline void chain_from(const JointTrig& trig, const std::array<double, 6>& d, const std::array<double, 6>& a,
-                const std::array<double, 6>& ca, const std::array<double, 6>& sa, Chain& c) {
+// cosine[i], sine[i]: of the DH angle theta_i (i = 0..5).
+template <typename T>
+[[gnu::always_inline]] inline void chain_from(const T* cosine, const T* sine, const std::array<double, 6>& d,
+                                              const std::array<double, 6>& a, const std::array<double, 6>& ca,
+                                              const std::array<double, 6>& sa, ChainOf<T>& c) {
   for (int r = 0; r < 3; ++r) {
-    c.x[0][r] = r == 0 ? 1.0 : 0.0;
-    c.y[0][r] = r == 1 ? 1.0 : 0.0;
-    c.z[0][r] = r == 2 ? 1.0 : 0.0;
-    c.o[0][r] = 0.0;
+    assign(c.x[0][r], r == 0 ? 1.0 : 0.0);
+    assign(c.y[0][r], r == 1 ? 1.0 : 0.0);
+    assign(c.z[0][r], r == 2 ? 1.0 : 0.0);
+    assign(c.o[0][r], 0.0);
   }
   for (std::size_t i = 0; i < 6; ++i) {
-    const double ct = trig.c[i], st = trig.s[i];
+    const T ct = cosine[i], st = sine[i];
     for (int r = 0; r < 3; ++r) {
-      const double xr = c.x[i][r], yr = c.y[i][r], zr = c.z[i][r];
-      const double x_new = ct * xr + st * yr;
-      const double u = ct * yr - st * xr;
+      const T xr = c.x[i][r], yr = c.y[i][r], zr = c.z[i][r];
+      const T x_new = ct * xr + st * yr;
+      const T u = ct * yr - st * xr;
       c.x[i + 1][r] = x_new;
       c.y[i + 1][r] = ca[i] * u + sa[i] * zr;
       c.z[i + 1][r] = ca[i] * zr - sa[i] * u;
       c.o[i + 1][r] = c.o[i][r] + a[i] * x_new + d[i] * zr;
     }
   }
+}
+
+[[gnu::always_inline]] inline void chain_from(const JointTrig& trig, const std::array<double, 6>& d, const std::array<double, 6>& a,
+                const std::array<double, 6>& ca, const std::array<double, 6>& sa, Chain& c) {
+  chain_from(trig.c.data(), trig.s.data(), d, a, ca, sa, c);
 }
 
 [[gnu::always_inline]] inline void chain_from(const Vector6d& q, const std::array<double, 6>& offset, const std::array<double, 6>& d,
@@ -59,12 +75,12 @@ struct Chain {
 }
 
 // Geometric Jacobian of E, column i = (z_i, z_i x (p - o_i)), written into `j` (6 x 6).
-template <typename Matrix>
-[[gnu::always_inline]] inline void jacobian_from(const Chain& c, Matrix& j) {
-  const double* p = c.o[6];
+template <typename T, typename Matrix>
+[[gnu::always_inline]] inline void jacobian_from(const ChainOf<T>& c, Matrix& j) {
+  const T* p = c.o[6];
   for (int i = 0; i < 6; ++i) {
-    const double* z = c.z[i];
-    const double rx = p[0] - c.o[i][0], ry = p[1] - c.o[i][1], rz = p[2] - c.o[i][2];
+    const T* z = c.z[i];
+    const T rx = p[0] - c.o[i][0], ry = p[1] - c.o[i][1], rz = p[2] - c.o[i][2];
     j(0, i) = z[0];
     j(1, i) = z[1];
     j(2, i) = z[2];
@@ -80,15 +96,14 @@ template <typename Matrix>
 // through o_j) gives it the linear momentum P = z_j x (h - M o_j) and the angular momentum about
 // the origin L = K z_j - h x (z_j x o_j); then H_ij = z_i . (L - o_i x P) = z_i . L - (z_i x o_i) . P
 // for i <= j, and the holding torque tau_j = z_j . ((h - M o_j) x g e_z).
-template <typename InertiaMatrix, typename GravityVector>
-[[gnu::always_inline]] inline void dynamics_from(const Chain& c, const std::array<Haptic6RBody, 6>& bodies, double g, InertiaMatrix* inertia,
+template <typename T, typename InertiaMatrix, typename GravityVector>
+[[gnu::always_inline]] inline void dynamics_from(const ChainOf<T>& c, const std::array<Haptic6RBody, 6>& bodies, double g, InertiaMatrix* inertia,
                    GravityVector* gravity) {
-  double mass = 0.0;
-  double h[3] = {0.0, 0.0, 0.0};
-  double kxx = 0.0, kyy = 0.0, kzz = 0.0, kxy = 0.0, kxz = 0.0, kyz = 0.0;
-  double arm[6][3];  // z_i x o_i
+  T mass, h[3], kxx, kyy, kzz, kxy, kxz, kyz;
+  for (T* t : {&mass, &h[0], &h[1], &h[2], &kxx, &kyy, &kzz, &kxy, &kxz, &kyz}) assign(*t, 0.0);
+  T arm[6][3];  // z_i x o_i
   for (int i = 0; i < 6; ++i) {
-    const double *z = c.z[i], *o = c.o[i];
+    const T *z = c.z[i], *o = c.o[i];
     arm[i][0] = z[1] * o[2] - z[2] * o[1];
     arm[i][1] = z[2] * o[0] - z[0] * o[2];
     arm[i][2] = z[0] * o[1] - z[1] * o[0];
@@ -97,14 +112,14 @@ template <typename InertiaMatrix, typename GravityVector>
     const Haptic6RBody& b = bodies[static_cast<std::size_t>(j)];
     if (b.mass > 0.0) {
       const int f = j + 1;  // body j lives in DH frame j + 1
-      const double *X = c.x[f], *Y = c.y[f], *Z = c.z[f];
+      const T *X = c.x[f], *Y = c.y[f], *Z = c.z[f];
       const double lx = b.com.x(), ly = b.com.y(), lz = b.com.z();
-      double com[3];
+      T com[3];
       for (int r = 0; r < 3; ++r) com[r] = c.o[f][r] + X[r] * lx + Y[r] * ly + Z[r] * lz;
       // R I R^T with I the body's inertia about its centre of mass in its frame: A = R I, then
       // K_ab = sum_k A_ak R_bk (only the six distinct entries).
       const Eigen::Matrix3d& in = b.inertia;
-      double A[3][3];  // A[r][k]
+      T A[3][3];  // A[r][k]
       if (in(0, 1) == 0.0 && in(0, 2) == 0.0 && in(1, 2) == 0.0) {
         // Principal axes along the frame's (every body of the docs/design.md model): A = R diag(I).
         for (int r = 0; r < 3; ++r) {
@@ -124,7 +139,7 @@ template <typename InertiaMatrix, typename GravityVector>
       kxz += A[0][0] * X[2] + A[0][1] * Y[2] + A[0][2] * Z[2];
       kyz += A[1][0] * X[2] + A[1][1] * Y[2] + A[1][2] * Z[2];
       // Point mass at com about the origin: m (|c|^2 1 - c c^T).
-      const double mx = b.mass * com[0], my = b.mass * com[1], mz = b.mass * com[2];
+      const T mx = b.mass * com[0], my = b.mass * com[1], mz = b.mass * com[2];
       kxx += my * com[1] + mz * com[2];
       kyy += mx * com[0] + mz * com[2];
       kzz += mx * com[0] + my * com[1];
@@ -136,18 +151,18 @@ template <typename InertiaMatrix, typename GravityVector>
       h[2] += mz;
       mass += b.mass;
     }
-    const double *zj = c.z[j], *oj = c.o[j];
-    const double lever[3] = {h[0] - mass * oj[0], h[1] - mass * oj[1], h[2] - mass * oj[2]};  // M (c - o_j)
+    const T *zj = c.z[j], *oj = c.o[j];
+    const T lever[3] = {h[0] - mass * oj[0], h[1] - mass * oj[1], h[2] - mass * oj[2]};  // M (c - o_j)
     if (inertia) {
-      const double momentum[3] = {zj[1] * lever[2] - zj[2] * lever[1], zj[2] * lever[0] - zj[0] * lever[2],
+      const T momentum[3] = {zj[1] * lever[2] - zj[2] * lever[1], zj[2] * lever[0] - zj[0] * lever[2],
                                   zj[0] * lever[1] - zj[1] * lever[0]};
-      const double* aj = arm[j];
-      const double angular[3] = {kxx * zj[0] + kxy * zj[1] + kxz * zj[2] - (h[1] * aj[2] - h[2] * aj[1]),
+      const T* aj = arm[j];
+      const T angular[3] = {kxx * zj[0] + kxy * zj[1] + kxz * zj[2] - (h[1] * aj[2] - h[2] * aj[1]),
                                  kxy * zj[0] + kyy * zj[1] + kyz * zj[2] - (h[2] * aj[0] - h[0] * aj[2]),
                                  kxz * zj[0] + kyz * zj[1] + kzz * zj[2] - (h[0] * aj[1] - h[1] * aj[0])};
       for (int i = 0; i <= j; ++i) {
-        const double *zi = c.z[i], *ai = arm[i];
-        const double value = zi[0] * angular[0] + zi[1] * angular[1] + zi[2] * angular[2] -
+        const T *zi = c.z[i], *ai = arm[i];
+        const T value = zi[0] * angular[0] + zi[1] * angular[1] + zi[2] * angular[2] -
                              (ai[0] * momentum[0] + ai[1] * momentum[1] + ai[2] * momentum[2]);
         (*inertia)(i, j) = value;
         (*inertia)(j, i) = value;

@@ -281,15 +281,16 @@ void into_limits(Vector6d& q, const Haptic6RSetup& o) {
 }
 }  // namespace
 
-HAPSYN_MULTIVERSION
-void Haptic6RModel::solve_sample(const double* pose, Needs needs, SampleQuantities& out) const {
-  out.q.resize(6);
+// The first half of solve(): IK, selection and classification of the pose. Sets q (zero when
+// unreachable, the first solution when invalid, the chosen one in the limits otherwise) and,
+// for kReachable and kSingular, the chosen configuration's DH-angle cosines and sines.
+[[gnu::always_inline]] inline SampleStatus Haptic6RModel::configure(const double* pose, Vector6d& q,
+                                                                   JointTrig& chosen_trig) const {
   Eigen::Quaterniond quat(pose[3], pose[4], pose[5], pose[6]);
   const double qn = quat.norm();
   if (!(qn > 1e-9) || !std::isfinite(qn) || !std::isfinite(pose[0] + pose[1] + pose[2])) {
-    out.status = SampleStatus::kUnreachable;
-    out.q.setZero();
-    return;
+    q.setZero();
+    return SampleStatus::kUnreachable;
   }
   quat.coeffs() /= qn;
   Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
@@ -299,34 +300,42 @@ void Haptic6RModel::solve_sample(const double* pose, Needs needs, SampleQuantiti
   std::array<JointTrig, 8> trig;
   const int count = inverse_kinematics_impl(target, solutions, &trig);
   if (count == 0) {
-    out.status = SampleStatus::kUnreachable;
-    out.q.setZero();
-    return;
+    q.setZero();
+    return SampleStatus::kUnreachable;
   }
   const int chosen = select(solutions, count);
   if (chosen < 0) {
-    out.status = SampleStatus::kInvalid;
-    out.q = solutions[0];
-    return;
+    q = solutions[0];
+    return SampleStatus::kInvalid;
   }
-  Vector6d q = solutions[static_cast<std::size_t>(chosen)];
+  q = solutions[static_cast<std::size_t>(chosen)];
   into_limits(q, *setup_);
-  out.q = q;
   const double tol = setup_->options.singularity_tolerance;
   const Eigen::Vector3d& approach = target.linear().col(2);
   const double wrist = norm2(approach.x(), approach.y());
-  const JointTrig& chosen_trig = trig[static_cast<std::size_t>(chosen)];
+  chosen_trig = trig[static_cast<std::size_t>(chosen)];
   const double sin2 = chosen_trig.s[1];
   const double cos4 = chosen_trig.c[3];  // l4 vertical when cos(theta4) = 0
-  if (std::abs(sin2) < tol || std::abs(cos4) < tol || wrist < tol) {
-    out.status = SampleStatus::kSingular;
-    return;
-  }
-  out.status = SampleStatus::kReachable;
+  if (std::abs(sin2) < tol || std::abs(cos4) < tol || wrist < tol) return SampleStatus::kSingular;
+  return SampleStatus::kReachable;
+}
+
+HAPSYN_MULTIVERSION
+SampleStatus Haptic6RModel::configuration_impl(const double* pose, Vector6d& q, JointTrig& trig) const {
+  return configure(pose, q, trig);
+}
+
+HAPSYN_MULTIVERSION
+void Haptic6RModel::solve_sample(const double* pose, Needs needs, SampleQuantities& out) const {
+  Vector6d q;
+  JointTrig trig;
+  out.status = configure(pose, q, trig);
+  out.q = q;
+  if (out.status != SampleStatus::kReachable) return;
   constexpr Needs kMotion = kNeedJointVelocity | kNeedJointAcceleration | kNeedVelocityTorque;
   if (needs & (kNeedJacobian | kNeedInertia | kNeedGravity | kMotion)) {
     haptic6r_chain::Chain f;
-    haptic6r_chain::chain_from(trig[static_cast<std::size_t>(chosen)], d_, a_, ca_, sa_, f);
+    haptic6r_chain::chain_from(trig, d_, a_, ca_, sa_, f);
     if (needs & kNeedJacobian) {
       out.jacobian.resize(6, 6);
       haptic6r_chain::jacobian_from(f, out.jacobian);

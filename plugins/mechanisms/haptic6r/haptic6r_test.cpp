@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -638,4 +639,72 @@ TEST(Haptic6R, DataFilesThatAreNotRegularFilesAreRefusedWithoutBlocking) {
   expect_error([] { read_actuator_table("/tmp"); }, {"haptic6r: data file /tmp is not a regular file (a directory)"});
   expect_error([] { read_actuator_table("/nonexistent/actuators.json"); },
                {"haptic6r: cannot read data file /nonexistent/actuators.json: No such file or directory"});
+}
+
+namespace {
+// |a - b| within 1e-12 of the larger magnitude (and of 1 near zero).
+bool close(double a, double b) { return std::abs(a - b) <= 1e-12 * std::max({1.0, std::abs(a), std::abs(b)}); }
+}  // namespace
+
+TEST(Haptic6R, BlockKernelEqualsSolveLaneByLane) {
+  // Poses of random configurations (reachable), their singular and boundary neighbours, poses
+  // out of reach and a degenerate quaternion, in blocks of every fill (1..8 lanes).
+  std::mt19937 rng(17);
+  auto scratch = std::make_unique<MechanismScratch>();
+  const Needs all = kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits;
+  EXPECT_TRUE(haptic6r().solves_blocks(all));
+  EXPECT_FALSE(haptic6r().solves_blocks(all | kNeedJointVelocity));  // the demanded motion stays per sample
+  long reachable = 0, other = 0;
+  for (int d = 0; d < 6; ++d) {
+    Fixture f(d == 0 ? paper_like_design() : random_design(rng));
+    std::vector<std::array<double, 7>> poses;
+    for (int k = 0; k < 40; ++k) {
+      Vector6d q = random_q(rng);
+      if (k % 5 == 1) q(1) = 0.0;  // SCARA stretched: singular
+      if (k % 5 == 2) q(3) = 0.0;  // l4 vertical: singular
+      std::array<double, 7> row = pose_row(f.model.forward(q));
+      if (k % 7 == 3) row[2] += 5.0;  // out of reach
+      if (k % 11 == 4) row[3] = row[4] = row[5] = row[6] = 0.0;  // no rotation
+      poses.push_back(row);
+    }
+    std::size_t first = 0;
+    for (int count = 1; first < poses.size(); count = count % kBlockLanes + 1) {
+      const int n = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(count), poses.size() - first));
+      double coordinates[7][kBlockLanes];
+      PoseBlock block;
+      block.dimension = 7;
+      block.count = n;
+      for (int c = 0; c < 7; ++c) {
+        for (int lane = 0; lane < kBlockLanes; ++lane) {
+          coordinates[c][lane] = poses[first + static_cast<std::size_t>(std::min(lane, n - 1))][static_cast<std::size_t>(c)];
+        }
+        block.coordinate[c] = coordinates[c];
+      }
+      auto out = std::make_unique<QuantityBlock>();
+      f.model.solve_block(block, all, *scratch, *out);
+      for (int lane = 0; lane < n; ++lane) {
+        SampleQuantities expected;
+        f.model.solve(poses[first + static_cast<std::size_t>(lane)].data(), all, *scratch, expected);
+        ASSERT_EQ(out->lane_status(lane), expected.status) << "design " << d << ", pose " << first + lane;
+        if (expected.status != SampleStatus::kReachable) {
+          ++other;
+          continue;
+        }
+        ++reachable;
+        for (int r = 0; r < 6; ++r) {
+          EXPECT_TRUE(close(out->gravity[r][lane], expected.gravity(r))) << "g(" << r << ")";
+          EXPECT_EQ(out->max_velocity[r], expected.max_velocity(r));
+          EXPECT_EQ(out->max_torque[r], expected.max_torque(r));
+          for (int c = 0; c < 6; ++c) {
+            EXPECT_TRUE(close(out->jacobian[r * 6 + c][lane], expected.jacobian(r, c))) << "J(" << r << ", " << c << ")";
+            EXPECT_TRUE(close(out->inertia[r * 6 + c][lane], expected.inertia(r, c))) << "H(" << r << ", " << c << ")";
+          }
+        }
+      }
+      for (int lane = n; lane < kBlockLanes; ++lane) EXPECT_EQ(out->lane_status(lane), SampleStatus::kUnreachable);
+      first += static_cast<std::size_t>(n);
+    }
+  }
+  EXPECT_GT(reachable, 100);  // both kinds of lanes were exercised
+  EXPECT_GT(other, 50);
 }

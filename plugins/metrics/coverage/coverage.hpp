@@ -12,6 +12,7 @@
 /// n_reach^h is the sample count. A manipulator-unreachable (or singular / invalid) sample adds
 /// 0 to n_reach^m and to every eta sum. With n_reach^m = 0, J_v = J_a = J_f = 0.
 #include <hapsyn/metric.hpp>
+#include <hapsyn/sample_block.hpp>
 #include <hapsyn/options.hpp>
 
 #include <Eigen/Core>
@@ -62,6 +63,10 @@ class Coverage final : public Metric {
   explicit Coverage(const CoverageOptions& options);
 
   void local(const SampleQuantities& q, double* out) const override;
+  /// The block path (coverage_block.cpp, docs/design.md section 14): local() for every lane, one
+  /// sample per SIMD lane (agreement to 1e-12 relative).
+  bool has_local_block() const override { return true; }
+  void local_block(const QuantityBlock& q, double* out) const override;
   /// pose only: kNeedPose; velocity: Jacobian + ActuatorLimits; acceleration: + Inertia +
   /// Gravity; force: Jacobian + Gravity + ActuatorLimits.
   Needs needs() const override;
@@ -87,6 +92,12 @@ class Coverage final : public Metric {
   static bool solve_jacobian(const Matrix6& jacobian, Eigen::Matrix<double, 6, 6>& x);
   static bool solve_jacobian(const Matrix6& jacobian, Eigen::Matrix<double, 6, 12>& x);
 
+  /// solve_jacobian() for every lane of a block, one per SIMD lane: J is q's Jacobian (6 x 6
+  /// per lane); x holds the right-hand sides on entry and the solutions on exit, entry (r, c) of
+  /// lane i at x[r * 6 + c][i]. regular[i] is 1 when lane i's elimination met no zero pivot (x
+  /// is then its solution, to 1e-12 relative of solve_jacobian()), else 0 (x finite, unspecified).
+  static void solve_jacobian_block(const QuantityBlock& q, double (*x)[kBlockLanes], double* regular);
+
   /// eq. 13 with A = J^-1 M_v (one LU of J). Singular J (non-finite A): 0.
   static double eta_velocity(const Matrix6& jacobian, const Matrix6& m_v, const Vector6& max_velocity);
   /// eq. 16 with B = H J^-1 M_a.
@@ -99,6 +110,8 @@ class Coverage final : public Metric {
  private:
   // local()'s body, compiled for AVX2/FMA and baseline CPUs (see hapsyn/multiversion.hpp).
   void local_sample(const SampleQuantities& q, double* out) const;
+  // local_block()'s body, compiled for AVX-512, AVX2/FMA and baseline CPUs.
+  void local_block_impl(const QuantityBlock& q, double* out) const;
 
   CoverageOptions options_;
   // The selected terms (options_.terms as flags: local() runs per sample).

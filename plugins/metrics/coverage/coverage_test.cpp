@@ -351,3 +351,95 @@ TEST(Coverage, EvaluatorHandsEachMetricItsAttributeRowsInDeclaredOrder) {
   q.sample = 0;
   EXPECT_EQ(q.attribute_row(0), nullptr);
 }
+
+TEST(Coverage, BlockLocalsEqualLocalLaneByLane) {
+  // Random J, H, g, limits and M_v, M_a per lane; among them a J with a zero column (a zero pivot:
+  // the elimination gives up), a nearly singular J (large but finite solutions), rows needing the
+  // pivot swap, and lanes that are not reachable.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  AttributeMatrix m_v(kBlockLanes, 36), m_a(kBlockLanes, 36);
+  for (int r = 0; r < kBlockLanes; ++r) {
+    for (int c = 0; c < 36; ++c) {
+      m_v(r, c) = 2.0 * u(rng);
+      m_a(r, c) = 20.0 * u(rng);
+    }
+  }
+  const std::vector<std::vector<std::string>> term_sets = {
+      {"pose"}, {"velocity"}, {"acceleration"}, {"force"}, {"pose", "velocity", "acceleration", "force"}, {"acceleration", "velocity"}};
+  for (int trial = 0; trial < 40; ++trial) {
+    auto block = std::make_unique<QuantityBlock>();
+    std::array<SampleQuantities, kBlockLanes> single;
+    block->jacobian_rows = block->jacobian_cols = block->inertia_size = block->gravity_size = block->actuator_count = 6;
+    Vector6 max_velocity, max_torque;
+    for (int i = 0; i < 6; ++i) {
+      max_velocity(i) = 1.0 + 4.0 * std::abs(u(rng));
+      max_torque(i) = 5.0 + 50.0 * std::abs(u(rng));
+      block->max_velocity[i] = max_velocity(i);
+      block->max_torque[i] = max_torque(i);
+    }
+    for (int lane = 0; lane < kBlockLanes; ++lane) {
+      Matrix6 j = Matrix6::NullaryExpr([&] { return u(rng); });
+      if (lane == 1) j.col(2).setZero();                                  // singular: a zero pivot
+      if (lane == 2) j.col(4) = j.col(1) + 1e-13 * Vector6::Ones();       // nearly singular
+      if (lane == 3) j.row(0).setZero(), j(0, 5) = 1e-3;                  // pivots far from the diagonal
+      const Matrix6 h = [&] {
+        const Matrix6 a = Matrix6::NullaryExpr([&] { return u(rng); });
+        return Matrix6(a * a.transpose() + Matrix6::Identity());
+      }();
+      const Vector6 g = Vector6::NullaryExpr([&] { return 3.0 * u(rng); });
+      SampleQuantities& q = single[static_cast<std::size_t>(lane)];
+      q.status = (lane + trial) % 5 == 4 ? SampleStatus::kSingular : SampleStatus::kReachable;
+      q.jacobian = j;
+      q.inertia = h;
+      q.gravity = g;
+      q.max_velocity = max_velocity;
+      q.max_torque = max_torque;
+      q.sample = lane;
+      block->status[lane] = static_cast<std::int32_t>(q.status);
+      for (int r = 0; r < 6; ++r) {
+        block->gravity[r][lane] = g(r);
+        for (int c = 0; c < 6; ++c) {
+          block->jacobian[r * 6 + c][lane] = j(r, c);
+          block->inertia[r * 6 + c][lane] = h(r, c);
+        }
+      }
+    }
+    int samples[kBlockLanes];
+    for (int lane = 0; lane < kBlockLanes; ++lane) samples[lane] = lane;
+    block->samples = samples;
+    for (const std::vector<std::string>& terms : term_sets) {
+      const Coverage metric = coverage(Json{{"terms", terms}});
+      std::vector<const AttributeMatrix*> attributes;
+      for (const std::string& name : metric.scene_attributes()) attributes.push_back(name == "M_v" ? &m_v : &m_a);
+      block->attributes = attributes.data();
+      block->attribute_count = static_cast<int>(attributes.size());
+      const std::size_t k = metric.locals().size();
+      std::vector<double> lanes(k * kBlockLanes), one(k);
+      metric.local_block(*block, lanes.data());
+      for (int lane = 0; lane < kBlockLanes; ++lane) {
+        SampleQuantities& q = single[static_cast<std::size_t>(lane)];
+        q.attributes = attributes.data();
+        q.attribute_count = static_cast<int>(attributes.size());
+        metric.local(q, one.data());
+        for (std::size_t i = 0; i < k; ++i) {
+          const double b = lanes[i * kBlockLanes + static_cast<std::size_t>(lane)];
+          EXPECT_NEAR(b, one[i], 1e-12 * std::max(1.0, std::abs(one[i])))
+              << "trial " << trial << ", lane " << lane << ", local " << metric.locals()[i].name << ", terms " << Json(terms).dump();
+        }
+      }
+    }
+  }
+}
+
+TEST(Coverage, BlockLocalsNameAMissingAttribute) {
+  auto block = std::make_unique<QuantityBlock>();
+  block->jacobian_rows = block->jacobian_cols = 6;
+  for (int lane = 0; lane < kBlockLanes; ++lane) block->status[lane] = static_cast<std::int32_t>(SampleStatus::kReachable);
+  std::vector<double> out(3 * kBlockLanes);
+  const std::string message = hapsyn::test::error_of([&] { coverage(Json{{"terms", {"velocity"}}}).local_block(*block, out.data()); });
+  EXPECT_NE(message.find("coverage: the velocity term needs the scene attribute M_v"), std::string::npos) << message;
+  block->jacobian_rows = 3;
+  const std::string shape = hapsyn::test::error_of([&] { coverage(Json{{"terms", {"force"}}}).local_block(*block, out.data()); });
+  EXPECT_NE(shape.find("coverage: the mechanism's Jacobian is 3x6"), std::string::npos) << shape;
+}

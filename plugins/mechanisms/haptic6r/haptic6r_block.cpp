@@ -1,0 +1,113 @@
+// Haptic6RModel's block kernel (docs/design.md section 14): the IK and its selection stay per
+// lane (branchy, up to eight solutions), the forward chain, Jacobian, inertia and gravity torque
+// run once for the block, one sample per lane (the haptic6r_chain.hpp kernels with T = Lanes).
+#include "haptic6r.hpp"
+#include "haptic6r_chain.hpp"
+
+#include <hapsyn/error.hpp>
+#include <hapsyn/fast_math.hpp>
+#include <hapsyn/lanes.hpp>
+#include <hapsyn/multiversion.hpp>
+
+#include <algorithm>
+#include <cstddef>
+#include <string>
+
+namespace hapsyn::plugins {
+
+namespace {
+
+constexpr Needs kBlockNeeds = kNeedPose | kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits;
+
+// Entry (r, c) of a QuantityBlock matrix with `cols` columns, as the lanes of one sample each.
+// The block's rows are 64-byte aligned arrays of kBlockLanes doubles: the layout of Lanes.
+struct BlockMatrix {
+  double (*entries)[kBlockLanes];
+  int cols;
+  [[gnu::always_inline]] Lanes& operator()(int r, int c) const { return reinterpret_cast<Lanes&>(entries[r * cols + c]); }
+  [[gnu::always_inline]] Lanes& operator()(int r) const { return reinterpret_cast<Lanes&>(entries[r]); }
+};
+
+}  // namespace
+
+bool Haptic6R::solves_blocks(Needs needs) const { return (needs & ~kBlockNeeds) == 0; }
+
+// The block's Jacobian, inertia and gravity torque (those in `needs`) from each lane's DH-angle
+// cosines and sines, with the chain kernels of haptic6r_chain.hpp at T = Lanes.
+[[gnu::always_inline]] inline void Haptic6RModel::fill_block(const Lanes* cosine, const Lanes* sine, Needs needs,
+                                                            QuantityBlock& out) const {
+  if (needs & kNeedActuatorLimits) {
+    out.actuator_count = 6;
+    for (int j = 0; j < 6; ++j) {
+      out.max_velocity[j] = max_velocity_(j);
+      out.max_torque[j] = max_torque_(j);
+    }
+  }
+  if (!(needs & (kNeedJacobian | kNeedInertia | kNeedGravity))) return;
+  haptic6r_chain::ChainOf<Lanes> chain;
+  haptic6r_chain::chain_from(cosine, sine, d_, a_, ca_, sa_, chain);
+  if (needs & kNeedJacobian) {
+    out.jacobian_rows = out.jacobian_cols = 6;
+    const BlockMatrix jacobian{out.jacobian, 6};
+    haptic6r_chain::jacobian_from(chain, jacobian);
+  }
+  if (needs & (kNeedInertia | kNeedGravity)) {
+    const BlockMatrix inertia{out.inertia, 6}, gravity{out.gravity, 1};
+    if (needs & kNeedInertia) out.inertia_size = 6;
+    if (needs & kNeedGravity) out.gravity_size = 6;
+    haptic6r_chain::dynamics_from(chain, bodies_, setup_->options.gravity, (needs & kNeedInertia) ? &inertia : nullptr,
+                                  (needs & kNeedGravity) ? &gravity : nullptr);
+  }
+}
+
+HAPSYN_MULTIVERSION_WIDE
+void Haptic6RModel::solve_block_impl(const PoseBlock& poses, Needs needs, QuantityBlock& out) const {
+  Lanes cosine[6], sine[6];
+  double pose[kBlockMaxCoordinates];
+  Vector6d q;
+  JointTrig trig;
+  for (int lane = 0; lane < kBlockLanes; ++lane) {
+    SampleStatus status = SampleStatus::kUnreachable;
+    if (lane < poses.count) {
+      for (int c = 0; c < poses.dimension; ++c) pose[c] = poses.coordinate[c][lane];
+      status = configuration_impl(pose, q, trig);
+    }
+    out.status[lane] = static_cast<std::int32_t>(status);
+    // Other lanes compute the zero configuration: finite values, ignored.
+    const bool chosen = status == SampleStatus::kReachable;
+    for (std::size_t i = 0; i < 6; ++i) {
+      cosine[i].v[lane] = chosen ? trig.c[i] : 1.0;
+      sine[i].v[lane] = chosen ? trig.s[i] : 0.0;
+    }
+  }
+  fill_block(cosine, sine, needs, out);
+}
+
+HAPSYN_MULTIVERSION_WIDE
+void Haptic6RModel::quantities_block_impl(const Vector6d* q, int count, Needs needs, QuantityBlock& out) const {
+  Lanes cosine[6], sine[6];
+  for (int lane = 0; lane < kBlockLanes; ++lane) {
+    const Vector6d& configuration = q[std::min(lane, count - 1)];
+    for (std::size_t i = 0; i < 6; ++i) {
+      double s = 0.0, c = 1.0;
+      fast::sin_cos(configuration(static_cast<Eigen::Index>(i)) + offset_[i], s, c);  // as quantities() does
+      cosine[i].v[lane] = c;
+      sine[i].v[lane] = s;
+    }
+    out.status[lane] = static_cast<std::int32_t>(lane < count ? SampleStatus::kReachable : SampleStatus::kUnreachable);
+  }
+  fill_block(cosine, sine, needs, out);
+}
+
+void Haptic6RModel::quantities_block(const Vector6d* q, int count, Needs needs, QuantityBlock& out) const {
+  if (count < 1 || count > kBlockLanes) {
+    throw Error("haptic6r", "quantities_block: count = " + std::to_string(count) + ": must be 1.." + std::to_string(kBlockLanes));
+  }
+  quantities_block_impl(q, count, needs, out);
+}
+
+void Haptic6RModel::solve_block(const PoseBlock& poses, Needs needs, MechanismScratch&, QuantityBlock& out) const {
+  solve_block_impl(poses, needs, out);
+}
+
+}  // namespace hapsyn::plugins

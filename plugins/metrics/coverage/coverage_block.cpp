@@ -1,0 +1,189 @@
+// Coverage's block path (docs/design.md section 14): local() for kBlockLanes samples at once, one
+// sample per lane. The elimination of J with partial pivoting picks each lane's own pivot row
+// and swaps rows by lane-wise selection, so every lane takes the pivots local() takes.
+#include "coverage.hpp"
+
+#include <hapsyn/error.hpp>
+#include <hapsyn/lanes.hpp>
+#include <hapsyn/multiversion.hpp>
+
+#include <limits>
+#include <string>
+
+namespace hapsyn::plugins {
+
+namespace {
+
+constexpr const char* kName = "coverage";
+
+// The lane's 6x6 row-major attribute (M_v or M_a); the errors are local()'s.
+const double* lane_attribute(const QuantityBlock& q, int index, int lane, const char* name, const char* term) {
+  const double* row = q.attribute_row(index, lane);
+  if (!row || q.attributes[index]->cols() != 36) {
+    throw Error(kName, std::string("the ") + term + " term needs the scene attribute " + name +
+                           " (36 values per sample) of each lane's sample; the block does not provide it");
+  }
+  return row;
+}
+
+// Solves J X = B in place for every lane (B: 6 x Cols right-hand sides). \return per lane 1
+// when every pivot was non-zero (the lane's J regular, as local() decides it), else 0.
+template <int Cols>
+[[gnu::always_inline]] inline Lanes eliminate_lanes(Lanes (&a)[6][6], Lanes (&b)[6][Cols]) {
+  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
+  Lanes regular = one;
+  for (int k = 0; k < 6; ++k) {
+    // The first row of largest |a(i, k)|, i >= k, per lane (local()'s strict comparison).
+    Lanes best = abs(a[k][k]), row = Lanes::splat(k);
+    for (int i = k + 1; i < 6; ++i) {
+      const Lanes candidate = abs(a[i][k]);
+      row = where_greater(candidate, best, Lanes::splat(i), row);
+      best = max(candidate, best);
+    }
+    regular = where_equal(best, zero, zero, regular);
+    for (int i = k + 1; i < 6; ++i) {  // swap rows k and the pivot row, lane by lane
+      const Lanes here = Lanes::splat(i);
+      for (int c = k; c < 6; ++c) {
+        const Lanes t = a[k][c];
+        a[k][c] = where_equal(row, here, a[i][c], t);
+        a[i][c] = where_equal(row, here, t, a[i][c]);
+      }
+      for (int c = 0; c < Cols; ++c) {
+        const Lanes t = b[k][c];
+        b[k][c] = where_equal(row, here, b[i][c], t);
+        b[i][c] = where_equal(row, here, t, b[i][c]);
+      }
+    }
+    // A zero pivot's lane is abandoned (not regular); dividing by 1 there keeps it finite.
+    const Lanes inverse_pivot = one / where_equal(a[k][k], zero, one, a[k][k]);
+    for (int i = k + 1; i < 6; ++i) {
+      const Lanes factor = a[i][k] * inverse_pivot;
+      for (int c = k; c < 6; ++c) a[i][c] -= factor * a[k][c];
+      for (int c = 0; c < Cols; ++c) b[i][c] -= factor * b[k][c];
+    }
+  }
+  for (int k = 5; k >= 0; --k) {
+    for (int c = k + 1; c < 6; ++c) {
+      for (int j = 0; j < Cols; ++j) b[k][j] -= a[k][c] * b[c][j];
+    }
+    const Lanes inverse = one / where_equal(a[k][k], zero, one, a[k][k]);
+    for (int j = 0; j < Cols; ++j) b[k][j] *= inverse;
+  }
+  return regular;
+}
+
+// local()'s min(1, min_i limit_i / (max_j |M_ij| + |extra_i|)) per lane, 0 for a lane with a
+// non-finite entry. `m(i, j)` gives entry (i, j) of the lane matrix.
+template <typename Entry>
+[[gnu::always_inline]] inline Lanes ratio_eta_lanes(const Entry& m, const double* limit, const Lanes* extra) {
+  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
+  // 0 * x is 0 for finite x and NaN for an infinite or NaN x: one sum marks a lane with any
+  // non-finite entry, without a comparison per entry.
+  Lanes eta = one, poison = zero;
+  for (int i = 0; i < 6; ++i) {
+    Lanes need = abs(m(i, 0));
+    poison += need * 0.0;
+    for (int j = 1; j < 6; ++j) {
+      const Lanes e = abs(m(i, j));
+      poison += e * 0.0;
+      need = max(e, need);
+    }
+    if (extra) need += abs(extra[i]);
+    poison += need * 0.0;
+    const Lanes bound = Lanes::splat(limit[i]);
+    eta = where_greater(need * eta, bound, bound / where_equal(need, zero, one, need), eta);
+  }
+  return where_equal(poison, zero, eta, zero);
+}
+
+}  // namespace
+
+HAPSYN_MULTIVERSION_WIDE
+void Coverage::local_block_impl(const QuantityBlock& q, double* out) const {
+  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
+  Lanes reachable;  // 1 or 0
+  for (int lane = 0; lane < kBlockLanes; ++lane) {
+    reachable.v[lane] = q.lane_status(lane) == SampleStatus::kReachable ? 1.0 : 0.0;
+  }
+  one.store(out);
+  reachable.store(out + kBlockLanes);
+  if (!(velocity_ || acceleration_ || force_)) return;
+  if (q.jacobian_rows != 6 || q.jacobian_cols != 6) {
+    throw Error(kName, "the mechanism's Jacobian is " + std::to_string(q.jacobian_rows) + "x" +
+                           std::to_string(q.jacobian_cols) + ": coverage needs a 6x6 (omega, v) Jacobian of a 6-joint arm");
+  }
+  Lanes jacobian[6][6], gravity[6];
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) jacobian[r][c] = Lanes::load(q.jacobian[r * 6 + c]);
+    gravity[r] = (acceleration_ || force_) ? Lanes::load(q.gravity[r]) : zero;
+  }
+  int k = 2;
+  if (velocity_ || acceleration_) {
+    // One elimination of J serves both terms: [M_v | M_a], as local() does it.
+    Lanes a[6][6], rhs[6][12];
+    for (int r = 0; r < 6; ++r) {
+      for (int c = 0; c < 6; ++c) a[r][c] = jacobian[r][c];
+    }
+    for (int lane = 0; lane < kBlockLanes; ++lane) {
+      const double* m_v = velocity_ ? lane_attribute(q, 0, lane, "M_v", "velocity") : nullptr;
+      const double* m_a = acceleration_ ? lane_attribute(q, velocity_ ? 1 : 0, lane, "M_a", "acceleration") : nullptr;
+      for (int r = 0; r < 6; ++r) {
+        for (int c = 0; c < 6; ++c) {
+          rhs[r][c].v[lane] = m_v ? m_v[r * 6 + c] : 0.0;
+          rhs[r][6 + c].v[lane] = m_a ? m_a[r * 6 + c] : 0.0;
+        }
+      }
+    }
+    const Lanes use = eliminate_lanes(a, rhs) * reachable;
+    if (velocity_) {
+      const auto velocity = [&](int i, int j) -> const Lanes& { return rhs[i][j]; };
+      where_equal(use, one, ratio_eta_lanes(velocity, q.max_velocity, nullptr), zero).store(out + kBlockLanes * k++);
+    }
+    if (acceleration_) {
+      Lanes torque[6][6];  // H J^-1 M_a
+      for (int r = 0; r < 6; ++r) {
+        for (int c = 0; c < 6; ++c) {
+          Lanes sum = Lanes::load(q.inertia[r * 6]) * rhs[0][6 + c];
+          for (int j = 1; j < 6; ++j) sum += Lanes::load(q.inertia[r * 6 + j]) * rhs[j][6 + c];
+          torque[r][c] = sum;
+        }
+      }
+      const auto entry = [&](int i, int j) -> const Lanes& { return torque[i][j]; };
+      where_equal(use, one, ratio_eta_lanes(entry, q.max_torque, gravity), zero).store(out + kBlockLanes * k++);
+    }
+  }
+  if (force_) {
+    // C = J^T diag(m_max I, f_max I): entry (i, j) is J(j, i) scaled by column j's bound.
+    Lanes c[6][6];
+    for (int i = 0; i < 6; ++i) {
+      for (int j = 0; j < 6; ++j) c[i][j] = jacobian[j][i] * (j < 3 ? options_.m_max : options_.f_max);
+    }
+    const auto entry = [&](int i, int j) -> const Lanes& { return c[i][j]; };
+    where_equal(reachable, one, ratio_eta_lanes(entry, q.max_torque, gravity), zero).store(out + kBlockLanes * k++);
+  }
+}
+
+void Coverage::local_block(const QuantityBlock& q, double* out) const { local_block_impl(q, out); }
+
+namespace {
+HAPSYN_MULTIVERSION_WIDE
+void solve_jacobian_lanes(const QuantityBlock& q, double (*x)[kBlockLanes], double* regular) {
+  Lanes a[6][6], b[6][6];
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) {
+      a[r][c] = Lanes::load(q.jacobian[r * 6 + c]);
+      b[r][c] = Lanes::load(x[r * 6 + c]);
+    }
+  }
+  eliminate_lanes(a, b).store(regular);
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) b[r][c].store(x[r * 6 + c]);
+  }
+}
+}  // namespace
+
+void Coverage::solve_jacobian_block(const QuantityBlock& q, double (*x)[kBlockLanes], double* regular) {
+  solve_jacobian_lanes(q, x, regular);
+}
+
+}  // namespace hapsyn::plugins
