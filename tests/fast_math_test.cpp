@@ -1,8 +1,10 @@
 // hapsyn/fast_math.hpp against libm: random arguments over many scales and every edge case.
 #include <hapsyn/fast_math.hpp>
+#include <hapsyn/lanes.hpp>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -76,6 +78,45 @@ TEST(FastMath, Atan2KeepsLibmsConventionsForZerosInfinitiesAndNaN) {
         EXPECT_EQ(std::signbit(fast), std::signbit(libm)) << "atan2(" << y << ", " << x << ")";
       }
     }
+  }
+}
+
+TEST(FastMath, LaneSinCosEqualsTheScalarCallLaneByLane) {
+  // The lane version (hapsyn/lanes.hpp) runs the same reduction and polynomials; compiled with
+  // the same flags, every lane is the scalar result bit for bit, in every quadrant, at the
+  // reduction's edges and for the arguments that fall back to libm.
+  std::mt19937_64 rng(9);
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  const double half_pi = 1.5707963267948966;
+  std::vector<double> xs = {0.0, -0.0, half_pi, -half_pi, 2 * half_pi, 3 * half_pi, -3 * half_pi, 1e6, -1e6,
+                            1e6 + 1.0, -2e6, 1e300, inf, -inf, nan, 0.25 * half_pi, 0.5 * half_pi, -0.5 * half_pi};
+  std::uniform_real_distribution<double> wide(-1e6, 1e6), narrow(-10.0, 10.0);
+  for (int i = 0; i < 40000; ++i) xs.push_back(i % 2 ? wide(rng) : narrow(rng));
+  while (xs.size() % hapsyn::kBlockLanes != 0) xs.push_back(narrow(rng));
+  for (std::size_t first = 0; first < xs.size(); first += hapsyn::kBlockLanes) {
+    const hapsyn::Lanes x = hapsyn::Lanes::load(xs.data() + first);
+    hapsyn::Lanes s, c;
+    hapsyn::sin_cos(x, s, c);
+    for (int lane = 0; lane < hapsyn::kBlockLanes; ++lane) {
+      double expected_s = 0.0, expected_c = 0.0;
+      hapsyn::fast::sin_cos(xs[first + static_cast<std::size_t>(lane)], expected_s, expected_c);
+      if (std::isnan(expected_s)) {
+        EXPECT_TRUE(std::isnan(s.v[lane]) && std::isnan(c.v[lane])) << xs[first + static_cast<std::size_t>(lane)];
+        continue;
+      }
+      EXPECT_EQ(s.v[lane], expected_s) << "sin(" << xs[first + static_cast<std::size_t>(lane)] << ")";
+      EXPECT_EQ(c.v[lane], expected_c) << "cos(" << xs[first + static_cast<std::size_t>(lane)] << ")";
+    }
+  }
+}
+
+TEST(FastMath, LaneFloorOfSmallValues) {
+  const std::vector<double> xs = {0.0, 0.25, 0.5, 0.75, 1.0, 1.5, 2.5, -0.25, -0.5, -1.0, -1.5, -2.5, 1e15 + 0.5, -3e14 - 0.25};
+  for (std::size_t first = 0; first < xs.size(); first += hapsyn::kBlockLanes) {
+    double in[hapsyn::kBlockLanes];
+    for (int lane = 0; lane < hapsyn::kBlockLanes; ++lane) in[lane] = xs[std::min(first + static_cast<std::size_t>(lane), xs.size() - 1)];
+    const hapsyn::Lanes f = hapsyn::floor_small(hapsyn::Lanes::load(in));
+    for (int lane = 0; lane < hapsyn::kBlockLanes; ++lane) EXPECT_EQ(f.v[lane], std::floor(in[lane])) << in[lane];
   }
 }
 

@@ -19,21 +19,20 @@
 
 namespace hapsyn::fast {
 
-/// sin(x) and cos(x) together [x in rad]. See the file comment for the accuracy.
-inline void sin_cos(double x, double& sine, double& cosine) {
-  if (!(std::abs(x) <= 1e6)) {  // also NaN and infinities
-    sine = std::sin(x);
-    cosine = std::cos(x);
-    return;
-  }
+/// The body of sin_cos() for |x| <= 1e6 on any number type with + - * by doubles (double, or
+/// hapsyn::Lanes for one value per SIMD lane, hapsyn/lanes.hpp): n = round(x / (pi/2)) (an
+/// integer-valued number) and s, c = sin, cos of the reduced argument x - n pi/2. The caller
+/// maps (s, c) to the quadrant n mod 4.
+template <typename T>
+inline void sin_cos_reduced(const T& x, T& n, T& s, T& c) {
   // n = round(x / (pi/2)) by the 1.5 * 2^52 trick (no SSE4.1 round instruction at baseline x86-64).
   constexpr double kInvHalfPi = 6.36619772367581382433e-01;
   constexpr double kToInt = 6755399441055744.0;  // 1.5 * 2^52
   constexpr double kHalfPi1 = 1.57079632673412561417e+00;   // first 33 bits of pi/2: n * kHalfPi1 is exact
   constexpr double kHalfPi1Tail = 6.07710050650619224932e-11;  // pi/2 - kHalfPi1
-  const double n = (x * kInvHalfPi + kToInt) - kToInt;
-  const double r = (x - n * kHalfPi1) - n * kHalfPi1Tail;  // in [-pi/4, pi/4] up to rounding
-  const double z = r * r, w = z * z;
+  n = (x * kInvHalfPi + kToInt) - kToInt;
+  const T r = (x - n * kHalfPi1) - n * kHalfPi1Tail;  // in [-pi/4, pi/4] up to rounding
+  const T z = r * r, w = z * z;
   // fdlibm / musl __sin and __cos kernels (|r| <= pi/4, error < 2^-58 relative to the result).
   constexpr double S1 = -1.66666666666666324348e-01, S2 = 8.33333333332248946124e-03,
                    S3 = -1.98412698298579493134e-04, S4 = 2.75573137070700676789e-06,
@@ -41,11 +40,22 @@ inline void sin_cos(double x, double& sine, double& cosine) {
   constexpr double C1 = 4.16666666666666019037e-02, C2 = -1.38888888888741095749e-03,
                    C3 = 2.48015872894767294178e-05, C4 = -2.75573143513906633035e-07,
                    C5 = 2.08757232129817482790e-09, C6 = -1.13596475577881948265e-11;
-  const double sin_poly = S2 + z * (S3 + z * S4) + z * w * (S5 + z * S6);
-  const double s = r + z * r * (S1 + z * sin_poly);
-  const double cos_poly = z * (C1 + z * (C2 + z * C3)) + w * w * (C4 + z * (C5 + z * C6));
-  const double half_z = 0.5 * z, one_minus = 1.0 - half_z;
-  const double c = one_minus + (((1.0 - one_minus) - half_z) + z * cos_poly);
+  const T sin_poly = S2 + z * (S3 + z * S4) + z * w * (S5 + z * S6);
+  s = r + z * r * (S1 + z * sin_poly);
+  const T cos_poly = z * (C1 + z * (C2 + z * C3)) + w * w * (C4 + z * (C5 + z * C6));
+  const T half_z = 0.5 * z, one_minus = 1.0 - half_z;
+  c = one_minus + (((1.0 - one_minus) - half_z) + z * cos_poly);
+}
+
+/// sin(x) and cos(x) together [x in rad]. See the file comment for the accuracy.
+inline void sin_cos(double x, double& sine, double& cosine) {
+  if (!(std::abs(x) <= 1e6)) {  // also NaN and infinities
+    sine = std::sin(x);
+    cosine = std::cos(x);
+    return;
+  }
+  double n = 0.0, s = 0.0, c = 0.0;
+  sin_cos_reduced(x, n, s, c);
   // Quadrant n mod 4: (sin, cos) = (s, c), (c, -s), (-s, -c), (-c, s).
   const long quadrant = static_cast<long>(n) & 3;
   const double swapped_sine = (quadrant & 1) ? c : s;

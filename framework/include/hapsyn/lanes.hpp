@@ -11,8 +11,10 @@
 /// hapsyn/multiversion.hpp), each is one vector instruction; compiled for baseline CPUs, the
 /// compiler splits it into SSE2 halves. The vector sits in a struct passed by reference: clang
 /// refuses to pass a 64-byte vector by value in code not compiled for AVX-512.
+#include <hapsyn/fast_math.hpp>
 #include <hapsyn/sample_block.hpp>
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 
@@ -75,5 +77,35 @@ HAPSYN_LANES_WHERE(where_equal, ==)
 }
 /// Lane-wise max(a, b) as `a > b ? a : b` (b when either is NaN).
 [[gnu::always_inline]] inline Lanes max(const Lanes& a, const Lanes& b) { return where_greater(a, b, a, b); }
+
+/// Lane-wise floor(a) for |a| < 2^51 (round to nearest by the 1.5 * 2^52 trick, then down).
+[[gnu::always_inline]] inline Lanes floor_small(const Lanes& a) {
+  constexpr double kToInt = 6755399441055744.0;  // 1.5 * 2^52
+  const Lanes nearest = (a + kToInt) - kToInt;
+  return where_greater(nearest, a, nearest - 1.0, nearest);
+}
+
+/// fast::sin_cos (hapsyn/fast_math.hpp) of every lane: the same reduction and polynomials, so a
+/// lane gets what the scalar call gives (up to the compiler's multiply-add fusion).
+[[gnu::always_inline]] inline void sin_cos(const Lanes& x, Lanes& sine, Lanes& cosine) {
+  const Lanes limit = Lanes::splat(1e6);
+  // Out-of-range lanes (|x| > 1e6, NaN, infinities) reduce a 0 here and take libm below.
+  const Lanes inside = where_greater(abs(x), limit, Lanes::splat(0.0), x);
+  Lanes n, s, c;
+  fast::sin_cos_reduced(inside, n, s, c);
+  // Quadrant n mod 4 (n is integer-valued): (sin, cos) = (s, c), (c, -s), (-s, -c), (-c, s).
+  const Lanes quadrant = n - 4.0 * floor_small(n * 0.25);
+  const Lanes one = Lanes::splat(1.0), two = Lanes::splat(2.0), three = Lanes::splat(3.0);
+  const Lanes odd = where_equal(quadrant, one, one, where_equal(quadrant, three, one, Lanes::splat(0.0)));
+  const Lanes swapped_sine = where_equal(odd, one, c, s), swapped_cosine = where_equal(odd, one, s, c);
+  sine = where_less(quadrant, two, swapped_sine, -swapped_sine);
+  cosine = where_equal(quadrant, one, -swapped_cosine, where_equal(quadrant, two, -swapped_cosine, swapped_cosine));
+  for (int i = 0; i < kBlockLanes; ++i) {
+    if (!(std::fabs(x.v[i]) <= 1e6)) {
+      sine.v[i] = std::sin(x.v[i]);
+      cosine.v[i] = std::cos(x.v[i]);
+    }
+  }
+}
 
 }  // namespace hapsyn

@@ -5,7 +5,6 @@
 #include "haptic6r_chain.hpp"
 
 #include <hapsyn/error.hpp>
-#include <hapsyn/fast_math.hpp>
 #include <hapsyn/lanes.hpp>
 #include <hapsyn/multiversion.hpp>
 
@@ -85,17 +84,13 @@ void Haptic6RModel::solve_block_impl(const PoseBlock& poses, Needs needs, Quanti
 
 HAPSYN_MULTIVERSION_WIDE
 void Haptic6RModel::quantities_block_impl(const Vector6d* q, int count, Needs needs, QuantityBlock& out) const {
-  Lanes cosine[6], sine[6];
+  Lanes theta[6], cosine[6], sine[6];
   for (int lane = 0; lane < kBlockLanes; ++lane) {
     const Vector6d& configuration = q[std::min(lane, count - 1)];
-    for (std::size_t i = 0; i < 6; ++i) {
-      double s = 0.0, c = 1.0;
-      fast::sin_cos(configuration(static_cast<Eigen::Index>(i)) + offset_[i], s, c);  // as quantities() does
-      cosine[i].v[lane] = c;
-      sine[i].v[lane] = s;
-    }
+    for (std::size_t i = 0; i < 6; ++i) theta[i].v[lane] = configuration(static_cast<Eigen::Index>(i)) + offset_[i];
     out.status[lane] = static_cast<std::int32_t>(lane < count ? SampleStatus::kReachable : SampleStatus::kUnreachable);
   }
+  for (std::size_t i = 0; i < 6; ++i) sin_cos(theta[i], sine[i], cosine[i]);  // as quantities() does, per lane
   fill_block(cosine, sine, needs, out);
 }
 

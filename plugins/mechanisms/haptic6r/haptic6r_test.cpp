@@ -708,3 +708,35 @@ TEST(Haptic6R, BlockKernelEqualsSolveLaneByLane) {
   EXPECT_GT(reachable, 100);  // both kinds of lanes were exercised
   EXPECT_GT(other, 50);
 }
+
+TEST(Haptic6R, QuantitiesBlockEqualsQuantitiesLaneByLane) {
+  std::mt19937 rng(23);
+  Fixture f(random_design(rng));
+  const Needs needs = kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits;
+  auto out = std::make_unique<QuantityBlock>();
+  for (int count = 1; count <= kBlockLanes; ++count) {
+    std::vector<Vector6d> qs;
+    for (int i = 0; i < count; ++i) qs.push_back(random_q(rng) * (i == 3 ? 1e5 : 1.0));  // one far past 2 pi
+    f.model.quantities_block(qs.data(), count, needs, *out);
+    for (int lane = 0; lane < kBlockLanes; ++lane) {
+      EXPECT_EQ(out->lane_status(lane), lane < count ? SampleStatus::kReachable : SampleStatus::kUnreachable);
+      if (lane >= count) continue;
+      Matrix6d j, h;
+      Vector6d g;
+      f.model.quantities(qs[static_cast<std::size_t>(lane)], &j, &h, &g);
+      for (int r = 0; r < 6; ++r) {
+        EXPECT_TRUE(close(out->gravity[r][lane], g(r))) << "count " << count << ", lane " << lane;
+        for (int c = 0; c < 6; ++c) {
+          EXPECT_TRUE(close(out->jacobian[r * 6 + c][lane], j(r, c))) << "count " << count << ", lane " << lane;
+          EXPECT_TRUE(close(out->inertia[r * 6 + c][lane], h(r, c))) << "count " << count << ", lane " << lane;
+        }
+      }
+    }
+  }
+  for (const int bad : {0, kBlockLanes + 1}) {
+    std::vector<Vector6d> qs(static_cast<std::size_t>(kBlockLanes + 1), Vector6d::Zero());
+    const std::string message = hapsyn::test::error_of([&] { f.model.quantities_block(qs.data(), bad, needs, *out); });
+    EXPECT_NE(message.find("haptic6r: quantities_block: count = " + std::to_string(bad) + ": must be 1..8"), std::string::npos)
+        << message;
+  }
+}

@@ -97,6 +97,9 @@ class Coverage final : public Metric {
   /// lane i at x[r * 6 + c][i]. regular[i] is 1 when lane i's elimination met no zero pivot (x
   /// is then its solution, to 1e-12 relative of solve_jacobian()), else 0 (x finite, unspecified).
   static void solve_jacobian_block(const QuantityBlock& q, double (*x)[kBlockLanes], double* regular);
+  /// As solve_jacobian_block, then times the block's inertia: x = H J^-1 x per lane (eq. 16's B
+  /// for x = M_a), the products summed in column order as local() sums them.
+  static void acceleration_torque_block(const QuantityBlock& q, double (*x)[kBlockLanes], double* regular);
 
   /// eq. 13 with A = J^-1 M_v (one LU of J). Singular J (non-finite A): 0.
   static double eta_velocity(const Matrix6& jacobian, const Matrix6& m_v, const Vector6& max_velocity);

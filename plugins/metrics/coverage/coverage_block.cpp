@@ -43,6 +43,9 @@ template <int Cols>
     regular = where_equal(best, zero, zero, regular);
     for (int i = k + 1; i < 6; ++i) {  // swap rows k and the pivot row, lane by lane
       const Lanes here = Lanes::splat(i);
+      bool any = false;  // most rows are no lane's pivot: skip their blends
+      for (int lane = 0; lane < kBlockLanes; ++lane) any = any || row.v[lane] == i;
+      if (!any) continue;
       for (int c = k; c < 6; ++c) {
         const Lanes t = a[k][c];
         a[k][c] = where_equal(row, here, a[i][c], t);
@@ -96,6 +99,18 @@ template <typename Entry>
   return where_equal(poison, zero, eta, zero);
 }
 
+// out = H x per lane (H: the block's inertia, x: 6 x 6 lanes), summed over k in order.
+template <typename Entry>
+[[gnu::always_inline]] inline void inertia_times(const QuantityBlock& q, const Entry& x, Lanes (&out)[6][6]) {
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) {
+      Lanes sum = Lanes::load(q.inertia[r * 6]) * x(0, c);
+      for (int j = 1; j < 6; ++j) sum += Lanes::load(q.inertia[r * 6 + j]) * x(j, c);
+      out[r][c] = sum;
+    }
+  }
+}
+
 }  // namespace
 
 HAPSYN_MULTIVERSION_WIDE
@@ -141,13 +156,7 @@ void Coverage::local_block_impl(const QuantityBlock& q, double* out) const {
     }
     if (acceleration_) {
       Lanes torque[6][6];  // H J^-1 M_a
-      for (int r = 0; r < 6; ++r) {
-        for (int c = 0; c < 6; ++c) {
-          Lanes sum = Lanes::load(q.inertia[r * 6]) * rhs[0][6 + c];
-          for (int j = 1; j < 6; ++j) sum += Lanes::load(q.inertia[r * 6 + j]) * rhs[j][6 + c];
-          torque[r][c] = sum;
-        }
-      }
+      inertia_times(q, [&](int j, int c) -> const Lanes& { return rhs[j][6 + c]; }, torque);
       const auto entry = [&](int i, int j) -> const Lanes& { return torque[i][j]; };
       where_equal(use, one, ratio_eta_lanes(entry, q.max_torque, gravity), zero).store(out + kBlockLanes * k++);
     }
@@ -166,8 +175,9 @@ void Coverage::local_block_impl(const QuantityBlock& q, double* out) const {
 void Coverage::local_block(const QuantityBlock& q, double* out) const { local_block_impl(q, out); }
 
 namespace {
+// x = J^-1 x, or H J^-1 x with `times_inertia`, for every lane.
 HAPSYN_MULTIVERSION_WIDE
-void solve_jacobian_lanes(const QuantityBlock& q, double (*x)[kBlockLanes], double* regular) {
+void solve_jacobian_lanes(const QuantityBlock& q, double (*x)[kBlockLanes], double* regular, bool times_inertia) {
   Lanes a[6][6], b[6][6];
   for (int r = 0; r < 6; ++r) {
     for (int c = 0; c < 6; ++c) {
@@ -176,6 +186,13 @@ void solve_jacobian_lanes(const QuantityBlock& q, double (*x)[kBlockLanes], doub
     }
   }
   eliminate_lanes(a, b).store(regular);
+  if (times_inertia) {
+    Lanes product[6][6];
+    inertia_times(q, [&](int j, int c) -> const Lanes& { return b[j][c]; }, product);
+    for (int r = 0; r < 6; ++r) {
+      for (int c = 0; c < 6; ++c) b[r][c] = product[r][c];
+    }
+  }
   for (int r = 0; r < 6; ++r) {
     for (int c = 0; c < 6; ++c) b[r][c].store(x[r * 6 + c]);
   }
@@ -183,7 +200,11 @@ void solve_jacobian_lanes(const QuantityBlock& q, double (*x)[kBlockLanes], doub
 }  // namespace
 
 void Coverage::solve_jacobian_block(const QuantityBlock& q, double (*x)[kBlockLanes], double* regular) {
-  solve_jacobian_lanes(q, x, regular);
+  solve_jacobian_lanes(q, x, regular, false);
+}
+
+void Coverage::acceleration_torque_block(const QuantityBlock& q, double (*x)[kBlockLanes], double* regular) {
+  solve_jacobian_lanes(q, x, regular, true);
 }
 
 }  // namespace hapsyn::plugins

@@ -443,3 +443,43 @@ TEST(Coverage, BlockLocalsNameAMissingAttribute) {
   const std::string shape = hapsyn::test::error_of([&] { coverage(Json{{"terms", {"force"}}}).local_block(*block, out.data()); });
   EXPECT_NE(shape.find("coverage: the mechanism's Jacobian is 3x6"), std::string::npos) << shape;
 }
+
+TEST(Coverage, BlockSolvesEqualTheScalarSolveLaneByLane) {
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  auto block = std::make_unique<QuantityBlock>();
+  std::array<Matrix6, kBlockLanes> j, h, b;
+  for (int lane = 0; lane < kBlockLanes; ++lane) {
+    j[lane] = Matrix6::NullaryExpr([&] { return u(rng); });
+    if (lane == 5) j[lane].col(0).setZero();  // singular: regular = 0
+    const Matrix6 a = Matrix6::NullaryExpr([&] { return u(rng); });
+    h[lane] = a * a.transpose();
+    b[lane] = Matrix6::NullaryExpr([&] { return 10.0 * u(rng); });
+    for (int e = 0; e < 36; ++e) {
+      block->jacobian[e][lane] = j[lane](e / 6, e % 6);
+      block->inertia[e][lane] = h[lane](e / 6, e % 6);
+    }
+  }
+  for (const bool torque : {false, true}) {
+    alignas(64) double x[36][kBlockLanes], regular[kBlockLanes];
+    for (int lane = 0; lane < kBlockLanes; ++lane) {
+      for (int e = 0; e < 36; ++e) x[e][lane] = b[lane](e / 6, e % 6);
+    }
+    if (torque) {
+      Coverage::acceleration_torque_block(*block, x, regular);
+    } else {
+      Coverage::solve_jacobian_block(*block, x, regular);
+    }
+    for (int lane = 0; lane < kBlockLanes; ++lane) {
+      Eigen::Matrix<double, 6, 6> expected = b[lane];
+      const bool solved = Coverage::solve_jacobian(j[lane], expected);
+      EXPECT_EQ(regular[lane], solved ? 1.0 : 0.0) << "lane " << lane;
+      if (!solved) continue;
+      if (torque) expected = Matrix6(h[lane] * expected);
+      for (int e = 0; e < 36; ++e) {
+        const double want = expected(e / 6, e % 6);
+        EXPECT_NEAR(x[e][lane], want, 1e-12 * std::max(1.0, std::abs(want))) << "lane " << lane << ", entry " << e;
+      }
+    }
+  }
+}
