@@ -230,9 +230,7 @@ class Haptic6RModel final : public MechanismModel {
   void solve_block(const PoseBlock& poses, Needs needs, MechanismScratch& scratch, QuantityBlock& out) const override;
   /// The first half of solve() for one pose: its status, q as solve() sets it, and for a
   /// reachable or singular pose the chosen configuration's DH-angle cosines and sines.
-  SampleStatus configuration(const double* pose, Vector6d& q, JointTrig& trig) const {
-    return configuration_impl(pose, q, trig);
-  }
+  SampleStatus configuration(const double* pose, Vector6d& q, JointTrig& trig) const;
 
   /// Every closed-form IK solution of the target (joint limits ignored), q [rad] wrapped into
   /// [-pi, pi). \return the count (0..8); solutions[0..count). With `trig`, also each solution's

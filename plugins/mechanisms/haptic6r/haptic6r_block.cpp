@@ -69,7 +69,7 @@ void Haptic6RModel::solve_block_impl(const PoseBlock& poses, Needs needs, Quanti
     SampleStatus status = SampleStatus::kUnreachable;
     if (lane < poses.count) {
       for (int c = 0; c < poses.dimension; ++c) pose[c] = poses.coordinate[c][lane];
-      status = configuration_impl(pose, q, trig);
+      status = configuration(pose, q, trig);
     }
     out.status[lane] = static_cast<std::int32_t>(status);
     // Other lanes compute the zero configuration: finite values, ignored.
@@ -86,8 +86,8 @@ HAPSYN_MULTIVERSION_WIDE
 void Haptic6RModel::quantities_block_impl(const Vector6d* q, int count, Needs needs, QuantityBlock& out) const {
   Lanes theta[6], cosine[6], sine[6];
   for (int lane = 0; lane < kBlockLanes; ++lane) {
-    const Vector6d& configuration = q[std::min(lane, count - 1)];
-    for (std::size_t i = 0; i < 6; ++i) theta[i].v[lane] = configuration(static_cast<Eigen::Index>(i)) + offset_[i];
+    const Vector6d& angles = q[std::min(lane, count - 1)];
+    for (std::size_t i = 0; i < 6; ++i) theta[i].v[lane] = angles(static_cast<Eigen::Index>(i)) + offset_[i];
     out.status[lane] = static_cast<std::int32_t>(lane < count ? SampleStatus::kReachable : SampleStatus::kUnreachable);
   }
   for (std::size_t i = 0; i < 6; ++i) sin_cos(theta[i], sine[i], cosine[i]);  // as quantities() does, per lane

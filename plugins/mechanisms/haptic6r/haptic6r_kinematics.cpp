@@ -325,6 +325,12 @@ SampleStatus Haptic6RModel::configuration_impl(const double* pose, Vector6d& q, 
   return configure(pose, q, trig);
 }
 
+// Other translation units call this plain wrapper (clang exports no plain symbol for the
+// multiversioned body).
+SampleStatus Haptic6RModel::configuration(const double* pose, Vector6d& q, JointTrig& trig) const {
+  return configuration_impl(pose, q, trig);
+}
+
 HAPSYN_MULTIVERSION
 void Haptic6RModel::solve_sample(const double* pose, Needs needs, SampleQuantities& out) const {
   Vector6d q;
