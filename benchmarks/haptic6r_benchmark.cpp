@@ -27,6 +27,8 @@
 #include <kdl/chainjnttojacsolver.hpp>
 
 #include <Eigen/LU>
+#include <map>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -128,9 +130,7 @@ void BM_CoverageAllFourTermsBlock(benchmark::State& state) {
       block.dimension = 7;
       block.count = std::min(hapsyn::kBlockLanes, n - first);
       for (int c = 0; c < 7; ++c) block.coordinate[c] = poses.data() + static_cast<std::size_t>(c * padded + first);
-      int samples[hapsyn::kBlockLanes];
-      for (int lane = 0; lane < hapsyn::kBlockLanes; ++lane) samples[lane] = first + std::min(lane, block.count - 1);
-      q->samples = samples;
+      for (int lane = 0; lane < hapsyn::kBlockLanes; ++lane) q->samples[lane] = first + std::min(lane, block.count - 1);
       m.solve_block(block, metric.needs(), *scratch, *q);
       metric.local_block(*q, out.data());
       for (int lane = 0; lane < block.count; ++lane) sum += out[static_cast<std::size_t>(hapsyn::kBlockLanes + lane)];
@@ -161,6 +161,34 @@ void BM_FullObjectivePerDesign(benchmark::State& state) {
   for (auto _ : state) j += study.problem->evaluate_parallel(nullptr, threads).objectives[0];
   benchmark::DoNotOptimize(j);
   state.counters["poses"] = study.problem->samples().size();
+}
+
+// Scaling: the full objective of the same design against the scene's lattice step [mm] and
+// orientation count, on 1 and 2 threads (block path). Each scene is built once (and cached on
+// disk by the human_arm scene, like any study's).
+void BM_FullObjectiveScaling(benchmark::State& state) {
+  static hapsyn::Registry registry({HAPSYN_PLUGIN_DIR});
+  static std::map<std::pair<long, long>, hapsyn::Study> studies;
+  const long step_mm = static_cast<long>(state.range(0)), orientations = static_cast<long>(state.range(1));
+  auto it = studies.find({step_mm, orientations});
+  if (it == studies.end()) {
+    Json doc = Json::parse(R"({
+      "name": "bench-scaling", "mechanism": {"plugin": "haptic6r"},
+      "scene": {"plugin": "human_arm", "options": {"joint3_steps": 17}},
+      "design": {"l": {"value": [0.45, 0.45, 0.65, 0.55, 0.15]}, "s": {"value": [3, 3, 2, 2, 1, 1]}, "r": {"value": [2, 2, 3, 2, 3, 3]}},
+      "objectives": [{"metric": "coverage"}], "solver": {"plugin": "evaluate"}})");
+    doc["scene"]["options"]["lattice_step"] = static_cast<double>(step_mm) / 1000.0;
+    doc["scene"]["options"]["orientations"] = orientations;
+    it = studies.emplace(std::make_pair(step_mm, orientations), hapsyn::load_study(doc, registry)).first;
+  }
+  const hapsyn::Problem& problem = *it->second.problem;
+  const int threads = static_cast<int>(state.range(2));
+  double j = 0.0;
+  for (auto _ : state) j += problem.evaluate_parallel(nullptr, threads).objectives[0];
+  benchmark::DoNotOptimize(j);
+  state.counters["poses"] = problem.samples().size();
+  state.counters["per_pose"] = benchmark::Counter(static_cast<double>(problem.samples().size()) * static_cast<double>(state.iterations()),
+                                                     benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
 // The baseline: the same evaluation, one thread, forced onto the per-sample loop.
@@ -294,6 +322,12 @@ BENCHMARK(BM_CoverageAllFourTerms)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CoverageAllFourTermsBlock)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FullObjectivePerDesignPerSample)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_FullObjectivePerDesign)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_FullObjectiveScaling)
+    ->ArgNames({"step_mm", "orientations", "threads"})
+    ->ArgsProduct({{200, 100, 50}, {505}, {1, 2}})
+    ->ArgsProduct({{100}, {101, 2000}, {1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_OursJacobianInertiaGravitySolve)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_OursBlockJacobianInertiaGravitySolve)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_KdlJacobianInertiaGravitySolve)->Unit(benchmark::kMicrosecond);

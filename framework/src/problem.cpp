@@ -603,12 +603,10 @@ const Evaluation& Problem::evaluate_blocks(const MechanismModel& model, EvalScra
       }
     }
     // The lanes' samples, padded with the last one (a kernel reads every lane).
-    int samples[kBlockLanes];
-    for (int i = 0; i < kBlockLanes; ++i) samples[i] = lane_sample[std::min(i, count - 1)];
-    q.samples = samples;
+    for (int i = 0; i < kBlockLanes; ++i) q.samples[i] = lane_sample[std::min(i, count - 1)];
     model.solve_block(poses, needs_, *ws.scratch, q);
     if (!worst_case_) {  // averaging: every lane counts, whatever its status; nothing to prune
-      fold_block_sums(model, ws, samples, count);
+      fold_block_sums(model, ws, lane_sample, count);
       continue;
     }
     int valid = 0;  // reachable lanes before the first failing one
@@ -773,9 +771,7 @@ void Problem::evaluate_designs(const double* const* free_designs, int count, Eva
     if (!mechanism_->solve_designs(designs, count, samples_->pose(sample), needs_, *ws.scratch, *ws.block)) {
       return one_by_one(0, active);  // these designs cannot share a vector: from scratch, one by one
     }
-    int lane_sample[kBlockLanes];
-    std::fill_n(lane_sample, kBlockLanes, sample);
-    ws.block->samples = lane_sample;
+    std::fill_n(ws.block->samples, kBlockLanes, sample);
     block_locals(ws);
     for (int i = 0; i < count; ++i) {
       if (!active[i]) continue;

@@ -190,7 +190,6 @@ class Problem {
   /// \throws Error on a NaN/inf or out-of-bounds component, or a NaN/inf from a plugin.
   const Evaluation& evaluate(const double* free_design, EvalScratch& eval_scratch,
                              const EvalOptions& options = {}) const;
-  /// How evaluate_parallel splits the work.
   /// Evaluates `count` designs (1..kBlockLanes free vectors) as `count` calls of evaluate() with
   /// the same options would, into outs[0..count): the same statuses, sample counts, critical
   /// samples and objectives, bit for bit. `outs` is the caller's and is reused (no allocation
@@ -203,6 +202,7 @@ class Problem {
   void evaluate_designs(const double* const* free_designs, int count, EvalScratch& eval_scratch,
                         const EvalOptions& options, std::vector<Evaluation>& outs) const;
 
+  /// How evaluate_parallel splits the work.
   struct ParallelOptions {
     /// Contiguous pieces of the sample order, evaluated on the threads and merged in order;
     /// 0 = one per thread. A fixed count (> 0) makes the result independent of the thread

@@ -16,6 +16,7 @@ namespace hapsyn {
 
 /// Samples per block: 8 doubles, one AVX-512 register (two AVX2 registers).
 constexpr int kBlockLanes = 8;
+static_assert(kBlockLanes == 8, "QuantityBlock::samples initialises 8 lanes");
 /// Largest pose dimension the block path serves (x, y, z, qw, qx, qy, qz).
 constexpr int kBlockMaxCoordinates = 7;
 /// Largest side of a block matrix (J, D, M): kMaxTask x kMaxTask entries.
@@ -49,8 +50,9 @@ struct QuantityBlock {
 
   /// Set by the evaluator before each metric's local_block(), like SampleQuantities::sample and
   /// ::attributes: the scene index of each lane's sample (lanes at or beyond the block's count
-  /// repeat a valid one), and the scene attributes that metric lists in scene_attributes().
-  const int* samples = nullptr;
+  /// repeat a valid one; -1 outside the evaluator), and the scene attributes that metric lists
+  /// in scene_attributes().
+  int samples[kBlockLanes] = {-1, -1, -1, -1, -1, -1, -1, -1};
   const AttributeMatrix* const* attributes = nullptr;
   int attribute_count = 0;
 
@@ -58,7 +60,7 @@ struct QuantityBlock {
   /// Row of lane `lane`'s sample in the calling metric's k-th scene attribute, or null when the
   /// evaluator did not resolve it.
   const double* attribute_row(int k, int lane) const {
-    if (!attributes || !samples || k < 0 || k >= attribute_count || !attributes[k]) return nullptr;
+    if (!attributes || k < 0 || k >= attribute_count || !attributes[k]) return nullptr;
     const int sample = samples[lane];
     return sample >= 0 && sample < attributes[k]->rows() ? attributes[k]->row(sample).data() : nullptr;
   }

@@ -405,9 +405,7 @@ TEST(Coverage, BlockLocalsEqualLocalLaneByLane) {
         }
       }
     }
-    int samples[kBlockLanes];
-    for (int lane = 0; lane < kBlockLanes; ++lane) samples[lane] = lane;
-    block->samples = samples;
+    for (int lane = 0; lane < kBlockLanes; ++lane) block->samples[lane] = lane;
     for (const std::vector<std::string>& terms : term_sets) {
       const Coverage metric = coverage(Json{{"terms", terms}});
       std::vector<const AttributeMatrix*> attributes;
