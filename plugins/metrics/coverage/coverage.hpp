@@ -12,6 +12,7 @@
 /// n_reach^h is the sample count. A manipulator-unreachable (or singular / invalid) sample adds
 /// 0 to n_reach^m and to every eta sum. With n_reach^m = 0, J_v = J_a = J_f = 0.
 #include <hapsyn/metric.hpp>
+#include <hapsyn/lanes.hpp>
 #include <hapsyn/sample_block.hpp>
 #include <hapsyn/options.hpp>
 
@@ -115,6 +116,9 @@ class Coverage final : public Metric {
   void local_sample(const SampleQuantities& q, double* out) const;
   // local_block()'s body, compiled for AVX-512, AVX2/FMA and baseline CPUs.
   void local_block_impl(const QuantityBlock& q, double* out) const;
+  template <int Cols>  // inlined into local_block_impl (coverage_block.cpp)
+  void velocity_acceleration(const QuantityBlock& q, const Lanes (&jacobian)[6][6], const Lanes* gravity,
+                             const Lanes& reachable, double* out, int& k) const;
 
   CoverageOptions options_;
   // The selected terms (options_.terms as flags: local() runs per sample).

@@ -113,6 +113,41 @@ template <typename Entry>
 
 }  // namespace
 
+// The velocity and acceleration terms of the block into out (local k onwards): M_v in columns
+// 0..5 when the velocity term is selected, M_a in the next 6 when the acceleration term is.
+template <int Cols>
+[[gnu::always_inline]] inline void Coverage::velocity_acceleration(const QuantityBlock& q, const Lanes (&jacobian)[6][6],
+                                                                  const Lanes* gravity, const Lanes& reachable,
+                                                                  double* out, int& k) const {
+  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
+  const int m_a_column = velocity_ ? 6 : 0;
+  Lanes a[6][6], rhs[6][Cols];
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) a[r][c] = jacobian[r][c];
+  }
+  for (int lane = 0; lane < kBlockLanes; ++lane) {
+    if (velocity_) {
+      const double* m_v = lane_attribute(q, 0, lane, "M_v", "velocity");
+      for (int e = 0; e < 36; ++e) rhs[e / 6][e % 6].v[lane] = m_v[e];
+    }
+    if (acceleration_) {
+      const double* m_a = lane_attribute(q, velocity_ ? 1 : 0, lane, "M_a", "acceleration");
+      for (int e = 0; e < 36; ++e) rhs[e / 6][m_a_column + e % 6].v[lane] = m_a[e];
+    }
+  }
+  const Lanes use = eliminate_lanes(a, rhs) * reachable;
+  if (velocity_) {
+    const auto velocity = [&](int i, int j) -> const Lanes& { return rhs[i][j]; };
+    where_equal(use, one, ratio_eta_lanes(velocity, q.max_velocity, nullptr), zero).store(out + kBlockLanes * k++);
+  }
+  if (acceleration_) {
+    Lanes torque[6][6];  // H J^-1 M_a
+    inertia_times(q, [&](int j, int c) -> const Lanes& { return rhs[j][m_a_column + c]; }, torque);
+    const auto entry = [&](int i, int j) -> const Lanes& { return torque[i][j]; };
+    where_equal(use, one, ratio_eta_lanes(entry, q.max_torque, gravity), zero).store(out + kBlockLanes * k++);
+  }
+}
+
 HAPSYN_MULTIVERSION_WIDE
 void Coverage::local_block_impl(const QuantityBlock& q, double* out) const {
   const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
@@ -133,33 +168,12 @@ void Coverage::local_block_impl(const QuantityBlock& q, double* out) const {
     gravity[r] = (acceleration_ || force_) ? Lanes::load(q.gravity[r]) : zero;
   }
   int k = 2;
-  if (velocity_ || acceleration_) {
-    // One elimination of J serves both terms: [M_v | M_a], as local() does it.
-    Lanes a[6][6], rhs[6][12];
-    for (int r = 0; r < 6; ++r) {
-      for (int c = 0; c < 6; ++c) a[r][c] = jacobian[r][c];
-    }
-    for (int lane = 0; lane < kBlockLanes; ++lane) {
-      const double* m_v = velocity_ ? lane_attribute(q, 0, lane, "M_v", "velocity") : nullptr;
-      const double* m_a = acceleration_ ? lane_attribute(q, velocity_ ? 1 : 0, lane, "M_a", "acceleration") : nullptr;
-      for (int r = 0; r < 6; ++r) {
-        for (int c = 0; c < 6; ++c) {
-          rhs[r][c].v[lane] = m_v ? m_v[r * 6 + c] : 0.0;
-          rhs[r][6 + c].v[lane] = m_a ? m_a[r * 6 + c] : 0.0;
-        }
-      }
-    }
-    const Lanes use = eliminate_lanes(a, rhs) * reachable;
-    if (velocity_) {
-      const auto velocity = [&](int i, int j) -> const Lanes& { return rhs[i][j]; };
-      where_equal(use, one, ratio_eta_lanes(velocity, q.max_velocity, nullptr), zero).store(out + kBlockLanes * k++);
-    }
-    if (acceleration_) {
-      Lanes torque[6][6];  // H J^-1 M_a
-      inertia_times(q, [&](int j, int c) -> const Lanes& { return rhs[j][6 + c]; }, torque);
-      const auto entry = [&](int i, int j) -> const Lanes& { return torque[i][j]; };
-      where_equal(use, one, ratio_eta_lanes(entry, q.max_torque, gravity), zero).store(out + kBlockLanes * k++);
-    }
+  // One elimination of J serves both terms ([M_v | M_a], as local() does it); a single term
+  // eliminates its 6 columns only.
+  if (velocity_ && acceleration_) {
+    velocity_acceleration<12>(q, jacobian, gravity, reachable, out, k);
+  } else if (velocity_ || acceleration_) {
+    velocity_acceleration<6>(q, jacobian, gravity, reachable, out, k);
   }
   if (force_) {
     // C = J^T diag(m_max I, f_max I): entry (i, j) is J(j, i) scaled by column j's bound.
