@@ -184,6 +184,10 @@ SolverResult evaluate_fixed_design(const Problem& problem, const SolverContext& 
 struct Seed {
   Json statistics = Json::object();
   long long designs = 0, samples = 0;
+  // False when a stop request cut the seed short: its checkpoint then holds no reference, and a
+  // resumed run seeds again (the sweep of a resumed run must start from the seed's reference,
+  // or its counts and evaluations would differ from an uninterrupted run's).
+  bool complete = false;
 };
 
 // The best feasible point of a coarse grid of start points (empty if none); at most 1e5 points.
@@ -262,6 +266,7 @@ Seed seed_reference(const Problem& problem, const Grid& grid, const Bounds& boun
   }
   seed.statistics["reference_score"] = reference.best.index >= 0 ? Json(reference.best.score) : Json(nullptr);
   seed.statistics["seconds"] = seconds_since(t0);
+  seed.complete = !context.stop_requested();
   return seed;
 }
 
@@ -668,17 +673,28 @@ std::string fingerprint_of(const Problem& problem, const CullingOptions& options
   return study_fingerprint(problem, options_to_json(options), {"progress_interval", "checkpoint_interval", "max_designs"});
 }
 
-// The checkpoint's state (caller holds reference.mutex, or the sweep is not running).
+// The checkpoint's state (caller holds reference.mutex, or the sweep is not running). A seed cut
+// short leaves the state of a run that has not started (see Seed::complete).
 Json checkpoint_state(const Reference& reference, const Seed& seed, double seconds) {
   Json state;
   state["lines"] = reference.ledger.units();
-  reference.ledger.write(state, "finished_lines");
-  state["reference"] = reference.best.index < 0 ? Json(nullptr)
-                                                : Json{{"index", reference.best.index}, {"score", reference.best.score}};
-  state["critical_samples"] = reference.critical;
-  state["iterations"] = reference.iterations;
-  state["counts"] = reference.finished.to_json();
-  state["seed"] = {{"statistics", seed.statistics}, {"designs", seed.designs}, {"samples", seed.samples}};
+  if (!seed.complete) {
+    RangeLedger(reference.ledger.units()).write(state, "finished_lines");
+    state["reference"] = nullptr;
+    state["critical_samples"] = Json::array();
+    state["iterations"] = 0;
+    state["counts"] = SweepCounts().to_json();
+    state["seed"] = {{"statistics", Json::object()}, {"designs", 0}, {"samples", 0}, {"complete", false}};
+  } else {
+    reference.ledger.write(state, "finished_lines");
+    state["reference"] = reference.best.index < 0 ? Json(nullptr)
+                                                  : Json{{"index", reference.best.index}, {"score", reference.best.score}};
+    state["critical_samples"] = reference.critical;
+    state["iterations"] = reference.iterations;
+    state["counts"] = reference.finished.to_json();
+    state["seed"] = {{"statistics", seed.statistics}, {"designs", seed.designs}, {"samples", seed.samples},
+                     {"complete", true}};
+  }
   state["elapsed_seconds"] = seconds;
   return state;
 }
@@ -722,6 +738,8 @@ double read_state(const Problem& problem, const Grid& grid, const SolverContext&
   seed.statistics = checkpoint_field<Json>(context, s, "state.seed", "statistics");
   seed.designs = checkpoint_field<long long>(context, s, "state.seed", "designs");
   seed.samples = checkpoint_field<long long>(context, s, "state.seed", "samples");
+  // (older checkpoints lack the field; they are read as before, as complete)
+  seed.complete = !s.contains("complete") || checkpoint_field<bool>(context, s, "state.seed", "complete");
   const Json claimed = checkpoint_field<Json>(context, state, "state", "reference");
   if (!claimed.is_null()) {
     const long long index = checkpoint_field<long long>(context, claimed, "state.reference", "index");
@@ -777,12 +795,25 @@ std::string stopped_message(const Grid& grid, const Reference& reference, const 
   return s.str();
 }
 
+// The result of a run stopped before its seed (the start grid and the SQP) was complete.
+SolverResult stopped_in_seed(const SolverContext& context, double seconds) {
+  SolverResult result;
+  result.status = SolverStatus::kStopped;
+  result.message = "stopped on request during the seed (the start grid and the SQP), before the sweep; " +
+                   (context.checkpoint_file.empty()
+                        ? std::string("no checkpoint file, a new run starts over")
+                        : "checkpoint " + context.checkpoint_file + " written, resume with --resume (the seed runs again)");
+  result.statistics = {{"seconds", seconds}};
+  return result;
+}
+
 // What ranks other than 0 need of the seed that rank 0 ran: the reference, the critical samples
 // and the seed's figures (doubles survive JSON text exactly).
 Json seed_message(const Reference& reference, const Seed& seed) {
   return {{"index", reference.best.index}, {"score", reference.best.index < 0 ? Json(nullptr) : Json(reference.best.score)},
           {"critical", reference.critical}, {"iterations", reference.iterations},
-          {"statistics", seed.statistics}, {"designs", seed.designs}, {"samples", seed.samples}};
+          {"statistics", seed.statistics}, {"designs", seed.designs}, {"samples", seed.samples},
+          {"complete", seed.complete}};
 }
 
 void adopt_seed(const Json& message, Reference& reference, Seed& seed) {
@@ -796,6 +827,7 @@ void adopt_seed(const Json& message, Reference& reference, Seed& seed) {
   seed.statistics = message["statistics"];
   seed.designs = message["designs"].get<long long>();
   seed.samples = message["samples"].get<long long>();
+  seed.complete = message["complete"].get<bool>();
 }
 
 
@@ -837,9 +869,11 @@ SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& c
   double seconds_before = 0.0;
   // Every rank reads the checkpoint (a collective) and re-evaluates its reference alike.
   const std::optional<Json> state = read_checkpoint(context, "culling", fingerprint);
-  if (state) {
-    seconds_before = restore(problem, grid, context, *state, reference, seed);
-  } else if (options_.seed) {
+  if (state) seconds_before = restore(problem, grid, context, *state, reference, seed);
+  const bool seeded_before = state && seed.complete;
+  if (!seeded_before && !options_.seed) {
+    seed.complete = true;
+  } else if (!seeded_before) {
     // Rank 0 seeds (the SQP is one sequential run) and the other ranks take its outcome, so that
     // every rank starts the sweep from the same reference whatever its floating point.
     if (cluster.root()) seed = seed_reference(problem, grid, bounds, options_, reference, context);
@@ -853,7 +887,11 @@ SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& c
     write_checkpoint(context, "culling", fingerprint,
                      checkpoint_state(reference, seed, seconds_before + seconds_since(t_start)));
   };
-  if (!state) save();  // the seed is done: a resumed run skips it
+  if (!seed.complete) {
+    save();  // a resumed run seeds again
+    return cluster.root() ? stopped_in_seed(context, seconds_before + seconds_since(t_start)) : result_of_rank_0(context);
+  }
+  if (!seeded_before) save();  // the seed is done: a resumed run skips it
   const auto t_sweep = Clock::now();
   SweepCounts partial;
   const FarmOutcome outcome = sweep(problem, grid, options_, context, reference, save, partial);
@@ -955,8 +993,8 @@ Json CullingSolver::merge_shards(const Problem& problem, const std::vector<Json>
     if (shard.best.index >= 0) merged.offer(shard.best.index, shard.best.score);
     merged.publish({shard.critical});
     merged.iterations += shard.iterations;
-    // Every shard ran the same seed (the same study and options): the first one's stands.
-    if (k == 0) seed = shard_seed;
+    // Every shard ran the same seed (the same study and options): the first complete one's stands.
+    if (!seed.complete && shard_seed.complete) seed = shard_seed;
     // The shards of a job array run side by side: the merged run took as long as the longest.
     seconds = std::max(seconds, shard_seconds);
     ledgers.push_back(shard.ledger);

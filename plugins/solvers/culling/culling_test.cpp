@@ -219,6 +219,44 @@ TEST(Culling, StopMidRunCheckpointsAndResumeGivesTheUninterruptedOptimum) {
   }
 }
 
+TEST(Culling, StopDuringTheSeedCheckpointsNoReferenceAndTheResumeSeedsAgain) {
+  for (int threads : {1, 2}) {
+    hapsyn::test::StopAfter counter;
+    const auto problem = hapsyn::test::stopping_problem(counter);
+    const std::string dir = hapsyn::test::fresh_directory("culling-stop-seed");
+    const std::string file = dir + "/checkpoint.json";
+    const Json options = culling_options(true, true);
+    const auto uninterrupted = cull_with(*problem, options, counter, "", false, threads);
+    ASSERT_EQ(uninterrupted.status, hapsyn::SolverStatus::kConverged) << uninterrupted.message;
+    counter.calls = 0;
+    counter.limit = 3;  // within the seed's start grid
+    const auto stopped = cull_with(*problem, options, counter, file, false, threads);
+    ASSERT_EQ(stopped.status, hapsyn::SolverStatus::kStopped) << stopped.message;
+    EXPECT_FALSE(stopped.best.has_value());
+    EXPECT_EQ(stopped.message, "stopped on request during the seed (the start grid and the SQP), before the sweep; "
+                               "checkpoint " + file + " written, resume with --resume (the seed runs again)");
+    const Json state = hapsyn::test::read_json_file(file)["state"];
+    EXPECT_FALSE(state["seed"]["complete"].get<bool>());
+    EXPECT_TRUE(state["reference"].is_null());
+    EXPECT_TRUE(state["critical_samples"].empty());
+    counter.stop = false;
+    counter.limit = -1;
+    const auto resumed = cull_with(*problem, options, counter, file, true, threads);
+    ASSERT_EQ(resumed.status, hapsyn::SolverStatus::kConverged) << resumed.message;
+    EXPECT_EQ(resumed.best->design, uninterrupted.best->design);
+    EXPECT_EQ(resumed.statistics["grid_optimum"], uninterrupted.statistics["grid_optimum"]);
+    // The whole seed ran again: the evaluations are the uninterrupted run's.
+    EXPECT_EQ(resumed.design_evaluations, uninterrupted.design_evaluations);
+    EXPECT_EQ(resumed.statistics["seed"]["reference_score"], uninterrupted.statistics["seed"]["reference_score"]);
+    EXPECT_EQ(resumed.statistics["seed"]["sqp"]["evaluations"], uninterrupted.statistics["seed"]["sqp"]["evaluations"]);
+    if (threads == 1) {  // (at two threads the early exits race, and the sample counts with them)
+      EXPECT_EQ(resumed.sample_evaluations, uninterrupted.sample_evaluations);
+      EXPECT_EQ(resumed.statistics["culled"], uninterrupted.statistics["culled"]);
+    }
+    std::filesystem::remove_all(dir);
+  }
+}
+
 TEST(Culling, DamagedEditedAndForeignCheckpointsAreRefused) {
   hapsyn::test::StopAfter counter;
   const auto problem = hapsyn::test::stopping_problem(counter);
