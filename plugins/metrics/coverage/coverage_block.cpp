@@ -28,49 +28,66 @@ const double* lane_attribute(const QuantityBlock& q, int index, int lane, const 
 
 // Solves J X = B in place for every lane (B: 6 x Cols right-hand sides). \return per lane 1
 // when every pivot was non-zero (the lane's J regular, as local() decides it), else 0.
+// J is factored first (its row swaps, multipliers and inverse pivots kept), then each column of
+// B is solved on its own: each column sees local()'s operations in local()'s order, and its six
+// values stay in registers instead of the whole of B spilling during the factorization.
 template <int Cols>
 [[gnu::always_inline]] inline Lanes eliminate_lanes(Lanes (&a)[6][6], Lanes (&b)[6][Cols]) {
   const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
   Lanes regular = one;
-  for (int k = 0; k < 6; ++k) {
+  Lanes pivot_row[6], inverse_pivot[6], factor[6][6];
+  unsigned swapped[6] = {};  // bit i of swapped[k]: row i is some lane's pivot at step k
+    for (int k = 0; k < 6; ++k) {
     // The first row of largest |a(i, k)|, i >= k, per lane (local()'s strict comparison).
     Lanes best = abs(a[k][k]), row = Lanes::splat(k);
-    for (int i = k + 1; i < 6; ++i) {
+        for (int i = k + 1; i < 6; ++i) {
       const Lanes candidate = abs(a[i][k]);
       row = where_greater(candidate, best, Lanes::splat(i), row);
       best = max(candidate, best);
     }
+    pivot_row[k] = row;
     regular = where_equal(best, zero, zero, regular);
+    for (int lane = 0; lane < kBlockLanes; ++lane) swapped[k] |= 1u << static_cast<int>(row.v[lane]);
     for (int i = k + 1; i < 6; ++i) {  // swap rows k and the pivot row, lane by lane
+      if (!(swapped[k] >> i & 1u)) continue;  // most rows are no lane's pivot: skip their blends
       const Lanes here = Lanes::splat(i);
-      bool any = false;  // most rows are no lane's pivot: skip their blends
-      for (int lane = 0; lane < kBlockLanes; ++lane) any = any || row.v[lane] == i;
-      if (!any) continue;
-      for (int c = k; c < 6; ++c) {
+            for (int c = k; c < 6; ++c) {
         const Lanes t = a[k][c];
         a[k][c] = where_equal(row, here, a[i][c], t);
         a[i][c] = where_equal(row, here, t, a[i][c]);
       }
-      for (int c = 0; c < Cols; ++c) {
-        const Lanes t = b[k][c];
-        b[k][c] = where_equal(row, here, b[i][c], t);
-        b[i][c] = where_equal(row, here, t, b[i][c]);
-      }
     }
     // A zero pivot's lane is abandoned (not regular); dividing by 1 there keeps it finite.
-    const Lanes inverse_pivot = one / where_equal(a[k][k], zero, one, a[k][k]);
-    for (int i = k + 1; i < 6; ++i) {
-      const Lanes factor = a[i][k] * inverse_pivot;
-      for (int c = k; c < 6; ++c) a[i][c] -= factor * a[k][c];
-      for (int c = 0; c < Cols; ++c) b[i][c] -= factor * b[k][c];
+    inverse_pivot[k] = one / where_equal(a[k][k], zero, one, a[k][k]);
+        for (int i = k + 1; i < 6; ++i) {
+      factor[i][k] = a[i][k] * inverse_pivot[k];
+            for (int c = k; c < 6; ++c) a[i][c] -= factor[i][k] * a[k][c];
     }
   }
-  for (int k = 5; k >= 0; --k) {
-    for (int c = k + 1; c < 6; ++c) {
-      for (int j = 0; j < Cols; ++j) b[k][j] -= a[k][c] * b[c][j];
+  for (int j = 0; j < Cols; ++j) {
+    Lanes x[6];
+    #pragma GCC unroll 6
+    for (int r = 0; r < 6; ++r) x[r] = b[r][j];
+    #pragma GCC unroll 6
+    for (int k = 0; k < 6; ++k) {
+      #pragma GCC unroll 6
+      for (int i = k + 1; i < 6; ++i) {
+        if (!(swapped[k] >> i & 1u)) continue;
+        const Lanes here = Lanes::splat(i), t = x[k];
+        x[k] = where_equal(pivot_row[k], here, x[i], t);
+        x[i] = where_equal(pivot_row[k], here, t, x[i]);
+      }
+      #pragma GCC unroll 6
+      for (int i = k + 1; i < 6; ++i) x[i] -= factor[i][k] * x[k];
     }
-    const Lanes inverse = one / where_equal(a[k][k], zero, one, a[k][k]);
-    for (int j = 0; j < Cols; ++j) b[k][j] *= inverse;
+    #pragma GCC unroll 6
+    for (int k = 5; k >= 0; --k) {
+      #pragma GCC unroll 6
+      for (int c = k + 1; c < 6; ++c) x[k] -= a[k][c] * x[c];
+      x[k] *= inverse_pivot[k];
+    }
+    #pragma GCC unroll 6
+    for (int r = 0; r < 6; ++r) b[r][j] = x[r];
   }
   return regular;
 }
