@@ -26,6 +26,13 @@ const double* lane_attribute(const QuantityBlock& q, int index, int lane, const 
   return row;
 }
 
+// Entry `e` of each lane's array, as lane vectors.
+[[gnu::always_inline]] inline Lanes gather(const double* const (&rows)[kBlockLanes], int e) {
+  Lanes r;
+  for (int lane = 0; lane < kBlockLanes; ++lane) r.v[lane] = rows[lane][e];
+  return r;
+}
+
 // Solves J X = B in place for every lane (B: 6 x Cols right-hand sides). \return per lane 1
 // when every pivot was non-zero (the lane's J regular, as local() decides it), else 0.
 // J is factored first (its row swaps, multipliers and inverse pivots kept), then each column of
@@ -142,14 +149,18 @@ template <int Cols>
   for (int r = 0; r < 6; ++r) {
     for (int c = 0; c < 6; ++c) a[r][c] = jacobian[r][c];
   }
+  // The lanes' 6x6 matrices into lane vectors, one entry of all lanes at a time (the transpose
+  // the other way round, one lane's 36 entries at a time, cost a fifth of the whole objective).
+  const double* m_v[kBlockLanes];
+  const double* m_a[kBlockLanes];
   for (int lane = 0; lane < kBlockLanes; ++lane) {
-    if (velocity_) {
-      const double* m_v = lane_attribute(q, 0, lane, "M_v", "velocity");
-      for (int e = 0; e < 36; ++e) rhs[e / 6][e % 6].v[lane] = m_v[e];
-    }
-    if (acceleration_) {
-      const double* m_a = lane_attribute(q, velocity_ ? 1 : 0, lane, "M_a", "acceleration");
-      for (int e = 0; e < 36; ++e) rhs[e / 6][m_a_column + e % 6].v[lane] = m_a[e];
+    if (velocity_) m_v[lane] = lane_attribute(q, 0, lane, "M_v", "velocity");
+    if (acceleration_) m_a[lane] = lane_attribute(q, velocity_ ? 1 : 0, lane, "M_a", "acceleration");
+  }
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) {
+      if (velocity_) rhs[r][c] = gather(m_v, r * 6 + c);
+      if (acceleration_) rhs[r][m_a_column + c] = gather(m_a, r * 6 + c);
     }
   }
   const Lanes use = eliminate_lanes(a, rhs) * reachable;
