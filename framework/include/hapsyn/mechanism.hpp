@@ -85,13 +85,22 @@ class Mechanism {
   /// violated, the other components as in `design`. It may be wider than the feasible set
   /// (inside it, evaluate_constraints decides) but never narrower: a solver counts the designs
   /// outside it as violating a constraint without evaluating them. The framework spot-checks
-  /// the claim (hapsyn/constraint_interval.hpp). An empty interval (lower > upper) means no
+  /// the claim (plugins/solvers/grid/line_bound.hpp). An empty interval (lower > upper) means no
   /// value is feasible. Default: false (no bound known; every design is evaluated).
   /// Called once per line of a design grid; must not allocate or throw.
   virtual bool constraint_interval(const double* design, int component, const SampleSet& scene, double& lower,
                                    double& upper) const {
     return false;
   }
+  /// Optional promise for grid solvers: true when, along design component `component` (the
+  /// others fixed), the values at which evaluate_constraints returns every g <= 0 form one
+  /// interval, as computed in floating point (every constraint is quasiconvex along it, e.g. a
+  /// monotone function of |c + x|). A solver with a constraint_interval for the line then
+  /// checks the constraints exactly at the two ends of the line's feasible run and skips them
+  /// for the designs between (docs/design.md section 13.3). A false promise lets a violating
+  /// design be evaluated: say true only with a proof (and a test on random lines).
+  /// Default: false.
+  virtual bool constraints_quasiconvex(int component) const { return false; }
   /// Optional design-lanes path (docs/design.md section 13.4): solves the one sample `pose` for
   /// up to kBlockLanes designs at once, lane i for the full design vector designs[i] (lanes at
   /// or beyond `count` repeat a valid design), filling out as build(designs[i])->solve_block

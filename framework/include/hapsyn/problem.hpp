@@ -89,6 +89,11 @@ struct EvalOptions {
   /// mutually non-dominated and sorted by the first objective, descending. Exact: a design that
   /// is not dominated by any of the points is never pruned.
   const std::vector<double>* prune_dominated_by = nullptr;
+  /// evaluate_designs only: the caller vouches that every design's constraints hold, so they
+  /// are not evaluated again. A grid solver sets it for the designs inside a line's feasible
+  /// run when its ends were checked and the mechanism promises Mechanism::constraints_quasiconvex
+  /// along the line (plugins/solvers/grid/line_bound.hpp). Builds with assertions check anyway.
+  bool constraints_verified = false;
 };
 
 /// The study's problem. Immutable and shared by threads; per-thread state is an EvalScratch.
@@ -248,7 +253,8 @@ class Problem {
   [[noreturn]] void refuse_non_finite_block_local(const MechanismModel& model, EvalScratch& ws, int sample) const;
   void choose_block_path();
   void order_extremes_first();
-  bool start_lane(const double* free_design, int lane, EvalScratch& ws, Evaluation& out) const;
+  bool start_lane(const double* free_design, int lane, bool constraints_verified, EvalScratch& ws,
+                  Evaluation& out) const;
   bool fold_lane_sample(int lane, int sample, EvalScratch& ws, const EvalOptions& options, bool prune,
                         bool prune_front, Evaluation& out) const;
   double score_bound(const double* accumulator, long long samples) const;

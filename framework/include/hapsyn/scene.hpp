@@ -90,6 +90,15 @@ struct SampleSet {
   /// cache_bounds() ran (the framework calls it after Scene::build), else a scan.
   Corner lower_corner() const;
   Corner upper_corner() const;
+  /// Minimum / maximum of pose coordinate `k` (0 <= k < dimension()) over all samples, in the
+  /// coordinate's unit. O(1) and copy-free once cache_bounds() ran, else a scan: what per-design
+  /// constraints call (a Corner copy costs more than the constraint).
+  double min_coordinate(int k) const {
+    return cached_lower_.size() == poses.cols() ? cached_lower_[k] : poses.col(k).minCoeff();
+  }
+  double max_coordinate(int k) const {
+    return cached_upper_.size() == poses.cols() ? cached_upper_[k] : poses.col(k).maxCoeff();
+  }
   /// Computes the bounding box once, so that per-design constraints need not scan the samples.
   void cache_bounds();
 

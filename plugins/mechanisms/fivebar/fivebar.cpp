@@ -345,9 +345,8 @@ void FiveBar::reach_interval(const FiveBarDesign& design, double xmin, double xm
 bool FiveBar::constraint_interval(const double* design, int component, const SampleSet& scene, double& lower,
                                   double& upper) const {
   if (component != 3 || scene.dimension() != 2 || scene.size() == 0) return false;
-  const SampleSet::Corner low = scene.lower_corner();
-  const SampleSet::Corner high = scene.upper_corner();
-  reach_interval(design_from(design), low[0], high[0], low[1], high[1], lower, upper);
+  reach_interval(design_from(design), scene.min_coordinate(0), scene.max_coordinate(0), scene.min_coordinate(1),
+                 scene.max_coordinate(1), lower, upper);
   if (lower > upper) return true;
   // Rounding: reach_constraint and this interval round differently; a margin far above their
   // few-ulp errors keeps the interval a superset of the designs reach_constraint accepts.
@@ -357,12 +356,15 @@ bool FiveBar::constraint_interval(const double* design, int component, const Sam
   return true;
 }
 
+bool FiveBar::constraints_quasiconvex(int component) const {
+  return component == 3 && options_.footprint_width <= 0.0 && options_.footprint_height <= 0.0;
+}
+
 void FiveBar::evaluate_constraints(const double* design, const SampleSet& scene, double* g) const {
   if (scene.dimension() != 2 || scene.size() == 0) check_scene(scene);
   // Cached by the framework once per study: O(1) and allocation-free per design.
-  const SampleSet::Corner lower = scene.lower_corner();
-  const SampleSet::Corner upper = scene.upper_corner();
-  const double xmin = lower[0], ymin = lower[1], xmax = upper[0], ymax = upper[1];
+  const double xmin = scene.min_coordinate(0), ymin = scene.min_coordinate(1);
+  const double xmax = scene.max_coordinate(0), ymax = scene.max_coordinate(1);
   const FiveBarDesign d{design[0], design[1], design[2], design[3]};
   g[0] = reach_constraint(d, xmin, xmax, ymin, ymax);
   if (options_.footprint_width > 0.0 || options_.footprint_height > 0.0) {

@@ -164,6 +164,11 @@ class FiveBar final : public Mechanism {
   /// false. O(1), no allocation.
   bool constraint_interval(const double* design, int component, const SampleSet& scene, double& lower,
                            double& upper) const override;
+  /// True for r (component 3) without a footprint constraint: reach_constraint is
+  /// (ax^2 + max(|ymin + r|, |ymax + r|)^2) - (l1 + l2)^2, and each rounded step after the sums
+  /// ymin + r, ymax + r (monotone in r) is monotone or a max of quasiconvex terms, so its
+  /// sublevel set in r is one interval in floating point too (docs/design.md section 13.3).
+  bool constraints_quasiconvex(int component) const override;
   /// The interval of r [m] on which reach_constraint(design with that r, box) <= 0, for the
   /// design's l0, l1, l2 and the box [xmin, xmax] x [ymin, ymax]: with ax the larger x distance
   /// from an actuated joint to the box and R = sqrt((l1 + l2)^2 - ax^2), the farthest corner

@@ -788,6 +788,54 @@ TEST(FiveBarReach, IntervalOfRHoldsExactlyThePlacementsTheConstraintAccepts) {
   EXPECT_GT(empty, 100);
 }
 
+TEST(FiveBarReach, ConstraintHoldsOnOneRunOfRAsComputed) {
+  // The promise of constraints_quasiconvex(3), in floating point: along r, the values where the
+  // computed constraint is <= 0 form one run. Checked on random designs and boxes at r on a
+  // grid and on every double within 300 ulps of the interval's ends, in increasing order.
+  std::mt19937_64 rng(29);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int runs = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    FiveBarDesign d{0.3 * u(rng), 0.01 + 0.3 * u(rng), 0.01 + 0.3 * u(rng), 0.0};
+    const double xmin = -0.1 * u(rng), xmax = 0.1 * u(rng), ymin = -0.1 * u(rng), ymax = 0.1 * u(rng);
+    double lower = 0.0, upper = 0.0;
+    FiveBar::reach_interval(d, xmin, xmax, ymin, ymax, lower, upper);
+    std::vector<double> rs;
+    for (double r = -1.0; r <= 1.0; r += 0.0037) rs.push_back(r);
+    for (const double end : {lower, upper, -0.5 * (ymin + ymax)}) {
+      if (!std::isfinite(end)) continue;
+      double below = end, above = end;
+      for (int k = 0; k < 300; ++k) {
+        rs.push_back(below = std::nextafter(below, -2.0));
+        rs.push_back(above = std::nextafter(above, 2.0));
+      }
+      rs.push_back(end);
+    }
+    std::sort(rs.begin(), rs.end());
+    int changes = 0;
+    bool previous = false;
+    for (std::size_t i = 0; i < rs.size(); ++i) {
+      d.r = rs[i];
+      const bool holds = FiveBar::reach_constraint(d, xmin, xmax, ymin, ymax) <= 0.0;
+      if (i > 0 && holds != previous) ++changes;
+      previous = holds;
+    }
+    d.r = rs.front();
+    ASSERT_GT(FiveBar::reach_constraint(d, xmin, xmax, ymin, ymax), 0.0);  // starts and ends outside
+    ASSERT_TRUE(changes == 0 || changes == 2) << "trial " << trial << ": " << changes << " changes along r";
+    runs += changes == 2;
+  }
+  EXPECT_GT(runs, 1000);
+}
+
+TEST(FiveBarReach, PromisesOneRunOnlyAlongRAndWithoutAFootprint) {
+  const FiveBar plain = fivebar();
+  for (int k = 0; k < 3; ++k) EXPECT_FALSE(plain.constraints_quasiconvex(k)) << k;
+  EXPECT_TRUE(plain.constraints_quasiconvex(3));
+  const FiveBar footprint = fivebar(Json{{"footprint_width", 0.2}});
+  EXPECT_FALSE(footprint.constraints_quasiconvex(3));
+}
+
 TEST(FiveBarReach, ConstraintIntervalIsTheReachIntervalWidenedAndOnlyForR) {
   const FiveBar mechanism = fivebar();
   const SampleSet scene = square(0.1, 0.01);

@@ -428,6 +428,7 @@ bool cull_line(const Problem& problem, const Grid& grid, long long line, SweepTh
     EvalOptions bound;
     bound.subset = &s.group_order;
     bound.prune_below = threshold;
+    bound.constraints_verified = s.line_bound->verified();
     problem.evaluate_designs(designs, count, *s.eval_scratch, bound, s.group_outs);
     for (int j = 0; j < count; ++j) {
       std::copy(designs[j], designs[j] + n, s.x.begin());

@@ -205,6 +205,7 @@ struct alignas(64) SweepThread : Extra {
   // their free vectors one after the other, and the evaluations' buffer.
   std::vector<long long> pending;
   long long pending_line = -1;
+  bool pending_verified = false;           // the line bound verified the pending designs' constraints
   std::vector<double> pending_x;           // kBlockLanes rows of free vectors
   std::vector<long long> row_line;         // the line each row was filled for
   std::vector<Evaluation> outs;
@@ -682,6 +683,7 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
       for (std::size_t i = 0; i < s.pending.size(); ++i) designs[i] = s.pending_x.data() + i * dim;
       EvalOptions options;
       if (prune) options.prune_below = incumbent.load(std::memory_order_relaxed);
+      options.constraints_verified = s.pending_verified;
       problem.evaluate_designs(designs, static_cast<int>(s.pending.size()), *s.eval_scratch, options, s.outs);
       for (std::size_t i = 0; i < s.pending.size(); ++i) take(s.pending[i], designs[i], s.outs[i], t);
       s.pending.clear();
@@ -693,6 +695,8 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
       }
       if (s.pending_line != s.line || s.pending.size() == static_cast<std::size_t>(kBlockLanes)) flush(t);
       s.pending_line = s.line;
+      // After the flush: the bound already describes this design's line (its update came first).
+      if (s.pending.empty()) s.pending_verified = s.bound->verified();
       // Row `row` of pending_x holds the line's design once per line; then only r changes.
       const std::size_t dim = s.x.size(), row = s.pending.size();
       double* slot = s.pending_x.data() + row * dim;

@@ -1,5 +1,6 @@
 // The grid solver is the oracle of later solvers: check it against a plain loop over the grid.
 #include "grid.hpp"
+#include "line_bound.hpp"
 
 #include "analytic_problems.hpp"
 #include "rank_test_support.hpp"
@@ -675,6 +676,26 @@ class NarrowedBound final : public hapsyn::Mechanism {
   std::shared_ptr<const hapsyn::Mechanism> fivebar_;
 };
 
+// The five-bar with its true constraint interval but without the one-run promise.
+class WithoutPromise final : public hapsyn::Mechanism {
+ public:
+  explicit WithoutPromise(std::shared_ptr<const hapsyn::Mechanism> fivebar) : fivebar_(std::move(fivebar)) {}
+  std::unique_ptr<const hapsyn::MechanismModel> build(const double* design) const override { return fivebar_->build(design); }
+  std::vector<hapsyn::VariableDecl> variables() const override { return fivebar_->variables(); }
+  std::vector<hapsyn::ConstraintDecl> constraints() const override { return fivebar_->constraints(); }
+  void evaluate_constraints(const double* design, const hapsyn::SampleSet& scene, double* g) const override {
+    fivebar_->evaluate_constraints(design, scene, g);
+  }
+  hapsyn::Needs provides() const override { return fivebar_->provides(); }
+  bool constraint_interval(const double* design, int component, const hapsyn::SampleSet& scene, double& lower,
+                           double& upper) const override {
+    return fivebar_->constraint_interval(design, component, scene, lower, upper);
+  }
+
+ private:
+  std::shared_ptr<const hapsyn::Mechanism> fivebar_;
+};
+
 }  // namespace
 
 TEST(GridLineBound, SkippingRuledOutDesignsGivesTheSameResultAndStatistics) {
@@ -706,6 +727,49 @@ TEST(GridLineBound, SkippingRuledOutDesignsGivesTheSameResultAndStatistics) {
       // The bound did rule out designs: most of this grid violates reach.
       EXPECT_GT(with.statistics["constraint_violated"].get<long long>(), with.statistics["grid_designs"].get<long long>() / 3);
     }
+  }
+}
+
+TEST(GridLineBound, OneRunPromiseMakesTheBoundExactOnEveryLine) {
+  // The five-bar promises one feasible run along r: the bound then excludes exactly the designs
+  // whose constraints fail (checked design by design) and verifies the rest; without the
+  // promise (NarrowedBound forwards no constraints_quasiconvex) nothing is verified.
+  const hapsyn::Study study = hapsyn::load_study(line_bound_study(), hapsyn::test::registry());
+  const hapsyn::Problem& p = *study.problem;
+  const hapsyn::DesignSpace& space = p.design_space();
+  const std::vector<long long> counts = space.grid_counts();
+  long long total = 1;
+  for (long long c : counts) total *= c;
+  const long long line_length = counts.back(), lines = total / line_length;
+  hapsyn::plugins::LineBound bound(p, true, "grid");
+  std::vector<double> x(space.free_size()), g(p.constraint_count());
+  long long verified = 0, excluded = 0;
+  for (long long line = 0; line < lines; ++line) {
+    space.grid_point(line * line_length, counts, x.data());
+    bound.update(x.data());
+    bool any = false;
+    for (long long i = 0; i < line_length; ++i) {
+      x.back() = space.grid_value(x.size() - 1, i);
+      const bool holds = p.constraints(x.data(), g.data());
+      ASSERT_EQ(bound.excludes(i), !holds) << "line " << line << ", r index " << i;
+      any = any || holds;
+      excluded += !holds;
+    }
+    EXPECT_EQ(bound.verified(), any) << "line " << line;
+    verified += bound.verified();
+  }
+  EXPECT_GT(verified, lines / 4);
+  EXPECT_GT(excluded, total / 3);
+
+  const std::shared_ptr<const hapsyn::Mechanism> fivebar(std::shared_ptr<const hapsyn::Mechanism>{}, &p.mechanism());
+  const auto unpromised = std::make_shared<hapsyn::Problem>(
+      "no-promise", std::make_shared<WithoutPromise>(fivebar), std::make_shared<hapsyn::SampleSet>(p.samples()),
+      p.metrics(), p.objectives(), p.design_space());
+  hapsyn::plugins::LineBound plain(*unpromised, true, "grid");
+  for (long long line = 0; line < lines; ++line) {
+    space.grid_point(line * line_length, counts, x.data());
+    plain.update(x.data());
+    EXPECT_FALSE(plain.verified());
   }
 }
 

@@ -8,7 +8,10 @@
 /// set, never narrower; LineBound checks the claim on every line at the excluded grid values
 /// nearest the interval (the designs most likely to expose a wrong bound), so that a mechanism
 /// whose bound cuts a feasible design stops the run with an error instead of a silently wrong
-/// optimum (docs/design.md section 13.3).
+/// optimum (docs/design.md section 13.3). When the mechanism also promises that the line's
+/// feasible values form one run (Mechanism::constraints_quasiconvex), the bound is made exact:
+/// the constraints are evaluated at the run's ends (stepping inward past violators), and the
+/// designs between need no constraint evaluation of their own (verified()).
 #include <hapsyn/error.hpp>
 #include <hapsyn/problem.hpp>
 
@@ -35,6 +38,7 @@ class LineBound {
       free_k_ = problem.design_space().free_size() - 1;
       component_ = problem.design_space().free_indices().back();
       count_ = problem.design_space().grid_counts().back();
+      one_run_ = enabled_ && problem.mechanism().constraints_quasiconvex(component_);
     }
     last_ = count_ - 1;
   }
@@ -45,6 +49,7 @@ class LineBound {
   void update(const double* free_design) {
     first_ = 0;
     last_ = count_ - 1;
+    verified_ = false;
     if (!enabled_) return;
     const DesignSpace& space = problem_.design_space();
     space.expand(free_design, full_.data());
@@ -69,7 +74,13 @@ class LineBound {
     while (last_ >= 0 && space.grid_value(free_k_, last_) > upper) --last_;
     if (first_ > 0) confirm_violated(first_ - 1);
     if (last_ < count_ - 1) confirm_violated(last_ + 1);
+    if (one_run_) make_exact();
   }
+
+  /// True when every design of the line the bound does not exclude satisfies the constraints
+  /// (checked at the run's ends, the rest by the mechanism's quasiconvexity promise): the
+  /// solver may then set EvalOptions::constraints_verified for them.
+  bool verified() const { return verified_; }
 
   /// True when grid index `i` of the line's component lies outside the bound.
   /// (Inline and branch-light: called for every design of the grid.)
@@ -83,6 +94,32 @@ class LineBound {
     if (!(steps > 0.0)) return 0;
     if (steps >= static_cast<double>(count_)) return count_;
     return static_cast<long long>(std::ceil(steps));
+  }
+
+  // Narrows [first_, last_] to the designs whose constraints hold, from both ends (the
+  // interval's margin makes it a superset by at most a few designs). One run: its ends hold,
+  // so everything between holds, and everything outside violates. A NaN at an end leaves the
+  // run unverified: the designs' own evaluations then report it.
+  void make_exact() {
+    Check c = Check::kViolated;
+    while (first_ <= last_ && (c = check(first_)) == Check::kViolated) ++first_;
+    if (c == Check::kNaN) return;
+    while (last_ > first_ && (c = check(last_)) == Check::kViolated) --last_;
+    if (c == Check::kNaN) return;
+    verified_ = first_ <= last_;
+  }
+
+  enum class Check { kHolds, kViolated, kNaN };
+  // The constraints at grid index i of the current line (full_ holds the line).
+  Check check(long long i) {
+    full_(component_) = problem_.design_space().grid_value(free_k_, i);
+    problem_.mechanism().evaluate_constraints(full_.data(), problem_.samples(), g_.data());
+    Check c = Check::kHolds;
+    for (double g : g_) {
+      if (std::isnan(g)) return Check::kNaN;
+      if (g > 0.0) c = Check::kViolated;
+    }
+    return c;
   }
 
   // The claim "violates a constraint" at grid index i of the current line (full_ holds the line).
@@ -107,6 +144,8 @@ class LineBound {
   Eigen::VectorXd full_;
   std::vector<double> g_;
   long long first_ = 0, last_ = 0;
+  bool one_run_ = false;   // the mechanism promises one feasible run per line
+  bool verified_ = false;  // [first_, last_] is exactly that run (see verified())
 };
 
 }  // namespace hapsyn::plugins
