@@ -46,21 +46,11 @@ struct Grid {
   const DesignSpace* space = nullptr;
   std::vector<long long> counts;
   long long total = 1;
-  // The grid values of the last variable (the same on every line), tabulated when a line is
-  // short enough (a cross-library call per design otherwise).
-  std::vector<double> line_values;
 
   explicit Grid(const DesignSpace& s) : space(&s), counts(s.grid_counts()) {
     for (long long c : counts) total *= c;
-    if (!counts.empty() && counts.back() <= (1LL << 16)) {
-      line_values.resize(static_cast<std::size_t>(counts.back()));
-      for (long long i = 0; i < counts.back(); ++i) line_values[static_cast<std::size_t>(i)] = s.grid_value(counts.size() - 1, i);
-    }
   }
   void decode(long long index, double* x) const { space->grid_point(index, counts, x); }
-  double line_value(long long i) const {
-    return line_values.empty() ? space->grid_value(counts.size() - 1, i) : line_values[static_cast<std::size_t>(i)];
-  }
   long long nearest_cell(std::size_t k, double v) const {
     const DesignComponent& c = space->components()[static_cast<std::size_t>(space->free_indices()[k])];
     const double i = std::floor((v - c.lower) / c.step);
@@ -420,7 +410,7 @@ bool cull_line(const Problem& problem, const Grid& grid, long long line, SweepTh
         continue;
       }
       double* slot = s.group_x.data() + static_cast<std::size_t>(count) * n;
-      slot[n - 1] = grid.line_value(i);
+      slot[n - 1] = s.line_bound->value(i);
       designs[count] = slot;
       group_index[count++] = line * line_length + i;
     }

@@ -68,19 +68,9 @@ void raise_to(std::atomic<double>& target, double value) {
 struct GridShape {
   std::vector<long long> counts;
   long long total = 1;
-  // The grid values of the last variable (the same on every line), tabulated when a line is
-  // short enough (a cross-library call per design otherwise).
-  std::vector<double> line_values;
 
   explicit GridShape(const DesignSpace& space) : counts(space.grid_counts()) {
     for (long long c : counts) total *= c;
-    if (!counts.empty() && counts.back() <= (1LL << 16)) {
-      line_values.resize(static_cast<std::size_t>(counts.back()));
-      for (long long i = 0; i < counts.back(); ++i) line_values[static_cast<std::size_t>(i)] = space.grid_value(counts.size() - 1, i);
-    }
-  }
-  double line_value(const DesignSpace& space, long long i) const {
-    return line_values.empty() ? space.grid_value(counts.size() - 1, i) : line_values[static_cast<std::size_t>(i)];
   }
 };
 
@@ -249,7 +239,7 @@ bool excluded_by_line_bound(SweepThread<Extra>& s, const DesignSpace& space, con
     s.bound->update(s.x.data());
   }
   if (s.bound->excludes(i)) return true;
-  s.x.back() = grid.line_value(space, i);
+  s.x.back() = s.bound->value(i);
   return false;
 }
 

@@ -39,8 +39,19 @@ class LineBound {
       component_ = problem.design_space().free_indices().back();
       count_ = problem.design_space().grid_counts().back();
       one_run_ = enabled_ && problem.mechanism().constraints_quasiconvex(component_);
+      if (count_ <= kMaxTabulated) {
+        values_.resize(static_cast<std::size_t>(count_));
+        for (long long i = 0; i < count_; ++i) values_[static_cast<std::size_t>(i)] = problem.design_space().grid_value(free_k_, i);
+      }
     }
     last_ = count_ - 1;
+  }
+
+  /// The value of the line's component at grid index i (DesignSpace::grid_value, the same on
+  /// every line): tabulated for lines of up to 65,536 points, so the solvers' per-design loops
+  /// make no cross-library call for it.
+  double value(long long i) const {
+    return values_.empty() ? problem_.design_space().grid_value(free_k_, i) : values_[static_cast<std::size_t>(i)];
   }
 
   /// Sets the range of the line through `free_design` (its last component is ignored). Throws
@@ -112,7 +123,7 @@ class LineBound {
   enum class Check { kHolds, kViolated, kNaN };
   // The constraints at grid index i of the current line (full_ holds the line).
   Check check(long long i) {
-    full_(component_) = problem_.design_space().grid_value(free_k_, i);
+    full_(component_) = value(i);
     problem_.mechanism().evaluate_constraints(full_.data(), problem_.samples(), g_.data());
     Check c = Check::kHolds;
     for (double g : g_) {
@@ -124,16 +135,14 @@ class LineBound {
 
   // The claim "violates a constraint" at grid index i of the current line (full_ holds the line).
   void confirm_violated(long long i) {
-    full_(component_) = problem_.design_space().grid_value(free_k_, i);
-    problem_.mechanism().evaluate_constraints(full_.data(), problem_.samples(), g_.data());
-    for (double g : g_) {
-      if (g > 0.0 || std::isnan(g)) return;
-    }
+    if (check(i) != Check::kHolds) return;
     throw Error(solver_, "the mechanism's constraint_interval for design component " + std::to_string(component_) +
                             " excludes the design " + problem_.design_to_json(full_).dump() +
                             ", whose constraints hold: the bound would cut feasible designs (a plugin bug); "
                             "set solver.options.line_bounds = false to run without it");
   }
+
+  static constexpr long long kMaxTabulated = 1LL << 16;
 
   const Problem& problem_;
   const char* solver_;
@@ -143,6 +152,7 @@ class LineBound {
   long long count_ = 1;
   Eigen::VectorXd full_;
   std::vector<double> g_;
+  std::vector<double> values_;  // value(i) of every grid index, when tabulated
   long long first_ = 0, last_ = 0;
   bool one_run_ = false;   // the mechanism promises one feasible run per line
   bool verified_ = false;  // [first_, last_] is exactly that run (see verified())
