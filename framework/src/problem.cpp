@@ -92,6 +92,11 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
     metric_attributes_.push_back(std::move(attributes));
   }
   local_offset_.push_back(static_cast<int>(local_reduction_.size()));
+  for (const Reduction r : local_reduction_) {
+    identity_accumulator_.push_back(r == Reduction::kMin   ? std::numeric_limits<double>::infinity()
+                                    : r == Reduction::kMax ? -std::numeric_limits<double>::infinity()
+                                                           : 0.0);
+  }
   // Accelerations and the velocity torque are computed at the joint rates: they imply them.
   if (needs_ & (kNeedJointAcceleration | kNeedVelocityTorque)) needs_ |= kNeedJointVelocity;
   resolve_demanded_motion();
@@ -300,17 +305,6 @@ double Problem::score(const std::vector<double>& objectives) const {
   return s;
 }
 
-namespace {
-// The reductions' identities (acc, arg: reductions.size() values each; a design lane's too).
-void reset_accumulators(const std::vector<Reduction>& reductions, double* acc, int* arg) {
-  for (std::size_t i = 0; i < reductions.size(); ++i) {
-    acc[i] = reductions[i] == Reduction::kMin   ? std::numeric_limits<double>::infinity()
-             : reductions[i] == Reduction::kMax ? -std::numeric_limits<double>::infinity()
-                                                : 0.0;
-    arg[i] = -1;
-  }
-}
-}  // namespace
 
 bool Problem::front_dominates(const std::vector<double>& front, const double* accumulator, double* bound) const {
   // Upper bounds of the objectives from the reductions so far (samples seen: a count is only
@@ -354,7 +348,8 @@ bool Problem::constraints_hold(const double* full, EvalScratch& ws, Evaluation& 
   for (std::size_t i = 0; i < constraint_names_.size(); ++i) {
     if (std::isnan(ws.g[i])) {
       throw Error("problem", "mechanism '" + mechanism_plugin_ + "' returned constraint '" + constraint_names_[i] +
-                                 "' = nan for design " + format_design(*this, ws.full));
+                                 "' = nan for design " +
+                                 format_design(*this, Eigen::Map<const Eigen::VectorXd>(full, static_cast<Eigen::Index>(space_.size()))));
     }
     if (ws.g[i] > 0.0) {
       out.status = EvalStatus::kConstraintViolated;
@@ -443,7 +438,10 @@ void Problem::mark_pruned(const int* argument, Evaluation& out) const {
   // The samples attaining the reductions so far are what made the bound fall: culling collects
   // them as critical samples.
   for (std::size_t m = 0; m < metrics_.size(); ++m) {
-    out.critical_samples[m].assign(argument + local_offset_[m], argument + local_offset_[m + 1]);
+    std::vector<int>& critical = out.critical_samples[m];
+    const std::size_t n = static_cast<std::size_t>(local_offset_[m + 1] - local_offset_[m]);
+    critical.resize(n);  // a no-op on a reused evaluation: the samples are written in place
+    for (std::size_t j = 0; j < n; ++j) critical[j] = argument[static_cast<std::size_t>(local_offset_[m]) + j];
   }
   out.status = EvalStatus::kPruned;
 }
@@ -483,7 +481,8 @@ const Evaluation& Problem::evaluate(const double* free_design, EvalScratch& ws, 
     owned = mechanism_->build(ws.full.data());
     model = owned.get();
   }
-  reset_accumulators(local_reduction_, ws.accumulator.data(), ws.argument.data());
+  std::copy(identity_accumulator_.begin(), identity_accumulator_.end(), ws.accumulator.begin());
+  std::fill(ws.argument.begin(), ws.argument.end(), -1);
   const bool prune = std::isfinite(options.prune_below) && prunable_;
   const std::vector<double>* front = options.prune_dominated_by;
   const bool prune_front = front && !front->empty() && worst_case_ && all_maximized_;
@@ -738,13 +737,17 @@ void Problem::refuse_non_finite_block_local(const MechanismModel& model, EvalScr
                              " gave a non-finite local value in a block but a finite one alone (docs/design.md section 13)");
 }
 
-// Design lanes (evaluate_designs). Lane i's state lives in ws.lane_*; the per-design helpers
-// (constraints_hold, score_bound, front_dominates, mark_pruned, combine_objectives) work on
-// ws.full / ws.accumulator / ws.argument, so a lane's state is copied in and out around them.
+// Design lanes (evaluate_designs). Lane i's design is lane_design[i]: the caller's free vector
+// when every component is free, else its expansion at ws.lane_full[i * size]. Its reductions are
+// kept lane-minor, local j of lane i at ws.lane_accumulator / lane_argument[j * kBlockLanes + i],
+// so that starting and folding a group are loops over the lanes that compile to vector code.
+// Most designs here are decided at their first sample: what a design costs is this bookkeeping,
+// not the arithmetic, so a lane's Evaluation is written only when the lane is decided
+// (docs/design.md section 13.4).
 void Problem::evaluate_designs(const double* const* free_designs, int count, EvalScratch& ws,
                                const EvalOptions& options, std::vector<Evaluation>& outs) const {
   assert(count >= 1 && count <= kBlockLanes);
-  if (outs.size() < static_cast<std::size_t>(count)) outs.resize(static_cast<std::size_t>(count));
+  size_evaluations(outs, count);
   const auto one_by_one = [&](int from, const bool* pending) {
     for (int i = from; i < count; ++i) {
       if (!pending || pending[i]) outs[static_cast<std::size_t>(i)] = evaluate(free_designs[i], ws, options);
@@ -754,15 +757,12 @@ void Problem::evaluate_designs(const double* const* free_designs, int count, Eva
   if (!block_path_ || !worst_case_ || options.per_sample || options.on_sample || count == 1) {
     return one_by_one(0, nullptr);
   }
-  const std::size_t size = space_.size();
   bool active[kBlockLanes] = {};
-  int left = 0, any = -1;
-  for (int i = 0; i < count; ++i) {
-    active[i] = start_lane(free_designs[i], i, options.constraints_verified, ws, outs[static_cast<std::size_t>(i)]);
-    left += active[i];
-    if (active[i] && any < 0) any = i;
-  }
+  const double* lane_design[kBlockLanes];
+  int left = start_lanes(free_designs, count, options.constraints_verified, ws, outs, active, lane_design);
   if (left == 0) return;
+  int any = 0;
+  while (!active[any]) ++any;
   const bool prune = std::isfinite(options.prune_below) && prunable_;
   const std::vector<double>* front = options.prune_dominated_by;
   const bool prune_front = front && !front->empty() && worst_case_ && all_maximized_;
@@ -771,7 +771,7 @@ void Problem::evaluate_designs(const double* const* free_designs, int count, Eva
   const double* designs[kBlockLanes];
   for (std::size_t t = 0; t < lane_samples && left > 0; ++t) {
     for (int i = 0; i < kBlockLanes; ++i) {  // decided and unused lanes repeat a live design
-      designs[i] = ws.lane_full.data() + static_cast<std::size_t>(i < count && active[i] ? i : any) * size;
+      designs[i] = lane_design[i < count && active[i] ? i : any];
     }
     const int sample = indices[t];
     if (!mechanism_->solve_designs(designs, count, samples_->pose(sample), needs_, *ws.scratch, *ws.block)) {
@@ -779,34 +779,27 @@ void Problem::evaluate_designs(const double* const* free_designs, int count, Eva
     }
     std::fill_n(ws.block->samples, kBlockLanes, sample);
     block_locals(ws);
-    for (int i = 0; i < count; ++i) {
-      if (!active[i]) continue;
-      ws.non_finite_lane = -1;
-      if (fold_lane_sample(i, sample, ws, options, prune, prune_front, outs[static_cast<std::size_t>(i)])) continue;
-      if (ws.non_finite_lane == i) {
-        // The per-sample loop meets the same value and reports it with the design and sample.
-        EvalOptions alone = options;
-        alone.per_sample = true;
-        (void)evaluate(free_designs[i], ws, alone);
-        throw Error("problem", "sample " + std::to_string(sample) +
-                                   " gave a non-finite local value in a design lane but not alone (docs/design.md section 13.4)");
-      }
-      active[i] = false;
-      --left;
-      if (any == i) any = -1;
+    const int non_finite = fold_lanes(sample, count, ws, options, prune, prune_front, outs, active, left);
+    if (non_finite >= 0) {
+      // The per-sample loop meets the same value and reports it with the design and sample.
+      EvalOptions alone = options;
+      alone.per_sample = true;
+      (void)evaluate(free_designs[non_finite], ws, alone);
+      throw Error("problem", "sample " + std::to_string(sample) +
+                                 " gave a non-finite local value in a design lane but not alone (docs/design.md section 13.4)");
     }
-    for (int i = 0; any < 0 && i < count; ++i) {
-      if (active[i]) any = i;
-    }
+    for (any = 0; left > 0 && !active[any];) ++any;
   }
   if (left == 0) return;
   if (lane_samples == indices.size()) {  // every sample seen: the surviving designs are complete
-    const std::size_t k = local_reduction_.size();
+    const std::size_t size = space_.size(), k = local_reduction_.size();
     for (int i = 0; i < count; ++i) {
       if (!active[i]) continue;
-      std::copy_n(ws.lane_accumulator.begin() + static_cast<std::ptrdiff_t>(i * k), k, ws.accumulator.begin());
-      std::copy_n(ws.lane_argument.begin() + static_cast<std::ptrdiff_t>(i * k), k, ws.argument.begin());
-      std::copy_n(ws.lane_full.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(i) * size), size, ws.full.data());
+      for (std::size_t j = 0; j < k; ++j) {
+        ws.accumulator[j] = ws.lane_accumulator[j * kBlockLanes + static_cast<std::size_t>(i)];
+        ws.argument[j] = ws.lane_argument[j * kBlockLanes + static_cast<std::size_t>(i)];
+      }
+      std::copy_n(lane_design[i], size, ws.full.data());
       combine_objectives(ws, outs[static_cast<std::size_t>(i)]);
     }
     return;
@@ -814,63 +807,128 @@ void Problem::evaluate_designs(const double* const* free_designs, int count, Eva
   one_by_one(0, active);  // undecided after the first samples: the block path finishes them
 }
 
-// Lane i's evaluate() up to its first sample: bounds, constraints (unless the caller verified
-// them), identity reductions. True when the design goes on to its samples; `out` then holds a
-// reset evaluation.
-bool Problem::start_lane(const double* free_design, int lane, bool constraints_verified, EvalScratch& ws,
-                         Evaluation& out) const {
-  check_design(free_design);
-  out.objectives.resize(objectives_.size());
-  out.critical_samples.resize(metrics_.size());
-  out.reduced.resize(metrics_.size());
-  reset_evaluation(out);
-  const std::size_t size = space_.size(), k = local_reduction_.size();
-  double* full = ws.lane_full.data() + static_cast<std::size_t>(lane) * size;
-  space_.expand(free_design, full);
-  if (!constraints_verified) {
-    if (!constraints_hold(full, ws, out)) return false;
-  } else {
-    // The caller's line bound checked the run's ends under the mechanism's quasiconvexity
-    // promise; a broken promise is a plugin bug that builds with assertions catch here.
-    assert(constraints_hold(full, ws, out) && "EvalOptions::constraints_verified for a design that violates a constraint");
+// Gives outs[0..count) the study's sizes; a no-op once they have them (outs is reused).
+void Problem::size_evaluations(std::vector<Evaluation>& outs, int count) const {
+  if (outs.size() < static_cast<std::size_t>(count)) outs.resize(static_cast<std::size_t>(count));
+  for (int i = 0; i < count; ++i) {
+    Evaluation& out = outs[static_cast<std::size_t>(i)];
+    if (out.objectives.size() == objectives_.size() && out.reduced.size() == metrics_.size() &&
+        out.critical_samples.size() == metrics_.size()) {
+      continue;
+    }
+    out.objectives.resize(objectives_.size());
+    out.critical_samples.resize(metrics_.size());
+    out.reduced.resize(metrics_.size());
   }
-  reset_accumulators(local_reduction_, ws.lane_accumulator.data() + static_cast<std::size_t>(lane) * k,
-                     ws.lane_argument.data() + static_cast<std::size_t>(lane) * k);
-  return true;
 }
 
-// One sample of lane i, as the per-sample loop takes it: a failing sample ends the design, the
-// local values are reduced with the tie rule, and the bound may prune it. True while the design
-// goes on.
-bool Problem::fold_lane_sample(int lane, int sample, EvalScratch& ws, const EvalOptions& options, bool prune,
-                               bool prune_front, Evaluation& out) const {
-  ++out.samples_evaluated;
-  if (ws.block->lane_status(lane) != SampleStatus::kReachable) {
-    out.status = EvalStatus::kSampleFailed;
-    out.failed_sample = sample;
-    out.failed_status = ws.block->lane_status(lane);
-    return false;
+// Each lane's evaluate() up to its first sample: bounds, constraints (unless the caller verified
+// them), identity reductions. Sets active[i] for the designs that go on to their samples and
+// returns how many do; their outs hold a reset evaluation, the others a constraint violation.
+int Problem::start_lanes(const double* const* free_designs, int count, bool constraints_verified, EvalScratch& ws,
+                         std::vector<Evaluation>& outs, bool* active, const double** lane_design) const {
+  const std::size_t free = free_lower_.size(), size = space_.size(), k = local_reduction_.size();
+  // One chain of comparisons per design, not one through all of them: the designs' checks overlap.
+  bool inside[kBlockLanes];
+  for (int i = 0; i < count; ++i) {
+    bool in = true;
+    for (std::size_t c = 0; c < free; ++c) in &= (free_designs[i][c] >= free_lower_[c]) & (free_designs[i][c] <= free_upper_[c]);
+    inside[i] = in;
   }
-  const std::size_t k = local_reduction_.size();
-  double* acc = ws.lane_accumulator.data() + static_cast<std::size_t>(lane) * k;
-  int* arg = ws.lane_argument.data() + static_cast<std::size_t>(lane) * k;
+  for (int i = 0; i < count; ++i) {
+    if (!inside[i]) check_design(free_designs[i]);  // throws with the component named
+  }
   for (std::size_t j = 0; j < k; ++j) {
-    const double v = ws.block_locals[j * kBlockLanes + static_cast<std::size_t>(lane)];
-    if (!std::isfinite(v)) {
-      ws.non_finite_lane = lane;  // evaluate_designs reports it as the per-sample loop does
-      return false;
-    }
-    if (better(local_reduction_[j], v, sample, acc[j], arg[j])) {
-      acc[j] = v;
-      arg[j] = sample;
+    for (int i = 0; i < kBlockLanes; ++i) {
+      ws.lane_accumulator[j * kBlockLanes + static_cast<std::size_t>(i)] = identity_accumulator_[j];
+      ws.lane_argument[j * kBlockLanes + static_cast<std::size_t>(i)] = -1;
     }
   }
-  if ((prune_front && front_dominates(*options.prune_dominated_by, acc, ws.objective_bound.data())) ||
-      (prune && score_bound(acc, out.samples_evaluated) < options.prune_below)) {
-    mark_pruned(arg, out);
-    return false;
+  int live = 0;
+  for (int i = 0; i < count; ++i) {
+    Evaluation& out = outs[static_cast<std::size_t>(i)];
+    reset_evaluation(out);
+    if (free == size) {
+      lane_design[i] = free_designs[i];
+    } else {
+      double* full = ws.lane_full.data() + static_cast<std::size_t>(i) * size;
+      space_.expand(free_designs[i], full);
+      lane_design[i] = full;
+    }
+    if (!constraints_verified) {
+      if (!constraints_hold(lane_design[i], ws, out)) continue;
+    } else {
+      // The caller's line bound checked the run's ends under the mechanism's quasiconvexity
+      // promise; a broken promise is a plugin bug that builds with assertions catch here.
+      assert(constraints_hold(lane_design[i], ws, out) &&
+             "EvalOptions::constraints_verified for a design that violates a constraint");
+    }
+    active[i] = true;
+    ++live;
   }
-  return true;
+  return live;
+}
+
+// One sample of every active lane, as the per-sample loop takes it: a failing sample ends the
+// design, the local values are reduced with the tie rule, and the bound may prune it. Clears
+// active[i] and decrements `left` for each lane decided here. Returns the first lane with a
+// non-finite local value (the caller reports it), else -1.
+int Problem::fold_lanes(int sample, int count, EvalScratch& ws, const EvalOptions& options, bool prune,
+                        bool prune_front, std::vector<Evaluation>& outs, bool* active, int& left) const {
+  const std::size_t k = local_reduction_.size();
+  constexpr std::size_t L = kBlockLanes;
+  // Which lanes fold this sample: active and reachable. The reductions of all lanes are updated
+  // together under that mask (lane-minor: a vector per local value).
+  bool folds[L] = {};
+  for (int i = 0; i < count; ++i) folds[i] = active[i] && ws.block->lane_status(i) == SampleStatus::kReachable;
+  const double* locals = ws.block_locals.data();
+  for (std::size_t j = 0; j < k; ++j) {
+    bool finite = true;
+    for (std::size_t i = 0; i < L; ++i) finite &= !folds[i] || std::isfinite(locals[j * L + i]);
+    if (!finite) {
+      for (int i = 0; i < count; ++i) {
+        if (folds[i] && !std::isfinite(locals[j * L + static_cast<std::size_t>(i)])) return i;
+      }
+    }
+    double* acc = ws.lane_accumulator.data() + j * L;
+    int* arg = ws.lane_argument.data() + j * L;
+    const bool is_min = local_reduction_[j] == Reduction::kMin;
+    for (std::size_t i = 0; i < L; ++i) {
+      const double v = locals[j * L + i];
+      const bool wins = is_min ? (v < acc[i] || (v == acc[i] && sample < arg[i]))
+                               : (v > acc[i] || (v == acc[i] && sample < arg[i]));
+      const bool take = folds[i] && wins;
+      acc[i] = take ? v : acc[i];
+      arg[i] = take ? sample : arg[i];
+    }
+  }
+  double* lane_acc = ws.accumulator.data();  // one lane's reductions, for the helpers (free here)
+  int* lane_arg = ws.argument.data();
+  for (int i = 0; i < count; ++i) {
+    if (!active[i]) continue;
+    Evaluation& out = outs[static_cast<std::size_t>(i)];
+    ++out.samples_evaluated;
+    if (!folds[i]) {
+      out.status = EvalStatus::kSampleFailed;
+      out.failed_sample = sample;
+      out.failed_status = ws.block->lane_status(i);
+      active[i] = false;
+      --left;
+      continue;
+    }
+    if (!prune && !prune_front) continue;
+    for (std::size_t j = 0; j < k; ++j) {
+      lane_acc[j] = ws.lane_accumulator[j * L + static_cast<std::size_t>(i)];
+      lane_arg[j] = ws.lane_argument[j * L + static_cast<std::size_t>(i)];
+    }
+    if ((prune_front && front_dominates(*options.prune_dominated_by, lane_acc, ws.objective_bound.data())) ||
+        (prune && score_bound(lane_acc, out.samples_evaluated) < options.prune_below)) {
+      mark_pruned(lane_arg, out);
+      active[i] = false;
+      --left;
+    }
+  }
+  return -1;
 }
 
 Evaluation Problem::evaluate_parallel(const double* free_design, int threads, const ParallelOptions& options) const {
@@ -909,9 +967,8 @@ Evaluation Problem::evaluate_parallel(const double* free_design, int threads, co
       return failed;
     }
   }
-  std::vector<double> acc(local_reduction_.size());
-  std::vector<int> arg(local_reduction_.size());
-  reset_accumulators(local_reduction_, acc.data(), arg.data());
+  std::vector<double> acc = identity_accumulator_;
+  std::vector<int> arg(local_reduction_.size(), -1);
   for (const auto& ws : spaces) {
     for (std::size_t m = 0; m < metrics_.size(); ++m) {
       for (std::size_t j = 0; j < ws->result.reduced[m].size(); ++j) {

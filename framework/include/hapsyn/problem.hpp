@@ -253,10 +253,11 @@ class Problem {
   [[noreturn]] void refuse_non_finite_block_local(const MechanismModel& model, EvalScratch& ws, int sample) const;
   void choose_block_path();
   void order_extremes_first();
-  bool start_lane(const double* free_design, int lane, bool constraints_verified, EvalScratch& ws,
-                  Evaluation& out) const;
-  bool fold_lane_sample(int lane, int sample, EvalScratch& ws, const EvalOptions& options, bool prune,
-                        bool prune_front, Evaluation& out) const;
+  void size_evaluations(std::vector<Evaluation>& outs, int count) const;
+  int start_lanes(const double* const* free_designs, int count, bool constraints_verified, EvalScratch& ws,
+                  std::vector<Evaluation>& outs, bool* active, const double** lane_design) const;
+  int fold_lanes(int sample, int count, EvalScratch& ws, const EvalOptions& options, bool prune, bool prune_front,
+                 std::vector<Evaluation>& outs, bool* active, int& left) const;
   double score_bound(const double* accumulator, long long samples) const;
   void mark_pruned(const int* argument, Evaluation& out) const;
   void combine_objectives(const EvalScratch& ws, Evaluation& out) const;
@@ -276,6 +277,7 @@ class Problem {
   std::vector<std::vector<const AttributeMatrix*>> metric_attributes_;  // per metric, see SampleQuantities::attributes
   std::vector<int> local_offset_;        // first local of metric m in the flat local array
   std::vector<Reduction> local_reduction_;
+  std::vector<double> identity_accumulator_;  // per local: +inf (min), -inf (max), 0 (sum)
   // Per sample, w_i N / W: the factor of its sum-reduced local values (SampleSet::weights);
   // empty when the scene has no weights or equal ones.
   std::vector<double> sample_scale_;

@@ -317,8 +317,10 @@ bool ruled_out_by_bound(SweepThread& s, const Evaluation& e) {
   if (e.status == EvalStatus::kPruned || e.status == EvalStatus::kSampleFailed) {
     // Move the deciding sample to the front: neighbouring designs tend to fail on it too.
     const int deciding = s.group_order[static_cast<std::size_t>(e.samples_evaluated - 1)];
-    const auto at = std::find(s.local.begin(), s.local.end(), deciding);
-    std::rotate(s.local.begin(), at, at + 1);
+    if (s.local.front() != deciding) {
+      const auto at = std::find(s.local.begin(), s.local.end(), deciding);
+      std::rotate(s.local.begin(), at, at + 1);
+    }
     if (e.status == EvalStatus::kPruned) {
       ++s.counts.culled;
     } else {
@@ -406,7 +408,10 @@ bool cull_line(const Problem& problem, const Grid& grid, long long line, SweepTh
     int count = 0;
     for (; i < line_length && count < kBlockLanes; ++i) {
       if (s.line_bound->excludes(i)) {
-        ++s.counts.constraint_violated;
+        // The bound excludes a prefix and a suffix of the line: count each at once.
+        const long long end = i < s.line_bound->first() ? std::min(s.line_bound->first(), line_length) : line_length;
+        s.counts.constraint_violated += end - i;
+        i = end - 1;
         continue;
       }
       double* slot = s.group_x.data() + static_cast<std::size_t>(count) * n;

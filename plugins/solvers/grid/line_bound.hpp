@@ -96,6 +96,9 @@ class LineBound {
   /// True when grid index `i` of the line's component lies outside the bound.
   /// (Inline and branch-light: called for every design of the grid.)
   bool excludes(long long i) const { return i < first_ || i > last_; }
+  /// The first grid index the bound does not exclude (the line's length when it excludes every
+  /// design): the excluded indices are those before it and those after the run it starts.
+  long long first() const { return first_; }
   /// Designs of the line the bound excludes.
   long long excluded() const { return count_ - std::max(0LL, last_ - first_ + 1); }
 
