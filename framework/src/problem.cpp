@@ -902,12 +902,16 @@ int Problem::fold_lanes(int sample, int count, EvalScratch& ws, const EvalOption
       arg[i] = take ? sample : arg[i];
     }
   }
+  // Every active lane has seen the same samples (they start together and fold each one).
+  const int seen = outs[static_cast<std::size_t>(std::find(active, active + count, true) - active)].samples_evaluated + 1;
+  double bound[L];
+  const bool bounded = prune && !prune_front && score_bound_lanes(ws.lane_accumulator.data(), seen, bound);
   double* lane_acc = ws.accumulator.data();  // one lane's reductions, for the helpers (free here)
   int* lane_arg = ws.argument.data();
   for (int i = 0; i < count; ++i) {
     if (!active[i]) continue;
     Evaluation& out = outs[static_cast<std::size_t>(i)];
-    ++out.samples_evaluated;
+    out.samples_evaluated = seen;
     if (!folds[i]) {
       out.status = EvalStatus::kSampleFailed;
       out.failed_sample = sample;
@@ -917,18 +921,37 @@ int Problem::fold_lanes(int sample, int count, EvalScratch& ws, const EvalOption
       continue;
     }
     if (!prune && !prune_front) continue;
+    if (bounded && !(bound[i] < options.prune_below)) continue;
     for (std::size_t j = 0; j < k; ++j) {
       lane_acc[j] = ws.lane_accumulator[j * L + static_cast<std::size_t>(i)];
       lane_arg[j] = ws.lane_argument[j * L + static_cast<std::size_t>(i)];
     }
-    if ((prune_front && front_dominates(*options.prune_dominated_by, lane_acc, ws.objective_bound.data())) ||
-        (prune && score_bound(lane_acc, out.samples_evaluated) < options.prune_below)) {
+    if (bounded || (prune_front && front_dominates(*options.prune_dominated_by, lane_acc, ws.objective_bound.data())) ||
+        (prune && score_bound(lane_acc, seen) < options.prune_below)) {
       mark_pruned(lane_arg, out);
       active[i] = false;
       --left;
     }
   }
   return -1;
+}
+
+// score_bound() of every lane at once (lane-minor reductions), bit for bit: each objective's
+// combined values added in objective order from 0. False when a metric has no combine_block.
+bool Problem::score_bound_lanes(const double* lane_accumulator, int samples, double* bound) const {
+  constexpr std::size_t L = kBlockLanes;
+  std::fill_n(bound, L, 0.0);
+  double combined[L];
+  for (std::size_t o = 0; o < objectives_.size(); ++o) {
+    const std::size_t m = static_cast<std::size_t>(objectives_[o].metric);
+    if (!metrics_[m].metric->combine_block(lane_accumulator + static_cast<std::size_t>(local_offset_[m]) * L, samples,
+                                           combined)) {
+      return false;
+    }
+    const double weight = objectives_[o].weight;
+    for (std::size_t i = 0; i < L; ++i) bound[i] += weight * combined[i];
+  }
+  return true;
 }
 
 Evaluation Problem::evaluate_parallel(const double* free_design, int threads, const ParallelOptions& options) const {

@@ -111,6 +111,17 @@ class Metric {
   /// sample. No lane may trap. Same rules as local() (concurrent, no allocation, lock or throw).
   /// Default: nothing.
   virtual void local_block(const QuantityBlock& q, double* out) const {}
+  /// Optional: combine() for kBlockLanes reductions at once, each lane's bit for bit what
+  /// combine() gives it. `reduced` is lane-minor: reduced[j * kBlockLanes + lane] is the lane's
+  /// j-th reduced value; out[lane] receives its combined value. The evaluator calls it when it
+  /// bounds several designs in one vector (Problem::evaluate_designs); lanes it will ignore may
+  /// hold any values, so no lane may trap. Same rules as combine() (concurrent, no allocation,
+  /// lock or throw). Returns false when not implemented (the default): the evaluator then calls
+  /// combine() per lane.
+  virtual bool combine_block(const double* reduced, int samples, double* out) const {
+    (void)reduced, (void)samples, (void)out;
+    return false;
+  }
 };
 
 }  // namespace hapsyn

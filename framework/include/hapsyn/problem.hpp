@@ -259,6 +259,7 @@ class Problem {
   int fold_lanes(int sample, int count, EvalScratch& ws, const EvalOptions& options, bool prune, bool prune_front,
                  std::vector<Evaluation>& outs, bool* active, int& left) const;
   double score_bound(const double* accumulator, long long samples) const;
+  bool score_bound_lanes(const double* lane_accumulator, int samples, double* bound) const;
   void mark_pruned(const int* argument, Evaluation& out) const;
   void combine_objectives(const EvalScratch& ws, Evaluation& out) const;
   bool front_dominates(const std::vector<double>& front, const double* accumulator, double* bound) const;

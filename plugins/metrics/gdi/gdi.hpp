@@ -20,6 +20,7 @@ class Gdi final : public Metric {
   std::vector<LocalValue> locals() const override;
   /// 1 / (1 + reduced[0]) [-]; 0 for an infinite reduced[0].
   double combine(const double* reduced, int samples) const override;
+  bool combine_block(const double* reduced, int samples, double* out) const override;
   /// The block path: largest_singular_value() per lane (2 x 2: its closed form, vectorised).
   bool has_local_block() const override { return true; }
   void local_block(const QuantityBlock& q, double* out) const override;

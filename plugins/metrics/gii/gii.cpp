@@ -7,6 +7,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace hapsyn::plugins {
 
@@ -112,6 +113,16 @@ double Gii::combine(const double* reduced, int /*samples*/) const {
   const double den = reduced[1];
   if (!(den > 0.0) || !std::isfinite(den)) return 0.0;
   return reduced[0] / den;
+}
+
+bool Gii::combine_block(const double* reduced, int /*samples*/, double* out) const {
+  // combine() per lane, written as selects so that the lanes compile to one vector.
+  for (int lane = 0; lane < kBlockLanes; ++lane) {
+    const double den = reduced[kBlockLanes + lane];
+    const bool usable = den > 0.0 && den < std::numeric_limits<double>::infinity();
+    out[lane] = usable ? reduced[lane] / (usable ? den : 1.0) : 0.0;
+  }
+  return true;
 }
 
 }  // namespace hapsyn::plugins

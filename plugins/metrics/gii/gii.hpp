@@ -57,6 +57,7 @@ class Gii final : public Metric {
   void local_block(const QuantityBlock& q, double* out) const override;
   /// reduced[0] / reduced[1]; 0 when reduced[1] is not a positive finite number.
   double combine(const double* reduced, int samples) const override;
+  bool combine_block(const double* reduced, int samples, double* out) const override;
 
   /// Smallest and largest singular values of a matrix. 2 x 2: closed form,
   /// sigma_max = sqrt(E^2 + H^2) + sqrt(F^2 + G^2) with E = (a + d)/2, F = (a - d)/2,
