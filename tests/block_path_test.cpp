@@ -42,6 +42,7 @@ void expect_same(const Evaluation& block, const Evaluation& single, const std::s
   if (block.status != EvalStatus::kFeasible && block.status != EvalStatus::kPruned) return;
   EXPECT_EQ(block.critical_samples, single.critical_samples) << what;
   if (block.status != EvalStatus::kFeasible) return;
+  ASSERT_EQ(block.objectives.size(), single.objectives.size()) << what;
   for (std::size_t o = 0; o < single.objectives.size(); ++o) {
     EXPECT_EQ(block.objectives[o], single.objectives[o]) << what;  // bit for bit
   }
@@ -157,12 +158,15 @@ std::vector<std::vector<std::vector<double>>> design_groups(int groups, unsigned
   return out;
 }
 
+// `unsized_outs`: before each group, outs is the caller's vector of default evaluations (empty
+// objectives and critical samples), which evaluate_designs must fill as it fills its own.
 void expect_groups_equal_single_evaluations(const Problem& problem, const EvalOptions& options, int groups,
-                                            unsigned seed, int& decided_in_lanes) {
+                                            unsigned seed, int& decided_in_lanes, bool unsized_outs = false) {
   auto lanes_scratch = problem.make_eval_scratch();
   auto single_scratch = problem.make_eval_scratch();
   std::vector<Evaluation> outs;
   for (const auto& group : design_groups(groups, seed)) {
+    if (unsized_outs) outs.assign(hapsyn::kBlockLanes, Evaluation{});
     const double* designs[hapsyn::kBlockLanes];
     for (std::size_t i = 0; i < group.size(); ++i) designs[i] = group[i].data();
     problem.evaluate_designs(designs, static_cast<int>(group.size()), *lanes_scratch, options, outs);
@@ -202,6 +206,11 @@ TEST(DesignLanes, SubsetsAndFrontsEqualTheirSingleEvaluations) {
   EvalOptions pareto;
   pareto.prune_dominated_by = &front;
   expect_groups_equal_single_evaluations(*problem, pareto, 400, 24, decided);
+  EvalOptions complete;  // the designs that survive the subset are complete: their objectives are written
+  complete.subset = &subset;
+  int unused = 0;
+  expect_groups_equal_single_evaluations(*problem, complete, 200, 26, unused, true);
+  expect_groups_equal_single_evaluations(*problem, bound, 200, 27, unused, true);
   std::vector<int> none;
   EvalOptions empty;
   empty.subset = &none;

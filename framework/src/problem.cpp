@@ -437,6 +437,7 @@ double Problem::score_bound(const double* accumulator, long long samples) const 
 void Problem::mark_pruned(const int* argument, Evaluation& out) const {
   // The samples attaining the reductions so far are what made the bound fall: culling collects
   // them as critical samples.
+  out.critical_samples.resize(metrics_.size());  // a no-op but for a caller's unsized evaluation
   for (std::size_t m = 0; m < metrics_.size(); ++m) {
     std::vector<int>& critical = out.critical_samples[m];
     const std::size_t n = static_cast<std::size_t>(local_offset_[m + 1] - local_offset_[m]);
@@ -447,6 +448,10 @@ void Problem::mark_pruned(const int* argument, Evaluation& out) const {
 }
 
 void Problem::combine_objectives(const EvalScratch& ws, Evaluation& out) const {
+  // No-ops for the scratch's own evaluation; a design lane's may come from the caller unsized.
+  out.objectives.resize(objectives_.size());
+  out.reduced.resize(metrics_.size());
+  out.critical_samples.resize(metrics_.size());
   for (std::size_t m = 0; m < metrics_.size(); ++m) {
     const int begin = local_offset_[m];
     const int end = local_offset_[m + 1];
@@ -807,18 +812,17 @@ void Problem::evaluate_designs(const double* const* free_designs, int count, Eva
   one_by_one(0, active);  // undecided after the first samples: the block path finishes them
 }
 
-// Gives outs[0..count) the study's sizes; a no-op once they have them (outs is reused).
+// Makes outs hold at least `count` evaluations, new ones sized for the study. Existing ones are
+// not checked per call (that cost as much as a lane's fold): the lanes' writers size what they
+// write (mark_pruned, combine_objectives), and whole evaluations are assigned.
 void Problem::size_evaluations(std::vector<Evaluation>& outs, int count) const {
-  if (outs.size() < static_cast<std::size_t>(count)) outs.resize(static_cast<std::size_t>(count));
-  for (int i = 0; i < count; ++i) {
-    Evaluation& out = outs[static_cast<std::size_t>(i)];
-    if (out.objectives.size() == objectives_.size() && out.reduced.size() == metrics_.size() &&
-        out.critical_samples.size() == metrics_.size()) {
-      continue;
-    }
-    out.objectives.resize(objectives_.size());
-    out.critical_samples.resize(metrics_.size());
-    out.reduced.resize(metrics_.size());
+  const std::size_t old = outs.size();
+  if (old >= static_cast<std::size_t>(count)) return;
+  outs.resize(static_cast<std::size_t>(count));
+  for (std::size_t i = old; i < outs.size(); ++i) {
+    outs[i].objectives.resize(objectives_.size());
+    outs[i].critical_samples.resize(metrics_.size());
+    outs[i].reduced.resize(metrics_.size());
   }
 }
 

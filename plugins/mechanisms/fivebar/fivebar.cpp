@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstring>
 #include <optional>
 #include <limits>
 
@@ -226,6 +227,10 @@ namespace {
 // rebuild it in place instead of allocating one per design.
 struct FiveBarScratch final : MechanismScratch {
   std::optional<FiveBarModel> model;
+  // solve_designs' model of a grid line (r = -0), kept while the line's l0, l1, l2 stay the same
+  // (bit for bit): a solver calls it once per sample for each group of the line's designs.
+  std::optional<FiveBarModel> line_model;
+  double line_key[3] = {};
 };
 }  // namespace
 
@@ -250,9 +255,15 @@ bool FiveBar::solve_designs(const double* const* designs, int count, const doubl
   }
   // The model of the line's l0, l1, l2 with r = -0: y + r_i + (-0) is y + r_i exactly, also
   // when y + r_i is -0, so every lane computes what its own design's model computes.
-  FiveBarDesign line = design_from(first);
-  line.r = -0.0;
-  const FiveBarModel model(line, options_);
+  assert(dynamic_cast<FiveBarScratch*>(&scratch));
+  auto& own = static_cast<FiveBarScratch&>(scratch);
+  if (!own.line_model || std::memcmp(own.line_key, first, sizeof own.line_key) != 0) {
+    FiveBarDesign line = design_from(first);
+    line.r = -0.0;
+    own.line_model.emplace(line, options_);
+    std::memcpy(own.line_key, first, sizeof own.line_key);
+  }
+  const FiveBarModel& model = *own.line_model;
   alignas(64) double x[kBlockLanes], y[kBlockLanes];
   for (int i = 0; i < kBlockLanes; ++i) {
     x[i] = pose[0];
