@@ -783,7 +783,11 @@ void Problem::evaluate_designs(const double* const* free_designs, int count, Eva
       return one_by_one(0, active);  // these designs cannot share a vector: from scratch, one by one
     }
     std::fill_n(ws.block->samples, kBlockLanes, sample);
-    block_locals(ws);
+    // Where the sample fails for every design (often: a line's neighbours share their failures),
+    // there are no local values to compute; fold_lanes reads them only for reachable lanes.
+    bool any_reachable = false;
+    for (int i = 0; i < count; ++i) any_reachable |= active[i] && ws.block->lane_status(i) == SampleStatus::kReachable;
+    if (any_reachable) block_locals(ws);
     const int non_finite = fold_lanes(sample, count, ws, options, prune, prune_front, outs, active, left);
     if (non_finite >= 0) {
       // The per-sample loop meets the same value and reports it with the design and sample.
@@ -832,15 +836,19 @@ void Problem::size_evaluations(std::vector<Evaluation>& outs, int count) const {
 int Problem::start_lanes(const double* const* free_designs, int count, bool constraints_verified, EvalScratch& ws,
                          std::vector<Evaluation>& outs, bool* active, const double** lane_design) const {
   const std::size_t free = free_lower_.size(), size = space_.size(), k = local_reduction_.size();
-  // One chain of comparisons per design, not one through all of them: the designs' checks overlap.
-  bool inside[kBlockLanes];
-  for (int i = 0; i < count; ++i) {
+  // Component by component over all the lanes (unused lanes repeat the last design), so that
+  // the comparisons are vector ones; a design out of bounds is then named by check_design.
+  bool inside = true;
+  for (std::size_t c = 0; c < free; ++c) {
+    double v[kBlockLanes];
+    for (int i = 0; i < kBlockLanes; ++i) v[i] = free_designs[std::min(i, count - 1)][c];
+    const double lower = free_lower_[c], upper = free_upper_[c];
     bool in = true;
-    for (std::size_t c = 0; c < free; ++c) in &= (free_designs[i][c] >= free_lower_[c]) & (free_designs[i][c] <= free_upper_[c]);
-    inside[i] = in;
+    for (int i = 0; i < kBlockLanes; ++i) in &= (v[i] >= lower) & (v[i] <= upper);
+    inside &= in;
   }
-  for (int i = 0; i < count; ++i) {
-    if (!inside[i]) check_design(free_designs[i]);  // throws with the component named
+  if (!inside) {
+    for (int i = 0; i < count; ++i) check_design(free_designs[i]);  // throws with the component named
   }
   for (std::size_t j = 0; j < k; ++j) {
     for (int i = 0; i < kBlockLanes; ++i) {

@@ -165,8 +165,11 @@ void SolveFiveBarBlock(const FiveBarBlockDesign& design, const double* x, const 
     const V h0 = hn::Set(d, design.h0);
     const Leg left = SolveLeg(d, hn::Add(px, h0), ey, design.l1, design.l2);
     const Leg right = SolveLeg(d, hn::Sub(h0, px), ey, design.l1, design.l2);  // mirrored about x = 0
-    hn::Store(Classify(d, design, left, right), d, status + i);
-    if (jacobian) Dynamics(d, design, left, right, inertia, mass, i, out);
+    const V lane_status = Classify(d, design, left, right);
+    hn::Store(lane_status, d, status + i);
+    // The quantities of lanes that are not reachable are never read (QuantityBlock's contract):
+    // when no lane is, they are not computed.
+    if (jacobian && !hn::AllFalse(d, hn::Eq(lane_status, hn::Zero(d)))) Dynamics(d, design, left, right, inertia, mass, i, out);
   }
   for (int i = 0; i < kBlockLanes; ++i) out.status[i] = static_cast<std::int32_t>(status[i]);
 }
