@@ -183,7 +183,7 @@ class Problem {
     std::vector<int> saved_argument;
     // Design lanes (evaluate_designs): each lane's full design and reductions.
     std::vector<double> lane_full;      // lane i's full design at [i * design size]
-    std::vector<double> lane_accumulator;  // lane i's reductions at [i * locals]
+    std::vector<double> lane_accumulator;  // lane-minor: local j of lane i at [j * kBlockLanes + i]
     std::vector<int> lane_argument;
     int non_finite_lane = -1;
     Evaluation result;
