@@ -305,7 +305,6 @@ double Problem::score(const std::vector<double>& objectives) const {
   return s;
 }
 
-
 bool Problem::front_dominates(const std::vector<double>& front, const double* accumulator, double* bound) const {
   // Upper bounds of the objectives from the reductions so far (samples seen: a count is only
   // needed by sum reductions, which worst-case metrics do not have).
@@ -783,11 +782,6 @@ void Problem::evaluate_designs(const double* const* free_designs, int count, Eva
       return one_by_one(0, active);  // these designs cannot share a vector: from scratch, one by one
     }
     std::fill_n(ws.block->samples, kBlockLanes, sample);
-    // Where the sample fails for every design (often: a line's neighbours share their failures),
-    // there are no local values to compute; fold_lanes reads them only for reachable lanes.
-    bool any_reachable = false;
-    for (int i = 0; i < count; ++i) any_reachable |= active[i] && ws.block->lane_status(i) == SampleStatus::kReachable;
-    if (any_reachable) block_locals(ws);
     const int non_finite = fold_lanes(sample, count, ws, options, prune, prune_front, outs, active, left);
     if (non_finite >= 0) {
       // The per-sample loop meets the same value and reports it with the design and sample.
@@ -881,7 +875,8 @@ int Problem::start_lanes(const double* const* free_designs, int count, bool cons
   return live;
 }
 
-// One sample of every active lane, as the per-sample loop takes it: a failing sample ends the
+// One sample of every active lane (solved into ws.block), as the per-sample loop takes it: the
+// metrics' local values are computed for the lanes that reach it; a failing sample ends the
 // design, the local values are reduced with the tie rule, and the bound may prune it. Clears
 // active[i] and decrements `left` for each lane decided here. Returns the first lane with a
 // non-finite local value (the caller reports it), else -1.
@@ -892,7 +887,14 @@ int Problem::fold_lanes(int sample, int count, EvalScratch& ws, const EvalOption
   // Which lanes fold this sample: active and reachable. The reductions of all lanes are updated
   // together under that mask (lane-minor: a vector per local value).
   bool folds[L] = {};
-  for (int i = 0; i < count; ++i) folds[i] = active[i] && ws.block->lane_status(i) == SampleStatus::kReachable;
+  bool any_folds = false;
+  for (int i = 0; i < count; ++i) {
+    folds[i] = active[i] && ws.block->lane_status(i) == SampleStatus::kReachable;
+    any_folds |= folds[i];
+  }
+  // Where the sample fails for every design (often: a line's neighbours share their failures),
+  // there are no local values to compute.
+  if (any_folds) block_locals(ws);
   const double* locals = ws.block_locals.data();
   for (std::size_t j = 0; j < k; ++j) {
     bool finite = true;
@@ -904,12 +906,10 @@ int Problem::fold_lanes(int sample, int count, EvalScratch& ws, const EvalOption
     }
     double* acc = ws.lane_accumulator.data() + j * L;
     int* arg = ws.lane_argument.data() + j * L;
-    const bool is_min = local_reduction_[j] == Reduction::kMin;
+    const Reduction reduction = local_reduction_[j];
     for (std::size_t i = 0; i < L; ++i) {
       const double v = locals[j * L + i];
-      const bool wins = is_min ? (v < acc[i] || (v == acc[i] && sample < arg[i]))
-                               : (v > acc[i] || (v == acc[i] && sample < arg[i]));
-      const bool take = folds[i] && wins;
+      const bool take = folds[i] && better(reduction, v, sample, acc[i], arg[i]);
       acc[i] = take ? v : acc[i];
       arg[i] = take ? sample : arg[i];
     }

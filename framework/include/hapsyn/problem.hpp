@@ -185,7 +185,6 @@ class Problem {
     std::vector<double> lane_full;      // lane i's full design at [i * design size]
     std::vector<double> lane_accumulator;  // lane-minor: local j of lane i at [j * kBlockLanes + i]
     std::vector<int> lane_argument;
-    int non_finite_lane = -1;
     Evaluation result;
   };
   std::unique_ptr<EvalScratch> make_eval_scratch() const;
