@@ -7,9 +7,12 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/pareto.hpp>
 
+#include <pagmo/utils/discrepancy.hpp>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -178,51 +181,51 @@ double l1_distance(const std::vector<double>& a, const std::vector<double>& b) {
   return dist;
 }
 
-// The solved point nearest to beta (L1; of equally near ones the first solved).
-const Solved& nearest_solved(const std::vector<Solved>& solved, const std::vector<double>& beta) {
-  const Solved* start = &solved.front();
-  double nearest = kInf;
-  for (const Solved& s : solved) {
-    const double dist = l1_distance(s.beta, beta);
-    if (dist < nearest - 1e-12) {
-      nearest = dist;
-      start = &s;
-    }
-  }
-  return *start;
-}
-
 // Two L1 distances between points of the simplex grid are equal (up to rounding, ~1e-15) or
 // differ by at least 2/divisions >= 2e-3: sum_i |k_i - k'_i| is even, as sum_i k_i is the same
 // for every point. 1e-9 separates the two cases with room to spare.
 constexpr double kSameDistance = 1e-9;
 
 // Where subproblem k starts: the nearest (L1) of the shadow optima and of the feasible
-// subproblems before k, ties to the first in that order (shadows, then grid order); this is
-// the start the one-by-one run in grid order gives it. nullopt while a subproblem before k that
-// is not finished could change it: one nearer, or as near and earlier than the one chosen so far.
+// subproblems before k, ties to the first in the order shadows, then grid order (the first
+// sweep), or grid order, then shadows (`grid_first`: the reverse sweep, so that it does not
+// start from the shadow optimum the first sweep started from); this is the start the one-by-one
+// run in grid order gives it. nullopt while a subproblem before k that is not finished could
+// change it: one nearer, or as near and earlier in that order than the one chosen so far.
 std::optional<Solved> start_of(std::size_t k, const std::vector<Solved>& shadow_starts,
-                                            const std::vector<std::vector<double>>& interior,
-                                            const SubproblemSlots& subproblems, const DesignSpace& space) {
-  std::vector<Solved> solved = shadow_starts;
-  std::vector<std::size_t> order;  // position of each solved point in "shadows, then grid order"
-  for (std::size_t j = 0; j < shadow_starts.size(); ++j) order.push_back(j);
+                               const std::vector<std::vector<double>>& interior, const SubproblemSlots& subproblems,
+                               const DesignSpace& space, const std::function<std::string(std::size_t)>& name_of,
+                               bool grid_first = false) {
+  const std::size_t m = shadow_starts.size(), n = interior.size();
+  const auto grid_order = [&](std::size_t j) { return grid_first ? j : m + j; };
+  std::vector<Solved> solved;
+  std::vector<std::size_t> order;  // position of each solved point in the tie order
   for (std::size_t j = 0; j < k; ++j) {
     if (subproblems[j] && subproblems[j]->point) {
-      solved.push_back({interior[j], free_design(space, subproblems[j]->point->design), "subproblems[" + std::to_string(j) + "]"});
-      order.push_back(shadow_starts.size() + j);
+      solved.push_back({interior[j], free_design(space, subproblems[j]->point->design), name_of(j)});
+      order.push_back(grid_order(j));
     }
   }
-  const Solved& chosen = nearest_solved(solved, interior[k]);
-  const double nearest = l1_distance(chosen.beta, interior[k]);
-  const std::size_t chosen_order = order[static_cast<std::size_t>(&chosen - solved.data())];
+  for (std::size_t j = 0; j < m; ++j) {
+    solved.push_back(shadow_starts[j]);
+    order.push_back(grid_first ? n + j : j);
+  }
+  std::size_t chosen = 0;
+  double nearest = kInf;
+  for (std::size_t i = 0; i < solved.size(); ++i) {
+    const double dist = l1_distance(solved[i].beta, interior[k]);
+    if (dist < nearest - kSameDistance || (dist <= nearest + kSameDistance && order[i] < order[chosen])) {
+      nearest = std::min(nearest, dist);
+      chosen = i;
+    }
+  }
   for (std::size_t j = 0; j < k; ++j) {
     if (subproblems[j]) continue;
     const double dist = l1_distance(interior[j], interior[k]);
     if (dist < nearest - kSameDistance) return std::nullopt;
-    if (dist <= nearest + kSameDistance && shadow_starts.size() + j < chosen_order) return std::nullopt;
+    if (dist <= nearest + kSameDistance && grid_order(j) < order[chosen]) return std::nullopt;
   }
-  return chosen;
+  return solved[chosen];
 }
 
 // The interior points of the simplex grid (the others are the shadow optima), in grid order:
@@ -235,11 +238,57 @@ std::vector<std::vector<double>> interior_points(const std::vector<std::vector<d
   return interior;
 }
 
+// Points `sub` at grid point beta: a = 1 - Phibar beta; d = Phibar e.
+void aim(Subproblem& sub, const Chim& chim, const std::vector<double>& beta) {
+  const std::size_t m = beta.size();
+  sub.a.assign(m, 1.0);
+  for (std::size_t i = 0; i < m; ++i) {
+    for (std::size_t k = 0; k < m; ++k) sub.a[i] -= chim.phibar[i][k] * beta[k];
+  }
+  sub.d = chim.normal;
+}
+
+// Designs spread over the free box (a Halton sequence, the same for every run), fully evaluated
+// once: the second start of every subproblem is the feasible one of them (or the shadow optimum)
+// with the best merit t for that subproblem. The neighbour's design alone is a local start: on
+// a non-convex front it can hold a subproblem in the basin of the neighbour's part of the front
+// (seen on the five-bar: a start at the GII optimum, links at their upper bounds, ended on a
+// point 0.09 below the front in GII).
+struct SeedPool {
+  std::vector<Solved> seeds;               // beta unused
+  std::vector<std::vector<double>> values; // objective values of each seed
+  long long samples = 0;
+};
+
+SeedPool seed_pool(const Problem& problem, int count, int threads, const ShadowOptima& shadows) {
+  SeedPool pool;
+  if (count == 0) return pool;  // no second start
+  const DesignSpace& space = problem.design_space();
+  for (std::size_t j = 0; j < shadows.designs.size(); ++j) {
+    pool.seeds.push_back({{}, free_design(space, shadows.designs[j]), "shadows[" + std::to_string(j) + "]"});
+    pool.values.push_back(shadows.values[j]);
+  }
+  pagmo::halton sequence(static_cast<unsigned>(space.free_size()), 1);
+  for (int i = 0; i < count; ++i) {
+    const std::vector<double> u = sequence();
+    std::vector<double> x(space.free_size());
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      const DesignComponent& c = space.components()[static_cast<std::size_t>(space.free_indices()[k])];
+      x[k] = c.lower + u[k] * (c.upper - c.lower);
+    }
+    std::vector<double> values;
+    if (evaluate_full_design(problem, problem.full_design(x.data()), threads, values, pool.samples)) {
+      pool.seeds.push_back({{}, x, "seeds[" + std::to_string(i) + "]"});
+      pool.values.push_back(std::move(values));
+    }
+  }
+  return pool;
+}
+
 // One subproblem: the SQP from its start (start_of), then the full evaluation of its design.
 // `sub` is this subproblem's own copy (its scratch is written): subproblems run concurrently.
 FinishedSubproblem solve_subproblem(const Problem& problem, const NbiOptions& options, const Chim& chim, Subproblem sub,
-                                    const std::vector<double>& beta, const Solved& start) {
-  const std::size_t m = problem.objectives().size();
+                                    const std::vector<double>& beta, const Solved& start, const SeedPool* pool) {
   const DesignSpace& space = problem.design_space();
   std::vector<double> lower(space.free_size()), upper(space.free_size());
   for (std::size_t k = 0; k < lower.size(); ++k) {
@@ -248,18 +297,37 @@ FinishedSubproblem solve_subproblem(const Problem& problem, const NbiOptions& op
     upper[k] = c.upper;
   }
   const auto t0 = Clock::now();
-  // a = 1 - Phibar beta; d = Phibar e.
-  sub.a.assign(m, 1.0);
-  for (std::size_t i = 0; i < m; ++i) {
-    for (std::size_t k = 0; k < m; ++k) sub.a[i] -= chim.phibar[i][k] * beta[k];
-  }
-  sub.d = chim.normal;
-  const SqpOutcome sqp = run_minmax_sqp(problem, start.x, lower, upper, sqp_settings(options, problem), nbi_goal(sub));
+  aim(sub, chim, beta);
+  const SqpSettings settings = sqp_settings(options, problem);
+  SqpOutcome sqp = run_minmax_sqp(problem, start.x, lower, upper, settings, nbi_goal(sub));
   FinishedSubproblem f;
   f.design_evaluations = sqp.evaluations;
   f.sample_evaluations = sqp.samples;
   f.record = {{"beta", beta}, {"start", start.name}, {"status", sqp.status}, {"t", sqp.x.empty() ? Json(nullptr) : Json(sqp.merit)},
               {"design_evaluations", sqp.evaluations}, {"rounds", sqp.rounds}};
+  // The second start: the pool's best design for this subproblem, when it is not the first start.
+  const Solved* seed = nullptr;
+  double seed_t = -kInf;
+  for (std::size_t j = 0; pool && j < pool->seeds.size(); ++j) {
+    const double t = sub.t_of(pool->values[j].data());
+    if (t > seed_t) {
+      seed_t = t;
+      seed = &pool->seeds[j];
+    }
+  }
+  if (seed && seed->x != start.x) {
+    SqpOutcome second = run_minmax_sqp(problem, seed->x, lower, upper, settings, nbi_goal(sub));
+    f.design_evaluations += second.evaluations;
+    f.sample_evaluations += second.samples;
+    const bool better = !second.x.empty() && (sqp.x.empty() || second.merit > sqp.merit);
+    f.record["second_start"] = {{"start", seed->name}, {"start_t", seed_t}, {"status", second.status},
+                                {"t", second.x.empty() ? Json(nullptr) : Json(second.merit)},
+                                {"design_evaluations", second.evaluations}, {"kept", better}};
+    if (better) {
+      sqp = std::move(second);
+      f.record["t"] = sqp.merit;
+    }
+  }
   if (!sqp.x.empty()) {
     std::vector<double> values;
     const Eigen::VectorXd full = problem.full_design(sqp.x.data());
@@ -324,6 +392,7 @@ namespace {
 // the checkpoint keeps), and the cost of subproblems interrupted by a stop request.
 struct NbiProgress {
   SubproblemSlots shadows, subproblems;
+  SubproblemSlots reverse;  // grid point k solved again in the reverse sweep
   long long interrupted_designs = 0, interrupted_samples = 0;
   double seconds_before = 0.0;  // elapsed in the runs before a resume
   Json resumed = nullptr;       // statistics.resumed
@@ -335,10 +404,12 @@ void resume(const Problem& problem, const SolverContext& context, const std::str
             const std::vector<std::vector<double>>& interior, NbiProgress& progress) {
   const std::size_t m = problem.objectives().size();
   std::optional<SubproblemCheckpoint> checkpoint = read_subproblem_checkpoint(
-      problem, context, "nbi", fingerprint, {{"shadows", m}, {"subproblems", interior.size()}});
+      problem, context, "nbi", fingerprint,
+      {{"shadows", m}, {"subproblems", interior.size()}, {"reverse", progress.reverse.size()}});
   if (!checkpoint) return;
   progress.shadows = std::move(checkpoint->lists["shadows"]);
   progress.subproblems = std::move(checkpoint->lists["subproblems"]);
+  progress.reverse = std::move(checkpoint->lists["reverse"]);
   for (std::size_t i = 0; i < progress.shadows.size(); ++i) {
     if (!progress.shadows[i]) continue;
     const std::string where = checkpoint->where("shadows", i);
@@ -355,30 +426,53 @@ void resume(const Problem& problem, const SolverContext& context, const std::str
                                       std::to_string(shadows) + " of " + std::to_string(m) +
                                       " shadow optima (the subproblems come after all of them)");
   }
-  for (std::size_t k = 0; k < progress.subproblems.size(); ++k) {
-    if (progress.subproblems[k] && progress.subproblems[k]->record.value("beta", Json()) != Json(interior[k])) {
-      throw bad_checkpoint(context, checkpoint->where("subproblems", k) + ".record.beta = " +
-                                        progress.subproblems[k]->record.value("beta", Json()).dump() +
-                                        ": this study's grid point " + std::to_string(k) + " is " + Json(interior[k]).dump());
+  for (const char* list : {"subproblems", "reverse"}) {
+    const SubproblemSlots& slots = list == std::string("subproblems") ? progress.subproblems : progress.reverse;
+    for (std::size_t task = 0; task < slots.size(); ++task) {
+      const std::size_t k = task;
+      if (slots[task] && slots[task]->record.value("beta", Json()) != Json(interior[k])) {
+        throw bad_checkpoint(context, checkpoint->where(list, task) + ".record.beta = " +
+                                          slots[task]->record.value("beta", Json()).dump() + ": this study's grid point " +
+                                          std::to_string(k) + " is " + Json(interior[k]).dump());
+      }
     }
+  }
+  if (finished_count(progress.reverse) > 0 && finished_count(progress.subproblems) < interior.size()) {
+    throw bad_checkpoint(context, "reverse: " + std::to_string(finished_count(progress.reverse)) + " finished with only " +
+                                      std::to_string(finished_count(progress.subproblems)) + " of " +
+                                      std::to_string(interior.size()) + " subproblems (the reverse sweep comes after all of them)");
   }
   progress.seconds_before = checkpoint->seconds;
   progress.resumed = {{"checkpoint", context.checkpoint_file},
                       {"shadows", shadows},
                       {"subproblems", subproblems},
+                      {"reverse", finished_count(progress.reverse)},
                       {"recheck_sample_evaluations", checkpoint->recheck_samples}};
   solver_line(context, "nbi: resuming from " + context.checkpoint_file + ": " + std::to_string(shadows) + " of " +
                            std::to_string(m) + " shadow optima and " + std::to_string(subproblems) + " of " +
                            std::to_string(interior.size()) + " subproblems finished");
 }
 
-// Every candidate front point so far: the shadow optima, then the subproblems' designs.
+// The reverse sweep starts from the better, on the grid point's own merit t, of its two results:
+// true when that is the reverse sweep's (the first sweep's on a tie).
+bool reverse_is_better(const std::optional<FinishedSubproblem>& first, const std::optional<FinishedSubproblem>& reverse) {
+  if (!reverse || !reverse->point) return false;
+  if (!first || !first->point) return true;
+  return reverse->record.value("t", -kInf) > first->record.value("t", -kInf);
+}
+
+// Every candidate front point so far: the shadow optima, then each grid point's better result
+// of its two sweeps.
 std::vector<SolutionPoint> candidates_of(const NbiProgress& progress) {
   std::vector<SolutionPoint> candidates;
-  for (const auto* list : {&progress.shadows, &progress.subproblems}) {
-    for (const std::optional<FinishedSubproblem>& f : *list) {
-      if (f && f->point) candidates.push_back(*f->point);
-    }
+  for (const std::optional<FinishedSubproblem>& f : progress.shadows) {
+    if (f && f->point) candidates.push_back(*f->point);
+  }
+  for (std::size_t k = 0; k < progress.subproblems.size(); ++k) {
+    const std::optional<FinishedSubproblem> no_result;
+    const std::optional<FinishedSubproblem>& reverse = k < progress.reverse.size() ? progress.reverse[k] : no_result;
+    const std::optional<FinishedSubproblem>& f = reverse_is_better(progress.subproblems[k], reverse) ? reverse : progress.subproblems[k];
+    if (f && f->point) candidates.push_back(*f->point);
   }
   return candidates;
 }
@@ -426,6 +520,7 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
   NbiProgress progress;
   progress.shadows.resize(m);
   progress.subproblems.resize(interior.size());
+  if (options_.reverse_sweep) progress.reverse.resize(interior.size());
   resume(problem, context, fingerprint, interior, progress);
   const auto elapsed = [&] { return progress.seconds_before + seconds_since(t_start); };
   const auto checkpoint = [&] {
@@ -434,7 +529,7 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
     for (std::optional<FinishedSubproblem>& f : shadows) {
       if (f && !f->point) f.reset();
     }
-    write_subproblem_checkpoint(context, "nbi", fingerprint, {{"shadows", &shadows}, {"subproblems", &progress.subproblems}},
+    write_subproblem_checkpoint(context, "nbi", fingerprint, {{"shadows", &shadows}, {"subproblems", &progress.subproblems}, {"reverse", &progress.reverse}},
                                 elapsed());
   };
   // The result from what has been done (the counts of every finished unit and of interrupted
@@ -442,7 +537,7 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
   const auto finish = [&](SolverStatus status, const std::string& message, bool with_front) {
     result.design_evaluations = progress.interrupted_designs;
     result.sample_evaluations = progress.interrupted_samples;
-    for (const auto* list : {&progress.shadows, &progress.subproblems}) {
+    for (const auto* list : {&progress.shadows, &progress.subproblems, &progress.reverse}) {
       for (const std::optional<FinishedSubproblem>& f : *list) {
         if (!f) continue;
         result.design_evaluations += f->design_evaluations;
@@ -453,7 +548,9 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
     stats["shadows"] = records_of(progress.shadows, shadow_seconds);
     stats["shadow_seconds"] = shadow_seconds;
     stats["subproblems"] = records_of(progress.subproblems, subproblem_seconds);
-    stats["subproblem_seconds"] = subproblem_seconds;
+    double reverse_seconds = 0.0;
+    stats["reverse"] = records_of(progress.reverse, reverse_seconds);
+    stats["subproblem_seconds"] = subproblem_seconds + reverse_seconds;
     stats["grid_points"] = grid.size();
     const std::vector<SolutionPoint> candidates = candidates_of(progress);
     if (with_front) result.front = front_of(problem, candidates, options_.filter_dominated);
@@ -579,6 +676,10 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
     beta[j] = 1.0;
     shadow_starts.push_back({beta, free_design(problem.design_space(), shadows.designs[j]), "shadows[" + std::to_string(j) + "]"});
   }
+  const SeedPool pool = seed_pool(problem, options_.seed_designs, context.threads, shadows);
+  stats["seed_designs"] = {{"feasible", pool.seeds.size() - shadows.designs.size()}, {"of", options_.seed_designs},
+                           {"sample_evaluations", pool.samples}};
+  progress.interrupted_samples += pool.samples;
   for (;;) {
     const std::size_t done = finished_count(progress.subproblems);
     if (done == interior.size()) break;
@@ -590,7 +691,8 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
     std::map<std::size_t, Solved> starts;
     for (std::size_t k = 0; k < interior.size(); ++k) {
       if (progress.subproblems[k]) continue;
-      if (std::optional<Solved> start = start_of(k, shadow_starts, interior, progress.subproblems, problem.design_space())) {
+      if (std::optional<Solved> start = start_of(k, shadow_starts, interior, progress.subproblems, problem.design_space(),
+                                                    [](std::size_t j) { return "subproblems[" + std::to_string(j) + "]"; })) {
         starts[k] = std::move(*start);
         farm.tasks.push_back(k);
       }
@@ -599,7 +701,7 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
     farm.threads = context.threads;
     farm.run = [&](std::size_t k) -> std::optional<FinishedSubproblem> {
       if (context.stop_requested()) return std::nullopt;
-      return solve_subproblem(problem, options_, chim, sub, interior[k], starts.at(k));
+      return solve_subproblem(problem, options_, chim, sub, interior[k], starts.at(k), &pool);
     };
     farm.collected = [&](std::size_t k) {
       checkpoint();
@@ -613,12 +715,67 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
     }
   }
 
+  // 3b. The reverse sweep: every grid point solved again, in reverse grid order, from the nearest
+  // of the shadow optima and the points after it (their better result), in waves as above. A
+  // chain of warm starts can hold every point of a front in the basin of the first shadow
+  // optimum's branch; the reverse chain starts from the other end.
+  const std::size_t n = interior.size();
+  const std::vector<std::vector<double>> reversed(interior.rbegin(), interior.rend());
+  while (finished_count(progress.reverse) < progress.reverse.size()) {
+    if (context.stop_requested()) {
+      return stopped("in the reverse sweep, after " + std::to_string(finished_count(progress.reverse)) + " of " +
+                     std::to_string(n) + " subproblems (all subproblems solved once)");
+    }
+    SubproblemSlots best(n);  // by index in the reverse order
+    std::vector<bool> from_reverse(n, false);
+    for (std::size_t r = 0; r < n; ++r) {
+      const std::size_t k = n - 1 - r;
+      if (!progress.reverse[k]) continue;
+      from_reverse[r] = reverse_is_better(progress.subproblems[k], progress.reverse[k]);
+      best[r] = from_reverse[r] ? progress.reverse[k] : progress.subproblems[k];
+    }
+    const auto name_of = [&](std::size_t r) {
+      return std::string(from_reverse[r] ? "reverse[" : "subproblems[") + std::to_string(n - 1 - r) + "]";
+    };
+    SubproblemFarm farm;
+    std::map<std::size_t, Solved> starts;
+    for (std::size_t r = 0; r < n; ++r) {
+      if (progress.reverse[n - 1 - r]) continue;
+      if (std::optional<Solved> start = start_of(r, shadow_starts, reversed, best, problem.design_space(), name_of, true)) {
+        starts[n - 1 - r] = std::move(*start);
+        farm.tasks.push_back(n - 1 - r);
+      }
+    }
+    farm.threads = context.threads;
+    farm.run = [&](std::size_t k) -> std::optional<FinishedSubproblem> {
+      if (context.stop_requested()) return std::nullopt;
+      if (starts.at(k).name == progress.subproblems[k]->record.value("start", std::string())) {
+        // The first sweep's start: the same run again would give the same result.
+        FinishedSubproblem same;
+        same.record = {{"beta", interior[k]}, {"start", starts.at(k).name}, {"status", "not solved again: the first sweep's start"}};
+        return same;
+      }
+      return solve_subproblem(problem, options_, chim, sub, interior[k], starts.at(k), nullptr);
+    };
+    farm.collected = [&](std::size_t k) {
+      checkpoint();
+      solver_line(context, "nbi: subproblem " + std::to_string(k + 1) + " of " + std::to_string(n) + " solved again (reverse sweep)");
+    };
+    farm.on_abort = checkpoint;
+    const FarmOutcome outcome = run_subproblem_farm(problem, context, progress.reverse, farm);
+    if (outcome.stopped && finished_count(progress.reverse) < n) {
+      return stopped("in the reverse sweep, after " + std::to_string(finished_count(progress.reverse)) + " of " +
+                     std::to_string(n) + " subproblems (all subproblems solved once)");
+    }
+  }
+
   // 4. The front.
   std::ostringstream message;
   const std::size_t candidates = candidates_of(progress).size();
   finish(SolverStatus::kConverged, "", true);
   message << "NBI: " << result.front.size() << " non-dominated points of " << candidates << " (" << m
-          << " shadow optima, " << interior.size() << " subproblems)";
+          << " shadow optima, " << interior.size() << " subproblems"
+          << (options_.reverse_sweep ? ", each solved again in reverse order" : "") << ")";
   result.message = message.str();
   return result;
 }

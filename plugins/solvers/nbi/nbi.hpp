@@ -14,8 +14,14 @@
 ///        maximize t   s.t.   G(x) <= Phibar beta + t n     (componentwise), x within bounds
 ///    solved by SLSQP (shared min-max SQP), warm-started from the nearest solved grid point
 ///    (L1 distance in beta; of equally near ones the first in the order shadows, then grid
-///    order, among the grid points before it).
-/// 4. Every point is evaluated over the whole workspace; dominated points are dropped
+///    order, among the grid points before it), and again from the best design (on this point's
+///    merit t) of a seed pool: the shadow optima and `seed_designs` Halton designs evaluated
+///    once. The better result is kept.
+/// 4. Reverse sweep (`reverse_sweep`): every grid point solved again in reverse grid order, from
+///    the nearest of the points after it (their better result) and the shadow optima (grid points
+///    first on a tie); each point keeps the better of its two results. A chain of warm starts
+///    from one shadow optimum can stay on a dominated branch of designs (README of the plugin).
+/// 5. Every point is evaluated over the whole workspace; dominated points are dropped
 ///    (`filter_dominated`).
 ///
 /// Degenerate payoff matrix: an objective whose payoff row has no spread (U_i - N_i <= 1e-9
@@ -48,6 +54,8 @@ struct NbiOptions {
   double ftol{};
   int max_evaluations{};
   int rounds{};
+  int seed_designs{};
+  bool reverse_sweep{};
   bool design_constraints{};
   bool filter_dominated{};
   SubSolver shadow_solver;
@@ -71,6 +79,13 @@ struct NbiOptions {
     d.add(&NbiOptions::rounds, "rounds", 6,
           "Active-set rounds per subproblem (each ends with a full workspace search)")
         .minimum(1);
+    d.add(&NbiOptions::seed_designs, "seed_designs", 64,
+          "Designs of a Halton sequence over the free box, evaluated once; each subproblem is also solved from the "
+          "best of them (or of the shadow optima) for its grid point, and keeps the better result; 0: no second start")
+        .range(0, 100000);
+    d.add(&NbiOptions::reverse_sweep, "reverse_sweep", true,
+          "Solve every grid point again in reverse grid order, warm-started from the points after it, and keep the "
+          "better result: a chain of warm starts from one shadow optimum can stay on a dominated branch of designs");
     d.add(&NbiOptions::design_constraints, "design_constraints", false,
           "Hand the mechanism's design constraints g(p) <= 0 to SLSQP (finite-difference gradients); switch on when "
           "one binds the front, e.g. the five-bar's footprint");
@@ -106,7 +121,7 @@ class NbiSolver : public Solver {
   /// found so far.
   ///
   /// Checkpoint (context.checkpoint_file): written after every shadow optimum and every
-  /// subproblem (their records, designs, objective values and counts); on --resume the
+  /// subproblem of either sweep (their records, designs, objective values and counts); on --resume the
   /// finished ones are skipped, after their designs are re-evaluated and found to give the
   /// claimed values, and the result is that of an uninterrupted run. The shadow solver runs
   /// without a checkpoint of its own (an interrupted shadow optimum is solved again). The

@@ -244,7 +244,7 @@ void expect_same_result(const hapsyn::SolverResult& got, const hapsyn::SolverRes
     EXPECT_EQ(got.design_evaluations, expected.design_evaluations);
     EXPECT_EQ(got.sample_evaluations, expected.sample_evaluations);
   }
-  for (const char* list : {"shadows", "subproblems"}) {
+  for (const char* list : {"shadows", "subproblems", "reverse"}) {
     Json a = got.statistics[list], b = expected.statistics[list];
     for (Json* records : {&a, &b}) {
       for (Json& r : *records) {
@@ -271,13 +271,137 @@ void edit_checkpoint(const std::string& file, const std::function<void(Json& sta
 
 }  // namespace
 
+// ---- local optima of the subproblems: second starts and the reverse sweep ----
+
+namespace {
+
+// Subproblem merit t of objective values f at grid point beta, from the run's payoff matrix
+// (statistics.payoff; every objective maximized): the largest t with Ft(f) >= a + t d.
+double merit(const Json& payoff, const std::vector<double>& beta, const std::vector<double>& f) {
+  const std::size_t m = beta.size();
+  std::vector<double> nadir(m), scale(m);
+  for (std::size_t i = 0; i < m; ++i) {
+    const std::vector<double> row = payoff[i].get<std::vector<double>>();
+    nadir[i] = *std::min_element(row.begin(), row.end());
+    scale[i] = *std::max_element(row.begin(), row.end()) - nadir[i];
+  }
+  double t = 1e300;
+  for (std::size_t i = 0; i < m; ++i) {
+    double a = 1.0, d = 0.0;
+    for (std::size_t k = 0; k < m; ++k) {
+      const double phibar = 1.0 - (payoff[i][k].get<double>() - nadir[i]) / scale[i];
+      a -= phibar * beta[k];
+      d += phibar;
+    }
+    t = std::min(t, ((f[i] - nadir[i]) / scale[i] - a) / d);
+  }
+  return t;
+}
+
+// For every grid point: the best merit NBI reached there (its two sweeps) minus
+// the best merit of any design of `problem`'s grid (exhaustive); negative: NBI ended below a
+// design it could have found.
+std::vector<double> merit_shortfalls(const hapsyn::Problem& problem, const hapsyn::SolverResult& nbi) {
+  const Json& stats = nbi.statistics;
+  const auto counts = problem.design_space().grid_counts();
+  long long total = 1;
+  for (long long c : counts) total *= c;
+  std::vector<hapsyn::ObjectivePoint> grid;
+  auto ws = problem.make_eval_scratch();
+  std::vector<double> x(problem.dimension());
+  for (long long i = 0; i < total; ++i) {
+    problem.design_space().grid_point(i, counts, x.data());
+    const auto& e = problem.evaluate(x.data(), *ws);
+    if (e.status == hapsyn::EvalStatus::kFeasible) grid.push_back(e.objectives);
+  }
+  std::vector<double> shortfalls;
+  for (std::size_t k = 0; k < stats["subproblems"].size(); ++k) {
+    const std::vector<double> beta = stats["subproblems"][k]["beta"].get<std::vector<double>>();
+    double reached = -1e300, best = -1e300;
+    for (const Json& list : {stats["subproblems"], stats["reverse"]}) {
+      for (const Json& r : list) {
+        if (r["beta"] == stats["subproblems"][k]["beta"] && r.contains("objectives")) {
+          reached = std::max(reached, merit(stats["payoff"], beta, r["objectives"].get<std::vector<double>>()));
+        }
+      }
+    }
+    for (const auto& f : grid) best = std::max(best, merit(stats["payoff"], beta, f));
+    shortfalls.push_back(reached - best);
+  }
+  return shortfalls;
+}
+
+// Two branches of designs: x1 = -0.6 holds f1's optimum (f1 = x0 - 0.05 (x1 + 0.6)^2) and a
+// local maximum of f2's bump g; x1 = +0.6 holds g's global maximum, and dominates the other
+// branch for f1 <= 0.93. A subproblem warm-started on the first branch stays there (g is flat
+// between the bumps).
+std::shared_ptr<hapsyn::Problem> two_branch_problem() {
+  const auto g = [](double x1) {
+    return 0.3 * std::exp(-std::pow((x1 - 0.6) / 0.2, 2)) + 0.1 * std::exp(-std::pow((x1 + 0.6) / 0.2, 2));
+  };
+  return hapsyn::test::analytic_problem(
+      {{0.0, 1.0}, {-1.0, 1.0}}, 0.01, {0.0},
+      {[](const double* x, const double*) { return x[0] - 0.05 * (x[1] + 0.6) * (x[1] + 0.6); },
+       [g](const double* x, const double*) { return hapsyn::test::two_objective_h(x[0]) + g(x[1]); }});
+}
+
+}  // namespace
+
+TEST(Nbi, WarmStartAloneEndsOnTheWrongBranchOfATwoBranchProblem) {
+  // The test below can fail: without second starts and the reverse sweep, the chain of warm starts from
+  // f1's optimum stays on the dominated branch.
+  const auto problem = two_branch_problem();
+  Json options = {{"points", 6}, {"seed_designs", 0}, {"reverse_sweep", false},
+                  {"shadow_solver", {{"plugin", "culling"}, {"options", {{"progress_interval", 1e9}}}}}};
+  const auto nbi = hapsyn::test::registry().create_solver("nbi", options, "solver");
+  hapsyn::SolverContext context;
+  const auto result = nbi->solve(*problem, context);
+  ASSERT_EQ(result.status, hapsyn::SolverStatus::kConverged) << result.message;
+  const std::vector<double> shortfalls = merit_shortfalls(*problem, result);
+  EXPECT_LT(*std::min_element(shortfalls.begin(), shortfalls.end()), -0.05);
+}
+
+TEST(Nbi, SecondStartsAndTheReverseSweepReachTheBestGridMeritAtEveryPoint) {
+  const auto problem = two_branch_problem();
+  // 64 seeds (the default): second starts suffice; 1 seed (on the dominated branch): the
+  // reverse sweep, warm-started from f2's optimum, is what gets the points there.
+  for (const auto& [threads, seeds] : {std::pair{1, 64}, {2, 64}, {1, 1}, {2, 1}}) {
+    SCOPED_TRACE(std::to_string(threads) + " threads, " + std::to_string(seeds) + " seeds");
+    Json options = {{"points", 6}, {"seed_designs", seeds},
+                    {"shadow_solver", {{"plugin", "culling"}, {"options", {{"progress_interval", 1e9}}}}}};
+    const auto nbi = hapsyn::test::registry().create_solver("nbi", options, "solver");
+    hapsyn::SolverContext context;
+    context.threads = threads;
+    const auto result = nbi->solve(*problem, context);
+    ASSERT_EQ(result.status, hapsyn::SolverStatus::kConverged) << result.message;
+    for (double shortfall : merit_shortfalls(*problem, result)) EXPECT_GT(shortfall, -1e-3);
+    EXPECT_EQ(result.statistics["reverse"].size(), result.statistics["subproblems"].size());
+  }
+}
+
+TEST(Nbi, ResumeBeforeTheReverseSweepGivesTheUninterruptedResult) {
+  const auto problem = two_branch_problem();
+  const Json options = {{"points", 6}, {"seed_designs", 1},
+                        {"shadow_solver", {{"plugin", "culling"}, {"options", {{"progress_interval", 1e9}}}}}};
+  const std::string file = temp_file("hapsyn-nbi-reverse");
+  boost::filesystem::remove(file);
+  const auto reference = run_nbi(*problem, file, false, nullptr, nullptr, 1, options);
+  ASSERT_EQ(reference.status, hapsyn::SolverStatus::kConverged) << reference.message;
+  ASSERT_FALSE(reference.statistics["reverse"].empty());
+  edit_checkpoint(file, [](Json& state) { state["reverse"] = Json::array(); });
+  const auto resumed = run_nbi(*problem, file, true, nullptr, nullptr, 1, options);
+  expect_same_result(resumed, reference, false);
+  EXPECT_EQ(resumed.statistics["resumed"]["subproblems"].get<std::size_t>(), reference.statistics["subproblems"].size());
+  boost::filesystem::remove(file);
+}
+
 TEST(Nbi, StopMidRunGivesThePointsSoFarAndResumeGivesTheUninterruptedResult) {
   Counter full;
   const auto reference = run_nbi(*counted_problem(full), "", false, nullptr);
   ASSERT_EQ(reference.status, hapsyn::SolverStatus::kConverged) << reference.message;
   const long long total = full.calls;
-  bool stopped_in_shadows = false, stopped_in_subproblems = false;
-  for (double fraction : {0.02, 0.4, 0.7, 0.85}) {
+  bool stopped_in_shadows = false, stopped_in_subproblems = false, stopped_in_reverse = false;
+  for (double fraction : {0.02, 0.3, 0.5, 0.9}) {
     SCOPED_TRACE(fraction);
     const std::string file = temp_file("hapsyn-nbi-stop");
     boost::filesystem::remove(file);
@@ -285,14 +409,24 @@ TEST(Nbi, StopMidRunGivesThePointsSoFarAndResumeGivesTheUninterruptedResult) {
     c.stop_after = static_cast<long long>(fraction * static_cast<double>(total));
     const auto stopped = run_nbi(*counted_problem(c), file, false, &c.stop);
     ASSERT_EQ(stopped.status, hapsyn::SolverStatus::kStopped) << stopped.message;
-    EXPECT_NE(stopped.message.find("NBI stopped on request after"), std::string::npos) << stopped.message;
+    EXPECT_NE(stopped.message.find("NBI stopped on request "), std::string::npos) << stopped.message;
     EXPECT_NE(stopped.message.find("checkpoint " + file + " written: `hapsyn run --resume` continues"), std::string::npos)
         << stopped.message;
     ASSERT_TRUE(boost::filesystem::exists(file));
-    const std::size_t shadows = stopped.statistics["shadows"].size(), subs = stopped.statistics["subproblems"].size();
-    EXPECT_LT(shadows + subs, 2u + 4u);
-    (shadows < 2 ? stopped_in_shadows : stopped_in_subproblems) = true;
-    std::cerr << "stop at " << fraction << ": " << shadows << " shadows, " << subs << " subproblems\n";
+    const std::size_t shadows = stopped.statistics["shadows"].size(), subs = stopped.statistics["subproblems"].size(),
+                      reverse = stopped.statistics["reverse"].size();
+    EXPECT_LT(shadows + subs + reverse, 2u + 4u + 4u);
+    if (shadows < 2) {
+      stopped_in_shadows = true;
+    } else if (subs < 4) {
+      stopped_in_subproblems = true;
+    } else {
+      stopped_in_reverse = true;
+      EXPECT_NE(stopped.message.find("in the reverse sweep, after " + std::to_string(reverse) + " of 4"), std::string::npos)
+          << stopped.message;
+    }
+    std::cerr << "stop at " << fraction << ": " << shadows << " shadows, " << subs << " subproblems, " << reverse
+              << " in reverse\n";
     EXPECT_EQ(stopped.statistics["candidates"].get<std::size_t>(), shadows + subs);
     if (shadows + subs > 0) {
       EXPECT_FALSE(stopped.front.empty());
@@ -302,10 +436,12 @@ TEST(Nbi, StopMidRunGivesThePointsSoFarAndResumeGivesTheUninterruptedResult) {
     expect_same_result(resumed, reference);
     EXPECT_EQ(resumed.statistics["resumed"]["shadows"].get<std::size_t>(), shadows);
     EXPECT_EQ(resumed.statistics["resumed"]["subproblems"].get<std::size_t>(), subs);
+    EXPECT_EQ(resumed.statistics["resumed"]["reverse"].get<std::size_t>(), reverse);
     boost::filesystem::remove(file);
   }
   EXPECT_TRUE(stopped_in_shadows);
   EXPECT_TRUE(stopped_in_subproblems);
+  EXPECT_TRUE(stopped_in_reverse);
 }
 
 TEST(Nbi, EditedOrForeignCheckpointIsRefused) {
@@ -460,11 +596,11 @@ TEST(Nbi, EveryRankEndsWithTheSingleProcessResult) {
     EXPECT_TRUE(tape->events.empty());  // the same collectives in the same order
     expect_same_result(r0, reference, false);  // 2 threads per rank
     expect_same_result(r1, reference, false);
-    // One farm of shadow optima, then the waves: fewer than the subproblems when some share a
-    // wave (with two objectives, the first and the last).
+    // One farm of shadow optima, then the waves of each sweep: fewer than the subproblems when
+    // some share a wave (with two objectives, the first and the last).
     const int subproblems = static_cast<int>(reference.statistics["subproblems"].size());
-    EXPECT_GE(rank0.farms(), 2);
-    EXPECT_LT(rank0.farms(), 1 + subproblems);
+    EXPECT_GE(rank0.farms(), 3);
+    EXPECT_LT(rank0.farms(), 1 + 2 * subproblems);
     EXPECT_EQ(rank1.farms(), rank0.farms());
   }
 }
@@ -507,6 +643,7 @@ TEST(Nbi, ResumeFromSubproblemsFinishedOutOfOrderGivesTheUninterruptedResult) {
     const Json shadows = s["shadows"], subproblems = s["subproblems"];
     s["shadows"] = Json::array({shadows[1]});
     s["subproblems"] = Json::array();
+    s["reverse"] = Json::array();
   });
   Counter again;
   const auto from_shadow = run_nbi(*counted_problem(again), file, true, nullptr);
@@ -515,6 +652,7 @@ TEST(Nbi, ResumeFromSubproblemsFinishedOutOfOrderGivesTheUninterruptedResult) {
   edit_checkpoint(file, [](Json& s) {
     const Json subproblems = s["subproblems"];
     s["subproblems"] = Json::array({subproblems[1], subproblems[3]});
+    s["reverse"] = Json::array();
   });
   Counter third;
   const auto from_subproblems = run_nbi(*counted_problem(third), file, true, nullptr);
