@@ -42,15 +42,19 @@ LegResult solve_leg(double dx, double dy, double l1, double l2, Leg& leg) {
     // E on the actuated joint: reachable only folded (l1 = l2), with any q1; singular.
     return std::abs(diff) <= 8.0 * kEps * spread ? LegResult::kOnJoint : LegResult::kUnreachable;
   }
+  // Reciprocals once, then products: a vector divides at a fraction of the rate it multiplies,
+  // and the block kernel (fivebar_block.cpp) does the same operations.
+  const double inv_rho = 1.0 / rho;
   const double den = 2.0 * l1 * rho;
-  double c = (diff + rho2) / den;  // cosine of the angle between E - A and the actuated link
+  const double inv_den = 1.0 / den;
+  double c = (diff + rho2) * inv_den;  // cosine of the angle between E - A and the actuated link
   // Rounding bound of c: a sample on the reach boundary (|E - A| = l1 + l2 or |l1 - l2|) may
   // compute |c| a few ulps above 1; it is clamped (and then classified singular), never NaN.
-  const double tolerance = 8.0 * kEps * spread / den;
+  const double tolerance = 8.0 * kEps * spread * inv_den;
   if (!(std::abs(c) <= 1.0 + tolerance)) return LegResult::kUnreachable;
   c = std::clamp(c, -1.0, 1.0);
   const double s = std::sqrt((1.0 - c) * (1.0 + c));  // sin(acos(c)) >= 0
-  const double ex = dx / rho, ey = dy / rho;
+  const double ex = dx * inv_rho, ey = dy * inv_rho;
   leg.ux = c * ex - s * ey;  // E - A rotated counter-clockwise by acos(c): elbow out
   leg.uy = c * ey + s * ex;
   leg.wx = dx - l1 * leg.ux;
@@ -132,10 +136,11 @@ void FiveBarModel::solve(const double* pose, Needs needs, MechanismScratch& /*sc
   const double u4x = -right.ux, u4y = right.uy, w2x = -right.wx, w2y = right.wy;
 
   // Transmission sines (cross products of the link vectors).
-  const double s12 = (left.wx * left.uy - left.wy * left.ux) / l2;      // sin(q1 - q2)
-  const double s34 = (right.wx * right.uy - right.wy * right.ux) / l2;  // sin(q3 - q4)
-  const double cross12 = w1x * w2y - w1y * w2x;                          // l2^2 sin(q3 - q2)
-  const double s23 = cross12 / l2_squared_;
+  const double inv_l2 = 1.0 / l2;
+  const double s12 = (left.wx * left.uy - left.wy * left.ux) * inv_l2;      // sin(q1 - q2)
+  const double s34 = (right.wx * right.uy - right.wy * right.ux) * inv_l2;  // sin(q3 - q4)
+  const double cross12 = w1x * w2y - w1y * w2x;                              // l2^2 sin(q3 - q2)
+  const double s23 = cross12 * (1.0 / l2_squared_);
   const double tol = singularity_tolerance_;
   if (!(std::abs(s12) >= tol && std::abs(s34) >= tol && std::abs(s23) >= tol)) {
     out.status = SampleStatus::kSingular;
@@ -180,8 +185,9 @@ void FiveBarModel::solve(const double* pose, Needs needs, MechanismScratch& /*sc
   p2(1, 1) = l1 * u4x;
   const Eigen::Matrix2d c1 = 0.5 * (p1 + jac);
   const Eigen::Matrix2d c2 = 0.5 * (p2 + jac);
-  const Eigen::Vector2d a2 = (jac - p1).transpose() * Eigen::Vector2d(-w1y, w1x) / l2_squared_;
-  const Eigen::Vector2d a3 = (jac - p2).transpose() * Eigen::Vector2d(-w2y, w2x) / l2_squared_;
+  const double inv_l2_squared = 1.0 / l2_squared_;
+  const Eigen::Vector2d a2 = (jac - p1).transpose() * Eigen::Vector2d(-w1y, w1x) * inv_l2_squared;
+  const Eigen::Vector2d a3 = (jac - p2).transpose() * Eigen::Vector2d(-w2y, w2x) * inv_l2_squared;
   Eigen::Matrix2d inertia = m2_ * (c1.transpose() * c1 + c2.transpose() * c2) +
                             inertia_f_ * (a2 * a2.transpose() + a3 * a3.transpose());
   inertia(0, 0) += inertia_a_;
@@ -192,8 +198,9 @@ void FiveBarModel::solve(const double* pose, Needs needs, MechanismScratch& /*sc
 
   // M = J^-T D J^-1 with J^-1 = diag(b1, b2)^-1 W (no inversion of J).
   Eigen::Matrix2d jac_inv;
-  jac_inv << w1x / b1, w1y / b1,  //
-      w2x / b2, w2y / b2;
+  const double inv_b1 = 1.0 / b1, inv_b2 = 1.0 / b2;
+  jac_inv << w1x * inv_b1, w1y * inv_b1,  //
+      w2x * inv_b2, w2y * inv_b2;
   out.effective_mass.resize(2, 2);
   out.effective_mass = jac_inv.transpose() * inertia * jac_inv;
 }

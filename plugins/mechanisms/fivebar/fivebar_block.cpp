@@ -59,8 +59,9 @@ HWY_INLINE Leg SolveLeg(D d, V dx, V dy, double l1, double l2) {
   const V rho = hn::Sqrt(rho2);
   const V spread = hn::Add(hn::Set(d, l1 * l1 + l2 * l2), rho2);
   const V den = hn::Mul(hn::Set(d, 2.0 * l1), rho);
-  const V c_raw = hn::Div(hn::Add(hn::Set(d, diff), rho2), den);
-  const V tolerance = hn::Div(hn::Mul(hn::Set(d, 8.0 * kEps), spread), den);
+  const V inv_den = hn::Div(one, den);
+  const V c_raw = hn::Mul(hn::Add(hn::Set(d, diff), rho2), inv_den);
+  const V tolerance = hn::Mul(hn::Mul(hn::Set(d, 8.0 * kEps), spread), inv_den);
   const M positive = hn::Gt(rho, zero);
   Leg leg;
   leg.on_joint = hn::AndNot(positive, hn::Le(hn::Set(d, std::abs(diff)), hn::Mul(hn::Set(d, 8.0 * kEps), spread)));
@@ -68,7 +69,8 @@ HWY_INLINE Leg SolveLeg(D d, V dx, V dy, double l1, double l2) {
   const V c = hn::IfThenElse(positive, hn::Min(hn::Max(c_raw, hn::Set(d, -1.0)), one), one);
   const V s = hn::Sqrt(hn::Mul(hn::Sub(one, c), hn::Add(one, c)));
   const V safe_rho = hn::IfThenElse(positive, rho, one);
-  const V ex = hn::Div(dx, safe_rho), ey = hn::Div(dy, safe_rho);
+  const V inv_rho = hn::Div(one, safe_rho);
+  const V ex = hn::Mul(dx, inv_rho), ey = hn::Mul(dy, inv_rho);
   leg.ux = hn::Sub(hn::Mul(c, ex), hn::Mul(s, ey));
   leg.uy = hn::Add(hn::Mul(c, ey), hn::Mul(s, ex));
   const V l1v = hn::Set(d, l1);
@@ -84,11 +86,12 @@ HWY_INLINE Leg SolveLeg(D d, V dx, V dy, double l1, double l2) {
 
 // Status per lane (SampleStatus as a double: 0 reachable, 1 unreachable, 2 singular, 3 invalid).
 HWY_INLINE V Classify(D d, const FiveBarBlockDesign& design, const Leg& left, const Leg& right) {
-  const V l2 = hn::Set(d, design.l2), tol = hn::Set(d, design.singularity_tolerance);
-  const V s12 = hn::Div(hn::Sub(hn::Mul(left.wx, left.uy), hn::Mul(left.wy, left.ux)), l2);
-  const V s34 = hn::Div(hn::Sub(hn::Mul(right.wx, right.uy), hn::Mul(right.wy, right.ux)), l2);
+  const V tol = hn::Set(d, design.singularity_tolerance);
+  const V inv_l2 = hn::Set(d, 1.0 / design.l2);
+  const V s12 = hn::Mul(hn::Sub(hn::Mul(left.wx, left.uy), hn::Mul(left.wy, left.ux)), inv_l2);
+  const V s34 = hn::Mul(hn::Sub(hn::Mul(right.wx, right.uy), hn::Mul(right.wy, right.ux)), inv_l2);
   const V cross12 = hn::Sub(hn::Mul(left.wx, right.wy), hn::Mul(left.wy, hn::Neg(right.wx)));
-  const V s23 = hn::Div(cross12, hn::Set(d, design.l2 * design.l2));
+  const V s23 = hn::Mul(cross12, hn::Set(d, 1.0 / (design.l2 * design.l2)));
   const M unreachable = hn::Or(hn::Not(hn::Or(left.solved, left.on_joint)), hn::Not(hn::Or(right.solved, right.on_joint)));
   const M transmits = hn::And(hn::And(hn::Ge(hn::Abs(s12), tol), hn::Ge(hn::Abs(s34), tol)), hn::Ge(hn::Abs(s23), tol));
   const M singular = hn::Or(hn::Or(left.on_joint, right.on_joint), hn::Not(transmits));
@@ -101,7 +104,7 @@ HWY_INLINE V Classify(D d, const FiveBarBlockDesign& design, const Leg& left, co
 HWY_INLINE void Dynamics(D d, const FiveBarBlockDesign& design, const Leg& left, const Leg& right, bool inertia,
                          bool mass, std::size_t i, QuantityBlock& out) {
   const V l1 = hn::Set(d, design.l1), minus_l1 = hn::Set(d, -design.l1), half = hn::Set(d, 0.5);
-  const V l2_squared = hn::Set(d, design.l2 * design.l2);
+  const V inv_l2_squared = hn::Set(d, 1.0 / (design.l2 * design.l2));
   const V u1x = left.ux, u1y = left.uy, w1x = left.wx, w1y = left.wy;
   const V u4x = hn::Neg(right.ux), u4y = right.uy, w2x = hn::Neg(right.wx), w2y = right.wy;
   const V cross12 = hn::Sub(hn::Mul(w1x, w2y), hn::Mul(w1y, w2x));
@@ -125,10 +128,10 @@ HWY_INLINE void Dynamics(D d, const FiveBarBlockDesign& design, const Leg& left,
   const V c2_10 = hn::Mul(half, j10), c2_11 = hn::Mul(half, hn::Add(p2_11, j11));
   // a2 = (J - p1)^T (-w1y, w1x) / l2^2, a3 = (J - p2)^T (-w2y, w2x) / l2^2.
   const V v1x = hn::Neg(w1y), v2x = hn::Neg(w2y);
-  const V a2_0 = hn::Div(hn::Add(hn::Mul(hn::Sub(j00, p1_00), v1x), hn::Mul(hn::Sub(j10, p1_10), w1x)), l2_squared);
-  const V a2_1 = hn::Div(hn::Add(hn::Mul(j01, v1x), hn::Mul(j11, w1x)), l2_squared);
-  const V a3_0 = hn::Div(hn::Add(hn::Mul(j00, v2x), hn::Mul(j10, w2x)), l2_squared);
-  const V a3_1 = hn::Div(hn::Add(hn::Mul(hn::Sub(j01, p2_01), v2x), hn::Mul(hn::Sub(j11, p2_11), w2x)), l2_squared);
+  const V a2_0 = hn::Mul(hn::Add(hn::Mul(hn::Sub(j00, p1_00), v1x), hn::Mul(hn::Sub(j10, p1_10), w1x)), inv_l2_squared);
+  const V a2_1 = hn::Mul(hn::Add(hn::Mul(j01, v1x), hn::Mul(j11, w1x)), inv_l2_squared);
+  const V a3_0 = hn::Mul(hn::Add(hn::Mul(j00, v2x), hn::Mul(j10, w2x)), inv_l2_squared);
+  const V a3_1 = hn::Mul(hn::Add(hn::Mul(hn::Sub(j01, p2_01), v2x), hn::Mul(hn::Sub(j11, p2_11), w2x)), inv_l2_squared);
   // D = m2 (c1^T c1 + c2^T c2) + I_f (a2 a2^T + a3 a3^T), plus I_a on the diagonal.
   const V m2 = hn::Set(d, design.m2), inertia_f = hn::Set(d, design.inertia_f), inertia_a = hn::Set(d, design.inertia_a);
   const auto dot2 = [](V a, V b, V c, V e) { return hn::Add(hn::Mul(a, b), hn::Mul(c, e)); };
@@ -145,7 +148,8 @@ HWY_INLINE void Dynamics(D d, const FiveBarBlockDesign& design, const Leg& left,
   hn::StoreU(d11, d, out.inertia[3] + i);
   if (!mass) return;
   // M = (K^T D) K with K = J^-1 = [[w1x / b1, w1y / b1], [w2x / b2, w2y / b2]].
-  const V k00 = hn::Div(w1x, b1), k01 = hn::Div(w1y, b1), k10 = hn::Div(w2x, b2), k11 = hn::Div(w2y, b2);
+  const V inv_b1 = hn::Div(hn::Set(d, 1.0), b1), inv_b2 = hn::Div(hn::Set(d, 1.0), b2);
+  const V k00 = hn::Mul(w1x, inv_b1), k01 = hn::Mul(w1y, inv_b1), k10 = hn::Mul(w2x, inv_b2), k11 = hn::Mul(w2y, inv_b2);
   const V t00 = dot2(k00, d00, k10, d01), t01 = dot2(k00, d01, k10, d11);
   const V t10 = dot2(k01, d00, k11, d01), t11 = dot2(k01, d01, k11, d11);
   hn::StoreU(dot2(t00, k00, t01, k10), d, out.effective_mass[0] + i);
