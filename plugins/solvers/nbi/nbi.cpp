@@ -172,7 +172,7 @@ std::vector<double> free_design(const DesignSpace& space, const Eigen::VectorXd&
 struct Solved {
   std::vector<double> beta;
   std::vector<double> x;  // free design
-  std::string name;       // "shadows[j]" or "subproblems[j]": its entry in the statistics
+  std::string name;       // "shadows[j]", "subproblems[j]", "reverse[j]" or "seeds[i]": where it comes from
 };
 
 double l1_distance(const std::vector<double>& a, const std::vector<double>& b) {
@@ -188,9 +188,9 @@ constexpr double kSameDistance = 1e-9;
 
 // Where subproblem k starts: the nearest (L1) of the shadow optima and of the feasible
 // subproblems before k, ties to the first in the order shadows, then grid order (the first
-// sweep), or grid order, then shadows (`grid_first`: the reverse sweep, so that it does not
-// start from the shadow optimum the first sweep started from); this is the start the one-by-one
-// run in grid order gives it. nullopt while a subproblem before k that is not finished could
+// sweep), or grid order, then shadows (`grid_first`: the reverse sweep, which passes the grid
+// reversed, so that it starts from a grid point where one is as near as the shadow optimum the
+// first sweep started from); this is the start the one-by-one run in that order gives it. nullopt while a subproblem before k that is not finished could
 // change it: one nearer, or as near and earlier in that order than the one chosen so far.
 std::optional<Solved> start_of(std::size_t k, const std::vector<Solved>& shadow_starts,
                                const std::vector<std::vector<double>>& interior, const SubproblemSlots& subproblems,
@@ -255,21 +255,24 @@ void aim(Subproblem& sub, const Chim& chim, const std::vector<double>& beta) {
 // (seen on the five-bar: a start at the GII optimum, links at their upper bounds, ended on a
 // point 0.09 below the front in GII).
 struct SeedPool {
-  std::vector<Solved> seeds;               // beta unused
-  std::vector<std::vector<double>> values; // objective values of each seed
-  long long samples = 0;
+  std::vector<Solved> seeds;                // the shadow optima, then the feasible Halton designs; beta unused
+  std::vector<std::vector<double>> values;  // objective values of each seed
+  long long designs = 0, samples = 0;       // what evaluating the Halton designs cost
+  long long feasible = 0;                   // Halton designs that are feasible
 };
 
-SeedPool seed_pool(const Problem& problem, int count, int threads, const ShadowOptima& shadows) {
+// Empty (no second start) for count 0. Stops early, incomplete, on a stop request: the caller
+// then stops before any subproblem uses it. The same pool for any number of threads.
+SeedPool seed_pool(const Problem& problem, int count, const SolverContext& context, const ShadowOptima& shadows) {
   SeedPool pool;
-  if (count == 0) return pool;  // no second start
+  if (count == 0) return pool;
   const DesignSpace& space = problem.design_space();
   for (std::size_t j = 0; j < shadows.designs.size(); ++j) {
     pool.seeds.push_back({{}, free_design(space, shadows.designs[j]), "shadows[" + std::to_string(j) + "]"});
     pool.values.push_back(shadows.values[j]);
   }
   pagmo::halton sequence(static_cast<unsigned>(space.free_size()), 1);
-  for (int i = 0; i < count; ++i) {
+  for (int i = 0; i < count && !context.stop_requested(); ++i) {
     const std::vector<double> u = sequence();
     std::vector<double> x(space.free_size());
     for (std::size_t k = 0; k < x.size(); ++k) {
@@ -277,15 +280,19 @@ SeedPool seed_pool(const Problem& problem, int count, int threads, const ShadowO
       x[k] = c.lower + u[k] * (c.upper - c.lower);
     }
     std::vector<double> values;
-    if (evaluate_full_design(problem, problem.full_design(x.data()), threads, values, pool.samples)) {
+    ++pool.designs;
+    if (evaluate_full_design(problem, problem.full_design(x.data()), context.threads, values, pool.samples)) {
       pool.seeds.push_back({{}, x, "seeds[" + std::to_string(i) + "]"});
       pool.values.push_back(std::move(values));
+      ++pool.feasible;
     }
   }
   return pool;
 }
 
-// One subproblem: the SQP from its start (start_of), then the full evaluation of its design.
+// One subproblem: the SQP from its start (start_of) and, with a pool, from the pool's best design
+// for it when that is another design (the better result is kept), then the full evaluation of
+// its design. The reverse sweep passes no pool: its point's best seed was tried in the first.
 // `sub` is this subproblem's own copy (its scratch is written): subproblems run concurrently.
 FinishedSubproblem solve_subproblem(const Problem& problem, const NbiOptions& options, const Chim& chim, Subproblem sub,
                                     const std::vector<double>& beta, const Solved& start, const SeedPool* pool) {
@@ -394,6 +401,7 @@ struct NbiProgress {
   SubproblemSlots shadows, subproblems;
   SubproblemSlots reverse;  // grid point k solved again in the reverse sweep
   long long interrupted_designs = 0, interrupted_samples = 0;
+  long long pool_designs = 0, pool_samples = 0;  // the seed pool's evaluations
   double seconds_before = 0.0;  // elapsed in the runs before a resume
   Json resumed = nullptr;       // statistics.resumed
 };
@@ -429,11 +437,22 @@ void resume(const Problem& problem, const SolverContext& context, const std::str
   for (const char* list : {"subproblems", "reverse"}) {
     const SubproblemSlots& slots = list == std::string("subproblems") ? progress.subproblems : progress.reverse;
     for (std::size_t task = 0; task < slots.size(); ++task) {
-      const std::size_t k = task;
-      if (slots[task] && slots[task]->record.value("beta", Json()) != Json(interior[k])) {
-        throw bad_checkpoint(context, checkpoint->where(list, task) + ".record.beta = " +
-                                          slots[task]->record.value("beta", Json()).dump() + ": this study's grid point " +
-                                          std::to_string(k) + " is " + Json(interior[k]).dump());
+      if (!slots[task]) continue;
+      const Json& record = slots[task]->record;
+      const std::string where = checkpoint->where(list, task);
+      if (record.value("beta", Json()) != Json(interior[task])) {
+        throw bad_checkpoint(context, where + ".record.beta = " + record.value("beta", Json()).dump() +
+                                          ": this study's grid point " + std::to_string(task) + " is " +
+                                          Json(interior[task]).dump());
+      }
+      // The sweeps compare these: a result's merit, and a start's name.
+      if (slots[task]->point && !(record.contains("t") && record["t"].is_number())) {
+        throw bad_checkpoint(context, where + ".record.t = " + record.value("t", Json()).dump() +
+                                          ": a subproblem with a design needs its merit t (a number)");
+      }
+      if (!(record.contains("start") && record["start"].is_string())) {
+        throw bad_checkpoint(context, where + ".record.start = " + record.value("start", Json()).dump() +
+                                          ": the name of the subproblem's start (a string)");
       }
     }
   }
@@ -450,7 +469,8 @@ void resume(const Problem& problem, const SolverContext& context, const std::str
                       {"recheck_sample_evaluations", checkpoint->recheck_samples}};
   solver_line(context, "nbi: resuming from " + context.checkpoint_file + ": " + std::to_string(shadows) + " of " +
                            std::to_string(m) + " shadow optima and " + std::to_string(subproblems) + " of " +
-                           std::to_string(interior.size()) + " subproblems finished");
+                           std::to_string(interior.size()) + " subproblems finished, " +
+                           std::to_string(finished_count(progress.reverse)) + " of the reverse sweep");
 }
 
 // The reverse sweep starts from the better, on the grid point's own merit t, of its two results:
@@ -535,8 +555,8 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
   // The result from what has been done (the counts of every finished unit and of interrupted
   // ones), with `status` and `message`.
   const auto finish = [&](SolverStatus status, const std::string& message, bool with_front) {
-    result.design_evaluations = progress.interrupted_designs;
-    result.sample_evaluations = progress.interrupted_samples;
+    result.design_evaluations = progress.interrupted_designs + progress.pool_designs;
+    result.sample_evaluations = progress.interrupted_samples + progress.pool_samples;
     for (const auto* list : {&progress.shadows, &progress.subproblems, &progress.reverse}) {
       for (const std::optional<FinishedSubproblem>& f : *list) {
         if (!f) continue;
@@ -676,10 +696,13 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
     beta[j] = 1.0;
     shadow_starts.push_back({beta, free_design(problem.design_space(), shadows.designs[j]), "shadows[" + std::to_string(j) + "]"});
   }
-  const SeedPool pool = seed_pool(problem, options_.seed_designs, context.threads, shadows);
-  stats["seed_designs"] = {{"feasible", pool.seeds.size() - shadows.designs.size()}, {"of", options_.seed_designs},
-                           {"sample_evaluations", pool.samples}};
-  progress.interrupted_samples += pool.samples;
+  // The pool is evaluated on every solve() (a resumed one too, and on every rank): 64 designs
+  // against the subproblems' thousands; its cost counts once per solve(), as in an
+  // uninterrupted run.
+  const SeedPool pool = seed_pool(problem, options_.seed_designs, context, shadows);
+  stats["seed_designs"] = {{"feasible", pool.feasible}, {"of", options_.seed_designs}, {"sample_evaluations", pool.samples}};
+  progress.pool_designs = pool.designs;
+  progress.pool_samples = pool.samples;
   for (;;) {
     const std::size_t done = finished_count(progress.subproblems);
     if (done == interior.size()) break;
@@ -759,7 +782,7 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
     };
     farm.collected = [&](std::size_t k) {
       checkpoint();
-      solver_line(context, "nbi: subproblem " + std::to_string(k + 1) + " of " + std::to_string(n) + " solved again (reverse sweep)");
+      solver_line(context, "nbi: subproblem " + std::to_string(k + 1) + " of " + std::to_string(n) + " done in the reverse sweep");
     };
     farm.on_abort = checkpoint;
     const FarmOutcome outcome = run_subproblem_farm(problem, context, progress.reverse, farm);

@@ -106,7 +106,9 @@ class NbiSolver : public Solver {
   /// nearer is finished), one SLSQP run per thread. The starts, and so the front, are those of
   /// the one-by-one run in grid order, whatever the ranks and threads. With two objectives the
   /// starts form one chain (each point starts from the one before it), so only the first and
-  /// the last subproblem run side by side; with three or more, the waves grow.
+  /// the last subproblem run side by side; with three or more, the waves grow. The reverse
+  /// sweep runs in waves the same way. The seed pool is evaluated on every rank (the same
+  /// designs, deterministic), before the first wave.
   bool distributed() const override { return true; }
   /// \throws Error("nbi", ...) with fewer than two objectives, an integer free variable, no free
   ///         variable or a simplex grid too large; or when the shadow solver refuses one of the
@@ -117,8 +119,8 @@ class NbiSolver : public Solver {
   /// optimum is not found (the first in objective order); kFailed without a shadow solver (options made without a registry) or
   /// when some but not all objectives have no spread in the payoff matrix (the message names
   /// them and what to do; the front would be degenerate); kStopped on a stop request (between
-  /// shadow optima and subproblems, and inside the shadow solver), with the front of the points
-  /// found so far.
+  /// shadow optima and subproblems, in the seed pool, in the reverse sweep, and inside the
+  /// shadow solver), with the front of the points found so far.
   ///
   /// Checkpoint (context.checkpoint_file): written after every shadow optimum and every
   /// subproblem of either sweep (their records, designs, objective values and counts); on --resume the
