@@ -166,10 +166,8 @@ std::vector<hapsyn::ObjectivePoint> feasible_grid_objectives(const hapsyn::Probl
   return grid;
 }
 
-}  // namespace
-
-TEST(Nbi, FiveBarFrontIsNotDominatedByExhaustiveSearch) {
-  // Coarse five-bar: NBI (continuous designs) against the exhaustive front of a 20 mm grid.
+// The coarse five-bar GII-GDI front: 6 NBI points on a box that a 20 mm grid covers.
+Json coarse_fivebar_front_study() {
   Json doc = hapsyn::test::fivebar_study("nbi");
   doc["objectives"] = Json::array({{{"metric", "gii"}}, {{"metric", "gdi"}}});
   doc["design"] = {{"l0", {{"lower", 0.0}, {"upper", 0.3}, {"step", 0.02}}},
@@ -178,7 +176,14 @@ TEST(Nbi, FiveBarFrontIsNotDominatedByExhaustiveSearch) {
                    {"r", {{"lower", 0.1}, {"upper", 0.5}, {"step", 0.02}}}};
   doc["solver"]["options"] = {{"points", 6}};
   doc["solver"]["options"]["shadow_solver"] = {{"plugin", "culling"}, {"options", {{"progress_interval", 1e9}}}};
-  hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  return doc;
+}
+
+}  // namespace
+
+TEST(Nbi, FiveBarFrontIsNotDominatedByExhaustiveSearch) {
+  // Coarse five-bar: NBI (continuous designs) against the exhaustive front of a 20 mm grid.
+  const hapsyn::Study study = hapsyn::load_study(coarse_fivebar_front_study(), hapsyn::test::registry());
   hapsyn::SolverContext context;
   context.threads = 2;
   const auto nbi = study.solver->solve(*study.problem, context);
@@ -392,15 +397,7 @@ TEST(Nbi, FiveBarPointsReachTheBestMeritOfA20MillimetreGrid) {
   // The study of FiveBarFrontIsNotDominatedByExhaustiveSearch, per grid point: NBI's continuous
   // designs reach at least the best 20 mm grid design's merit t there (less 0.005). A warm start
   // alone left the first point 0.24 below it after a change of the kernel's last bits.
-  Json doc = hapsyn::test::fivebar_study("nbi");
-  doc["objectives"] = Json::array({{{"metric", "gii"}}, {{"metric", "gdi"}}});
-  doc["design"] = {{"l0", {{"lower", 0.0}, {"upper", 0.3}, {"step", 0.02}}},
-                   {"l1", {{"lower", 0.06}, {"upper", 0.3}, {"step", 0.02}}},
-                   {"l2", {{"lower", 0.06}, {"upper", 0.3}, {"step", 0.02}}},
-                   {"r", {{"lower", 0.1}, {"upper", 0.5}, {"step", 0.02}}}};
-  doc["solver"]["options"] = {{"points", 6}};
-  doc["solver"]["options"]["shadow_solver"] = {{"plugin", "culling"}, {"options", {{"progress_interval", 1e9}}}};
-  hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  const hapsyn::Study study = hapsyn::load_study(coarse_fivebar_front_study(), hapsyn::test::registry());
   hapsyn::SolverContext context;
   context.threads = 2;
   const auto nbi = study.solver->solve(*study.problem, context);
@@ -573,30 +570,60 @@ TEST(Nbi, ObjectivesWithOneCommonOptimumGiveOnePointAndSaySo) {
 
 namespace {
 
-// The start the one-by-one run in grid order gives subproblem k: the nearest (L1 in beta) of
-// the shadow optima and the feasible subproblems before k, the first of equally near ones.
-std::string one_by_one_start(const Json& subproblems, std::size_t k, std::size_t m) {
-  const auto beta = [&](std::size_t j) { return subproblems[j]["beta"].get<std::vector<double>>(); };
-  const std::vector<double> b = beta(k);
+// The nearest (L1 in beta) to `beta` of the points offered, the first of equally near ones.
+struct NearestStart {
+  explicit NearestStart(std::vector<double> b) : beta(std::move(b)) {}
+  std::vector<double> beta;
   std::string start;
   double nearest = 1e9;
-  const auto consider = [&](const std::vector<double>& other, const std::string& name) {
+
+  void consider(const std::vector<double>& other, const std::string& name) {
     double d = 0;
-    for (std::size_t i = 0; i < m; ++i) d += std::abs(other[i] - b[i]);
+    for (std::size_t i = 0; i < beta.size(); ++i) d += std::abs(other[i] - beta[i]);
     if (d < nearest - 1e-9) {
       nearest = d;
       start = name;
     }
-  };
-  for (std::size_t j = 0; j < m; ++j) {
-    std::vector<double> corner(m, 0.0);
-    corner[j] = 1.0;
-    consider(corner, "shadows[" + std::to_string(j) + "]");
   }
+  void consider_shadows() {
+    for (std::size_t j = 0; j < beta.size(); ++j) {
+      std::vector<double> corner(beta.size(), 0.0);
+      corner[j] = 1.0;
+      consider(corner, "shadows[" + std::to_string(j) + "]");
+    }
+  }
+};
+
+std::vector<double> beta_of(const Json& records, std::size_t j) { return records[j]["beta"].get<std::vector<double>>(); }
+
+// The start the one-by-one run in grid order gives subproblem k: the nearest (L1 in beta) of
+// the shadow optima and the feasible subproblems before k, the first of equally near ones.
+std::string one_by_one_start(const Json& subproblems, std::size_t k) {
+  NearestStart n(beta_of(subproblems, k));
+  n.consider_shadows();
   for (std::size_t j = 0; j < k; ++j) {
-    if (subproblems[j].contains("objectives")) consider(beta(j), "subproblems[" + std::to_string(j) + "]");
+    if (subproblems[j].contains("objectives")) n.consider(beta_of(subproblems, j), "subproblems[" + std::to_string(j) + "]");
   }
-  return start;
+  return n.start;
+}
+
+// The reverse sweep's start of grid point k in a one-by-one run in reverse grid order: the
+// nearest of the points after k (by the better of their two results: "reverse[j]" when the
+// reverse sweep's t is higher) and the shadow optima; of equally near ones the first in the
+// order: points from the last one down, then the shadows.
+std::string one_by_one_reverse_start(const Json& subproblems, const Json& reverse, std::size_t k) {
+  NearestStart n(beta_of(subproblems, k));
+  for (std::size_t j = subproblems.size(); j-- > k + 1;) {
+    const bool first = subproblems[j].contains("objectives");
+    const bool second = reverse[j].contains("objectives");
+    if (second && (!first || reverse[j]["t"].get<double>() > subproblems[j]["t"].get<double>())) {
+      n.consider(beta_of(subproblems, j), "reverse[" + std::to_string(j) + "]");
+    } else if (first) {
+      n.consider(beta_of(subproblems, j), "subproblems[" + std::to_string(j) + "]");
+    }
+  }
+  n.consider_shadows();
+  return n.start;
 }
 
 const Json kThreeObjectiveOptions = {
@@ -611,8 +638,11 @@ TEST(Nbi, SubproblemsStartWhereTheOneByOneRunStartsThemOnAnyThreadCount) {
   ASSERT_EQ(one.status, hapsyn::SolverStatus::kConverged) << one.message;
   const Json& subproblems = one.statistics["subproblems"];
   ASSERT_EQ(subproblems.size(), 12u);  // 15 grid points, 3 of them shadow optima
+  const Json& reverse = one.statistics["reverse"];
+  ASSERT_EQ(reverse.size(), 12u);
   for (std::size_t k = 0; k < subproblems.size(); ++k) {
-    EXPECT_EQ(subproblems[k]["start"], one_by_one_start(subproblems, k, 3)) << k;
+    EXPECT_EQ(subproblems[k]["start"], one_by_one_start(subproblems, k)) << k;
+    EXPECT_EQ(reverse[k]["start"], one_by_one_reverse_start(subproblems, reverse, k)) << k;
   }
   for (int threads : {2, 4}) {
     SCOPED_TRACE(threads);
@@ -646,7 +676,7 @@ TEST(Nbi, EveryRankEndsWithTheSingleProcessResult) {
 TEST(Nbi, StopOnRanksIsTheSameOnEveryRankAndResumeFinishesIt) {
   Counter full;
   const auto reference = run_nbi(*counted_problem(full), "", false, nullptr);
-  for (double fraction : {0.02, 0.7}) {  // in the shadow optima, in the subproblems
+  for (double fraction : {0.02, 0.5, 0.9}) {  // in the shadow optima, in the subproblems, in the reverse sweep
     SCOPED_TRACE(fraction);
     const std::string file = temp_file("hapsyn-nbi-ranks-stop");
     boost::filesystem::remove(file);
@@ -661,8 +691,10 @@ TEST(Nbi, StopOnRanksIsTheSameOnEveryRankAndResumeFinishesIt) {
     EXPECT_EQ(r1.status, hapsyn::SolverStatus::kStopped) << r1.message;
     EXPECT_EQ(r1.statistics["shadows"], r0.statistics["shadows"]);
     EXPECT_EQ(r1.statistics["subproblems"], r0.statistics["subproblems"]);
-    EXPECT_EQ(r0.statistics["shadows"].size(), fraction < 0.5 ? 0u : 2u);
-    EXPECT_EQ(r0.statistics["subproblems"].empty(), fraction < 0.5);
+    EXPECT_EQ(r1.statistics["reverse"], r0.statistics["reverse"]);
+    EXPECT_EQ(r0.statistics["shadows"].size(), fraction < 0.1 ? 0u : 2u);
+    EXPECT_EQ(r0.statistics["subproblems"].empty(), fraction < 0.1);
+    EXPECT_EQ(r0.statistics["reverse"].empty(), fraction < 0.8);
     EXPECT_TRUE(tape->events.empty());
     Counter again;
     expect_same_result(run_nbi(*counted_problem(again), file, true, nullptr), reference);
