@@ -12,8 +12,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <functional>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -190,8 +190,9 @@ constexpr double kSameDistance = 1e-9;
 // subproblems before k, ties to the first in the order shadows, then grid order (the first
 // sweep), or grid order, then shadows (`grid_first`: the reverse sweep, which passes the grid
 // reversed, so that it starts from a grid point where one is as near as the shadow optimum the
-// first sweep started from); this is the start the one-by-one run in that order gives it. nullopt while a subproblem before k that is not finished could
-// change it: one nearer, or as near and earlier in that order than the one chosen so far.
+// first sweep started from); this is the start the one-by-one run in that order gives it.
+// nullopt while a subproblem before k that is not finished could change it: one nearer, or as
+// near and earlier in that order than the one chosen so far.
 std::optional<Solved> start_of(std::size_t k, const std::vector<Solved>& shadow_starts,
                                const std::vector<std::vector<double>>& interior, const SubproblemSlots& subproblems,
                                const DesignSpace& space, const std::function<std::string(std::size_t)>& name_of,
@@ -703,52 +704,62 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
   stats["seed_designs"] = {{"feasible", pool.feasible}, {"of", options_.seed_designs}, {"sample_evaluations", pool.samples}};
   progress.pool_designs = pool.designs;
   progress.pool_samples = pool.samples;
-  for (;;) {
-    const std::size_t done = finished_count(progress.subproblems);
-    if (done == interior.size()) break;
-    if (context.stop_requested()) {
-      return stopped("after " + std::to_string(done) + " of " + std::to_string(interior.size()) +
-                     " subproblems (all shadow optima found)");
+  // One sweep in waves: each wave is a farm of the unfinished tasks of `slots` whose start is
+  // settled (starts(): task and start, in the order the farm hands them out), each one
+  // single-threaded SQP run, as many at a time as the rank has threads. False on a stop.
+  using Starts = std::vector<std::pair<std::size_t, Solved>>;
+  const auto run_sweep = [&](SubproblemSlots& slots, const std::function<Starts()>& starts,
+                             const std::function<FinishedSubproblem(std::size_t, const Solved&)>& solve,
+                             const std::string& done_line) {
+    while (finished_count(slots) < slots.size()) {
+      if (context.stop_requested()) return false;
+      std::map<std::size_t, Solved> start_of_task;
+      SubproblemFarm farm;
+      for (auto& [k, start] : starts()) {
+        farm.tasks.push_back(k);
+        start_of_task[k] = std::move(start);
+      }
+      farm.threads = context.threads;
+      farm.run = [&](std::size_t k) -> std::optional<FinishedSubproblem> {
+        if (context.stop_requested()) return std::nullopt;
+        return solve(k, start_of_task.at(k));
+      };
+      farm.collected = [&](std::size_t k) {
+        checkpoint();
+        solver_line(context, "nbi: subproblem " + std::to_string(k + 1) + " of " + std::to_string(slots.size()) + done_line);
+      };
+      farm.on_abort = checkpoint;
+      const FarmOutcome outcome = run_subproblem_farm(problem, context, slots, farm);
+      if (outcome.stopped && finished_count(slots) < slots.size()) return false;
     }
-    SubproblemFarm farm;
-    std::map<std::size_t, Solved> starts;
-    for (std::size_t k = 0; k < interior.size(); ++k) {
+    return true;
+  };
+  const std::size_t n = interior.size();
+  const auto first_starts = [&] {
+    Starts starts;
+    for (std::size_t k = 0; k < n; ++k) {
       if (progress.subproblems[k]) continue;
       if (std::optional<Solved> start = start_of(k, shadow_starts, interior, progress.subproblems, problem.design_space(),
                                                     [](std::size_t j) { return "subproblems[" + std::to_string(j) + "]"; })) {
-        starts[k] = std::move(*start);
-        farm.tasks.push_back(k);
+        starts.emplace_back(k, std::move(*start));
       }
     }
-    // Single-threaded SQP runs: as many at a time as the rank has threads.
-    farm.threads = context.threads;
-    farm.run = [&](std::size_t k) -> std::optional<FinishedSubproblem> {
-      if (context.stop_requested()) return std::nullopt;
-      return solve_subproblem(problem, options_, chim, sub, interior[k], starts.at(k), &pool);
-    };
-    farm.collected = [&](std::size_t k) {
-      checkpoint();
-      solver_line(context, "nbi: subproblem " + std::to_string(k + 1) + " of " + std::to_string(interior.size()) + " solved");
-    };
-    farm.on_abort = checkpoint;
-    const FarmOutcome outcome = run_subproblem_farm(problem, context, progress.subproblems, farm);
-    if (outcome.stopped && finished_count(progress.subproblems) < interior.size()) {
-      return stopped("after " + std::to_string(finished_count(progress.subproblems)) + " of " +
-                     std::to_string(interior.size()) + " subproblems (all shadow optima found)");
-    }
+    return starts;
+  };
+  const auto first_solve = [&](std::size_t k, const Solved& start) {
+    return solve_subproblem(problem, options_, chim, sub, interior[k], start, &pool);
+  };
+  if (!run_sweep(progress.subproblems, first_starts, first_solve, " solved")) {
+    return stopped("after " + std::to_string(finished_count(progress.subproblems)) + " of " + std::to_string(n) +
+                   " subproblems (all shadow optima found)");
   }
 
   // 3b. The reverse sweep: every grid point solved again, in reverse grid order, from the nearest
   // of the shadow optima and the points after it (their better result), in waves as above. A
   // chain of warm starts can hold every point of a front in the basin of the first shadow
   // optimum's branch; the reverse chain starts from the other end.
-  const std::size_t n = interior.size();
   const std::vector<std::vector<double>> reversed(interior.rbegin(), interior.rend());
-  while (finished_count(progress.reverse) < progress.reverse.size()) {
-    if (context.stop_requested()) {
-      return stopped("in the reverse sweep, after " + std::to_string(finished_count(progress.reverse)) + " of " +
-                     std::to_string(n) + " subproblems (all subproblems solved once)");
-    }
+  const auto reverse_starts = [&] {
     SubproblemSlots best(n);  // by index in the reverse order
     std::vector<bool> from_reverse(n, false);
     for (std::size_t r = 0; r < n; ++r) {
@@ -760,36 +771,27 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
     const auto name_of = [&](std::size_t r) {
       return std::string(from_reverse[r] ? "reverse[" : "subproblems[") + std::to_string(n - 1 - r) + "]";
     };
-    SubproblemFarm farm;
-    std::map<std::size_t, Solved> starts;
+    Starts starts;
     for (std::size_t r = 0; r < n; ++r) {
       if (progress.reverse[n - 1 - r]) continue;
       if (std::optional<Solved> start = start_of(r, shadow_starts, reversed, best, problem.design_space(), name_of, true)) {
-        starts[n - 1 - r] = std::move(*start);
-        farm.tasks.push_back(n - 1 - r);
+        starts.emplace_back(n - 1 - r, std::move(*start));
       }
     }
-    farm.threads = context.threads;
-    farm.run = [&](std::size_t k) -> std::optional<FinishedSubproblem> {
-      if (context.stop_requested()) return std::nullopt;
-      if (starts.at(k).name == progress.subproblems[k]->record.value("start", std::string())) {
-        // The first sweep's start: the same run again would give the same result.
-        FinishedSubproblem same;
-        same.record = {{"beta", interior[k]}, {"start", starts.at(k).name}, {"status", "not solved again: the first sweep's start"}};
-        return same;
-      }
-      return solve_subproblem(problem, options_, chim, sub, interior[k], starts.at(k), nullptr);
-    };
-    farm.collected = [&](std::size_t k) {
-      checkpoint();
-      solver_line(context, "nbi: subproblem " + std::to_string(k + 1) + " of " + std::to_string(n) + " done in the reverse sweep");
-    };
-    farm.on_abort = checkpoint;
-    const FarmOutcome outcome = run_subproblem_farm(problem, context, progress.reverse, farm);
-    if (outcome.stopped && finished_count(progress.reverse) < n) {
-      return stopped("in the reverse sweep, after " + std::to_string(finished_count(progress.reverse)) + " of " +
-                     std::to_string(n) + " subproblems (all subproblems solved once)");
+    return starts;
+  };
+  const auto reverse_solve = [&](std::size_t k, const Solved& start) {
+    if (start.name == progress.subproblems[k]->record.value("start", std::string())) {
+      // The first sweep's start: the same run again would give the same result.
+      FinishedSubproblem same;
+      same.record = {{"beta", interior[k]}, {"start", start.name}, {"status", "not solved again: the first sweep's start"}};
+      return same;
     }
+    return solve_subproblem(problem, options_, chim, sub, interior[k], start, nullptr);
+  };
+  if (!run_sweep(progress.reverse, reverse_starts, reverse_solve, " done in the reverse sweep")) {
+    return stopped("in the reverse sweep, after " + std::to_string(finished_count(progress.reverse)) + " of " +
+                   std::to_string(n) + " subproblems (all subproblems solved once)");
   }
 
   // 4. The front.
