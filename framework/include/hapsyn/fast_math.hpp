@@ -64,31 +64,39 @@ inline void sin_cos(double x, double& sine, double& cosine) {
   cosine = ((quadrant + 1) & 2) ? -swapped_cosine : swapped_cosine;
 }
 
+/// atan(k / 8), k = 0..8, correctly rounded: the table of atan2().
+inline constexpr double kAtanTable[9] = {0.0,
+                                         0.12435499454676144,
+                                         0.24497866312686414,
+                                         0.35877067027057225,
+                                         0.4636476090008061,
+                                         0.5585993153435624,
+                                         0.6435011087932844,
+                                         0.7188299996216245,
+                                         0.7853981633974483};
+
+/// The body of atan2() on any number type with + - * / by doubles (double, or hapsyn::Lanes,
+/// hapsyn/lanes.hpp): atan(t) for t = smallest / largest in [0, 1], given ck = k / 8 (k the
+/// nearest integer to 8 t) and table_k = kAtanTable[k]. The caller maps it to the octant.
+template <typename T>
+inline T atan_reduced(const T& t, const T& ck, const T& table_k) {
+  const T u = (t - ck) / (1.0 + t * ck);  // |u| <= 1/16
+  const T z = u * u;
+  const T series =
+      u + u * z *
+              (-1.0 / 3.0 +
+               z * (1.0 / 5.0 + z * (-1.0 / 7.0 + z * (1.0 / 9.0 + z * (-1.0 / 11.0 + z * (1.0 / 13.0))))));
+  return table_k + series;  // atan(smallest / largest) in [0, pi/4]
+}
+
 /// atan2(y, x) [rad] in [-pi, pi]. See the file comment for the accuracy.
 inline double atan2(double y, double x) {
   const double ax = std::abs(x), ay = std::abs(y);
   const double largest = ax > ay ? ax : ay, smallest = ax > ay ? ay : ax;
   if (!(largest > 0.0) || !(largest <= 1.7976931348623157e308) || !(smallest >= 0.0)) return std::atan2(y, x);
-  // atan(k / 8), k = 0..8, correctly rounded.
-  static constexpr double kTable[9] = {0.0,
-                                       0.12435499454676144,
-                                       0.24497866312686414,
-                                       0.35877067027057225,
-                                       0.4636476090008061,
-                                       0.5585993153435624,
-                                       0.6435011087932844,
-                                       0.7188299996216245,
-                                       0.7853981633974483};
   const double t = smallest / largest;  // in [0, 1]
   const int k = static_cast<int>(t * 8.0 + 0.5);
-  const double ck = 0.125 * k;
-  const double u = (t - ck) / (1.0 + t * ck);  // |u| <= 1/16
-  const double z = u * u;
-  const double series =
-      u + u * z *
-              (-1.0 / 3.0 +
-               z * (1.0 / 5.0 + z * (-1.0 / 7.0 + z * (1.0 / 9.0 + z * (-1.0 / 11.0 + z * (1.0 / 13.0))))));
-  double angle = kTable[k] + series;  // atan(smallest / largest) in [0, pi/4]
+  double angle = atan_reduced(t, 0.125 * k, kAtanTable[k]);
   constexpr double kHalfPi = 1.5707963267948966, kPi = 3.141592653589793;
   if (ay > ax) angle = kHalfPi - angle;
   if (std::signbit(x)) angle = kPi - angle;

@@ -85,6 +85,48 @@ HAPSYN_LANES_WHERE(where_equal, ==)
   return where_greater(nearest, a, nearest - 1.0, nearest);
 }
 
+/// Lane-wise `x has its sign bit set ? a : b` (as std::signbit: true for -0 and negative NaNs).
+[[gnu::always_inline]] inline Lanes where_sign_bit(const Lanes& x, const Lanes& a, const Lanes& b) {
+  typedef std::int64_t Bits __attribute__((vector_size(kBlockLanes * sizeof(double))));
+  return Lanes{reinterpret_cast<Bits>(x.v) < 0 ? a.v : b.v};
+}
+
+/// Lane-wise std::sqrt. One vector instruction where the translation unit is compiled with
+/// -fno-math-errno (otherwise the compiler keeps libm's errno path, lane by lane).
+[[gnu::always_inline]] inline Lanes sqrt(const Lanes& a) {
+  Lanes r;
+  for (int i = 0; i < kBlockLanes; ++i) r.v[i] = std::sqrt(a.v[i]);
+  return r;
+}
+
+/// fast::atan2 (hapsyn/fast_math.hpp) of every lane: the same table and series (one template,
+/// fast::atan_reduced), so a lane gets what the scalar call gives (up to the compiler's
+/// multiply-add fusion); lanes with a zero or non-finite argument take libm, as the scalar does.
+[[gnu::always_inline]] inline Lanes atan2(const Lanes& y, const Lanes& x) {
+  const Lanes ax = abs(x), ay = abs(y), zero = Lanes::splat(0.0);
+  const Lanes largest = where_greater(ax, ay, ax, ay), smallest = where_greater(ax, ay, ay, ax);
+  // Lanes outside fast::atan2's range compute atan(0) here (no NaN reaches the table index).
+  // The scalar's !(largest > 0) || !(largest <= DBL_MAX) || !(smallest >= 0): zero, infinite
+  // or NaN arguments (smallest == smallest is false for a NaN |x| next to a finite |y|).
+  const Lanes one = Lanes::splat(1.0);
+  const Lanes in_range = where_greater(
+      largest, zero, where_greater(largest, Lanes::splat(1.7976931348623157e308), zero, where_equal(smallest, smallest, one, zero)),
+      zero);
+  const Lanes t = where_equal(in_range, zero, zero, smallest / where_equal(in_range, zero, one, largest));
+  const Lanes k = floor_small(t * 8.0 + 0.5);  // t * 8 + 0.5 >= 0.5: floor is the scalar's truncation
+  Lanes table_k;
+  for (int i = 0; i < kBlockLanes; ++i) table_k.v[i] = fast::kAtanTable[static_cast<int>(k.v[i])];
+  Lanes angle = fast::atan_reduced(t, 0.125 * k, table_k);
+  constexpr double kHalfPi = 1.5707963267948966, kPi = 3.141592653589793;
+  angle = where_greater(ay, ax, kHalfPi - angle, angle);
+  angle = where_sign_bit(x, kPi - angle, angle);
+  angle = where_sign_bit(y, -angle, angle);
+  for (int i = 0; i < kBlockLanes; ++i) {
+    if (in_range.v[i] == 0.0) angle.v[i] = std::atan2(y.v[i], x.v[i]);
+  }
+  return angle;
+}
+
 /// fast::sin_cos (hapsyn/fast_math.hpp) of every lane: the same reduction and polynomials, so a
 /// lane gets what the scalar call gives (up to the compiler's multiply-add fusion).
 [[gnu::always_inline]] inline void sin_cos(const Lanes& x, Lanes& sine, Lanes& cosine) {

@@ -210,6 +210,10 @@ struct Haptic6RBody {
   Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();      ///< about the com, frame i axes [kg m^2]
 };
 
+namespace haptic6r_ik {
+struct IkModel;  // haptic6r_ik.hpp
+}
+
 /// The manipulator for one design. Immutable after rebuild(); solve() is const, thread-safe
 /// and allocation-free.
 class Haptic6RModel final : public MechanismModel {
@@ -281,6 +285,7 @@ class Haptic6RModel final : public MechanismModel {
   int inverse_kinematics_impl(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions,
                               std::array<JointTrig, 8>* trig) const;
   void quantities_impl(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const;
+  void ik_model(haptic6r_ik::IkModel& m) const;  // the numbers the IK templates read
 
   const Haptic6RSetup* setup_ = nullptr;
   std::array<double, 5> l_{};

@@ -1,8 +1,9 @@
-// Haptic6RModel's block kernel (docs/design.md section 14): the IK and its selection stay per
-// lane (branchy, up to eight solutions), the forward chain, Jacobian, inertia and gravity torque
-// run once for the block, one sample per lane (the haptic6r_chain.hpp kernels with T = Lanes).
+// Haptic6RModel's block kernel (docs/design.md section 14): the IK, its selection and the
+// classification (haptic6r_ik.hpp), the forward chain, Jacobian, inertia and gravity torque
+// (haptic6r_chain.hpp) run once for the block, one sample per lane (the templates at T = Lanes).
 #include "haptic6r.hpp"
 #include "haptic6r_chain.hpp"
+#include "haptic6r_ik.hpp"
 
 #include <hapsyn/error.hpp>
 #include <hapsyn/lanes.hpp>
@@ -61,23 +62,37 @@ bool Haptic6R::solves_blocks(Needs needs) const { return (needs & ~kBlockNeeds) 
 
 HAPSYN_MULTIVERSION_WIDE
 void Haptic6RModel::solve_block_impl(const PoseBlock& poses, Needs needs, QuantityBlock& out) const {
+  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
+  // Lanes past the count, and poses solve() settles before the IK (a non-finite position, a
+  // quaternion of norm <= 1e-9 or not finite), take the identity pose: finite arithmetic,
+  // status unreachable below.
+  static constexpr double kIdentity[7] = {0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0};
+  Lanes pose[7];
+  for (int c = 0; c < 7; ++c) {
+    for (int lane = 0; lane < kBlockLanes; ++lane) {
+      pose[c].v[lane] = lane < poses.count && c < poses.dimension ? poses.coordinate[c][lane] : kIdentity[c];
+    }
+  }
+  Lanes norm = haptic6r_ik::quaternion_norm(pose);
+  const Lanes position_sum = pose[0] + pose[1] + pose[2];
+  Lanes ok = where_greater(norm, Lanes::splat(1e-9), one, zero);
+  ok = where_equal(norm - norm, zero, ok, zero);  // a finite norm
+  ok = where_equal(position_sum - position_sum, zero, ok, zero);  // a finite position
+  for (int lane = poses.count; lane < kBlockLanes; ++lane) ok.v[lane] = 0.0;
+  for (int c = 0; c < 7; ++c) pose[c] = where_equal(ok, zero, Lanes::splat(kIdentity[c]), pose[c]);
+  norm = where_equal(ok, zero, one, norm);
+  haptic6r_ik::IkModel m;
+  ik_model(m);
+  haptic6r_ik::PoseOutcome<Lanes> o;
+  haptic6r_ik::configure(pose, norm, m, o);
+  const Lanes status = where_equal(ok, zero, Lanes::splat(static_cast<double>(SampleStatus::kUnreachable)), o.status);
+  const Lanes reachable = where_equal(status, Lanes::splat(static_cast<double>(SampleStatus::kReachable)), one, zero);
+  for (int lane = 0; lane < kBlockLanes; ++lane) out.status[lane] = static_cast<std::int32_t>(status.v[lane]);
+  // Other lanes compute the zero configuration: finite values, ignored.
   Lanes cosine[6], sine[6];
-  double pose[kBlockMaxCoordinates];
-  Vector6d q;
-  JointTrig trig;
-  for (int lane = 0; lane < kBlockLanes; ++lane) {
-    SampleStatus status = SampleStatus::kUnreachable;
-    if (lane < poses.count) {
-      for (int c = 0; c < poses.dimension; ++c) pose[c] = poses.coordinate[c][lane];
-      status = configuration(pose, q, trig);
-    }
-    out.status[lane] = static_cast<std::int32_t>(status);
-    // Other lanes compute the zero configuration: finite values, ignored.
-    const bool chosen = status == SampleStatus::kReachable;
-    for (std::size_t i = 0; i < 6; ++i) {
-      cosine[i].v[lane] = chosen ? trig.c[i] : 1.0;
-      sine[i].v[lane] = chosen ? trig.s[i] : 0.0;
-    }
+  for (int i = 0; i < 6; ++i) {
+    cosine[i] = where_equal(reachable, one, o.c[i], one);
+    sine[i] = where_equal(reachable, one, o.s[i], zero);
   }
   fill_block(cosine, sine, needs, out);
 }

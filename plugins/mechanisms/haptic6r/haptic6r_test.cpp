@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <random>
 
 #ifdef HAPSYN_HAVE_KDL
@@ -707,6 +708,75 @@ TEST(Haptic6R, BlockKernelEqualsSolveLaneByLane) {
   }
   EXPECT_GT(reachable, 100);  // both kinds of lanes were exercised
   EXPECT_GT(other, 50);
+}
+
+TEST(Haptic6R, BlockStatusesAndQuantitiesEqualSolveUnderEveryRule) {
+  // The lane IK and selection (haptic6r_ik.hpp at T = Lanes) against solve() (the same templates
+  // at T = double) on 4,000 poses per rule: random configurations, their stretched and vertical
+  // neighbours, a vertical roll axis (h free), poses just inside and outside l4's reach, scaled
+  // and non-finite quaternions and positions. Statuses must be equal (the same decisions at every
+  // threshold), and the quantities of every reachable lane agree to 1e-12 relative (the scalar
+  // and the lane clones fuse multiply-adds differently).
+  std::mt19937 rng(31);
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<Json> rules = {
+      Json::object(), Json{{"selection", "elbow_left"}}, Json{{"selection", "elbow_right"}},
+      Json{{"home", {10, -60, 20, 45, 30, 0}}},
+      Json{{"joint_lower", {-90, -150, -180, 60, -120, -180}}, {"joint_upper", {90, 150, 180, 120, 120, 180}}},
+      Json{{"joint_lower", {0, 0, 0, 0, 0, 0}}, {"joint_upper", {350, 350, 350, 350, 350, 350}}}};
+  auto scratch = std::make_unique<MechanismScratch>();
+  const Needs all = kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits;
+  std::map<SampleStatus, long> seen;
+  for (std::size_t r = 0; r < rules.size(); ++r) {
+    Fixture f(r % 2 ? random_design(rng) : paper_like_design(), rules[r]);
+    std::vector<std::array<double, 7>> poses;
+    for (int k = 0; k < 4000; ++k) {
+      Vector6d q = random_q(rng);
+      if (k % 9 == 1) q(1) = 0.0;
+      if (k % 9 == 2) q(3) = 0.5 * kPi;
+      if (k % 9 == 3) q(4) = 0.0;  // roll axis along h's neighbour: exercises the near-vertical cases
+      std::array<double, 7> row = pose_row(f.model.forward(q));
+      if (k % 13 == 4) row = {row[0], row[1], row[2], 1.0, 0.0, 0.0, 0.0};      // roll axis vertical
+      if (k % 13 == 5) row = {row[0], row[1], row[2], 0.0, 1.0, 0.0, 0.0};      // vertical, pointing down
+      if (k % 17 == 6) row[2] += (k % 2 ? 1.0 : -1.0) * 1e-3 * (k % 5);          // near l4's reach
+      if (k % 19 == 7) row[3] *= 3.0;                                             // not normalised
+      if (k % 23 == 8) row[k % 7] = (k % 3 == 0) ? nan : (k % 3 == 1 ? inf : -inf);  // non-finite
+      if (k % 29 == 9) row[3] = row[4] = row[5] = row[6] = 1e-10;                // below the norm floor
+      poses.push_back(row);
+    }
+    for (std::size_t first = 0; first < poses.size(); first += kBlockLanes) {
+      const int n = static_cast<int>(std::min<std::size_t>(kBlockLanes, poses.size() - first));
+      double coordinates[7][kBlockLanes] = {};
+      PoseBlock block;
+      block.dimension = 7;
+      block.count = n;
+      for (int c = 0; c < 7; ++c) {
+        for (int lane = 0; lane < n; ++lane) coordinates[c][lane] = poses[first + static_cast<std::size_t>(lane)][static_cast<std::size_t>(c)];
+        block.coordinate[c] = coordinates[c];
+      }
+      auto out = std::make_unique<QuantityBlock>();
+      f.model.solve_block(block, all, *scratch, *out);
+      for (int lane = 0; lane < n; ++lane) {
+        SampleQuantities expected;
+        f.model.solve(poses[first + static_cast<std::size_t>(lane)].data(), all, *scratch, expected);
+        ++seen[expected.status];
+        ASSERT_EQ(out->lane_status(lane), expected.status) << "rule " << r << ", pose " << first + static_cast<std::size_t>(lane);
+        if (expected.status != SampleStatus::kReachable) continue;
+        for (int i = 0; i < 6; ++i) {
+          ASSERT_TRUE(close(out->gravity[i][lane], expected.gravity(i))) << "rule " << r << ", pose " << first + static_cast<std::size_t>(lane);
+          for (int c = 0; c < 6; ++c) {
+            ASSERT_TRUE(close(out->jacobian[i * 6 + c][lane], expected.jacobian(i, c))) << "rule " << r << ", J(" << i << ", " << c << ")";
+            ASSERT_TRUE(close(out->inertia[i * 6 + c][lane], expected.inertia(i, c))) << "rule " << r << ", H(" << i << ", " << c << ")";
+          }
+        }
+      }
+    }
+  }
+  // Every status occurred often enough to mean something.
+  EXPECT_GT(seen[SampleStatus::kReachable], 5000);
+  EXPECT_GT(seen[SampleStatus::kUnreachable], 500);
+  EXPECT_GT(seen[SampleStatus::kSingular], 500);
+  EXPECT_GT(seen[SampleStatus::kInvalid], 500);
 }
 
 TEST(Haptic6R, QuantitiesBlockEqualsQuantitiesLaneByLane) {
