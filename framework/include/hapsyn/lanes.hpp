@@ -85,6 +85,27 @@ HAPSYN_LANES_WHERE(where_equal, ==)
   return where_greater(nearest, a, nearest - 1.0, nearest);
 }
 
+/// Whether any lane of `a` is non-zero (NaN counts as non-zero): one compare and a logarithmic
+/// fold of the lanes, instead of a branch per lane.
+[[gnu::always_inline]] inline bool any_nonzero(const Lanes& a) {
+  typedef std::int64_t Bits __attribute__((vector_size(kBlockLanes * sizeof(double))));
+  static_assert(kBlockLanes == 8, "the fold below halves eight lanes three times");
+  Bits m = a.v != 0.0;
+  m |= __builtin_shufflevector(m, m, 4, 5, 6, 7, 0, 1, 2, 3);
+  m |= __builtin_shufflevector(m, m, 2, 3, 0, 1, 6, 7, 4, 5);
+  m |= __builtin_shufflevector(m, m, 1, 0, 3, 2, 5, 4, 7, 6);
+  return m[0] != 0;
+}
+/// Whether any lane of `a` is zero.
+[[gnu::always_inline]] inline bool any_zero(const Lanes& a) {
+  typedef std::int64_t Bits __attribute__((vector_size(kBlockLanes * sizeof(double))));
+  Bits m = a.v == 0.0;
+  m |= __builtin_shufflevector(m, m, 4, 5, 6, 7, 0, 1, 2, 3);
+  m |= __builtin_shufflevector(m, m, 2, 3, 0, 1, 6, 7, 4, 5);
+  m |= __builtin_shufflevector(m, m, 1, 0, 3, 2, 5, 4, 7, 6);
+  return m[0] != 0;
+}
+
 /// Lane-wise `x has its sign bit set ? a : b` (as std::signbit: true for -0 and negative NaNs).
 [[gnu::always_inline]] inline Lanes where_sign_bit(const Lanes& x, const Lanes& a, const Lanes& b) {
   typedef std::int64_t Bits __attribute__((vector_size(kBlockLanes * sizeof(double))));
@@ -115,14 +136,26 @@ HAPSYN_LANES_WHERE(where_equal, ==)
   const Lanes t = where_equal(in_range, zero, zero, smallest / where_equal(in_range, zero, one, largest));
   const Lanes k = floor_small(t * 8.0 + 0.5);  // t * 8 + 0.5 >= 0.5: floor is the scalar's truncation
   Lanes table_k;
+#if defined(__clang__)
   for (int i = 0; i < kBlockLanes; ++i) table_k.v[i] = fast::kAtanTable[static_cast<int>(k.v[i])];
+#else
+  // The table as two vectors and one two-source permutation (one instruction with AVX-512).
+  static_assert(kBlockLanes == 8, "the permuted table holds 16 entries");
+  typedef std::int64_t Index __attribute__((vector_size(kBlockLanes * sizeof(double))));
+  const Lanes::Vector low = {fast::kAtanTable[0], fast::kAtanTable[1], fast::kAtanTable[2], fast::kAtanTable[3],
+                             fast::kAtanTable[4], fast::kAtanTable[5], fast::kAtanTable[6], fast::kAtanTable[7]};
+  const Lanes::Vector high = {fast::kAtanTable[8], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  table_k.v = __builtin_shuffle(low, high, __builtin_convertvector(k.v, Index));
+#endif
   Lanes angle = fast::atan_reduced(t, 0.125 * k, table_k);
   constexpr double kHalfPi = 1.5707963267948966, kPi = 3.141592653589793;
   angle = where_greater(ay, ax, kHalfPi - angle, angle);
   angle = where_sign_bit(x, kPi - angle, angle);
   angle = where_sign_bit(y, -angle, angle);
-  for (int i = 0; i < kBlockLanes; ++i) {
-    if (in_range.v[i] == 0.0) angle.v[i] = std::atan2(y.v[i], x.v[i]);
+  if (any_zero(in_range)) {
+    for (int i = 0; i < kBlockLanes; ++i) {
+      if (in_range.v[i] == 0.0) angle.v[i] = std::atan2(y.v[i], x.v[i]);
+    }
   }
   return angle;
 }

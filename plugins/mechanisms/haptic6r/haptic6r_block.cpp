@@ -83,16 +83,30 @@ void Haptic6RModel::solve_block_impl(const PoseBlock& poses, Needs needs, Quanti
   norm = where_equal(ok, zero, one, norm);
   haptic6r_ik::IkModel m;
   ik_model(m);
-  haptic6r_ik::PoseOutcome<Lanes> o;
-  haptic6r_ik::configure(pose, norm, m, o);
-  const Lanes status = where_equal(ok, zero, Lanes::splat(static_cast<double>(SampleStatus::kUnreachable)), o.status);
-  const Lanes reachable = where_equal(status, Lanes::splat(static_cast<double>(SampleStatus::kReachable)), one, zero);
-  for (int lane = 0; lane < kBlockLanes; ++lane) out.status[lane] = static_cast<std::int32_t>(status.v[lane]);
-  // Other lanes compute the zero configuration: finite values, ignored.
+  // The branches' angles for all lanes at once (branch-free arithmetic: 13 atan2, 9 square roots
+  // and the rotations), then the assembly, selection and classification per lane: branchy work
+  // that costs more as lane-wise selections than as the per-pose code on this data.
+  haptic6r_ik::Target<Lanes> target;
+  haptic6r_ik::target_of(pose, norm, target);
+  haptic6r_ik::Branches<Lanes> branches;
+  haptic6r_ik::branch_angles(target, m, branches);
   Lanes cosine[6], sine[6];
-  for (int i = 0; i < 6; ++i) {
-    cosine[i] = where_equal(reachable, one, o.c[i], one);
-    sine[i] = where_equal(reachable, one, o.s[i], zero);
+  for (int lane = 0; lane < kBlockLanes; ++lane) {
+    SampleStatus status = SampleStatus::kUnreachable;
+    haptic6r_ik::PoseOutcome o;
+    if (ok.v[lane] != 0.0) {
+      haptic6r_ik::Branches<double> b;
+      haptic6r_ik::lane_of(branches, lane, b);
+      haptic6r_ik::configure_branches(b, m, o);
+      status = o.status;
+    }
+    out.status[lane] = static_cast<std::int32_t>(status);
+    // Other lanes compute the zero configuration: finite values, ignored.
+    const bool chosen = status == SampleStatus::kReachable;
+    for (int i = 0; i < 6; ++i) {
+      cosine[i].v[lane] = chosen ? o.c[i] : 1.0;
+      sine[i].v[lane] = chosen ? o.s[i] : 0.0;
+    }
   }
   fill_block(cosine, sine, needs, out);
 }

@@ -44,11 +44,7 @@ constexpr double kBoundaryTolerance = 1e-12;
 [[gnu::always_inline]] inline Lanes round_down(const Lanes& a) { return floor_small(a); }  // |a| < 2^51 here
 /// Whether any lane holds a non-zero truth value.
 [[gnu::always_inline]] inline bool any(double truth) { return truth != 0.0; }
-[[gnu::always_inline]] inline bool any(const Lanes& truth) {
-  bool r = false;
-  for (int i = 0; i < kBlockLanes; ++i) r |= truth.v[i] != 0.0;
-  return r;
-}
+[[gnu::always_inline]] inline bool any(const Lanes& truth) { return any_nonzero(truth); }
 template <typename T>
 [[gnu::always_inline]] inline T splat(double value) {
   if constexpr (std::is_same_v<T, double>) {
@@ -73,17 +69,17 @@ template <typename T>
   return where_less(a, lo, lo, where_less(hi, a, hi, a));
 }
 
-/// Into [-pi, pi). IK angles are sums of a few atan2 values (|angle| < 6 pi): the common case is
-/// the angle itself, which one pose returns at once (the same value the selection picks).
+/// Into [-pi, pi): angle - 2 pi n, n = floor((angle + pi) / (2 pi)). An angle already inside
+/// gets n = 0 and comes back unchanged (the subtraction of 0 is exact); the turn count can be
+/// off by one only where (angle + pi) / (2 pi) rounds across an integer, and the two corrections
+/// (rarely taken, so predictable for one pose) bring r into [-pi, pi) there. No test of whether
+/// the angle is inside: for IK angles that is a coin toss, which a branch mispredicts.
 template <typename T>
 [[gnu::always_inline]] inline T wrap(const T& angle) {
-  if constexpr (std::is_same_v<T, double>) {
-    if (angle >= -kPi && angle < kPi) return angle;
-  }
-  T r = angle - 2.0 * kPi * round_down((angle + kPi) / (2.0 * kPi));
+  constexpr double kInverseTwoPi = 0.15915494309189533577;
+  T r = angle - 2.0 * kPi * round_down((angle + kPi) * kInverseTwoPi);
   r = where_less(r, splat<T>(kPi), r, r - 2.0 * kPi);
-  r = where_less(r, splat<T>(-kPi), r + 2.0 * kPi, r);
-  return where_less(angle, splat<T>(-kPi), r, where_less(angle, splat<T>(kPi), angle, r));
+  return where_less(r, splat<T>(-kPi), r + 2.0 * kPi, r);
 }
 
 /// The design's numbers the IK and the selection read (from Haptic6RModel and its setup).
@@ -101,13 +97,6 @@ struct Target {
   T p[3], r[3][3];
 };
 
-/// The eight branches in the order (h sign, theta4 branch, elbow), slot 4 hs + 2 b4 + b2: q
-/// [rad] wrapped into [-pi, pi), the DH-angle cosines c and sines s, valid 1 where the branch
-/// is a solution. Compacting the valid slots in order gives inverse_kinematics()'s list.
-template <typename T>
-struct Slots {
-  T q[8][6], c[8][6], s[8][6], valid[8];
-};
 
 // Rotation of one DH row from cos/sin of its angle: m = Rz(theta) Rx(alpha).
 template <typename T>
@@ -178,6 +167,10 @@ template <typename T>
     const T c2_raw = (ox * ox + oy * oy - L1 * L1 - L2 * L2) / (2.0 * L1 * L2);
     PlanarSolution<T>& p = planar[k];
     p.valid = where_greater(magnitude(c2_raw), splat<T>(1.0 + kBoundaryTolerance), zero, one);
+    if (!any(g.ok * p.valid)) {  // out of reach for every lane: nothing else of it is read
+      p = PlanarSolution<T>{zero, zero, zero, zero, zero, zero, one, zero, one, zero};
+      continue;
+    }
     p.c2 = clamp_to(c2_raw, splat<T>(-1.0), one);
     p.s2 = root(at_least_zero(1.0 - p.c2 * p.c2));
     p.theta2 = angle_of(p.s2, p.c2);
@@ -204,12 +197,19 @@ struct WristAngles {
 };
 
 template <typename T>
-[[gnu::always_inline]] inline void solve_wrist(const Target<T>& target, const WristGeometry<T>& g, const IkModel& m,
+[[gnu::always_inline]] inline void solve_wrist(const Target<T>& target, const WristGeometry<T>& g,
+                                               const PlanarSolution<T> (&planar)[2], const IkModel& m,
                                                WristAngles<T>& wrist) {
   const T zero = splat<T>(0.0), one = splat<T>(1.0);
   T r3[3][3];
   dh_rotation(-g.hy, g.hx, m.ca[2], m.sa[2], r3);
   for (int b4 = 0; b4 < 2; ++b4) {
+    // Branch b4's wrist angles serve the slots built on planar[b4] only (see assemble()).
+    if (!any(planar[b4].valid)) {
+      wrist.theta5[b4] = wrist.theta6[b4] = wrist.sin5[b4] = wrist.sin6[b4] = zero;
+      wrist.cos5[b4] = wrist.cos6[b4] = one;
+      continue;
+    }
     T r4[3][3], r04[3][3], r5[3][3];
     dh_rotation(b4 == 0 ? g.c4_abs : -g.c4_abs, g.s4, m.ca[3], m.sa[3], r4);
     for (int i = 0; i < 3; ++i) {
@@ -243,37 +243,83 @@ template <typename T>
   }
 }
 
-// Step 4: every branch's q = DH angles - theta offsets wrapped into [-pi, pi), its DH-angle
-// cosines and sines (angle-sum identities on the vectors they came from) and its validity.
+/// Steps 1 to 3 and the remaining angles (the yaw of h, theta4 of both branches): everything
+/// the branches are assembled from. All of it is arithmetic without branches (the lane part of
+/// the block kernel); assembling, selecting and classifying is per pose. Only T members, in
+/// order: lane_of() reads one lane of a Branches<Lanes> as a Branches<double>.
 template <typename T>
-[[gnu::always_inline]] inline void assemble(const WristGeometry<T>& g, const PlanarSolution<T> (&planar)[2],
-                                            const WristAngles<T>& wrist, const IkModel& m, Slots<T>& out) {
-  const T yaw0 = angle_of(g.hx, -g.hy);
-  const T theta4_branch[2] = {angle_of(g.s4, g.c4_abs), angle_of(g.s4, -g.c4_abs)};
+struct Branches {
+  Target<T> target;
+  WristGeometry<T> g;
+  PlanarSolution<T> planar[2];
+  WristAngles<T> wrist;
+  T yaw0, theta4_branch[2];
+};
+
+template <typename T>
+[[gnu::always_inline]] inline void branch_angles(const Target<T>& target, const IkModel& m, Branches<T>& b) {
+  b.target = target;
+  wrist_geometry(target, m, b.g);
+  solve_planar(b.g, m, b.planar);
+  solve_wrist(target, b.g, b.planar, m, b.wrist);
+  b.yaw0 = angle_of(b.g.hx, -b.g.hy);
+  b.theta4_branch[0] = angle_of(b.g.s4, b.g.c4_abs);
+  b.theta4_branch[1] = angle_of(b.g.s4, -b.g.c4_abs);
+}
+
+/// Lane `lane` of `in` (a struct of Lanes only) as the same struct of doubles.
+template <template <typename> class S>
+[[gnu::always_inline]] inline void lane_of(const S<Lanes>& in, int lane, S<double>& out) {
+  static_assert(sizeof(S<Lanes>) == kBlockLanes * sizeof(S<double>), "S holds numbers of its type only");
+  constexpr std::size_t kCount = sizeof(S<double>) / sizeof(double);
+  const Lanes* from = reinterpret_cast<const Lanes*>(&in);
+  double* to = reinterpret_cast<double*>(&out);
+  for (std::size_t i = 0; i < kCount; ++i) to[i] = from[i].v[lane];
+}
+
+// Step 4 and after: per pose (T = double). The block kernel computes the branches for all lanes
+// (branch_angles at T = Lanes) and runs this per lane: assembling, selecting and classifying
+// branch on data that differs between lanes, and as lane-wise selections they cost more than
+// the whole per-pose code (measured: docs/design.md section 14.4).
+
+/// The eight branches in the order (h sign, theta4 branch, elbow), slot 4 hs + 2 b4 + b2: q
+/// [rad] wrapped into [-pi, pi), the DH-angle cosines c and sines s, valid where the branch is
+/// a solution. Compacting the valid slots in order gives inverse_kinematics()'s list.
+struct Slots {
+  double q[8][6], c[8][6], s[8][6];
+  bool valid[8];
+};
+
+// Every branch's q = DH angles - theta offsets wrapped into [-pi, pi), its DH-angle cosines and
+// sines (angle-sum identities on the vectors they came from) and its validity.
+[[gnu::always_inline]] inline void assemble(const Branches<double>& b, const IkModel& m, Slots& out) {
+  const WristGeometry<double>& g = b.g;
+  const WristAngles<double>& wrist = b.wrist;
   for (int hs = 0; hs < 2; ++hs) {
-    const T yaw = hs == 0 ? yaw0 : yaw0 + kPi;
+    const double yaw = hs == 0 ? b.yaw0 : b.yaw0 + kPi;
     for (int b4 = 0; b4 < 2; ++b4) {
-      const PlanarSolution<T>& p = planar[hs ^ b4];
-      const T theta5 = hs == 0 ? wrist.theta5[b4] : kPi - wrist.theta5[1 - b4];
-      const T theta6 = hs == 0 ? wrist.theta6[b4] : wrist.theta6[1 - b4] + kPi;
+      const PlanarSolution<double>& p = b.planar[hs ^ b4];
+      const double theta5 = hs == 0 ? wrist.theta5[b4] : kPi - wrist.theta5[1 - b4];
+      const double theta6 = hs == 0 ? wrist.theta6[b4] : wrist.theta6[1 - b4] + kPi;
       for (int b2 = 0; b2 < 2; ++b2) {
         const int slot = 4 * hs + 2 * b4 + b2;
-        out.valid[slot] = g.ok * p.valid;
-        const T theta2 = b2 == 0 ? p.theta2 : -p.theta2;
-        const T theta1 = b2 == 0 ? p.phi - p.beta : p.phi + p.beta;
-        const T theta3 = yaw - theta1 - theta2;
-        const T theta[6] = {theta1, theta2, theta3, theta4_branch[b4], theta5, theta6};
+        out.valid[slot] = g.ok != 0.0 && p.valid != 0.0;
+        if (!out.valid[slot]) continue;
+        const double theta2 = b2 == 0 ? p.theta2 : -p.theta2;
+        const double theta1 = b2 == 0 ? p.phi - p.beta : p.phi + p.beta;
+        const double theta3 = yaw - theta1 - theta2;
+        const double theta[6] = {theta1, theta2, theta3, b.theta4_branch[b4], theta5, theta6};
         for (int i = 0; i < 6; ++i) out.q[slot][i] = wrap(theta[i] - m.offset[static_cast<std::size_t>(i)]);
-        T* c = out.c[slot];
-        T* s = out.s[slot];
-        const T sb = b2 == 0 ? -p.sin_beta : p.sin_beta;  // theta1 = phi + (-+beta)
+        double* c = out.c[slot];
+        double* s = out.s[slot];
+        const double sb = b2 == 0 ? -p.sin_beta : p.sin_beta;  // theta1 = phi + (-+beta)
         c[0] = p.cos_phi * p.cos_beta - p.sin_phi * sb;
         s[0] = p.sin_phi * p.cos_beta + p.cos_phi * sb;
         c[1] = p.c2;
         s[1] = b2 == 0 ? p.s2 : -p.s2;
-        const T c12 = c[0] * c[1] - s[0] * s[1], s12 = s[0] * c[1] + c[0] * s[1];
+        const double c12 = c[0] * c[1] - s[0] * s[1], s12 = s[0] * c[1] + c[0] * s[1];
         const double sign = hs == 0 ? 1.0 : -1.0;
-        const T cy = -sign * g.hy, sy = sign * g.hx;  // the yaw: x3 = e_z x h
+        const double cy = -sign * g.hy, sy = sign * g.hx;  // the yaw: x3 = e_z x h
         c[2] = cy * c12 + sy * s12;  // theta3 = yaw - (theta1 + theta2)
         s[2] = sy * c12 - cy * s12;
         c[3] = b4 == 0 ? g.c4_abs : -g.c4_abs;
@@ -288,90 +334,56 @@ template <typename T>
 }
 
 /// Every branch of the target's IK (joint limits ignored), into `out`.
-template <typename T>
-[[gnu::always_inline]] inline void inverse_kinematics(const Target<T>& target, const IkModel& m, Slots<T>& out) {
-  WristGeometry<T> g;
-  wrist_geometry(target, m, g);
-  PlanarSolution<T> planar[2];
-  solve_planar(g, m, planar);
-  WristAngles<T> wrist;
-  solve_wrist(target, g, m, wrist);
-  assemble(g, planar, wrist, m, out);
+[[gnu::always_inline]] inline void inverse_kinematics(const Target<double>& target, const IkModel& m, Slots& out) {
+  Branches<double> b;
+  branch_angles(target, m, b);
+  assemble(b, m, out);
 }
 
-// ---- The selection: among the valid branches inside the joint limits (and on the selected
-// elbow side), the one closest to home; the first one on ties.
-
-// Adds or subtracts 2 pi while `v` is below `bound` (above it when `above`), as the per-pose
-// while loop does: a lane stops when its own condition fails, so each lane gets exactly the
-// scalar's sequence of additions. `v` must be finite in every lane (an infinite one never stops).
-template <typename T>
-[[gnu::always_inline]] inline void shift_by_turns(T& v, double bound, bool above) {
-  const T b = splat<T>(bound), zero = splat<T>(0.0), one = splat<T>(1.0);
-  for (;;) {
-    const T beyond = above ? where_greater(v, b, one, zero) : where_less(v, b, one, zero);
-    if (!any(beyond)) return;
-    v = pick(beyond, above ? v - 2.0 * kPi : v + 2.0 * kPi, v);
-  }
-}
-
-/// 1 where q (finite) has a representative in [lower, upper] in every joint (tolerance
-/// kHaptic6RAngleTolerance) and lies on the selected elbow side, else 0.
-template <typename T>
-[[gnu::always_inline]] inline T admissible(const T (&q)[6], const IkModel& m) {
-  const T zero = splat<T>(0.0), one = splat<T>(1.0);
+/// Whether q has a representative in [lower, upper] in every joint (tolerance
+/// kHaptic6RAngleTolerance) and lies on the selected elbow side.
+[[gnu::always_inline]] inline bool admissible(const double (&q)[6], const IkModel& m) {
   constexpr double tol = kHaptic6RAngleTolerance;
-  T inside = one;
   for (std::size_t i = 0; i < 6; ++i) {
-    // q_i in [lower, upper] (0 for a NaN, as the comparisons of the per-pose code give).
-    const T plain = where_less(q[i], splat<T>(m.lower[i]), zero,
-                               where_greater(q[i], splat<T>(m.upper[i]), zero, where_equal(q[i], q[i], one, zero)));
-    if constexpr (std::is_same_v<T, double>) {
-      if (plain != 0.0) continue;  // the common case
-    }
+    if (q[i] >= m.lower[i] && q[i] <= m.upper[i]) continue;  // the common case
     // The representative of q_i in [lower, lower + 2 pi) must not exceed upper (with tolerance).
-    T v = pick(plain, zero, q[i]);  // lanes inside already need no turns
-    shift_by_turns(v, m.lower[i] - tol, false);
-    shift_by_turns(v, m.lower[i] + 2.0 * kPi - tol, true);
-    v = where_less(v, splat<T>(m.lower[i] - tol), v + 2.0 * kPi, v);
-    const T below_upper = where_greater(v, splat<T>(m.upper[i] + tol), zero, where_equal(v, v, one, zero));
-    inside = inside * pick(plain, one, below_upper);
+    double v = q[i];
+    while (v < m.lower[i] - tol) v += 2.0 * kPi;
+    while (v > m.lower[i] + 2.0 * kPi - tol) v -= 2.0 * kPi;
+    if (v < m.lower[i] - tol) v += 2.0 * kPi;
+    if (!(v <= m.upper[i] + tol)) return false;
   }
-  if (m.selection == Haptic6RSelection::kElbowLeft) inside = where_less(q[1], splat<T>(-tol), zero, inside);
-  if (m.selection == Haptic6RSelection::kElbowRight) inside = where_greater(q[1], splat<T>(tol), zero, inside);
-  return inside;
+  if (m.selection == Haptic6RSelection::kElbowLeft && q[1] < -tol) return false;
+  if (m.selection == Haptic6RSelection::kElbowRight && q[1] > tol) return false;
+  return true;
 }
 
-/// The slot the selection rule picks, -1 where none is admissible.
-template <typename T>
-[[gnu::always_inline]] inline T select(const Slots<T>& slots, const IkModel& m) {
-  const T zero = splat<T>(0.0);
-  T best = splat<T>(-1.0), best_distance = splat<T>(INFINITY);
+/// The slot the selection rule picks among the valid admissible ones: the one closest to home,
+/// the first on ties; -1 when there is none.
+[[gnu::always_inline]] inline int select(const Slots& slots, const IkModel& m) {
+  int best = -1;
+  double best_distance = INFINITY;
   for (int k = 0; k < 8; ++k) {
-    if (!any(slots.valid[k])) continue;
-    T q[6];
-    for (int i = 0; i < 6; ++i) q[i] = pick(slots.valid[k], slots.q[k][i], zero);  // invalid lanes: finite
-    const T ok = slots.valid[k] * admissible(q, m);
-    T distance = zero;
+    if (!slots.valid[k] || !admissible(slots.q[k], m)) continue;
+    double distance = 0.0;
     for (std::size_t i = 0; i < 6; ++i) {
-      const T e = wrap(q[i] - m.home[i]);
-      distance = distance + e * e;
+      const double e = wrap(slots.q[k][i] - m.home[i]);
+      distance += e * e;
     }
-    const T better = pick(ok, where_less(distance, best_distance, splat<T>(1.0), zero), zero);
-    best = pick(better, splat<T>(k), best);
-    best_distance = pick(better, distance, best_distance);
+    if (distance < best_distance) {
+      best_distance = distance;
+      best = k;
+    }
   }
   return best;
 }
 
-// ---- One pose, end to end.
-
-/// A pose's outcome: status (a SampleStatus value), q as solve() sets it (zero when unreachable,
-/// the first solution when invalid, the chosen one brought into the limits otherwise) and, for
-/// a reachable or singular pose, the chosen configuration's DH-angle cosines c and sines s.
-template <typename T>
+/// A pose's outcome: its status, q as solve() sets it (zero when unreachable, the first solution
+/// when invalid, the chosen one brought into the limits otherwise) and, for a reachable or
+/// singular pose, the chosen configuration's DH-angle cosines c and sines s.
 struct PoseOutcome {
-  T status, q[6], c[6], s[6];
+  SampleStatus status = SampleStatus::kUnreachable;
+  double q[6] = {}, c[6] = {}, s[6] = {};
 };
 
 /// The target of a pose (x, y, z, qw, qx, qy, qz) with a finite position and a quaternion of
@@ -401,54 +413,45 @@ template <typename T>
   return root(pose[3] * pose[3] + pose[4] * pose[4] + pose[5] * pose[5] + pose[6] * pose[6]);
 }
 
+/// The selection and classification of a pose from its branches (what configure() does after
+/// branch_angles()).
+[[gnu::always_inline]] inline void configure_branches(const Branches<double>& b, const IkModel& m, PoseOutcome& out) {
+  Slots slots;
+  assemble(b, m, slots);
+  int first = -1;
+  for (int k = 7; k >= 0; --k) first = slots.valid[k] ? k : first;
+  out = PoseOutcome{};
+  if (first < 0) return;  // unreachable: q zero
+  const int chosen = select(slots, m);
+  if (chosen < 0) {  // invalid: the first solution's q
+    for (int i = 0; i < 6; ++i) out.q[i] = slots.q[first][i];
+    out.status = SampleStatus::kInvalid;
+    return;
+  }
+  // Brings q_i to its representative inside [lower, upper] (select() checked it exists).
+  constexpr double tol = kHaptic6RAngleTolerance;
+  for (std::size_t i = 0; i < 6; ++i) {
+    double v = slots.q[chosen][i];
+    while (v < m.lower[i] - tol) v += 2.0 * kPi;
+    while (v > m.upper[i] + tol) v -= 2.0 * kPi;
+    out.q[i] = v < m.lower[i] ? m.lower[i] : (m.upper[i] < v ? m.upper[i] : v);
+    out.c[i] = slots.c[chosen][i];
+    out.s[i] = slots.s[chosen][i];
+  }
+  const double singular_below = m.singularity_tolerance;
+  const double wrist = std::sqrt(b.target.r[0][2] * b.target.r[0][2] + b.target.r[1][2] * b.target.r[1][2]);
+  const bool singular = std::fabs(out.s[1]) < singular_below || std::fabs(out.c[3]) < singular_below || wrist < singular_below;
+  out.status = singular ? SampleStatus::kSingular : SampleStatus::kReachable;
+}
+
 /// IK, selection and classification of a pose whose position is finite and whose quaternion has
 /// a finite norm > 1e-9 (`norm`, from quaternion_norm(); the caller settles other poses).
-template <typename T>
-[[gnu::always_inline]] inline void configure(const T (&pose)[7], const T& norm, const IkModel& m, PoseOutcome<T>& out) {
-  const T zero = splat<T>(0.0), one = splat<T>(1.0);
-  Target<T> target;
+[[gnu::always_inline]] inline void configure(const double (&pose)[7], double norm, const IkModel& m, PoseOutcome& out) {
+  Target<double> target;
   target_of(pose, norm, target);
-  Slots<T> slots;
-  inverse_kinematics(target, m, slots);
-  const T chosen = select(slots, m);
-  // The first valid slot (the per-pose list's solutions[0]) and the chosen slot's values.
-  T first = splat<T>(-1.0);
-  for (int k = 7; k >= 0; --k) first = pick(slots.valid[k], splat<T>(k), first);
-  const T use = where_less(chosen, zero, first, chosen);
-  for (int i = 0; i < 6; ++i) out.q[i] = out.c[i] = out.s[i] = zero;
-  for (int k = 0; k < 8; ++k) {
-    const T here = where_equal(use, splat<T>(k), one, zero);
-    if (!any(here)) continue;
-    for (int i = 0; i < 6; ++i) {
-      out.q[i] = pick(here, slots.q[k][i], out.q[i]);
-      out.c[i] = pick(here, slots.c[k][i], out.c[i]);
-      out.s[i] = pick(here, slots.s[k][i], out.s[i]);
-    }
-  }
-  const T is_chosen = where_less(chosen, zero, zero, one);
-  // Brings q_i to its representative inside [lower, upper] (select() checked it exists).
-  for (std::size_t i = 0; i < 6; ++i) {
-    constexpr double tol = kHaptic6RAngleTolerance;
-    T v = pick(is_chosen, out.q[i], zero);
-    shift_by_turns(v, m.lower[i] - tol, false);
-    shift_by_turns(v, m.upper[i] + tol, true);
-    out.q[i] = pick(is_chosen, clamp_to(v, splat<T>(m.lower[i]), splat<T>(m.upper[i])), out.q[i]);
-  }
-  const T tol = splat<T>(m.singularity_tolerance);
-  const T wrist = root(target.r[0][2] * target.r[0][2] + target.r[1][2] * target.r[1][2]);
-  const T singular = where_less(magnitude(out.s[1]), tol, one,
-                                where_less(magnitude(out.c[3]), tol, one, where_less(wrist, tol, one, zero)));
-  const T reachable_status = pick(singular, splat<T>(static_cast<double>(SampleStatus::kSingular)),
-                                  splat<T>(static_cast<double>(SampleStatus::kReachable)));
-  out.status = where_less(first, zero, splat<T>(static_cast<double>(SampleStatus::kUnreachable)),
-                          pick(is_chosen, reachable_status, splat<T>(static_cast<double>(SampleStatus::kInvalid))));
-  // Unreachable: q zero (and no trig); invalid: the first solution's q (and no trig).
-  const T has_trig = pick(is_chosen, one, zero);
-  for (int i = 0; i < 6; ++i) {
-    out.q[i] = where_less(first, zero, zero, out.q[i]);
-    out.c[i] = pick(has_trig, out.c[i], zero);
-    out.s[i] = pick(has_trig, out.s[i], zero);
-  }
+  Branches<double> b;
+  branch_angles(target, m, b);
+  configure_branches(b, m, out);
 }
 
 }  // namespace hapsyn::plugins::haptic6r_ik

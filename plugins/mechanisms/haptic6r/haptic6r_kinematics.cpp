@@ -47,11 +47,11 @@ int Haptic6RModel::inverse_kinematics_impl(const Eigen::Isometry3d& target, std:
     t.p[r] = target.translation()(r);
     for (int c = 0; c < 3; ++c) t.r[r][c] = target.linear()(r, c);
   }
-  haptic6r_ik::Slots<double> slots;
+  haptic6r_ik::Slots slots;
   haptic6r_ik::inverse_kinematics(t, m, slots);
   int count = 0;
   for (int k = 0; k < 8; ++k) {
-    if (slots.valid[k] == 0.0) continue;
+    if (!slots.valid[k]) continue;
     for (int i = 0; i < 6; ++i) {
       solutions[static_cast<std::size_t>(count)](i) = slots.q[k][i];
       if (!trig) continue;
@@ -66,12 +66,12 @@ int Haptic6RModel::inverse_kinematics_impl(const Eigen::Isometry3d& target, std:
 int Haptic6RModel::select(const std::array<Vector6d, 8>& solutions, int count) const {
   haptic6r_ik::IkModel m;
   ik_model(m);
-  haptic6r_ik::Slots<double> slots;
+  haptic6r_ik::Slots slots;
   for (int k = 0; k < 8; ++k) {
-    slots.valid[k] = k < count ? 1.0 : 0.0;
+    slots.valid[k] = k < count;
     for (int i = 0; i < 6; ++i) slots.q[k][i] = k < count ? solutions[static_cast<std::size_t>(k)](i) : 0.0;
   }
-  return static_cast<int>(haptic6r_ik::select(slots, m));
+  return haptic6r_ik::select(slots, m);
 }
 
 // The first half of solve(): IK, selection and classification of the pose. Sets q (zero when
@@ -88,14 +88,14 @@ int Haptic6RModel::select(const std::array<Vector6d, 8>& solutions, int count) c
   }
   haptic6r_ik::IkModel m;
   ik_model(m);
-  haptic6r_ik::PoseOutcome<double> o;
+  haptic6r_ik::PoseOutcome o;
   haptic6r_ik::configure(p, norm, m, o);
   for (std::size_t i = 0; i < 6; ++i) {
     q(static_cast<Eigen::Index>(i)) = o.q[i];
     chosen_trig.c[i] = o.c[i];
     chosen_trig.s[i] = o.s[i];
   }
-  return static_cast<SampleStatus>(static_cast<int>(o.status));
+  return o.status;
 }
 
 HAPSYN_MULTIVERSION
