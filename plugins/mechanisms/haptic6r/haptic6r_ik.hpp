@@ -283,17 +283,42 @@ template <template <typename> class S>
 // the whole per-pose code (measured: docs/design.md section 14.4).
 
 /// The eight branches in the order (h sign, theta4 branch, elbow), slot 4 hs + 2 b4 + b2: q
-/// [rad] wrapped into [-pi, pi), the DH-angle cosines c and sines s, valid where the branch is
-/// a solution. Compacting the valid slots in order gives inverse_kinematics()'s list.
+/// [rad] wrapped into [-pi, pi), the DH-angle cosines c and sines s (when asked for), valid where
+/// the branch is a solution. Compacting the valid slots in order gives inverse_kinematics()'s list.
 struct Slots {
   double q[8][6], c[8][6], s[8][6];
   bool valid[8];
 };
 
-// Every branch's q = DH angles - theta offsets wrapped into [-pi, pi), its DH-angle cosines and
-// sines (angle-sum identities on the vectors they came from) and its validity.
-[[gnu::always_inline]] inline void assemble(const Branches<double>& b, const IkModel& m, Slots& out) {
+// The DH-angle cosines c and sines s of slot 4 hs + 2 b4 + b2, by angle-sum identities on the
+// vectors its angles came from (no trigonometric call).
+[[gnu::always_inline]] inline void slot_trig(const Branches<double>& b, int slot, double* c, double* s) {
+  const int hs = slot >> 2, b4 = (slot >> 1) & 1, b2 = slot & 1;
   const WristGeometry<double>& g = b.g;
+  const WristAngles<double>& wrist = b.wrist;
+  const PlanarSolution<double>& p = b.planar[hs ^ b4];
+  const double sb = b2 == 0 ? -p.sin_beta : p.sin_beta;  // theta1 = phi + (-+beta)
+  c[0] = p.cos_phi * p.cos_beta - p.sin_phi * sb;
+  s[0] = p.sin_phi * p.cos_beta + p.cos_phi * sb;
+  c[1] = p.c2;
+  s[1] = b2 == 0 ? p.s2 : -p.s2;
+  const double c12 = c[0] * c[1] - s[0] * s[1], s12 = s[0] * c[1] + c[0] * s[1];
+  const double sign = hs == 0 ? 1.0 : -1.0;
+  const double cy = -sign * g.hy, sy = sign * g.hx;  // the yaw: x3 = e_z x h
+  c[2] = cy * c12 + sy * s12;  // theta3 = yaw - (theta1 + theta2)
+  s[2] = sy * c12 - cy * s12;
+  c[3] = b4 == 0 ? g.c4_abs : -g.c4_abs;
+  s[3] = g.s4;
+  c[4] = hs == 0 ? wrist.cos5[b4] : -wrist.cos5[1 - b4];  // pi - theta5
+  s[4] = hs == 0 ? wrist.sin5[b4] : wrist.sin5[1 - b4];
+  c[5] = hs == 0 ? wrist.cos6[b4] : -wrist.cos6[1 - b4];  // theta6 + pi
+  s[5] = hs == 0 ? wrist.sin6[b4] : -wrist.sin6[1 - b4];
+}
+
+// Every branch's q = DH angles - theta offsets wrapped into [-pi, pi) and its validity; with
+// `with_trig` also its DH-angle cosines and sines (slot_trig). A pose needs them for the chosen
+// branch only.
+[[gnu::always_inline]] inline void assemble(const Branches<double>& b, const IkModel& m, bool with_trig, Slots& out) {
   const WristAngles<double>& wrist = b.wrist;
   for (int hs = 0; hs < 2; ++hs) {
     const double yaw = hs == 0 ? b.yaw0 : b.yaw0 + kPi;
@@ -303,31 +328,14 @@ struct Slots {
       const double theta6 = hs == 0 ? wrist.theta6[b4] : wrist.theta6[1 - b4] + kPi;
       for (int b2 = 0; b2 < 2; ++b2) {
         const int slot = 4 * hs + 2 * b4 + b2;
-        out.valid[slot] = g.ok != 0.0 && p.valid != 0.0;
+        out.valid[slot] = b.g.ok != 0.0 && p.valid != 0.0;
         if (!out.valid[slot]) continue;
         const double theta2 = b2 == 0 ? p.theta2 : -p.theta2;
         const double theta1 = b2 == 0 ? p.phi - p.beta : p.phi + p.beta;
         const double theta3 = yaw - theta1 - theta2;
         const double theta[6] = {theta1, theta2, theta3, b.theta4_branch[b4], theta5, theta6};
         for (int i = 0; i < 6; ++i) out.q[slot][i] = wrap(theta[i] - m.offset[static_cast<std::size_t>(i)]);
-        double* c = out.c[slot];
-        double* s = out.s[slot];
-        const double sb = b2 == 0 ? -p.sin_beta : p.sin_beta;  // theta1 = phi + (-+beta)
-        c[0] = p.cos_phi * p.cos_beta - p.sin_phi * sb;
-        s[0] = p.sin_phi * p.cos_beta + p.cos_phi * sb;
-        c[1] = p.c2;
-        s[1] = b2 == 0 ? p.s2 : -p.s2;
-        const double c12 = c[0] * c[1] - s[0] * s[1], s12 = s[0] * c[1] + c[0] * s[1];
-        const double sign = hs == 0 ? 1.0 : -1.0;
-        const double cy = -sign * g.hy, sy = sign * g.hx;  // the yaw: x3 = e_z x h
-        c[2] = cy * c12 + sy * s12;  // theta3 = yaw - (theta1 + theta2)
-        s[2] = sy * c12 - cy * s12;
-        c[3] = b4 == 0 ? g.c4_abs : -g.c4_abs;
-        s[3] = g.s4;
-        c[4] = hs == 0 ? wrist.cos5[b4] : -wrist.cos5[1 - b4];  // pi - theta5
-        s[4] = hs == 0 ? wrist.sin5[b4] : wrist.sin5[1 - b4];
-        c[5] = hs == 0 ? wrist.cos6[b4] : -wrist.cos6[1 - b4];  // theta6 + pi
-        s[5] = hs == 0 ? wrist.sin6[b4] : -wrist.sin6[1 - b4];
+        if (with_trig) slot_trig(b, slot, out.c[slot], out.s[slot]);
       }
     }
   }
@@ -337,7 +345,7 @@ struct Slots {
 [[gnu::always_inline]] inline void inverse_kinematics(const Target<double>& target, const IkModel& m, Slots& out) {
   Branches<double> b;
   branch_angles(target, m, b);
-  assemble(b, m, out);
+  assemble(b, m, true, out);
 }
 
 /// Whether q has a representative in [lower, upper] in every joint (tolerance
@@ -417,7 +425,7 @@ template <typename T>
 /// branch_angles()).
 [[gnu::always_inline]] inline void configure_branches(const Branches<double>& b, const IkModel& m, PoseOutcome& out) {
   Slots slots;
-  assemble(b, m, slots);
+  assemble(b, m, false, slots);
   int first = -1;
   for (int k = 7; k >= 0; --k) first = slots.valid[k] ? k : first;
   out = PoseOutcome{};
@@ -435,9 +443,8 @@ template <typename T>
     while (v < m.lower[i] - tol) v += 2.0 * kPi;
     while (v > m.upper[i] + tol) v -= 2.0 * kPi;
     out.q[i] = v < m.lower[i] ? m.lower[i] : (m.upper[i] < v ? m.upper[i] : v);
-    out.c[i] = slots.c[chosen][i];
-    out.s[i] = slots.s[chosen][i];
   }
+  slot_trig(b, chosen, out.c, out.s);
   const double singular_below = m.singularity_tolerance;
   const double wrist = std::sqrt(b.target.r[0][2] * b.target.r[0][2] + b.target.r[1][2] * b.target.r[1][2]);
   const bool singular = std::fabs(out.s[1]) < singular_below || std::fabs(out.c[3]) < singular_below || wrist < singular_below;
