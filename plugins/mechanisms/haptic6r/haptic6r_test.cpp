@@ -645,6 +645,22 @@ TEST(Haptic6R, DataFilesThatAreNotRegularFilesAreRefusedWithoutBlocking) {
 namespace {
 // |a - b| within 1e-12 of the larger magnitude (and of 1 near zero).
 bool close(double a, double b) { return std::abs(a - b) <= 1e-12 * std::max({1.0, std::abs(a), std::abs(b)}); }
+
+// The block of poses[first, first + n) over `coordinates`; the lanes past n repeat the last pose
+// when `repeat_last`, else keep what `coordinates` holds.
+PoseBlock pose_block(const std::vector<std::array<double, 7>>& poses, std::size_t first, int n, bool repeat_last,
+                     double (&coordinates)[7][kBlockLanes]) {
+  PoseBlock block;
+  block.dimension = 7;
+  block.count = n;
+  for (int c = 0; c < 7; ++c) {
+    for (int lane = 0; lane < (repeat_last ? kBlockLanes : n); ++lane) {
+      coordinates[c][lane] = poses[first + static_cast<std::size_t>(std::min(lane, n - 1))][static_cast<std::size_t>(c)];
+    }
+    block.coordinate[c] = coordinates[c];
+  }
+  return block;
+}
 }  // namespace
 
 TEST(Haptic6R, BlockKernelEqualsSolveLaneByLane) {
@@ -672,15 +688,7 @@ TEST(Haptic6R, BlockKernelEqualsSolveLaneByLane) {
     for (int count = 1; first < poses.size(); count = count % kBlockLanes + 1) {
       const int n = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(count), poses.size() - first));
       double coordinates[7][kBlockLanes];
-      PoseBlock block;
-      block.dimension = 7;
-      block.count = n;
-      for (int c = 0; c < 7; ++c) {
-        for (int lane = 0; lane < kBlockLanes; ++lane) {
-          coordinates[c][lane] = poses[first + static_cast<std::size_t>(std::min(lane, n - 1))][static_cast<std::size_t>(c)];
-        }
-        block.coordinate[c] = coordinates[c];
-      }
+      const PoseBlock block = pose_block(poses, first, n, true, coordinates);
       auto out = std::make_unique<QuantityBlock>();
       f.model.solve_block(block, all, *scratch, *out);
       for (int lane = 0; lane < n; ++lane) {
@@ -747,13 +755,7 @@ TEST(Haptic6R, BlockStatusesAndQuantitiesEqualSolveUnderEveryRule) {
     for (std::size_t first = 0; first < poses.size(); first += kBlockLanes) {
       const int n = static_cast<int>(std::min<std::size_t>(kBlockLanes, poses.size() - first));
       double coordinates[7][kBlockLanes] = {};
-      PoseBlock block;
-      block.dimension = 7;
-      block.count = n;
-      for (int c = 0; c < 7; ++c) {
-        for (int lane = 0; lane < n; ++lane) coordinates[c][lane] = poses[first + static_cast<std::size_t>(lane)][static_cast<std::size_t>(c)];
-        block.coordinate[c] = coordinates[c];
-      }
+      const PoseBlock block = pose_block(poses, first, n, false, coordinates);  // lanes past n: zeros
       auto out = std::make_unique<QuantityBlock>();
       f.model.solve_block(block, all, *scratch, *out);
       for (int lane = 0; lane < n; ++lane) {
