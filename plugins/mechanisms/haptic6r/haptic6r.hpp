@@ -211,8 +211,16 @@ struct Haptic6RBody {
 };
 
 namespace haptic6r_ik {
-struct IkModel;  // haptic6r_ik.hpp
-}
+/// The design's numbers the IK and the selection read (from Haptic6RModel and its setup); set
+/// by rebuild(), read by the IK templates of haptic6r_ik.hpp for every pose.
+struct IkModel {
+  double L1 = 0.0, L2 = 0.0, L3 = 0.0, L4 = 0.0, L5 = 0.0;  // a1, a2, -d3, a4, d6 [m]
+  std::array<double, 6> ca{}, sa{}, offset{};               // cos, sin alpha_i; theta_offset_i [rad]
+  std::array<double, 6> lower{}, upper{}, home{};            // joint limits and home [rad]
+  Haptic6RSelection selection = Haptic6RSelection::kClosestToHome;
+  double singularity_tolerance = 0.0;
+};
+}  // namespace haptic6r_ik
 
 /// The manipulator for one design. Immutable after rebuild(); solve() is const, thread-safe
 /// and allocation-free.
@@ -285,12 +293,13 @@ class Haptic6RModel final : public MechanismModel {
   int inverse_kinematics_impl(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions,
                               std::array<JointTrig, 8>* trig) const;
   void quantities_impl(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const;
-  void ik_model(haptic6r_ik::IkModel& m) const;  // the numbers the IK templates read
+  void ik_model(haptic6r_ik::IkModel& m) const;  // fills ik_ (in rebuild())
 
   const Haptic6RSetup* setup_ = nullptr;
   std::array<double, 5> l_{};
   std::array<double, 6> d_{}, a_{}, offset_{}, ca_{}, sa_{};
   std::array<Haptic6RBody, 6> bodies_;
+  haptic6r_ik::IkModel ik_;  // the numbers the IK reads: once per design, not once per pose
   Vector6d max_velocity_ = Vector6d::Zero(), max_torque_ = Vector6d::Zero();
 };
 

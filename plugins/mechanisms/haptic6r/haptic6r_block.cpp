@@ -81,8 +81,7 @@ void Haptic6RModel::solve_block_impl(const PoseBlock& poses, Needs needs, Quanti
   for (int lane = poses.count; lane < kBlockLanes; ++lane) ok.v[lane] = 0.0;
   for (int c = 0; c < 7; ++c) pose[c] = where_equal(ok, zero, Lanes::splat(kIdentity[c]), pose[c]);
   norm = where_equal(ok, zero, one, norm);
-  haptic6r_ik::IkModel m;
-  ik_model(m);
+  const haptic6r_ik::IkModel& m = ik_;
   // The branches' angles for all lanes at once (branch-free arithmetic: 13 atan2, 9 square roots
   // and the rotations), then the assembly, selection and classification per lane: branchy work
   // that costs more as lane-wise selections than as the per-pose code on this data.

@@ -33,7 +33,6 @@ constexpr double kBoundaryTolerance = 1e-12;
 [[gnu::always_inline]] inline double where_less(double x, double y, double a, double b) { return x < y ? a : b; }
 [[gnu::always_inline]] inline double where_greater(double x, double y, double a, double b) { return x > y ? a : b; }
 [[gnu::always_inline]] inline double where_equal(double x, double y, double a, double b) { return x == y ? a : b; }
-[[gnu::always_inline]] inline double where_sign_bit(double x, double a, double b) { return std::signbit(x) ? a : b; }
 [[gnu::always_inline]] inline double magnitude(double a) { return std::fabs(a); }
 [[gnu::always_inline]] inline Lanes magnitude(const Lanes& a) { return abs(a); }
 [[gnu::always_inline]] inline double root(double a) { return std::sqrt(a); }
@@ -81,15 +80,6 @@ template <typename T>
   r = where_less(r, splat<T>(kPi), r, r - 2.0 * kPi);
   return where_less(r, splat<T>(-kPi), r + 2.0 * kPi, r);
 }
-
-/// The design's numbers the IK and the selection read (from Haptic6RModel and its setup).
-struct IkModel {
-  double L1 = 0.0, L2 = 0.0, L3 = 0.0, L4 = 0.0, L5 = 0.0;  // a1, a2, -d3, a4, d6 [m]
-  std::array<double, 6> ca{}, sa{}, offset{};               // cos, sin alpha_i; theta_offset_i [rad]
-  std::array<double, 6> lower{}, upper{}, home{};            // joint limits and home [rad]
-  Haptic6RSelection selection = Haptic6RSelection::kClosestToHome;
-  double singularity_tolerance = 0.0;
-};
 
 /// A target frame: position p [m] and rotation r (r[row][col], columns x_E, y_E, z_E).
 template <typename T>

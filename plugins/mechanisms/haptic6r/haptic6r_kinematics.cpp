@@ -40,8 +40,7 @@ void Haptic6RModel::ik_model(haptic6r_ik::IkModel& m) const {
 HAPSYN_MULTIVERSION
 int Haptic6RModel::inverse_kinematics_impl(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions,
                                            std::array<JointTrig, 8>* trig) const {
-  haptic6r_ik::IkModel m;
-  ik_model(m);
+  const haptic6r_ik::IkModel& m = ik_;
   haptic6r_ik::Target<double> t;
   for (int r = 0; r < 3; ++r) {
     t.p[r] = target.translation()(r);
@@ -64,8 +63,7 @@ int Haptic6RModel::inverse_kinematics_impl(const Eigen::Isometry3d& target, std:
 }
 
 int Haptic6RModel::select(const std::array<Vector6d, 8>& solutions, int count) const {
-  haptic6r_ik::IkModel m;
-  ik_model(m);
+  const haptic6r_ik::IkModel& m = ik_;
   haptic6r_ik::Slots slots;
   for (int k = 0; k < 8; ++k) {
     slots.valid[k] = k < count;
@@ -86,8 +84,7 @@ int Haptic6RModel::select(const std::array<Vector6d, 8>& solutions, int count) c
     q.setZero();
     return SampleStatus::kUnreachable;
   }
-  haptic6r_ik::IkModel m;
-  ik_model(m);
+  const haptic6r_ik::IkModel& m = ik_;
   haptic6r_ik::PoseOutcome o;
   haptic6r_ik::configure(p, norm, m, o);
   for (std::size_t i = 0; i < 6; ++i) {

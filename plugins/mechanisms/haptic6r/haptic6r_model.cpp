@@ -70,6 +70,7 @@ void Haptic6RModel::rebuild(const double* design, const Haptic6RSetup& setup) {
     if (std::abs(ca_[i]) < 1e-15) ca_[i] = 0.0;
     if (std::abs(sa_[i]) < 1e-15) sa_[i] = 0.0;
   }
+  ik_model(ik_);  // after d_, a_, offset_, ca_, sa_: the IK reads these once per design
   // Mass model, each body in its own DH frame.
   const double ro = 0.5 * setup.options.tube_outer_diameter, ri = ro - setup.options.tube_wall;
   const double tube_r2 = ro * ro + ri * ri;
