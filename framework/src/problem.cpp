@@ -433,6 +433,23 @@ double Problem::score_bound(const double* accumulator, long long samples) const 
   return bound;
 }
 
+double Problem::block_score_bound(const double* full_design, int component, double lower, double upper,
+                                  int sample) const {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  if (!prunable_) return kInf;  // the sum of metric bounds bounds the score only for maximized, weight >= 0
+  SampleEnvelope envelope;
+  if (!mechanism_->sample_envelope(full_design, component, lower, upper, samples_->pose(sample), envelope)) return kInf;
+  if (envelope.all_fail) return -kInf;
+  // Added as score_bound adds: each term is an upper bound, and rounded addition is monotone.
+  double bound = 0.0;
+  for (const Objective& objective : objectives_) {
+    const double value = metrics_[static_cast<std::size_t>(objective.metric)].metric->envelope_bound(envelope);
+    if (!(value < kInf)) return kInf;
+    bound += objective.weight * value;
+  }
+  return bound;
+}
+
 void Problem::mark_pruned(const int* argument, Evaluation& out) const {
   // The samples attaining the reductions so far are what made the bound fall: culling collects
   // them as critical samples.

@@ -4,6 +4,7 @@
 /// requested quantities, with per-thread scratch so the per-sample loop is allocation-free.
 #include <hapsyn/design_space.hpp>
 #include <hapsyn/quantities.hpp>
+#include <hapsyn/sample_envelope.hpp>
 #include <hapsyn/sample_block.hpp>
 #include <hapsyn/scene.hpp>
 
@@ -101,6 +102,17 @@ class Mechanism {
   /// design be evaluated: say true only with a proof (and a test on random lines).
   /// Default: false.
   virtual bool constraints_quasiconvex(int component) const { return false; }
+  /// Optional block bound of one sample for grid solvers (docs/design.md section 13.5): bounds
+  /// of the quantities at the sample `pose` over every design equal to `design` (a full design
+  /// vector) except in component `component`, which runs over [lower, upper]. Fill only what is
+  /// proved, rounding included (the solver rules out whole blocks of designs on it; it
+  /// spot-checks one design of each block it rules out and stops with an error on a false
+  /// claim). Returns false when nothing is known (the default). Called for runs of a grid line
+  /// (a few per line); must not allocate or throw.
+  virtual bool sample_envelope(const double* design, int component, double lower, double upper, const double* pose,
+                               SampleEnvelope& out) const {
+    return false;
+  }
   /// Optional design-lanes path (docs/design.md section 13.4): solves the one sample `pose` for
   /// up to kBlockLanes designs at once, lane i for the full design vector designs[i] (lanes at
   /// or beyond `count` repeat a valid design), filling out as build(designs[i])->solve_block

@@ -11,7 +11,9 @@
 /// (the per-sample bound that culling uses: GII(p) <= sigma_min(J(p,a)) / sigma_max(J(p,b))).
 #include <hapsyn/quantities.hpp>
 #include <hapsyn/sample_block.hpp>
+#include <hapsyn/sample_envelope.hpp>
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -121,6 +123,16 @@ class Metric {
   virtual bool combine_block(const double* reduced, int samples, double* out) const {
     (void)reduced, (void)samples, (void)out;
     return false;
+  }
+
+  /// Optional block bound (docs/design.md section 13.5), for worst-case metrics: an upper bound
+  /// of this metric's value over the whole scene, valid for every design of the envelope's block
+  /// that reaches its sample (the value at that one sample bounds the whole scene's). Use only
+  /// the envelope's fields; +inf when they say nothing this metric can use (the default). Must
+  /// not allocate or throw.
+  virtual double envelope_bound(const SampleEnvelope& envelope) const {
+    (void)envelope;
+    return std::numeric_limits<double>::infinity();
   }
 };
 

@@ -129,6 +129,14 @@ class Problem {
   const std::vector<std::string>& constraint_names() const { return constraint_names_; }
   /// True when every metric in the study is worst-case (culling and pruning apply).
   bool worst_case() const { return worst_case_; }
+  /// Block bound of a run of a grid line (docs/design.md section 13.5): an upper bound of the
+  /// score of every design equal to `full_design` (a full design vector) except in component
+  /// `component`, which runs over [lower, upper], from the mechanism's envelope of sample
+  /// `sample` (Mechanism::sample_envelope) and each objective's Metric::envelope_bound. -inf
+  /// when the sample fails for every such design (all are infeasible); +inf when nothing is
+  /// known (a study that is not prunable, a mechanism or a metric without envelopes). No
+  /// allocation.
+  double block_score_bound(const double* full_design, int component, double lower, double upper, int sample) const;
   /// True when evaluate() solves samples in blocks (hapsyn/sample_block.hpp): the mechanism
   /// solves blocks for the study's needs, every metric is worst-case with a block local and no
   /// scene attributes, and the scene has at most kBlockMaxCoordinates coordinates and no

@@ -374,6 +374,27 @@ bool FiveBar::constraint_interval(const double* design, int component, const Sam
   return true;
 }
 
+bool FiveBar::sample_envelope(const double* design, int component, double lower, double upper, const double* pose,
+                              SampleEnvelope& out) const {
+  if (component != 3) return false;  // the run's r enters as y + r: the angles are monotone in it
+  const FiveBarDesign d = design_from(design);
+  if (!(d.l0 >= 0.0 && d.l1 > 0.0 && d.l2 > 0.0) || !(lower <= upper)) return false;
+  // The masses and inertias as FiveBarModel computes them.
+  const double k2 = options_.k * options_.k;
+  const double m1 = options_.rho * d.l1, m2 = options_.rho * d.l2;
+  FiveBarRun run;
+  run.h0 = 0.5 * d.l0;
+  run.l1 = d.l1;
+  run.l2 = d.l2;
+  run.y_low = pose[1] + lower;  // the model's rounded y + r, monotone in r
+  run.y_high = pose[1] + upper;
+  run.singularity_tolerance = options_.singularity_tolerance;
+  run.inertia_a = m1 * (4.0 * d.l1 * d.l1 + k2) / 12.0;
+  run.mass_f = m2;
+  run.inertia_f = m2 * (d.l2 * d.l2 + k2) / 12.0;
+  return fivebar_envelope(run, pose[0], out);
+}
+
 bool FiveBar::constraints_quasiconvex(int component) const {
   return component == 3 && options_.footprint_width <= 0.0 && options_.footprint_height <= 0.0;
 }

@@ -29,6 +29,7 @@
 #include <hapsyn/options.hpp>
 
 #include "fivebar_block.hpp"
+#include "fivebar_envelope.hpp"
 
 #include <Eigen/Core>
 #include <memory>
@@ -169,6 +170,12 @@ class FiveBar final : public Mechanism {
   /// ymin + r, ymax + r (monotone in r) is monotone or a max of quasiconvex terms, so its
   /// sublevel set in r is one interval in floating point too (docs/design.md section 13.3).
   bool constraints_quasiconvex(int component) const override;
+  /// For r (component 3): bounds of the sample's sigma_min(J) / sigma_max(J) and sigma_max(M),
+  /// and proofs of failure, over a run of r (fivebar_envelope.hpp, docs/design.md section
+  /// 13.5). False for other components and for runs that put the sample at or below the
+  /// actuated joints' axis. O(1), no allocation.
+  bool sample_envelope(const double* design, int component, double lower, double upper, const double* pose,
+                       SampleEnvelope& out) const override;
   /// The interval of r [m] on which reach_constraint(design with that r, box) <= 0, for the
   /// design's l0, l1, l2 and the box [xmin, xmax] x [ymin, ymax]: with ax the larger x distance
   /// from an actuated joint to the box and R = sqrt((l1 + l2)^2 - ax^2), the farthest corner

@@ -54,6 +54,10 @@ std::vector<LocalValue> Gdi::locals() const { return {LocalValue{"sigma_max_M", 
 
 double Gdi::combine(const double* reduced, int /*samples*/) const { return 1.0 / (1.0 + reduced[0]); }
 
+double Gdi::envelope_bound(const SampleEnvelope& envelope) const {
+  return 1.0 / (1.0 + envelope.effective_mass_sigma_max_min);
+}
+
 bool Gdi::combine_block(const double* reduced, int /*samples*/, double* out) const {
   for (int lane = 0; lane < kBlockLanes; ++lane) out[lane] = 1.0 / (1.0 + reduced[lane]);
   return true;

@@ -25,6 +25,10 @@ class Gdi final : public Metric {
   bool has_local_block() const override { return true; }
   void local_block(const QuantityBlock& q, double* out) const override;
 
+  /// Block bound (docs/design.md section 13.5): GDI over the whole scene is at most
+  /// 1 / (1 + sigma_max(M)) at any one sample, so 1 / (1 + effective_mass_sigma_max_min) bounds
+  /// it (1 when the envelope says nothing about M: no bound below 1 is known).
+  double envelope_bound(const SampleEnvelope& envelope) const override;
   /// Largest singular value of a matrix. 2 x 2: closed form
   /// sqrt(E^2 + H^2) + sqrt(F^2 + G^2) with E = (a + d)/2, F = (a - d)/2, G = (c + b)/2,
   /// H = (c - b)/2 (never NaN for finite input); other shapes: Eigen::JacobiSVD (fixed

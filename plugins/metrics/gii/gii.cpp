@@ -115,6 +115,11 @@ double Gii::combine(const double* reduced, int /*samples*/) const {
   return reduced[0] / den;
 }
 
+double Gii::envelope_bound(const SampleEnvelope& envelope) const {
+  if (rows_ != Rows::kAll || characteristic_length_ != 0.0) return std::numeric_limits<double>::infinity();
+  return envelope.jacobian_inverse_condition_max;
+}
+
 bool Gii::combine_block(const double* reduced, int /*samples*/, double* out) const {
   // combine() per lane, written as selects so that the lanes compile to one vector.
   for (int lane = 0; lane < kBlockLanes; ++lane) {

@@ -59,6 +59,11 @@ class Gii final : public Metric {
   double combine(const double* reduced, int samples) const override;
   bool combine_block(const double* reduced, int samples, double* out) const override;
 
+  /// Block bound (docs/design.md section 13.5): GII over the whole scene is at most
+  /// sigma_min(J) / sigma_max(J) at any one sample, so the envelope's
+  /// jacobian_inverse_condition_max bounds it. Only when J is used as the mechanism returns it
+  /// (rows = all, no characteristic_length); +inf otherwise.
+  double envelope_bound(const SampleEnvelope& envelope) const override;
   /// Smallest and largest singular values of a matrix. 2 x 2: closed form,
   /// sigma_max = sqrt(E^2 + H^2) + sqrt(F^2 + G^2) with E = (a + d)/2, F = (a - d)/2,
   /// G = (c + b)/2, H = (c - b)/2, and sigma_min = |ad - bc| / sigma_max (0 for the zero

@@ -81,7 +81,8 @@ struct Bounds {
 
 struct SweepCounts {
   long long culled = 0, constraint_violated = 0, failed_at_bound = 0, full_searches = 0, full_feasible = 0,
-            full_pruned = 0, full_failed = 0, bound_samples = 0, full_samples = 0;
+            full_pruned = 0, full_failed = 0, bound_samples = 0, full_samples = 0, block_bounds = 0,
+            block_ruled_out = 0;
 
   void add(const SweepCounts& c) {
     culled += c.culled;
@@ -93,6 +94,8 @@ struct SweepCounts {
     full_failed += c.full_failed;
     bound_samples += c.bound_samples;
     full_samples += c.full_samples;
+    block_bounds += c.block_bounds;
+    block_ruled_out += c.block_ruled_out;
   }
   // The counts since `before` (a line's share of a thread's counts).
   SweepCounts since(const SweepCounts& before) const {
@@ -106,12 +109,15 @@ struct SweepCounts {
     d.full_failed -= before.full_failed;
     d.bound_samples -= before.bound_samples;
     d.full_samples -= before.full_samples;
+    d.block_bounds -= before.block_bounds;
+    d.block_ruled_out -= before.block_ruled_out;
     return d;
   }
   Json to_json() const {
     return {{"culled", culled}, {"constraint_violated", constraint_violated}, {"failed_at_bound", failed_at_bound},
             {"full_searches", full_searches}, {"full_feasible", full_feasible}, {"full_pruned", full_pruned},
-            {"full_failed", full_failed}, {"bound_samples", bound_samples}, {"full_samples", full_samples}};
+            {"full_failed", full_failed}, {"bound_samples", bound_samples}, {"full_samples", full_samples},
+            {"block_bounds", block_bounds}, {"block_ruled_out", block_ruled_out}};
   }
 };
 
@@ -284,6 +290,10 @@ struct alignas(64) SweepThread {
   std::vector<double> group_x;          // kBlockLanes rows: the line's designs bounded together
   std::vector<Evaluation> group_outs;   // their bounds
   std::vector<int> group_order;         // s.local as the group was bounded
+  std::vector<double> full;             // the current line's full design (block bounds)
+  std::vector<double> check_x;          // a design of a ruled-out run, spot-checked
+  std::vector<int> check_sample;        // the one sample it is checked at
+  long long ruled_out_runs = 0;         // runs this thread ruled out by block bounds
   SweepCounts counts;         // this run's, lines finished or not
   SweepCounts partial;        // of the lines a stop left unfinished
   std::vector<double> bound;  // the objectives' bound at the critical samples of the current design
@@ -385,15 +395,98 @@ void full_search(const Problem& problem, SweepThread& s, long long index, double
   }
 }
 
+// Block bounds (docs/design.md section 13.5). A run of a line is tried at once at the first
+// kBlockSamples critical samples; the runs start at kFirstBlock designs, double after a run is
+// ruled out and halve after one is not, within [kMinBlock, kMaxBlock]. After a try that rules
+// nothing out, the next one waits `gap` designs, doubled on every such try in a row: on lines
+// where the bounds do not help, the tries cost little beside the designs' own bounds.
+constexpr long long kMinBlock = 8, kFirstBlock = 32, kMaxBlock = 4096, kMaxGap = 1024;
+constexpr std::size_t kBlockSamples = 2;
+constexpr long long kCheckEvery = 16;
+
+// Spot check of a ruled-out run (the framework's check of a mechanism's claim, as LineBound
+// checks line bounds): its middle design, evaluated exactly at the sample, must fail there when
+// the bound says every design fails, and must not score above the bound otherwise.
+void check_block_bound(const Problem& problem, SweepThread& s, long long first, long long last, int sample,
+                       double bound) {
+  const std::size_t n = s.x.size();
+  std::copy(s.x.begin(), s.x.end(), s.check_x.begin());
+  const long long middle = first + (last - first) / 2;
+  s.check_x[n - 1] = s.line_bound->value(middle);
+  s.check_sample.assign(1, sample);
+  EvalOptions at_sample;
+  at_sample.subset = &s.check_sample;
+  const Evaluation& e = problem.evaluate(s.check_x.data(), *s.eval_scratch, at_sample);
+  if (e.status != EvalStatus::kFeasible || e.score <= bound) return;
+  std::ostringstream message;
+  message << std::setprecision(17) << "the mechanism's block bound (Mechanism::sample_envelope) is wrong: over "
+          << problem.design_space().components()[static_cast<std::size_t>(problem.design_space().free_indices().back())].name
+          << " in [" << s.line_bound->value(first) << ", " << s.line_bound->value(last) << "] at sample " << sample
+          << " it claims " << (bound == -kInf ? std::string("that every design fails") : "a score of at most " + std::to_string(bound))
+          << ", but grid value " << s.check_x[n - 1] << " reaches the sample and scores " << e.score
+          << " there; culling could cut the optimum: set solver.options.block_bounds = false, and report the mechanism";
+  throw Error("culling", message.str());
+}
+
+// True when every design of the run [first, last] of the current line (s.full) is ruled out
+// at once: infeasible at a critical sample, or bounded there strictly below the reference.
+bool rule_out_run(const Problem& problem, SweepThread& s, long long first, long long last, double threshold) {
+  ++s.counts.block_bounds;
+  const int component = problem.design_space().free_indices().back();
+  const double lower = s.line_bound->value(first), upper = s.line_bound->value(last);
+  const std::size_t tries = std::min(s.local.size(), kBlockSamples);
+  for (std::size_t k = 0; k < tries; ++k) {
+    const int sample = s.local[k];
+    const double bound = problem.block_score_bound(s.full.data(), component, lower, upper, sample);
+    if (!(bound == -kInf || bound < threshold)) continue;
+    // The spot check costs a design's evaluation: every kCheckEvery-th ruled-out run (the first
+    // of each thread included) is checked.
+    if (s.ruled_out_runs++ % kCheckEvery == 0) check_block_bound(problem, s, first, last, sample, bound);
+    s.counts.block_ruled_out += last - first + 1;
+    if (k > 0) std::rotate(s.local.begin(), s.local.begin() + static_cast<std::ptrdiff_t>(k),
+                           s.local.begin() + static_cast<std::ptrdiff_t>(k) + 1);  // as ruled_out_by_bound does
+    return true;
+  }
+  return false;
+}
+
+// Where the next block bound is tried on a line, and how long a run it covers.
+struct BlockTries {
+  long long next = 0, size = kFirstBlock, gap = kMinBlock;
+};
+
+// Tries the run starting at design i (inside the line bound's run, which ends at `last`) when
+// one is due; returns the last design it ruled out, or i - 1.
+long long try_block(const Problem& problem, SweepThread& s, BlockTries& tries, long long i, long long last,
+                    double threshold) {
+  if (i < tries.next || last - i + 1 < kMinBlock) return i - 1;
+  const long long end = std::min(last, i + tries.size - 1);
+  if (rule_out_run(problem, s, i, end, threshold)) {
+    tries.size = std::min(tries.size * 2, kMaxBlock);
+    tries.gap = kMinBlock;
+    tries.next = end + 1;
+    return end;
+  }
+  tries.size = std::max(tries.size / 2, kMinBlock);
+  tries.next = i + tries.gap;
+  tries.gap = std::min(tries.gap * 2, kMaxGap);
+  return i - 1;
+}
+
 // Every design of one grid line (the last variable running), bounded first, searched in full
 // when the bound cannot rule it out. False when a stop request (or a breach) left it unfinished.
 bool cull_line(const Problem& problem, const Grid& grid, long long line, SweepThread& s, Reference& reference,
-               const SolverContext& context) {
+               const SolverContext& context, bool block_bounds) {
   const std::size_t n = s.x.size();
   const long long line_length = grid.counts[n - 1];
   catch_up(s, reference);
   grid.decode(line * line_length, s.x.data());
   s.line_bound->update(s.x.data());
+  // Block bounds on lines whose run is verified, so that the designs they rule out are known to
+  // satisfy the constraints (the counts stay those of a run without them).
+  const bool try_blocks = block_bounds && s.line_bound->verified();
+  if (try_blocks) problem.design_space().expand(s.x.data(), s.full.data());
+  BlockTries tries;
   for (std::size_t row = 0; row < static_cast<std::size_t>(kBlockLanes); ++row) {
     std::copy(s.x.begin(), s.x.end(), s.group_x.begin() + static_cast<std::ptrdiff_t>(row * n));
   }
@@ -413,6 +506,14 @@ bool cull_line(const Problem& problem, const Grid& grid, long long line, SweepTh
         s.counts.constraint_violated += end - i;
         i = end - 1;
         continue;
+      }
+      if (try_blocks && !s.local.empty()) {
+        const long long ruled_out_to =
+            try_block(problem, s, tries, i, s.line_bound->last(), reference.score.load(std::memory_order_relaxed));
+        if (ruled_out_to >= i) {
+          i = ruled_out_to;
+          continue;
+        }
       }
       double* slot = s.group_x.data() + static_cast<std::size_t>(count) * n;
       slot[n - 1] = s.line_bound->value(i);
@@ -460,13 +561,15 @@ std::string progress_line(const Grid& grid, const Reference& reference, double e
 
 void put_counts(ByteWriter& out, const SweepCounts& c) {
   out.put(c.culled).put(c.constraint_violated).put(c.failed_at_bound).put(c.full_searches).put(c.full_feasible);
-  out.put(c.full_pruned).put(c.full_failed).put(c.bound_samples).put(c.full_samples);
+  out.put(c.full_pruned).put(c.full_failed).put(c.bound_samples).put(c.full_samples).put(c.block_bounds);
+  out.put(c.block_ruled_out);
 }
 
 SweepCounts get_counts(ByteReader& in) {
   SweepCounts c;
   for (long long* v : {&c.culled, &c.constraint_violated, &c.failed_at_bound, &c.full_searches, &c.full_feasible,
-                       &c.full_pruned, &c.full_failed, &c.bound_samples, &c.full_samples}) {
+                       &c.full_pruned, &c.full_failed, &c.bound_samples, &c.full_samples, &c.block_bounds,
+                       &c.block_ruled_out}) {
     *v = in.get<long long>();
   }
   return c;
@@ -497,6 +600,8 @@ FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions
     s.x.resize(grid.counts.size());
     s.line_bound.emplace(problem, options.line_bounds, "culling");
     s.group_x.assign(static_cast<std::size_t>(kBlockLanes) * grid.counts.size(), 0.0);
+    s.full.assign(problem.design_space().size(), 0.0);
+    s.check_x.assign(grid.counts.size(), 0.0);
   }
   const RangeLedger skip = reference.ledger;  // finished before this run
   auto last_report = Clock::now(), last_checkpoint = Clock::now();
@@ -509,7 +614,7 @@ FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions
     s.line_best = Best{};
     s.line_critical.clear();
     s.breach.reset();
-    const bool complete = cull_line(problem, grid, line, s, reference, context);
+    const bool complete = cull_line(problem, grid, line, s, reference, context, options.block_bounds);
     if (!complete && !s.breach) {
       s.partial.add(s.counts.since(before));
       return std::nullopt;
@@ -628,6 +733,8 @@ Json sweep_statistics(const Grid& grid, const SweepCounts& sum, const Reference&
   stats["full_searches_failed"] = sum.full_failed;
   stats["bound_sample_evaluations"] = sum.bound_samples;
   stats["full_search_sample_evaluations"] = sum.full_samples;
+  stats["block_bounds"] = sum.block_bounds;        // runs of a line tried at once (section 13.5)
+  stats["block_ruled_out"] = sum.block_ruled_out;  // designs those ruled out, not in the counts above
   stats["iterations"] = reference.iterations;
   stats["critical_samples"] = reference.critical.size();
   stats["samples_per_full_search"] = samples;
@@ -717,6 +824,8 @@ SweepCounts counts_from(const SolverContext& context, const Json& state) {
   n.full_failed = checkpoint_field<long long>(context, c, "state.counts", "full_failed");
   n.bound_samples = checkpoint_field<long long>(context, c, "state.counts", "bound_samples");
   n.full_samples = checkpoint_field<long long>(context, c, "state.counts", "full_samples");
+  n.block_bounds = checkpoint_field<long long>(context, c, "state.counts", "block_bounds");
+  n.block_ruled_out = checkpoint_field<long long>(context, c, "state.counts", "block_ruled_out");
   return n;
 }
 

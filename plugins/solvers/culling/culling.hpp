@@ -48,6 +48,7 @@ struct CullingOptions {
   double sqp_ftol{};
   int sqp_max_evaluations{};
   bool line_bounds{};
+  bool block_bounds{};
   double progress_interval{};
   double checkpoint_interval{};
   double max_designs{};
@@ -73,6 +74,10 @@ struct CullingOptions {
           "Skip the designs of a grid line (the last variable varying) that the mechanism's constraint interval "
           "rules out, counting them as violating a constraint (exact: the same result and statistics; "
           "docs/design.md section 13.3)");
+    d.add(&CullingOptions::block_bounds, "block_bounds", true,
+          "Rule out runs of a grid line at once where the mechanism bounds a critical sample over the run "
+          "(Mechanism::sample_envelope) and the metrics turn that into a score bound below the reference; exact: the "
+          "same optimum (docs/design.md section 13.5). Ruled-out designs are counted in block_ruled_out, not culled");
     d.add(&CullingOptions::progress_interval, "progress_interval", 2.0, "Seconds between progress lines on stderr")
         .greater_than(0)
         .unit("s");

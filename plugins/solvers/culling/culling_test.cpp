@@ -503,6 +503,7 @@ TEST(Culling, LineBoundsSkipRuledOutDesignsWithTheSameResultAndCounts) {
   const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
   Json on = culling_options(true, false), off = culling_options(true, false);
   off["line_bounds"] = false;
+  on["block_bounds"] = false;  // they rule out designs inside the run (tested below)
   const hapsyn::plugins::CullingSolver with(hapsyn::make_options<hapsyn::plugins::CullingOptions>(on));
   const hapsyn::plugins::CullingSolver without(hapsyn::make_options<hapsyn::plugins::CullingOptions>(off));
   const auto a = solve(with, *study.problem, 1);
@@ -516,4 +517,137 @@ TEST(Culling, LineBoundsSkipRuledOutDesignsWithTheSameResultAndCounts) {
   }
   EXPECT_EQ(a.sample_evaluations, b.sample_evaluations);
   EXPECT_GT(a.statistics["constraint_violated"].get<long long>(), 1000);
+}
+
+namespace {
+
+// A random sub-box with long lines of r (block bounds act on runs of a line): r on a 5 mm grid
+// over 30 to 100 points, l0, l1, l2 over 2 to 4 points of 20 mm.
+Json random_long_lines(std::mt19937& rng) {
+  Json doc = random_box(rng, 0.02, 2, 4);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const int points = 30 + static_cast<int>(u(rng) * 71);
+  const double width = 0.005 * (points - 1);
+  const double lower = 0.005 * std::floor(u(rng) * (0.6 - width) / 0.005);
+  doc["design"]["r"] = {{"lower", lower}, {"upper", lower + width}, {"step", 0.005}};
+  doc["scene"]["options"]["step"] = 0.02;
+  return doc;
+}
+
+// The five-bar, forwarding everything (line bounds and their one-run promise included), with a
+// sample envelope that claims every design of every run fails.
+class FalseEnvelope final : public hapsyn::Mechanism {
+ public:
+  explicit FalseEnvelope(std::shared_ptr<const hapsyn::Mechanism> fivebar) : fivebar_(std::move(fivebar)) {}
+  std::unique_ptr<const hapsyn::MechanismModel> build(const double* design) const override { return fivebar_->build(design); }
+  std::vector<hapsyn::VariableDecl> variables() const override { return fivebar_->variables(); }
+  std::vector<hapsyn::ConstraintDecl> constraints() const override { return fivebar_->constraints(); }
+  void evaluate_constraints(const double* design, const hapsyn::SampleSet& scene, double* g) const override {
+    fivebar_->evaluate_constraints(design, scene, g);
+  }
+  hapsyn::Needs provides() const override { return fivebar_->provides(); }
+  bool constraint_interval(const double* design, int component, const hapsyn::SampleSet& scene, double& lower,
+                           double& upper) const override {
+    return fivebar_->constraint_interval(design, component, scene, lower, upper);
+  }
+  bool constraints_quasiconvex(int component) const override { return fivebar_->constraints_quasiconvex(component); }
+  bool sample_envelope(const double*, int, double, double, const double*, hapsyn::SampleEnvelope& out) const override {
+    out = hapsyn::SampleEnvelope{};
+    out.all_fail = true;
+    return true;
+  }
+
+ private:
+  std::shared_ptr<const hapsyn::Mechanism> fivebar_;
+};
+
+}  // namespace
+
+TEST(Culling, BlockBoundsGiveTheExhaustiveOptimumOnLongLines) {
+  std::mt19937 rng(77);
+  const std::vector<Json> objective_sets = {
+      Json::array({{{"metric", "gii"}}}),
+      Json::array({{{"metric", "gdi"}}}),
+      Json::array({{{"metric", "gii"}, {"weight", 0.6}}, {{"metric", "gdi"}, {"weight", 0.4}}})};
+  int compared = 0;
+  long long ruled_out = 0, bounded = 0;
+  for (int box = 0; box < 10; ++box) {
+    Json doc = random_long_lines(rng);
+    for (const Json& objectives : objective_sets) {
+      doc["objectives"] = objectives;
+      const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+      const auto exhaustive = solve(grid_solver(Json{{"prune", false}, {"progress_interval", 1e9}}), *study.problem, 2);
+      for (int threads : {1, 2}) {
+        const hapsyn::plugins::CullingSolver culling(
+            hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(threads == 2, false)));
+        const auto culled = solve(culling, *study.problem, threads);
+        ASSERT_EQ(culled.status, exhaustive.status) << culled.message << "\n" << doc.dump();
+        ruled_out += culled.statistics["block_ruled_out"].get<long long>();
+        bounded += culled.statistics["feasible_designs"].get<long long>();
+        if (!exhaustive.best) continue;
+        EXPECT_EQ(culled.best->design, exhaustive.best->design) << doc.dump();
+        EXPECT_EQ(culled.best->score, exhaustive.best->score) << doc.dump();
+        ++compared;
+      }
+    }
+  }
+  EXPECT_GE(compared, 30);
+  EXPECT_GT(ruled_out, bounded / 4) << "the block bounds should rule out a good part of these lines";
+}
+
+TEST(Culling, BlockBoundsRuleOutRunsWithTheSameOptimumAndTotals) {
+  // On one thread the sweep is deterministic: with and without block bounds the optimum, the
+  // constraint counts and the designs ruled out in all are the same; the bounds move designs
+  // from culled / failed to block_ruled_out and save sample evaluations.
+  Json doc = hapsyn::test::fivebar_study("culling");
+  doc["design"]["r"] = {{"lower", 0.0}, {"upper", 0.6}, {"step", 0.005}};
+  doc["design"]["l0"]["step"] = 0.05;
+  doc["scene"]["options"]["step"] = 0.01;
+  for (const char* metric : {"gii", "gdi"}) {
+    doc["objectives"] = Json::array({{{"metric", metric}}});
+    const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+    Json off = culling_options(true, false);
+    off["block_bounds"] = false;
+    const hapsyn::plugins::CullingSolver with(hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(true, false)));
+    const hapsyn::plugins::CullingSolver without(hapsyn::make_options<hapsyn::plugins::CullingOptions>(off));
+    const auto a = solve(with, *study.problem, 1);
+    const auto b = solve(without, *study.problem, 1);
+    ASSERT_TRUE(a.best && b.best);
+    EXPECT_EQ(a.best->design, b.best->design);
+    EXPECT_EQ(a.best->score, b.best->score);
+    EXPECT_EQ(a.statistics["constraint_violated"], b.statistics["constraint_violated"]);
+    const auto ruled = [](const Json& st) {
+      return st["culled"].get<long long>() + st["failed_at_critical_sample"].get<long long>() +
+             st["block_ruled_out"].get<long long>() + st["full_workspace_searches"].get<long long>();
+    };
+    EXPECT_EQ(ruled(a.statistics), ruled(b.statistics)) << metric;
+    EXPECT_EQ(b.statistics["block_ruled_out"].get<long long>(), 0);
+    EXPECT_EQ(b.statistics["block_bounds"].get<long long>(), 0);
+    EXPECT_GT(a.statistics["block_ruled_out"].get<long long>(), a.statistics["feasible_designs"].get<long long>() / 3)
+        << metric;
+    EXPECT_LT(a.statistics["bound_sample_evaluations"].get<long long>() * 4,
+              b.statistics["bound_sample_evaluations"].get<long long>() * 3)
+        << metric;
+  }
+}
+
+TEST(Culling, AFalseBlockBoundStopsTheRunNamingIt) {
+  Json doc = hapsyn::test::fivebar_study("culling");
+  doc["design"]["r"] = {{"lower", 0.0}, {"upper", 0.6}, {"step", 0.005}};
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  const hapsyn::Problem& p = *study.problem;
+  const std::shared_ptr<const hapsyn::Mechanism> fivebar(std::shared_ptr<const hapsyn::Mechanism>{}, &p.mechanism());
+  const auto problem = std::make_shared<hapsyn::Problem>(
+      "false-envelope", std::make_shared<FalseEnvelope>(fivebar), std::make_shared<hapsyn::SampleSet>(p.samples()),
+      p.metrics(), p.objectives(), p.design_space());
+  const hapsyn::plugins::CullingSolver culling(hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(true, false)));
+  expect_error([&] { solve(culling, *problem, 1); },
+               {"culling: the mechanism's block bound (Mechanism::sample_envelope) is wrong: over r in [",
+                "it claims that every design fails, but grid value", "reaches the sample and scores",
+                "set solver.options.block_bounds = false"});
+  // Without block bounds the same problem runs to the optimum.
+  Json off = culling_options(true, false);
+  off["block_bounds"] = false;
+  const auto result = solve(hapsyn::plugins::CullingSolver(hapsyn::make_options<hapsyn::plugins::CullingOptions>(off)), *problem, 1);
+  EXPECT_TRUE(result.best.has_value());
 }

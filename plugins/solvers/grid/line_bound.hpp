@@ -99,6 +99,9 @@ class LineBound {
   /// The first grid index the bound does not exclude (the line's length when it excludes every
   /// design): the excluded indices are those before it and those after the run it starts.
   long long first() const { return first_; }
+  /// The last grid index the bound does not exclude (before first() when it excludes every
+  /// design).
+  long long last() const { return last_; }
   /// Designs of the line the bound excludes.
   long long excluded() const { return count_ - std::max(0LL, last_ - first_ + 1); }
 
