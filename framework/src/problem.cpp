@@ -438,7 +438,7 @@ double Problem::block_score_bound(const double* full_design, int component, doub
   constexpr double kInf = std::numeric_limits<double>::infinity();
   if (!prunable_) return kInf;  // the sum of metric bounds bounds the score only for maximized, weight >= 0
   SampleEnvelope envelope;
-  if (!mechanism_->sample_envelope(full_design, component, lower, upper, samples_->pose(sample), envelope)) return kInf;
+  if (!mechanism_->sample_envelope(full_design, component, lower, upper, samples_->pose(sample), needs_, envelope)) return kInf;
   if (envelope.all_fail) return -kInf;
   // Added as score_bound adds: each term is an upper bound, and rounded addition is monotone.
   double bound = 0.0;

@@ -104,13 +104,14 @@ class Mechanism {
   virtual bool constraints_quasiconvex(int component) const { return false; }
   /// Optional block bound of one sample for grid solvers (docs/design.md section 13.5): bounds
   /// of the quantities at the sample `pose` over every design equal to `design` (a full design
-  /// vector) except in component `component`, which runs over [lower, upper]. Fill only what is
-  /// proved, rounding included (the solver rules out whole blocks of designs on it; it
+  /// vector) except in component `component`, which runs over [lower, upper]. `needs` (Need
+  /// flags, the study's) says which quantities' bounds are wanted: skip the others. Fill only
+  /// what is proved, rounding included (the solver rules out whole blocks of designs on it; it
   /// spot-checks one design of each block it rules out and stops with an error on a false
   /// claim). Returns false when nothing is known (the default). Called for runs of a grid line
   /// (a few per line); must not allocate or throw.
   virtual bool sample_envelope(const double* design, int component, double lower, double upper, const double* pose,
-                               SampleEnvelope& out) const {
+                               Needs needs, SampleEnvelope& out) const {
     return false;
   }
   /// Optional design-lanes path (docs/design.md section 13.4): solves the one sample `pose` for

@@ -375,7 +375,7 @@ bool FiveBar::constraint_interval(const double* design, int component, const Sam
 }
 
 bool FiveBar::sample_envelope(const double* design, int component, double lower, double upper, const double* pose,
-                              SampleEnvelope& out) const {
+                              Needs needs, SampleEnvelope& out) const {
   if (component != 3) return false;  // the run's r enters as y + r: the angles are monotone in it
   const FiveBarDesign d = design_from(design);
   if (!(d.l0 >= 0.0 && d.l1 > 0.0 && d.l2 > 0.0) || !(lower <= upper)) return false;
@@ -392,7 +392,7 @@ bool FiveBar::sample_envelope(const double* design, int component, double lower,
   run.inertia_a = m1 * (4.0 * d.l1 * d.l1 + k2) / 12.0;
   run.mass_f = m2;
   run.inertia_f = m2 * (d.l2 * d.l2 + k2) / 12.0;
-  return fivebar_envelope(run, pose[0], out);
+  return fivebar_envelope(run, pose[0], (needs & kNeedEffectiveMass) != 0, out);
 }
 
 bool FiveBar::constraints_quasiconvex(int component) const {

@@ -175,7 +175,7 @@ class FiveBar final : public Mechanism {
   /// 13.5). False for other components and for runs that put the sample at or below the
   /// actuated joints' axis. O(1), no allocation.
   bool sample_envelope(const double* design, int component, double lower, double upper, const double* pose,
-                       SampleEnvelope& out) const override;
+                       Needs needs, SampleEnvelope& out) const override;
   /// The interval of r [m] on which reach_constraint(design with that r, box) <= 0, for the
   /// design's l0, l1, l2 and the box [xmin, xmax] x [ymin, ymax]: with ax the larger x distance
   /// from an actuated joint to the box and R = sqrt((l1 + l2)^2 - ax^2), the farthest corner

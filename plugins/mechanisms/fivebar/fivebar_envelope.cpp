@@ -54,8 +54,9 @@ struct LegBounds {
   bool unreachable = false;  // |E - A| outside [|l1 - l2|, l1 + l2] for every design
   Interval sin_gamma{};      // the transmission sine sin(gamma) = |sin(q1 - q2)| (or q3 - q4)
   double abs_cos_gamma_lo = 0.0;  // the smallest |cos(gamma)|
+  Interval cos_gamma{};           // cos(gamma) (clamped to [-1, 1])
   double rho_lo = 0.0, rho_hi = 0.0;  // |E - A| over the designs that reach E [m]
-  Interval theta{}, beta{};
+  Interval theta{}, beta{}, alpha{};  // alpha: the triangle's angle at A
 };
 
 // The leg with E - A = (dx, Y), Y in [y_low, y_high] > 0: rho grows with Y; theta = atan2(Y, dx)
@@ -84,7 +85,22 @@ LegBounds leg_bounds(double dx, const FiveBarRun& run) {
   const double sin_a = std::sqrt((1.0 - c_lo) * (1.0 + c_lo)), sin_b = std::sqrt((1.0 - c_hi) * (1.0 + c_hi));
   leg.sin_gamma = {std::min(sin_a, sin_b), (c_lo <= 0.0 && 0.0 <= c_hi) ? 1.0 : std::max(sin_a, sin_b)};
   leg.abs_cos_gamma_lo = (c_lo <= 0.0 && 0.0 <= c_hi) ? 0.0 : std::min(std::abs(c_lo), std::abs(c_hi));
+  leg.cos_gamma = {c_lo, c_hi};
   return leg;
+}
+
+// The angle between the side of length `a` and the side rho of a triangle with third side b,
+// over rho in [lo, hi]: cos = (rho + (a^2 - b^2) / rho) / (2 a), smallest at rho = sqrt(a^2 -
+// b^2) when a > b, monotone on either side of it (at E: a = l2, b = l1; at A: a = l1, b = l2).
+Interval triangle_angle(double a, double b, double lo, double hi) {
+  const double d = (a - b) * (a + b);
+  const auto cosine = [&](double rho) { return (rho + d / rho) / (2.0 * a); };
+  Interval c = hull(cosine(lo), cosine(hi));
+  if (d > 0.0) {
+    const double turn = std::sqrt(d);
+    if (turn > lo && turn < hi) c.lo = std::min(c.lo, cosine(turn));
+  }
+  return acos_of(c).widened(kAngleMargin);
 }
 
 // The leg's angles theta = atan2(Y, dx) (monotone in Y: increasing for dx > 0, decreasing for
@@ -92,17 +108,12 @@ LegBounds leg_bounds(double dx, const FiveBarRun& run) {
 void leg_angles(double dx, const FiveBarRun& run, LegBounds& leg) {
   const double l1 = run.l1, l2 = run.l2, lo = leg.rho_lo, hi = leg.rho_hi;
   leg.theta = hull(fast::atan2(run.y_low, dx), fast::atan2(run.y_high, dx)).widened(kAngleMargin);
-  // Angle at E: cos(beta) = (rho + (l2^2 - l1^2) / rho) / (2 l2), smallest at
-  // rho = sqrt(l2^2 - l1^2) when l2 > l1, monotone on either side of it.
-  const double d = (l2 - l1) * (l2 + l1);
-  const auto cos_beta = [&](double rho) { return (rho + d / rho) / (2.0 * l2); };
-  Interval c = hull(cos_beta(lo), cos_beta(hi));
-  if (d > 0.0) {
-    const double turn = std::sqrt(d);
-    if (turn > lo && turn < hi) c.lo = std::min(c.lo, cos_beta(turn));
-  }
-  leg.beta = acos_of(c).widened(kAngleMargin);
+  leg.beta = triangle_angle(l2, l1, lo, hi);
 }
+
+// The elbow-out leg's actuated angle q_act = theta + alpha (the model's q1, or q4 = pi - it for
+// the mirrored right leg), with alpha the triangle's angle at A.
+void leg_actuated_angle(const FiveBarRun& run, LegBounds& leg) { leg.alpha = triangle_angle(run.l1, run.l2, leg.rho_lo, leg.rho_hi); }
 
 // The largest 2 s1 s2 / (s1^2 + s2^2) = 2t / (1 + t^2), t = s1 / s2, over two intervals: 1 when
 // they overlap (t = 1), else at the closest pair of ends (the function rises to t = 1).
@@ -111,6 +122,73 @@ double sup_balance(Interval s1, Interval s2) {
   if (s1.hi < s2.lo) t = s1.hi / s2.lo;
   if (s2.hi < s1.lo) t = s2.hi / s1.lo;
   return 2.0 * t / (1.0 + t * t);
+}
+
+// Interval arithmetic for the energy along one direction. Each operation rounds by a few 1e-16
+// relative; the result's margin covers that.
+Interval operator+(Interval a, Interval b) { return {a.lo + b.lo, a.hi + b.hi}; }
+Interval operator-(Interval a) { return {-a.hi, -a.lo}; }
+Interval operator*(double k, Interval a) { return k >= 0.0 ? Interval{k * a.lo, k * a.hi} : Interval{k * a.hi, k * a.lo}; }
+Interval operator*(Interval a, Interval b) {
+  const double p[4] = {a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi};
+  return {std::min(std::min(p[0], p[1]), std::min(p[2], p[3])), std::max(std::max(p[0], p[1]), std::max(p[2], p[3]))};
+}
+Interval square(Interval a) {
+  if (a.lo >= 0.0) return {a.lo * a.lo, a.hi * a.hi};
+  if (a.hi <= 0.0) return {a.hi * a.hi, a.lo * a.lo};
+  return {0.0, std::max(a.lo * a.lo, a.hi * a.hi)};
+}
+
+// sin and cos over an angle interval: the ends, and 1 or -1 where an extremum lies inside.
+void sin_cos_of(Interval a, Interval& sine_of, Interval& cosine_of) {
+  if (a.hi - a.lo >= 2.0 * kPi) {
+    sine_of = cosine_of = {-1.0, 1.0};
+    return;
+  }
+  double s0 = 0.0, c0 = 0.0, s1 = 0.0, c1 = 0.0;
+  fast::sin_cos(a.lo, s0, c0);
+  fast::sin_cos(a.hi, s1, c1);
+  sine_of = hull(s0, s1);
+  cosine_of = hull(c0, c1);
+  const auto inside = [&](double phase) { return phase + 2.0 * kPi * std::ceil((a.lo - phase) / (2.0 * kPi)) <= a.hi; };
+  if (inside(0.5 * kPi)) sine_of.hi = 1.0;
+  if (inside(-0.5 * kPi)) sine_of.lo = -1.0;
+  if (inside(0.0)) cosine_of.hi = 1.0;
+  if (inside(kPi)) cosine_of.lo = -1.0;
+}
+
+// The kinetic energy 1/2 v^T M v of the unit task velocity v = (cos psi, sin psi), from below,
+// over the designs of the run that reach the sample (transmission sines >= the tolerance). The
+// angles in the mechanism frame: q1 = theta_1 + alpha_1, q2 = theta_1 - beta_1 (left leg); the
+// right leg is solved mirrored, so q4 = pi - (theta_2' + alpha_2), q3 = pi - (theta_2' - beta_2).
+// With b_1 = -l1 l2 sin(gamma_1) and b_2 = l1 l2 sin(gamma_2) (elbow out), qdot_1 =
+// -cos(q2 - psi) / (l1 sin(gamma_1)), qdot_4 = cos(q3 - psi) / (l1 sin(gamma_2)); the elbow
+// moves at v_B = l1 perp(u) qdot, so |v_B + v|^2 = l1^2 qdot^2 + 1 + 2 l1 qdot sin(psi - q_act);
+// the free bar turns at (sin(psi - q_free) + l1 qdot cos(gamma)) / l2 (perp(w) . perp(u) = w . u
+// = l2 cos(q_free - q_act) = -l2 cos(gamma)).
+double energy_along(const FiveBarRun& run, const LegBounds& left, const LegBounds& right, double psi) {
+  const Interval q1{left.theta.lo + left.alpha.lo - psi, left.theta.hi + left.alpha.hi - psi};
+  const Interval q2{left.theta.lo - left.beta.hi - psi, left.theta.hi - left.beta.lo - psi};
+  const Interval q4{kPi - right.theta.hi - right.alpha.hi - psi, kPi - right.theta.lo - right.alpha.lo - psi};
+  const Interval q3{kPi - right.theta.hi + right.beta.lo - psi, kPi - right.theta.lo + right.beta.hi - psi};
+  Interval s1, c1, s2, c2, s3, c3, s4, c4;  // sin and cos of q_k - psi
+  sin_cos_of(q1, s1, c1);
+  sin_cos_of(q2, s2, c2);
+  sin_cos_of(q3, s3, c3);
+  sin_cos_of(q4, s4, c4);
+  const double tol = run.singularity_tolerance;  // sines below it are singular samples
+  const Interval inv_left{1.0 / (run.l1 * left.sin_gamma.hi), 1.0 / (run.l1 * std::max(left.sin_gamma.lo, tol))};
+  const Interval inv_right{1.0 / (run.l1 * right.sin_gamma.hi), 1.0 / (run.l1 * std::max(right.sin_gamma.lo, tol))};
+  const Interval qdot1 = -(c2 * inv_left), qdot4 = c3 * inv_right;
+  const double l1 = run.l1, inv_l2 = 1.0 / run.l2;
+  const Interval one{1.0, 1.0};
+  const Interval centre1 = (l1 * l1) * square(qdot1) + one + (-2.0 * l1) * (qdot1 * s1);  // sin(psi - q1) = -s1
+  const Interval centre4 = (l1 * l1) * square(qdot4) + one + (-2.0 * l1) * (qdot4 * s4);
+  const Interval turn1 = inv_l2 * (-s2 + l1 * (qdot1 * left.cos_gamma));
+  const Interval turn2 = inv_l2 * (-s3 + l1 * (qdot4 * right.cos_gamma));
+  return run.inertia_a * (square(qdot1).lo + square(qdot4).lo) +
+         run.mass_f / 4.0 * (std::max(0.0, centre1.lo) + std::max(0.0, centre4.lo)) +
+         run.inertia_f * (square(turn1).lo + square(turn2).lo);
 }
 
 // sigma_max(M) from below: the kinetic energy 1/2 v^T M v of a unit task velocity v, over the
@@ -137,12 +215,26 @@ double effective_mass_bound(const FiveBarRun& run, const LegBounds& left, const 
   const double n_max = std::max(n1, n2);
   const double at_rest = run.inertia_a * sin_lo * sin_lo * n_max * n_max + run.mass_f / 4.0 +
                          run.inertia_f / (run.l2 * run.l2);
-  return std::max(along_top, at_rest) * (1.0 - kRelativeMargin);
+  // Along the top singular vector of J^-1 at the middle of the angles' intervals (rows e(q2) n_1
+  // and e(q3) n_2: the eigenvector of n_1^2 e e^T + n_2^2 e e^T): any direction gives a bound,
+  // this one is close to the best for narrow runs.
+  const double q2 = 0.5 * (left.theta.lo - left.beta.hi + left.theta.hi - left.beta.lo);
+  const double q3 = kPi - 0.5 * (right.theta.lo - right.beta.hi + right.theta.hi - right.beta.lo);
+  const double m1 = std::max(0.5 * (left.sin_gamma.lo + left.sin_gamma.hi), run.singularity_tolerance);
+  const double m2 = std::max(0.5 * (right.sin_gamma.lo + right.sin_gamma.hi), run.singularity_tolerance);
+  const double w1 = 1.0 / (m1 * m1), w2 = 1.0 / (m2 * m2);
+  double s2 = 0.0, c2 = 0.0, s3 = 0.0, c3 = 0.0;
+  fast::sin_cos(2.0 * q2, s2, c2);
+  fast::sin_cos(2.0 * q3, s3, c3);
+  const double psi = 0.5 * fast::atan2(w1 * s2 + w2 * s3, w1 * c2 + w2 * c3);
+  const double along_psi = energy_along(run, left, right, psi);
+  const double bound = std::max(std::max(along_top, at_rest), along_psi);
+  return bound * (1.0 - kRelativeMargin) - 1e-12 * run.inertia_a * top;
 }
 
 }  // namespace
 
-bool fivebar_envelope(const FiveBarRun& run, double x, SampleEnvelope& out) {
+bool fivebar_envelope(const FiveBarRun& run, double x, bool effective_mass, SampleEnvelope& out) {
   if (!(run.y_low > 0.0) || !(run.y_high >= run.y_low)) return false;
   out = SampleEnvelope{};
   // The model solves the left leg with dx = x + h0 and the right one mirrored, dx = h0 - x.
@@ -158,6 +250,10 @@ bool fivebar_envelope(const FiveBarRun& run, double x, SampleEnvelope& out) {
   }
   leg_angles(dx_left, run, left);
   leg_angles(dx_right, run, right);
+  if (effective_mass) {
+    leg_actuated_angle(run, left);
+    leg_actuated_angle(run, right);
+  }
   // q2 = theta_1 - beta_1 and the mirrored free angle theta_2' - beta_2 (q3 = pi - it); a free
   // link pointing down (below -margin) fails the paper's G or is singular (section 13.2).
   const Interval q2{left.theta.lo - left.beta.hi, left.theta.hi - left.beta.lo};
@@ -173,7 +269,7 @@ bool fivebar_envelope(const FiveBarRun& run, double x, SampleEnvelope& out) {
   const double g = std::min(1.0, sup_abs_sin(mode) * sup_balance(s1, s2));
   const double kappa = g / (1.0 + std::sqrt(std::max(0.0, (1.0 - g) * (1.0 + g))));
   out.jacobian_inverse_condition_max = std::min(1.0, kappa * (1.0 + kRelativeMargin) + 1e-12);
-  out.effective_mass_sigma_max_min = effective_mass_bound(run, left, right, mode);
+  if (effective_mass) out.effective_mass_sigma_max_min = effective_mass_bound(run, left, right, mode);
   return true;
 }
 

@@ -34,8 +34,9 @@ struct FiveBarRun {
   double inertia_f = 0.0;  ///< free bar about its centre [kg m^2]
 };
 
-/// Fills `out` for the sample (x, y_low .. y_high) of the run. Returns false when it proves
+/// Fills `out` for the sample (x, y_low .. y_high) of the run (the bound of sigma_max(M) only
+/// when `effective_mass` is set). Returns false when it proves
 /// nothing (part of the run at or below the actuated joints' axis, Y <= 0). No allocation.
-bool fivebar_envelope(const FiveBarRun& run, double x, SampleEnvelope& out);
+bool fivebar_envelope(const FiveBarRun& run, double x, bool effective_mass, SampleEnvelope& out);
 
 }  // namespace hapsyn::plugins

@@ -86,7 +86,7 @@ TEST(FiveBarEnvelope, EveryDesignOfRandomRunsObeysTheBounds) {
     const RandomRun run = random_run(rng);
     const double design[4] = {run.design.l0, run.design.l1, run.design.l2, run.lower};
     SampleEnvelope envelope;
-    if (!fivebar.sample_envelope(design, 3, run.lower, run.upper, run.pose, envelope)) {
+    if (!fivebar.sample_envelope(design, 3, run.lower, run.upper, run.pose, kAll, envelope)) {
       EXPECT_LE(run.pose[1] + run.lower, 0.0) << "an envelope is refused only at or below the joints' axis";
       continue;
     }
@@ -116,27 +116,32 @@ TEST(FiveBarEnvelope, EveryDesignOfRandomRunsObeysTheBounds) {
   EXPECT_GT(reached, 100000);
 }
 
-TEST(FiveBarEnvelope, ARunOfOneDesignGivesItsOwnInverseConditionNumber) {
+TEST(FiveBarEnvelope, ARunOfOneDesignGivesItsOwnInverseConditionNumberAndNearlyItsMass) {
   // Width 0: the intervals shrink to the design's angles, so the GII bound is the design's own
-  // sigma_min / sigma_max plus the margins; a wrong angle formula would show here.
+  // sigma_min / sigma_max plus the margins, and the energy along the chosen direction is close
+  // to sigma_max(M) (exact when the direction is M's top eigenvector); a wrong angle or sign in
+  // either formula would show here.
   const FiveBarOptions options = hapsyn::make_options<FiveBarOptions>(Json::object());
   const FiveBar fivebar(options);
   std::mt19937 rng(7);
-  int compared = 0;
+  int compared = 0, mass_close = 0;
   for (int trial = 0; trial < 20000; ++trial) {
     RandomRun run = random_run(rng);
     run.upper = run.lower;
     run.design.r = run.lower;
     const double design[4] = {run.design.l0, run.design.l1, run.design.l2, run.lower};
     SampleEnvelope envelope;
-    if (!fivebar.sample_envelope(design, 3, run.lower, run.upper, run.pose, envelope) || envelope.all_fail) continue;
+    if (!fivebar.sample_envelope(design, 3, run.lower, run.upper, run.pose, kAll, envelope) || envelope.all_fail) continue;
     const Exact e = solve(options, run.design, run.pose);
     if (e.status != SampleStatus::kReachable) continue;
     EXPECT_NEAR(envelope.jacobian_inverse_condition_max, e.inverse_condition, 1e-6 * (1.0 + e.inverse_condition))
         << "trial " << trial;
+    EXPECT_LE(envelope.effective_mass_sigma_max_min, e.mass) << "trial " << trial;
+    mass_close += envelope.effective_mass_sigma_max_min >= 0.95 * e.mass;
     ++compared;
   }
   EXPECT_GT(compared, 3000);
+  EXPECT_GT(mass_close, compared * 9 / 10);
 }
 
 TEST(FiveBarEnvelope, ProvesFailureOnlyWhereEveryDesignFailsAndOftenWhereOneDesignFails) {
@@ -152,7 +157,7 @@ TEST(FiveBarEnvelope, ProvesFailureOnlyWhereEveryDesignFailsAndOftenWhereOneDesi
     run.design.r = run.lower;
     const double design[4] = {run.design.l0, run.design.l1, run.design.l2, run.lower};
     SampleEnvelope envelope;
-    if (!fivebar.sample_envelope(design, 3, run.lower, run.upper, run.pose, envelope)) continue;
+    if (!fivebar.sample_envelope(design, 3, run.lower, run.upper, run.pose, kAll, envelope)) continue;
     const Exact e = solve(options, run.design, run.pose);
     if (e.status == SampleStatus::kReachable) {
       EXPECT_FALSE(envelope.all_fail) << "trial " << trial;
@@ -170,11 +175,11 @@ TEST(FiveBarEnvelope, OnlyForRAndAboveTheJointsAxis) {
   const double design[4] = {0.01, 0.2, 0.25, 0.3};
   const double pose[2] = {0.02, -0.05};
   SampleEnvelope envelope;
-  for (int component : {0, 1, 2}) EXPECT_FALSE(fivebar.sample_envelope(design, component, 0.1, 0.2, pose, envelope));
-  EXPECT_TRUE(fivebar.sample_envelope(design, 3, 0.1, 0.2, pose, envelope));
-  EXPECT_FALSE(fivebar.sample_envelope(design, 3, 0.0, 0.2, pose, envelope));   // y + r = -0.05 at r = 0
-  EXPECT_FALSE(fivebar.sample_envelope(design, 3, 0.05, 0.2, pose, envelope));  // y + r = 0: on the axis
-  EXPECT_FALSE(fivebar.sample_envelope(design, 3, 0.2, 0.1, pose, envelope));   // an empty run
+  for (int component : {0, 1, 2}) EXPECT_FALSE(fivebar.sample_envelope(design, component, 0.1, 0.2, pose, kAll, envelope));
+  EXPECT_TRUE(fivebar.sample_envelope(design, 3, 0.1, 0.2, pose, kAll, envelope));
+  EXPECT_FALSE(fivebar.sample_envelope(design, 3, 0.0, 0.2, pose, kAll, envelope));   // y + r = -0.05 at r = 0
+  EXPECT_FALSE(fivebar.sample_envelope(design, 3, 0.05, 0.2, pose, kAll, envelope));  // y + r = 0: on the axis
+  EXPECT_FALSE(fivebar.sample_envelope(design, 3, 0.2, 0.1, pose, kAll, envelope));   // an empty run
 }
 
 }  // namespace

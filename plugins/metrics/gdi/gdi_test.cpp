@@ -136,3 +136,12 @@ TEST(Gdi, HasNoOptionsAndRefusesAnyKey) {
 }
 
 }  // namespace
+
+TEST(Gdi, EnvelopeBoundIsOneOverOnePlusTheSmallestMass) {
+  hapsyn::SampleEnvelope envelope;
+  EXPECT_EQ(Gdi().envelope_bound(envelope), 1.0);  // nothing known: GDI <= 1 always
+  envelope.effective_mass_sigma_max_min = 1.0;
+  EXPECT_EQ(Gdi().envelope_bound(envelope), 0.5);
+  // A sample of mass 3 kg scores 0.25 <= 0.5.
+  EXPECT_LE(gdi_of({matrix2(3.0, 0.0, 0.0, 1.0)}), Gdi().envelope_bound(envelope));
+}

@@ -227,3 +227,19 @@ TEST(Gii, MixedJacobianUsesTheDeclaredRowsOrRefuses) {
 }
 
 }  // namespace
+
+TEST(Gii, EnvelopeBoundIsTheInverseConditionBoundOnlyForJAsReturned) {
+  // One sample of inverse condition number 0.5 scores 0.5: an envelope claiming at most 0.6
+  // bounds it; without the field (the default) there is no bound.
+  hapsyn::SampleEnvelope envelope;
+  EXPECT_EQ(Gii().envelope_bound(envelope), std::numeric_limits<double>::infinity());
+  envelope.jacobian_inverse_condition_max = 0.6;
+  EXPECT_EQ(Gii().envelope_bound(envelope), 0.6);
+  EXPECT_LE(gii_of({matrix2(2.0, 0.0, 0.0, 1.0)}), Gii().envelope_bound(envelope));
+  // With rows or a characteristic length that change J, the mechanism's bound of J says nothing.
+  const auto with = [](const Json& options) {
+    return Gii(hapsyn::make_options<hapsyn::plugins::GiiOptions>(options));
+  };
+  EXPECT_EQ(with(Json{{"rows", "translational"}}).envelope_bound(envelope), std::numeric_limits<double>::infinity());
+  EXPECT_EQ(with(Json{{"characteristic_length", 0.1}}).envelope_bound(envelope), std::numeric_limits<double>::infinity());
+}

@@ -551,7 +551,8 @@ class FalseEnvelope final : public hapsyn::Mechanism {
     return fivebar_->constraint_interval(design, component, scene, lower, upper);
   }
   bool constraints_quasiconvex(int component) const override { return fivebar_->constraints_quasiconvex(component); }
-  bool sample_envelope(const double*, int, double, double, const double*, hapsyn::SampleEnvelope& out) const override {
+  bool sample_envelope(const double*, int, double, double, const double*, hapsyn::Needs,
+                       hapsyn::SampleEnvelope& out) const override {
     out = hapsyn::SampleEnvelope{};
     out.all_fail = true;
     return true;
