@@ -21,8 +21,9 @@ means hapsyn is faster):
 - numpy: the plain NumPy exhaustive 10 mm GII search on one core (numpy-grid), with the
   optimum check; the reference of the culling target.
 - paper: the paper-resolution culling studies problems/fivebar-gii-culling-paper.json and
-  fivebar-gdi-culling-paper.json (--threads 2), as a ratio against the NumPy search. About a
-  minute each; --skip-paper leaves them out.
+  fivebar-gdi-culling-paper.json (--threads 2), as a ratio against the NumPy search, each also
+  with solver.options.block_bounds=false (the sweep without block bounds, docs/design.md
+  section 13.5) as the same run's baseline. Up to a minute each; --skip-paper leaves them out.
 
 Options: --hapsyn PATH (default $HAPSYN, else build/bin/hapsyn under the repository root),
 --only grid,nsga2,numpy,paper, --repeats N (3), --out FILE (JSON: every figure, the hapsyn
@@ -251,10 +252,15 @@ def row_numpy(runner, report, table):
 
 def row_paper(runner, report, table):
     numpy_s = report.get("numpy_seconds")
-    for label, problem in PAPER:
+    # Each study with block bounds (the default) and without them (the previous version's sweep),
+    # in the same run: the baseline of the block bounds' gain.
+    variants = [("", []), (", no block bounds", ["solver.options.block_bounds=false"])]
+    for (base_label, problem), (suffix, sets) in [(p, v) for p in PAPER for v in variants]:
+        label = base_label + suffix
         wait_quiet(runner.args, label)
         before = load()
-        result, wall, argv = runner.hapsyn_run(os.path.join(ROOT, problem), 2, os.path.basename(problem)[:-5])
+        result, wall, argv = runner.hapsyn_run(os.path.join(ROOT, problem), 2,
+                                               os.path.basename(problem)[:-5] + ("-noblock" if sets else ""), sets)
         after = load()
         s = solve_seconds(result)
         entry = {"row": label, "kind": "paper", "threads": 2,

@@ -22,14 +22,13 @@ struct Interval {
 
 Interval hull(double a, double b) { return {std::min(a, b), std::max(a, b)}; }
 
-// The inline sine, arc tangent and arc cosine of hapsyn/fast_math.hpp (absolute errors below
+// The inline sine and arc tangent of hapsyn/fast_math.hpp (absolute errors below
 // 1e-15 rad, far inside the margins): libm's calls were most of an envelope's cost.
 double sine(double a) {
   double s = 0.0, c = 0.0;
   fast::sin_cos(a, s, c);
   return s;
 }
-double arc_cos(double c) { return fast::atan2(std::sqrt((1.0 - c) * (1.0 + c)), c); }
 
 // Largest and smallest |sin| over an angle interval.
 double sup_abs_sin(Interval a) {
@@ -44,10 +43,6 @@ double inf_abs_sin(Interval a) {
   return std::min(std::abs(sine(a.lo)), std::abs(sine(a.hi)));
 }
 
-// acos over an interval of cosines (clamped to [-1, 1]): decreasing.
-Interval acos_of(Interval c) {
-  return {arc_cos(std::clamp(c.hi, -1.0, 1.0)), arc_cos(std::clamp(c.lo, -1.0, 1.0))};
-}
 
 // What one leg contributes: its triangle's angles over the run, for the designs that reach E.
 struct LegBounds {
@@ -56,7 +51,8 @@ struct LegBounds {
   double abs_cos_gamma_lo = 0.0;  // the smallest |cos(gamma)|
   Interval cos_gamma{};           // cos(gamma) (clamped to [-1, 1])
   double rho_lo = 0.0, rho_hi = 0.0;  // |E - A| over the designs that reach E [m]
-  Interval theta{}, beta{}, alpha{};  // alpha: the triangle's angle at A
+  Interval free{};  // the free link's angle theta - beta (q2; for the mirrored right leg pi - q3)
+  Interval act{};   // the actuated link's angle theta + alpha (q1; mirrored: pi - q4)
 };
 
 // The leg with E - A = (dx, Y), Y in [y_low, y_high] > 0: rho grows with Y; theta = atan2(Y, dx)
@@ -89,10 +85,11 @@ LegBounds leg_bounds(double dx, const FiveBarRun& run) {
   return leg;
 }
 
-// The angle between the side of length `a` and the side rho of a triangle with third side b,
-// over rho in [lo, hi]: cos = (rho + (a^2 - b^2) / rho) / (2 a), smallest at rho = sqrt(a^2 -
-// b^2) when a > b, monotone on either side of it (at E: a = l2, b = l1; at A: a = l1, b = l2).
-Interval triangle_angle(double a, double b, double lo, double hi) {
+// The cosine of the angle between the side of length `a` and the side rho of a triangle with
+// third side b, over rho in [lo, hi]: (rho + (a^2 - b^2) / rho) / (2 a), smallest at rho =
+// sqrt(a^2 - b^2) when a > b, monotone on either side of it (at E: a = l2, b = l1, the angle
+// beta; at A: a = l1, b = l2, the angle alpha). Clamped to [-1, 1] and widened by the margin.
+Interval triangle_cosine(double a, double b, double lo, double hi) {
   const double d = (a - b) * (a + b);
   const auto cosine = [&](double rho) { return (rho + d / rho) / (2.0 * a); };
   Interval c = hull(cosine(lo), cosine(hi));
@@ -100,20 +97,53 @@ Interval triangle_angle(double a, double b, double lo, double hi) {
     const double turn = std::sqrt(d);
     if (turn > lo && turn < hi) c.lo = std::min(c.lo, cosine(turn));
   }
-  return acos_of(c).widened(kAngleMargin);
+  return {std::max(-1.0, c.lo - kAngleMargin), std::min(1.0, c.hi + kAngleMargin)};
 }
 
-// The leg's angles theta = atan2(Y, dx) (monotone in Y: increasing for dx > 0, decreasing for
-// dx < 0, so a hull of the ends) and beta (see below), for the designs that reach E.
+// (dx, y) turned by acos(c), clockwise (turn = -1) or counter-clockwise (turn = +1): its atan2
+// is atan2(y, dx) -+ acos(c) modulo 2 pi, one arc tangent instead of two.
+struct Turned {
+  double x, y;
+  double angle() const { return fast::atan2(y, x); }
+  // Within 1e-6 rad of atan2's branch cut at +-pi.
+  bool near_cut() const { return x < 0.0 && std::abs(y) <= 1e-6 * -x; }
+  // Within 1e-6 rad of 0.
+  bool near_zero() const { return x > 0.0 && std::abs(y) <= 1e-6 * x; }
+};
+Turned turned(double dx, double y, double c, double turn) {
+  const double s = std::sqrt((1.0 - c) * (1.0 + c)) * turn;
+  return {dx * c - y * s, y * c + dx * s};
+}
+
+// The leg's angles over the run, for the designs that reach E: theta = atan2(Y, dx) is monotone
+// in Y (increasing for dx > 0, decreasing for dx < 0), so its extremes are at the run's ends,
+// and the free link's angle theta - beta lies in (-pi, pi): its lower end is the smaller theta
+// minus the larger beta, one atan2 of a rotated vector (likewise the upper end).
 void leg_angles(double dx, const FiveBarRun& run, LegBounds& leg) {
-  const double l1 = run.l1, l2 = run.l2, lo = leg.rho_lo, hi = leg.rho_hi;
-  leg.theta = hull(fast::atan2(run.y_low, dx), fast::atan2(run.y_high, dx)).widened(kAngleMargin);
-  leg.beta = triangle_angle(l2, l1, lo, hi);
+  const double y_small = dx >= 0.0 ? run.y_low : run.y_high, y_large = dx >= 0.0 ? run.y_high : run.y_low;
+  const Interval beta_cos = triangle_cosine(run.l2, run.l1, leg.rho_lo, leg.rho_hi);
+  const Turned lo = turned(dx, y_small, beta_cos.lo, -1.0), hi = turned(dx, y_large, beta_cos.hi, -1.0);
+  // Near the cut the atan2 may land on the wrong side: the conservative end (the true angle
+  // lies inside (-pi, pi)).
+  leg.free = {lo.near_cut() ? -kPi : lo.angle(), hi.near_cut() ? kPi : hi.angle()};
+  if (!(leg.free.lo <= leg.free.hi)) leg.free = {-kPi, kPi};
+  leg.free = leg.free.widened(2.0 * kAngleMargin);
 }
 
-// The elbow-out leg's actuated angle q_act = theta + alpha (the model's q1, or q4 = pi - it for
-// the mirrored right leg), with alpha the triangle's angle at A.
-void leg_actuated_angle(const FiveBarRun& run, LegBounds& leg) { leg.alpha = triangle_angle(run.l1, run.l2, leg.rho_lo, leg.rho_hi); }
+// The actuated link's angle theta + alpha in (0, 2 pi) (the model's q1, or q4 = pi - it for the
+// mirrored right leg), alpha the triangle's angle at A, in the same way.
+void leg_actuated_angle(double dx, const FiveBarRun& run, LegBounds& leg) {
+  const double y_small = dx >= 0.0 ? run.y_low : run.y_high, y_large = dx >= 0.0 ? run.y_high : run.y_low;
+  const Interval alpha_cos = triangle_cosine(run.l1, run.l2, leg.rho_lo, leg.rho_hi);
+  const Turned lo_turned = turned(dx, y_small, alpha_cos.hi, 1.0), hi_turned = turned(dx, y_large, alpha_cos.lo, 1.0);
+  // atan2 gives the angle modulo 2 pi in (-pi, pi], so an angle in (0, 2 pi) is it or it plus
+  // 2 pi; near 0 it could be 0+ or 2 pi-: then the whole range.
+  double lo = lo_turned.angle(), hi = hi_turned.angle();
+  if (lo <= 0.0) lo += 2.0 * kPi;
+  if (hi <= 0.0) hi += 2.0 * kPi;
+  const bool unsure = lo_turned.near_zero() || hi_turned.near_zero() || !(lo <= hi);
+  leg.act = (unsure ? Interval{0.0, 2.0 * kPi} : Interval{lo, hi}).widened(2.0 * kAngleMargin);
+}
 
 // The largest 2 s1 s2 / (s1^2 + s2^2) = 2t / (1 + t^2), t = s1 / s2, over two intervals: 1 when
 // they overlap (t = 1), else at the closest pair of ends (the function rises to t = 1).
@@ -167,10 +197,10 @@ void sin_cos_of(Interval a, Interval& sine_of, Interval& cosine_of) {
 // the free bar turns at (sin(psi - q_free) + l1 qdot cos(gamma)) / l2 (perp(w) . perp(u) = w . u
 // = l2 cos(q_free - q_act) = -l2 cos(gamma)).
 double energy_along(const FiveBarRun& run, const LegBounds& left, const LegBounds& right, double psi) {
-  const Interval q1{left.theta.lo + left.alpha.lo - psi, left.theta.hi + left.alpha.hi - psi};
-  const Interval q2{left.theta.lo - left.beta.hi - psi, left.theta.hi - left.beta.lo - psi};
-  const Interval q4{kPi - right.theta.hi - right.alpha.hi - psi, kPi - right.theta.lo - right.alpha.lo - psi};
-  const Interval q3{kPi - right.theta.hi + right.beta.lo - psi, kPi - right.theta.lo + right.beta.hi - psi};
+  const Interval q1{left.act.lo - psi, left.act.hi - psi};
+  const Interval q2{left.free.lo - psi, left.free.hi - psi};
+  const Interval q4{kPi - right.act.hi - psi, kPi - right.act.lo - psi};
+  const Interval q3{kPi - right.free.hi - psi, kPi - right.free.lo - psi};
   Interval s1, c1, s2, c2, s3, c3, s4, c4;  // sin and cos of q_k - psi
   sin_cos_of(q1, s1, c1);
   sin_cos_of(q2, s2, c2);
@@ -218,8 +248,8 @@ double effective_mass_bound(const FiveBarRun& run, const LegBounds& left, const 
   // Along the top singular vector of J^-1 at the middle of the angles' intervals (rows e(q2) n_1
   // and e(q3) n_2: the eigenvector of n_1^2 e e^T + n_2^2 e e^T): any direction gives a bound,
   // this one is close to the best for narrow runs.
-  const double q2 = 0.5 * (left.theta.lo - left.beta.hi + left.theta.hi - left.beta.lo);
-  const double q3 = kPi - 0.5 * (right.theta.lo - right.beta.hi + right.theta.hi - right.beta.lo);
+  const double q2 = 0.5 * (left.free.lo + left.free.hi);
+  const double q3 = kPi - 0.5 * (right.free.lo + right.free.hi);
   const double m1 = std::max(0.5 * (left.sin_gamma.lo + left.sin_gamma.hi), run.singularity_tolerance);
   const double m2 = std::max(0.5 * (right.sin_gamma.lo + right.sin_gamma.hi), run.singularity_tolerance);
   const double w1 = 1.0 / (m1 * m1), w2 = 1.0 / (m2 * m2);
@@ -251,13 +281,12 @@ bool fivebar_envelope(const FiveBarRun& run, double x, bool effective_mass, Samp
   leg_angles(dx_left, run, left);
   leg_angles(dx_right, run, right);
   if (effective_mass) {
-    leg_actuated_angle(run, left);
-    leg_actuated_angle(run, right);
+    leg_actuated_angle(dx_left, run, left);
+    leg_actuated_angle(dx_right, run, right);
   }
   // q2 = theta_1 - beta_1 and the mirrored free angle theta_2' - beta_2 (q3 = pi - it); a free
   // link pointing down (below -margin) fails the paper's G or is singular (section 13.2).
-  const Interval q2{left.theta.lo - left.beta.hi, left.theta.hi - left.beta.lo};
-  const Interval q3_mirrored{right.theta.lo - right.beta.hi, right.theta.hi - right.beta.lo};
+  const Interval q2 = left.free, q3_mirrored = right.free;
   const Interval mode{kPi - q3_mirrored.hi - q2.hi, kPi - q3_mirrored.lo - q2.lo};  // q3 - q2
   if (q2.hi < -1e-6 || q3_mirrored.hi < -1e-6 || mode.hi < -1e-6 || sup_abs_sin(mode) < tol) {
     out.all_fail = true;
