@@ -116,30 +116,38 @@ TEST(FiveBarEnvelope, EveryDesignOfRandomRunsObeysTheBounds) {
   EXPECT_GT(reached, 100000);
 }
 
-TEST(FiveBarEnvelope, ARunOfOneDesignGivesItsOwnInverseConditionNumberAndNearlyItsMass) {
-  // Width 0: the intervals shrink to the design's angles, so the GII bound is the design's own
-  // sigma_min / sigma_max plus the margins, and the energy along the chosen direction is close
-  // to sigma_max(M) (exact when the direction is M's top eigenvector); a wrong angle or sign in
-  // either formula would show here.
+// Runs of one design (r_lo = r_hi = r) of `trials` random draws: check(trial, envelope, exact)
+// for each that has an envelope.
+template <class Check>
+void for_runs_of_one_design(unsigned seed, int trials, const Check& check) {
   const FiveBarOptions options = hapsyn::make_options<FiveBarOptions>(Json::object());
   const FiveBar fivebar(options);
-  std::mt19937 rng(7);
-  int compared = 0, mass_close = 0;
-  for (int trial = 0; trial < 20000; ++trial) {
+  std::mt19937 rng(seed);
+  for (int trial = 0; trial < trials; ++trial) {
     RandomRun run = random_run(rng);
     run.upper = run.lower;
     run.design.r = run.lower;
     const double design[4] = {run.design.l0, run.design.l1, run.design.l2, run.lower};
     SampleEnvelope envelope;
-    if (!fivebar.sample_envelope(design, 3, run.lower, run.upper, run.pose, kAll, envelope) || envelope.all_fail) continue;
-    const Exact e = solve(options, run.design, run.pose);
-    if (e.status != SampleStatus::kReachable) continue;
+    if (!fivebar.sample_envelope(design, 3, run.lower, run.upper, run.pose, kAll, envelope)) continue;
+    check(trial, envelope, solve(options, run.design, run.pose));
+  }
+}
+
+TEST(FiveBarEnvelope, ARunOfOneDesignGivesItsOwnInverseConditionNumberAndNearlyItsMass) {
+  // Width 0: the intervals shrink to the design's angles, so the GII bound is the design's own
+  // sigma_min / sigma_max plus the margins, and the energy along the chosen direction is close
+  // to sigma_max(M) (exact when the direction is M's top eigenvector); a wrong angle or sign in
+  // either formula would show here.
+  int compared = 0, mass_close = 0;
+  for_runs_of_one_design(7, 20000, [&](int trial, const SampleEnvelope& envelope, const Exact& e) {
+    if (envelope.all_fail || e.status != SampleStatus::kReachable) return;
     EXPECT_NEAR(envelope.jacobian_inverse_condition_max, e.inverse_condition, 1e-6 * (1.0 + e.inverse_condition))
         << "trial " << trial;
     EXPECT_LE(envelope.effective_mass_sigma_max_min, e.mass) << "trial " << trial;
     mass_close += envelope.effective_mass_sigma_max_min >= 0.95 * e.mass;
     ++compared;
-  }
+  });
   EXPECT_GT(compared, 3000);
   EXPECT_GT(mass_close, compared * 9 / 10);
 }
@@ -147,25 +155,15 @@ TEST(FiveBarEnvelope, ARunOfOneDesignGivesItsOwnInverseConditionNumberAndNearlyI
 TEST(FiveBarEnvelope, ProvesFailureOnlyWhereEveryDesignFailsAndOftenWhereOneDesignFails) {
   // A run of one design whose sample fails is proved failing in most cases (the envelope's
   // failure tests follow the model's classification), and never one that reaches the sample.
-  const FiveBarOptions options = hapsyn::make_options<FiveBarOptions>(Json::object());
-  const FiveBar fivebar(options);
-  std::mt19937 rng(11);
   int failing = 0, proved = 0;
-  for (int trial = 0; trial < 20000; ++trial) {
-    RandomRun run = random_run(rng);
-    run.upper = run.lower;
-    run.design.r = run.lower;
-    const double design[4] = {run.design.l0, run.design.l1, run.design.l2, run.lower};
-    SampleEnvelope envelope;
-    if (!fivebar.sample_envelope(design, 3, run.lower, run.upper, run.pose, kAll, envelope)) continue;
-    const Exact e = solve(options, run.design, run.pose);
+  for_runs_of_one_design(11, 20000, [&](int trial, const SampleEnvelope& envelope, const Exact& e) {
     if (e.status == SampleStatus::kReachable) {
       EXPECT_FALSE(envelope.all_fail) << "trial " << trial;
-      continue;
+      return;
     }
     ++failing;
     proved += envelope.all_fail;
-  }
+  });
   EXPECT_GT(failing, 3000);
   EXPECT_GT(proved, failing * 9 / 10);
 }

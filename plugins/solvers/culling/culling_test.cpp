@@ -2,6 +2,7 @@
 #include "culling.hpp"
 
 #include "../grid/grid.hpp"
+#include "grid/forwarding_mechanism.hpp"
 #include "grid/rank_test_support.hpp"
 #include "grid/stop_test_support.hpp"
 #include "test_support.hpp"
@@ -30,6 +31,12 @@ Json culling_options(bool seed, bool polish) {
               {"sqp_max_evaluations", 60}, {"progress_interval", 1e9}};
 }
 
+// GII, GDI and a weighted sum of both.
+std::vector<Json> worst_case_objective_sets() {
+  return {Json::array({{{"metric", "gii"}}}), Json::array({{{"metric", "gdi"}}}),
+          Json::array({{{"metric", "gii"}, {"weight", 0.6}}, {{"metric", "gdi"}, {"weight", 0.4}}})};
+}
+
 // A random sub-box of the paper's bounds on a grid of the given step.
 Json random_box(std::mt19937& rng, double step, int min_points, int max_points) {
   Json doc = hapsyn::test::fivebar_study("culling");
@@ -48,10 +55,7 @@ Json random_box(std::mt19937& rng, double step, int min_points, int max_points) 
 
 TEST(Culling, ReturnsTheExhaustiveOptimumOnRandomSubBoxes) {
   std::mt19937 rng(2024);
-  const std::vector<Json> objective_sets = {
-      Json::array({{{"metric", "gii"}}}),
-      Json::array({{{"metric", "gdi"}}}),
-      Json::array({{{"metric", "gii"}, {"weight", 0.6}}, {{"metric", "gdi"}, {"weight", 0.4}}})};
+  const std::vector<Json> objective_sets = worst_case_objective_sets();
   int compared = 0;
   for (int box = 0; box < 12; ++box) {
     Json doc = random_box(rng, box < 6 ? 0.02 : 0.01, 4, 9);
@@ -536,40 +540,23 @@ Json random_long_lines(std::mt19937& rng) {
 
 // The five-bar, forwarding everything (line bounds and their one-run promise included), with a
 // sample envelope that claims every design of every run fails.
-class FalseEnvelope final : public hapsyn::Mechanism {
+class FalseEnvelope final : public hapsyn::test::ForwardingMechanism {
  public:
-  explicit FalseEnvelope(std::shared_ptr<const hapsyn::Mechanism> fivebar) : fivebar_(std::move(fivebar)) {}
-  std::unique_ptr<const hapsyn::MechanismModel> build(const double* design) const override { return fivebar_->build(design); }
-  std::vector<hapsyn::VariableDecl> variables() const override { return fivebar_->variables(); }
-  std::vector<hapsyn::ConstraintDecl> constraints() const override { return fivebar_->constraints(); }
-  void evaluate_constraints(const double* design, const hapsyn::SampleSet& scene, double* g) const override {
-    fivebar_->evaluate_constraints(design, scene, g);
-  }
-  hapsyn::Needs provides() const override { return fivebar_->provides(); }
-  bool constraint_interval(const double* design, int component, const hapsyn::SampleSet& scene, double& lower,
-                           double& upper) const override {
-    return fivebar_->constraint_interval(design, component, scene, lower, upper);
-  }
-  bool constraints_quasiconvex(int component) const override { return fivebar_->constraints_quasiconvex(component); }
+  using ForwardingMechanism::ForwardingMechanism;
+  bool constraints_quasiconvex(int component) const override { return inner().constraints_quasiconvex(component); }
   bool sample_envelope(const double*, int, double, double, const double*, hapsyn::Needs,
                        hapsyn::SampleEnvelope& out) const override {
     out = hapsyn::SampleEnvelope{};
     out.all_fail = true;
     return true;
   }
-
- private:
-  std::shared_ptr<const hapsyn::Mechanism> fivebar_;
 };
 
 }  // namespace
 
 TEST(Culling, BlockBoundsGiveTheExhaustiveOptimumOnLongLines) {
   std::mt19937 rng(77);
-  const std::vector<Json> objective_sets = {
-      Json::array({{{"metric", "gii"}}}),
-      Json::array({{{"metric", "gdi"}}}),
-      Json::array({{{"metric", "gii"}, {"weight", 0.6}}, {{"metric", "gdi"}, {"weight", 0.4}}})};
+  const std::vector<Json> objective_sets = worst_case_objective_sets();
   int compared = 0;
   long long ruled_out = 0, bounded = 0;
   for (int box = 0; box < 10; ++box) {

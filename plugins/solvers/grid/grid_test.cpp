@@ -3,6 +3,7 @@
 #include "line_bound.hpp"
 
 #include "analytic_problems.hpp"
+#include "forwarding_mechanism.hpp"
 #include "rank_test_support.hpp"
 #include "stop_test_support.hpp"
 #include "test_support.hpp"
@@ -656,29 +657,12 @@ Json without_seconds(Json statistics) {
 
 // The five-bar's model, constraints and constraint interval, without its one-run promise
 // (constraints_quasiconvex keeps the default false).
-class WithoutPromise : public hapsyn::Mechanism {
- public:
-  explicit WithoutPromise(std::shared_ptr<const hapsyn::Mechanism> fivebar) : fivebar_(std::move(fivebar)) {}
-  std::unique_ptr<const hapsyn::MechanismModel> build(const double* design) const override { return fivebar_->build(design); }
-  std::vector<hapsyn::VariableDecl> variables() const override { return fivebar_->variables(); }
-  std::vector<hapsyn::ConstraintDecl> constraints() const override { return fivebar_->constraints(); }
-  void evaluate_constraints(const double* design, const hapsyn::SampleSet& scene, double* g) const override {
-    fivebar_->evaluate_constraints(design, scene, g);
-  }
-  hapsyn::Needs provides() const override { return fivebar_->provides(); }
-  bool constraint_interval(const double* design, int component, const hapsyn::SampleSet& scene, double& lower,
-                           double& upper) const override {
-    return fivebar_->constraint_interval(design, component, scene, lower, upper);
-  }
-
- private:
-  std::shared_ptr<const hapsyn::Mechanism> fivebar_;
-};
+using WithoutPromise = hapsyn::test::ForwardingMechanism;
 
 // The five-bar with a constraint interval that cuts 0.1 m off the top of the true one.
 class NarrowedBound final : public WithoutPromise {
  public:
-  using WithoutPromise::WithoutPromise;
+  using WithoutPromise::ForwardingMechanism;
   bool constraint_interval(const double* design, int component, const hapsyn::SampleSet& scene, double& lower,
                            double& upper) const override {
     if (!WithoutPromise::constraint_interval(design, component, scene, lower, upper)) return false;

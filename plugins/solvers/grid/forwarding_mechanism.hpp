@@ -1,0 +1,35 @@
+#pragma once
+/// \file
+/// Test support for grid and culling tests: a mechanism that forwards to another (the five-bar)
+/// its model, variables, constraints and constraint interval, and nothing else (no one-run
+/// promise, no envelope, no design lanes), so that a test can add or change one claim.
+#include <hapsyn/mechanism.hpp>
+
+#include <memory>
+#include <vector>
+
+namespace hapsyn::test {
+
+class ForwardingMechanism : public Mechanism {
+ public:
+  explicit ForwardingMechanism(std::shared_ptr<const Mechanism> inner) : inner_(std::move(inner)) {}
+  std::unique_ptr<const MechanismModel> build(const double* design) const override { return inner_->build(design); }
+  std::vector<VariableDecl> variables() const override { return inner_->variables(); }
+  std::vector<ConstraintDecl> constraints() const override { return inner_->constraints(); }
+  void evaluate_constraints(const double* design, const SampleSet& scene, double* g) const override {
+    inner_->evaluate_constraints(design, scene, g);
+  }
+  Needs provides() const override { return inner_->provides(); }
+  bool constraint_interval(const double* design, int component, const SampleSet& scene, double& lower,
+                           double& upper) const override {
+    return inner_->constraint_interval(design, component, scene, lower, upper);
+  }
+
+ protected:
+  const Mechanism& inner() const { return *inner_; }
+
+ private:
+  std::shared_ptr<const Mechanism> inner_;
+};
+
+}  // namespace hapsyn::test
