@@ -50,7 +50,7 @@ struct LegBounds {
   Interval sin_gamma{};      // the transmission sine sin(gamma) = |sin(q1 - q2)| (or q3 - q4)
   double abs_cos_gamma_lo = 0.0;  // the smallest |cos(gamma)|
   Interval cos_gamma{};           // cos(gamma) (clamped to [-1, 1])
-  double rho_lo = 0.0, rho_hi = 0.0;  // |E - A| over the designs that reach E [m]
+  double rho_lo = 0.0, rho_hi = 0.0;  // |E - A| over the designs that reach E [m] (squared before leg_angles)
   Interval free{};  // the free link's angle theta - beta (q2; for the mirrored right leg pi - q3)
   Interval act{};   // the actuated link's angle theta + alpha (q1; mirrored: pi - q4)
 };
@@ -60,23 +60,25 @@ struct LegBounds {
 LegBounds leg_bounds(double dx, const FiveBarRun& run) {
   LegBounds leg;
   const double l1 = run.l1, l2 = run.l2;
-  const double rho_low = std::sqrt(dx * dx + run.y_low * run.y_low) * (1.0 - 1e-12);
-  const double rho_high = std::sqrt(dx * dx + run.y_high * run.y_high) * (1.0 + 1e-12);
+  // Squares first: the reach test and the elbow angle need no square root.
+  const double rho2_low = (dx * dx + run.y_low * run.y_low) * (1.0 - 1e-12);
+  const double rho2_high = (dx * dx + run.y_high * run.y_high) * (1.0 + 1e-12);
   const double reach_min = std::abs(l1 - l2), reach_max = l1 + l2;
-  if (rho_low > reach_max * (1.0 + kRelativeMargin) || rho_high < reach_min * (1.0 - kRelativeMargin)) {
+  if (rho2_low > reach_max * reach_max * (1.0 + kRelativeMargin) ||
+      rho2_high < reach_min * reach_min * (1.0 - kRelativeMargin)) {
     leg.unreachable = true;
     return leg;
   }
   // Only designs that reach E matter for the bounds below.
-  const double lo = std::max(rho_low, reach_min), hi = std::min(rho_high, reach_max);
-  leg.rho_lo = lo;
-  leg.rho_hi = hi;
+  const double lo2 = std::max(rho2_low, reach_min * reach_min), hi2 = std::min(rho2_high, reach_max * reach_max);
+  leg.rho_lo = lo2;  // squared until leg_angles needs the lengths
+  leg.rho_hi = hi2;
   // Elbow angle: cos(gamma) = (l1^2 + l2^2 - rho^2) / (2 l1 l2), decreasing in rho; sin(gamma)
   // = sqrt(1 - cos^2) is concave in gamma on [0, pi], so its minimum is at an end. (A margin of
   // 1e-9 on the cosine covers one of 1e-9 rad on gamma.)
   const double inv_gamma = 1.0 / (2.0 * l1 * l2);
-  const Interval cos_gamma = Interval{(l1 * l1 + l2 * l2 - hi * hi) * inv_gamma,
-                                      (l1 * l1 + l2 * l2 - lo * lo) * inv_gamma}.widened(kAngleMargin);
+  const Interval cos_gamma = Interval{(l1 * l1 + l2 * l2 - hi2) * inv_gamma,
+                                      (l1 * l1 + l2 * l2 - lo2) * inv_gamma}.widened(kAngleMargin);
   const double c_lo = std::clamp(cos_gamma.lo, -1.0, 1.0), c_hi = std::clamp(cos_gamma.hi, -1.0, 1.0);
   const double sin_a = std::sqrt((1.0 - c_lo) * (1.0 + c_lo)), sin_b = std::sqrt((1.0 - c_hi) * (1.0 + c_hi));
   leg.sin_gamma = {std::min(sin_a, sin_b), (c_lo <= 0.0 && 0.0 <= c_hi) ? 1.0 : std::max(sin_a, sin_b)};
@@ -120,6 +122,8 @@ Turned turned(double dx, double y, double c, double turn) {
 // and the free link's angle theta - beta lies in (-pi, pi): its lower end is the smaller theta
 // minus the larger beta, one atan2 of a rotated vector (likewise the upper end).
 void leg_angles(double dx, const FiveBarRun& run, LegBounds& leg) {
+  leg.rho_lo = std::sqrt(leg.rho_lo);
+  leg.rho_hi = std::sqrt(leg.rho_hi);
   const double y_small = dx >= 0.0 ? run.y_low : run.y_high, y_large = dx >= 0.0 ? run.y_high : run.y_low;
   const Interval beta_cos = triangle_cosine(run.l2, run.l1, leg.rho_lo, leg.rho_hi);
   const Turned lo = turned(dx, y_small, beta_cos.lo, -1.0), hi = turned(dx, y_large, beta_cos.hi, -1.0);
@@ -269,36 +273,38 @@ bool fivebar_envelope(const FiveBarRun& run, double x, bool effective_mass, Samp
   out = SampleEnvelope{};
   // The model solves the left leg with dx = x + h0 and the right one mirrored, dx = h0 - x.
   const double dx_left = x + run.h0, dx_right = run.h0 - x;
-  LegBounds left = leg_bounds(dx_left, run), right = leg_bounds(dx_right, run);
-  // The tests without trigonometry first: out of reach, or a transmission sine below the
-  // singularity tolerance for every design.
+  // The tests without trigonometry first, leg by leg (most runs that fail, fail here): out of
+  // reach, or a transmission sine below the singularity tolerance for every design.
   const double tol = run.singularity_tolerance * (1.0 - 1e-6);
-  const Interval s1 = left.sin_gamma, s2 = right.sin_gamma;
-  if (left.unreachable || right.unreachable || s1.hi < tol || s2.hi < tol) {
+  const auto fails = [&] {
     out.all_fail = true;
     return true;
-  }
-  leg_angles(dx_left, run, left);
-  leg_angles(dx_right, run, right);
-  if (effective_mass) {
-    leg_actuated_angle(dx_left, run, left);
-    leg_actuated_angle(dx_right, run, right);
-  }
+  };
+  LegBounds left = leg_bounds(dx_left, run);
+  if (left.unreachable || left.sin_gamma.hi < tol) return fails();
+  LegBounds right = leg_bounds(dx_right, run);
+  if (right.unreachable || right.sin_gamma.hi < tol) return fails();
+  const Interval s1 = left.sin_gamma, s2 = right.sin_gamma;
   // q2 = theta_1 - beta_1 and the mirrored free angle theta_2' - beta_2 (q3 = pi - it); a free
   // link pointing down (below -margin) fails the paper's G or is singular (section 13.2).
+  leg_angles(dx_left, run, left);
+  if (left.free.hi < -1e-6) return fails();
+  leg_angles(dx_right, run, right);
   const Interval q2 = left.free, q3_mirrored = right.free;
   const Interval mode{kPi - q3_mirrored.hi - q2.hi, kPi - q3_mirrored.lo - q2.lo};  // q3 - q2
-  if (q2.hi < -1e-6 || q3_mirrored.hi < -1e-6 || mode.hi < -1e-6 || sup_abs_sin(mode) < tol) {
-    out.all_fail = true;
-    return true;
-  }
+  const double sin_mode = sup_abs_sin(mode);
+  if (q3_mirrored.hi < -1e-6 || mode.hi < -1e-6 || sin_mode < tol) return fails();
   // J^-1 rows: norms n_i = 1 / (l1 s_i) at the angle q3 - q2, so with
   // g = 2 sigma_1 sigma_2 / (sigma_1^2 + sigma_2^2) = |sin(q3 - q2)| 2 s1 s2 / (s1^2 + s2^2),
   // sigma_min / sigma_max = g / (1 + sqrt(1 - g^2)), increasing in g.
-  const double g = std::min(1.0, sup_abs_sin(mode) * sup_balance(s1, s2));
+  const double g = std::min(1.0, sin_mode * sup_balance(s1, s2));
   const double kappa = g / (1.0 + std::sqrt(std::max(0.0, (1.0 - g) * (1.0 + g))));
   out.jacobian_inverse_condition_max = std::min(1.0, kappa * (1.0 + kRelativeMargin) + 1e-12);
-  if (effective_mass) out.effective_mass_sigma_max_min = effective_mass_bound(run, left, right, mode);
+  if (effective_mass) {
+    leg_actuated_angle(dx_left, run, left);
+    leg_actuated_angle(dx_right, run, right);
+    out.effective_mass_sigma_max_min = effective_mass_bound(run, left, right, mode);
+  }
   return true;
 }
 
