@@ -591,6 +591,50 @@ std::vector<std::vector<int>> get_samples(ByteReader& in) {
 // rank 0 collects each line's counts, best design and critical samples and, when due, reports
 // progress and calls save(); the ranks share their reference and critical samples as they find
 // them. Returns the farm's outcome and, in `partial`, this rank's counts of unfinished lines.
+// The result of one task of the sweep (consecutive grid lines), sent to rank 0 as one record:
+// the lines finished, their summed counts, each line's best fully searched design (lines
+// without one left out), the critical samples they found (in order) and a breach.
+struct TaskLines {
+  std::vector<long long> lines;
+  SweepCounts counts;
+  std::vector<std::pair<long long, double>> bests;  // (grid index, score), in line order
+  std::vector<int> critical;
+  std::optional<MonotonicityBreach> breach;
+
+  void add(long long line, const SweepCounts& line_counts, const Best& best, const std::vector<int>& found) {
+    lines.push_back(line);
+    counts.add(line_counts);
+    if (best.index >= 0) bests.emplace_back(best.index, best.score);
+    critical.insert(critical.end(), found.begin(), found.end());
+  }
+  std::string bytes() const {
+    ByteWriter out;
+    out.put<std::uint64_t>(lines.size());
+    for (long long line : lines) out.put(line);
+    put_counts(out, counts);
+    out.put<std::uint64_t>(bests.size());
+    for (const auto& [index, score] : bests) out.put(index).put(score);
+    put_samples(out, critical);
+    put_breach(out, breach);
+    return out.take();
+  }
+  static TaskLines from(const std::string& bytes) {
+    ByteReader in(bytes);
+    TaskLines t;
+    t.lines.resize(static_cast<std::size_t>(in.get<std::uint64_t>()));
+    for (long long& line : t.lines) line = in.get<long long>();
+    t.counts = get_counts(in);
+    t.bests.resize(static_cast<std::size_t>(in.get<std::uint64_t>()));
+    for (auto& [index, score] : t.bests) {
+      index = in.get<long long>();
+      score = in.get<double>();
+    }
+    t.critical = get_samples(in)[0];
+    t.breach = get_breach(in);
+    return t;
+  }
+};
+
 template <class Save>
 FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions& options, const SolverContext& context,
                   Reference& reference, const Save& save, SweepCounts& partial) {
@@ -606,9 +650,10 @@ FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions
   const RangeLedger skip = reference.ledger;  // finished before this run
   auto last_report = Clock::now(), last_checkpoint = Clock::now();
   const auto t_sweep = Clock::now();
-  // A line's result: its counts, its best fully searched design, the critical samples it found
-  // and a breach.
-  const auto run_line = [&](long long line, int thread, bool& breach_found) -> std::optional<std::string> {
+  // One line of a task, added to the task's result (TaskLines): its counts, its best fully
+  // searched design, the critical samples it found. False when a stop left it unfinished (its
+  // counts then go to the thread's partial counts) or a breach ended it (task.breach set).
+  const auto run_line = [&](long long line, int thread, TaskLines& task) {
     SweepThread& s = states[static_cast<std::size_t>(thread)];
     const SweepCounts before = s.counts;
     s.line_best = Best{};
@@ -617,33 +662,28 @@ FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions
     const bool complete = cull_line(problem, grid, line, s, reference, context, options.block_bounds);
     if (!complete && !s.breach) {
       s.partial.add(s.counts.since(before));
-      return std::nullopt;
+      return false;
     }
-    breach_found = s.breach.has_value();
-    ByteWriter out;
-    put_counts(out, s.counts.since(before));
-    out.put(s.line_best.index).put(s.line_best.score);
-    put_samples(out, s.line_critical);
-    put_breach(out, s.breach);
-    return out.take();
+    if (s.breach) {
+      task.breach = s.breach;  // the line stays unfinished
+      return false;
+    }
+    task.add(line, s.counts.since(before), s.line_best, s.line_critical);
+    return true;
   };
-  const auto collect_line = [&](long long line, const std::string& bytes) {
-    ByteReader in(bytes);
-    const SweepCounts counts = get_counts(in);
-    const auto index = in.get<long long>();
-    const auto score = in.get<double>();
-    const std::vector<std::vector<int>> critical = get_samples(in);
-    const std::optional<MonotonicityBreach> breach = get_breach(in);
+  // A task's result, collected on rank 0: its finished lines, their counts, bests (in line
+  // order, so that the reference updates are counted as line by line) and critical samples.
+  const auto collect_task = [&](const TaskLines& task) {
     std::lock_guard<std::mutex> lock(reference.mutex);
-    if (breach) {
-      if (!reference.breach) reference.breach = breach;  // the line stays unfinished
+    for (long long line : task.lines) reference.ledger.finish(line);
+    reference.finished.add(task.counts);
+    for (const auto& [index, score] : task.bests) reference.update(index, score);
+    reference.publish(std::vector<std::vector<int>>{task.critical});
+    if (task.breach) {
+      if (!reference.breach) reference.breach = task.breach;
       reference.failed = true;
       return;
     }
-    reference.ledger.finish(line);
-    reference.finished.add(counts);
-    if (index >= 0) reference.update(index, score);
-    reference.publish(critical);
     if (context.progress && seconds_since(last_report) >= options.progress_interval) {
       last_report = Clock::now();
       *context.progress << progress_line(grid, reference, seconds_since(t_sweep)) << std::flush;
@@ -654,7 +694,7 @@ FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions
     }
   };
   // Each task is units_per_task() consecutive lines (those finished before skipped); its result
-  // is its lines' (index, result) pairs, up to a breach. A stop loses the task's finished lines
+  // is its finished lines' results in one record (TaskLines), up to a breach. A stop loses the task's finished lines
   // (a resumed run sweeps them again); their counts stay in the thread's partial counts.
   const long long lines = reference.ledger.units();
   const long long per_task = units_per_task(lines);
@@ -668,30 +708,17 @@ FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions
     return true;
   };
   farm.run = [&](long long task, int thread) -> std::optional<std::string> {
-    ByteWriter out;
-    SweepCounts finished;  // of the lines of this task finished so far
+    TaskLines result;
     for (long long line = task * per_task; line < std::min(lines, (task + 1) * per_task); ++line) {
       if (skip.finished(line)) continue;
-      bool breach = false;
-      const std::optional<std::string> result = run_line(line, thread, breach);
-      if (!result) {
-        states[static_cast<std::size_t>(thread)].partial.add(finished);
-        return std::nullopt;
-      }
-      ByteReader in(*result);
-      finished.add(get_counts(in));
-      out.put(line).put_string(*result);
-      if (breach) break;  // this rank's tasks stop; rank 0 learns it from this result
+      if (run_line(line, thread, result)) continue;
+      if (result.breach) break;  // this rank's tasks stop; rank 0 learns it from this result
+      states[static_cast<std::size_t>(thread)].partial.add(result.counts);
+      return std::nullopt;
     }
-    return out.take();
+    return result.bytes();
   };
-  farm.collect = [&](long long, std::string&& bytes) {
-    ByteReader in(bytes);
-    while (!in.at_end()) {
-      const auto line = in.get<long long>();
-      collect_line(line, in.get_string());
-    }
-  };
+  farm.collect = [&](long long, std::string&& bytes) { collect_task(TaskLines::from(bytes)); };
   // The reference (a real design's full score: it culls nothing that ties or beats it) and the
   // critical samples (any subset of samples bounds from above), as the ranks find them.
   farm.share = [&] {
