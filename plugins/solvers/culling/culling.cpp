@@ -587,10 +587,6 @@ std::vector<std::vector<int>> get_samples(ByteReader& in) {
   return samples;
 }
 
-// The sweep of the lines not finished yet, one task per line on every thread of every rank;
-// rank 0 collects each line's counts, best design and critical samples and, when due, reports
-// progress and calls save(); the ranks share their reference and critical samples as they find
-// them. Returns the farm's outcome and, in `partial`, this rank's counts of unfinished lines.
 // The result of one task of the sweep (consecutive grid lines), sent to rank 0 as one record:
 // the lines finished, their summed counts, each line's best fully searched design (lines
 // without one left out), the critical samples they found (in order) and a breach.
@@ -635,6 +631,11 @@ struct TaskLines {
   }
 };
 
+// The sweep of the lines not finished yet, tasks of consecutive lines on every thread of every
+// rank; rank 0 collects each task's lines, counts, best designs and critical samples
+// (TaskLines) and, when due, reports
+// progress and calls save(); the ranks share their reference and critical samples as they find
+// them. Returns the farm's outcome and, in `partial`, this rank's counts of unfinished lines.
 template <class Save>
 FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions& options, const SolverContext& context,
                   Reference& reference, const Save& save, SweepCounts& partial) {
