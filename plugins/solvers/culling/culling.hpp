@@ -25,7 +25,7 @@
 ///
 /// Ranks and shards: the seed runs on rank 0, which broadcasts its reference; the sweep's lines
 /// are the tasks of one task farm (hapsyn/cluster.hpp) on every thread of every rank, rank 0
-/// collecting each line's counts, best design and critical samples (and writing the
+/// collecting each line's counts, best design and critical samples, one record per task (and writing the
 /// checkpoint). The ranks share their reference and critical samples as they find them. Under
 /// `--shard i/N` the i-th contiguous slice of the lines is swept (after the seed, which every
 /// shard runs alike) and merge_shards() joins the shares' states. The grid optimum does not
