@@ -22,25 +22,32 @@ struct Interval {
 
 Interval hull(double a, double b) { return {std::min(a, b), std::max(a, b)}; }
 
-// The inline sine and arc tangent of hapsyn/fast_math.hpp (absolute errors below
-// 1e-15 rad, far inside the margins): libm's calls were most of an envelope's cost.
-double sine(double a) {
-  double s = 0.0, c = 0.0;
-  fast::sin_cos(a, s, c);
-  return s;
+// sin and cos over an angle interval: the ends, and 1 or -1 where an extremum lies inside. The
+// inline sin_cos of hapsyn/fast_math.hpp (absolute error below 1e-15, far inside the margins):
+// libm's calls were most of an envelope's cost.
+void sin_cos_of(Interval a, Interval& sine_of, Interval& cosine_of) {
+  if (a.hi - a.lo >= 2.0 * kPi) {
+    sine_of = cosine_of = {-1.0, 1.0};
+    return;
+  }
+  double s0 = 0.0, c0 = 0.0, s1 = 0.0, c1 = 0.0;
+  fast::sin_cos(a.lo, s0, c0);
+  fast::sin_cos(a.hi, s1, c1);
+  sine_of = hull(s0, s1);
+  cosine_of = hull(c0, c1);
+  const auto inside = [&](double phase) { return phase + 2.0 * kPi * std::ceil((a.lo - phase) / (2.0 * kPi)) <= a.hi; };
+  if (inside(0.5 * kPi)) sine_of.hi = 1.0;
+  if (inside(-0.5 * kPi)) sine_of.lo = -1.0;
+  if (inside(0.0)) cosine_of.hi = 1.0;
+  if (inside(kPi)) cosine_of.lo = -1.0;
 }
 
 // Largest and smallest |sin| over an angle interval.
-double sup_abs_sin(Interval a) {
-  if (a.hi - a.lo >= kPi) return 1.0;
-  const double k = std::ceil((a.lo - 0.5 * kPi) / kPi);  // the first pi/2 + k pi at or above lo
-  if (0.5 * kPi + k * kPi <= a.hi) return 1.0;
-  return std::max(std::abs(sine(a.lo)), std::abs(sine(a.hi)));
-}
-double inf_abs_sin(Interval a) {
-  if (a.hi - a.lo >= kPi) return 0.0;
-  if (std::ceil(a.lo / kPi) * kPi <= a.hi) return 0.0;
-  return std::min(std::abs(sine(a.lo)), std::abs(sine(a.hi)));
+Interval abs_sin_of(Interval a) {
+  Interval s{}, c{};
+  sin_cos_of(a, s, c);
+  const double lo = (s.lo <= 0.0 && 0.0 <= s.hi) ? 0.0 : std::min(std::abs(s.lo), std::abs(s.hi));
+  return {lo, std::max(std::abs(s.lo), std::abs(s.hi))};
 }
 
 
@@ -48,9 +55,9 @@ double inf_abs_sin(Interval a) {
 struct LegBounds {
   bool unreachable = false;  // |E - A| outside [|l1 - l2|, l1 + l2] for every design
   Interval sin_gamma{};      // the transmission sine sin(gamma) = |sin(q1 - q2)| (or q3 - q4)
-  double abs_cos_gamma_lo = 0.0;  // the smallest |cos(gamma)|
-  Interval cos_gamma{};           // cos(gamma) (clamped to [-1, 1])
-  double rho_lo = 0.0, rho_hi = 0.0;  // |E - A| over the designs that reach E [m] (squared before leg_angles)
+  Interval cos_gamma{};      // cos(gamma) (clamped to [-1, 1])
+  double rho2_lo = 0.0, rho2_hi = 0.0;  // |E - A|^2 over the designs that reach E [m^2]
+  double rho_lo = 0.0, rho_hi = 0.0;    // |E - A| (set by leg_angles) [m]
   Interval free{};  // the free link's angle theta - beta (q2; for the mirrored right leg pi - q3)
   Interval act{};   // the actuated link's angle theta + alpha (q1; mirrored: pi - q4)
 };
@@ -71,8 +78,8 @@ LegBounds leg_bounds(double dx, const FiveBarRun& run) {
   }
   // Only designs that reach E matter for the bounds below.
   const double lo2 = std::max(rho2_low, reach_min * reach_min), hi2 = std::min(rho2_high, reach_max * reach_max);
-  leg.rho_lo = lo2;  // squared until leg_angles needs the lengths
-  leg.rho_hi = hi2;
+  leg.rho2_lo = lo2;
+  leg.rho2_hi = hi2;
   // Elbow angle: cos(gamma) = (l1^2 + l2^2 - rho^2) / (2 l1 l2), decreasing in rho; sin(gamma)
   // = sqrt(1 - cos^2) is concave in gamma on [0, pi], so its minimum is at an end. (A margin of
   // 1e-9 on the cosine covers one of 1e-9 rad on gamma.)
@@ -82,7 +89,6 @@ LegBounds leg_bounds(double dx, const FiveBarRun& run) {
   const double c_lo = std::clamp(cos_gamma.lo, -1.0, 1.0), c_hi = std::clamp(cos_gamma.hi, -1.0, 1.0);
   const double sin_a = std::sqrt((1.0 - c_lo) * (1.0 + c_lo)), sin_b = std::sqrt((1.0 - c_hi) * (1.0 + c_hi));
   leg.sin_gamma = {std::min(sin_a, sin_b), (c_lo <= 0.0 && 0.0 <= c_hi) ? 1.0 : std::max(sin_a, sin_b)};
-  leg.abs_cos_gamma_lo = (c_lo <= 0.0 && 0.0 <= c_hi) ? 0.0 : std::min(std::abs(c_lo), std::abs(c_hi));
   leg.cos_gamma = {c_lo, c_hi};
   return leg;
 }
@@ -122,8 +128,8 @@ Turned turned(double dx, double y, double c, double turn) {
 // and the free link's angle theta - beta lies in (-pi, pi): its lower end is the smaller theta
 // minus the larger beta, one atan2 of a rotated vector (likewise the upper end).
 void leg_angles(double dx, const FiveBarRun& run, LegBounds& leg) {
-  leg.rho_lo = std::sqrt(leg.rho_lo);
-  leg.rho_hi = std::sqrt(leg.rho_hi);
+  leg.rho_lo = std::sqrt(leg.rho2_lo);
+  leg.rho_hi = std::sqrt(leg.rho2_hi);
   const double y_small = dx >= 0.0 ? run.y_low : run.y_high, y_large = dx >= 0.0 ? run.y_high : run.y_low;
   const Interval beta_cos = triangle_cosine(run.l2, run.l1, leg.rho_lo, leg.rho_hi);
   const Turned lo = turned(dx, y_small, beta_cos.lo, -1.0), hi = turned(dx, y_large, beta_cos.hi, -1.0);
@@ -135,7 +141,7 @@ void leg_angles(double dx, const FiveBarRun& run, LegBounds& leg) {
 }
 
 // The actuated link's angle theta + alpha in (0, 2 pi) (the model's q1, or q4 = pi - it for the
-// mirrored right leg), alpha the triangle's angle at A, in the same way.
+// mirrored right leg), alpha the triangle's angle at A, in the same way (after leg_angles).
 void leg_actuated_angle(double dx, const FiveBarRun& run, LegBounds& leg) {
   const double y_small = dx >= 0.0 ? run.y_low : run.y_high, y_large = dx >= 0.0 ? run.y_high : run.y_low;
   const Interval alpha_cos = triangle_cosine(run.l1, run.l2, leg.rho_lo, leg.rho_hi);
@@ -171,24 +177,6 @@ Interval square(Interval a) {
   if (a.lo >= 0.0) return {a.lo * a.lo, a.hi * a.hi};
   if (a.hi <= 0.0) return {a.hi * a.hi, a.lo * a.lo};
   return {0.0, std::max(a.lo * a.lo, a.hi * a.hi)};
-}
-
-// sin and cos over an angle interval: the ends, and 1 or -1 where an extremum lies inside.
-void sin_cos_of(Interval a, Interval& sine_of, Interval& cosine_of) {
-  if (a.hi - a.lo >= 2.0 * kPi) {
-    sine_of = cosine_of = {-1.0, 1.0};
-    return;
-  }
-  double s0 = 0.0, c0 = 0.0, s1 = 0.0, c1 = 0.0;
-  fast::sin_cos(a.lo, s0, c0);
-  fast::sin_cos(a.hi, s1, c1);
-  sine_of = hull(s0, s1);
-  cosine_of = hull(c0, c1);
-  const auto inside = [&](double phase) { return phase + 2.0 * kPi * std::ceil((a.lo - phase) / (2.0 * kPi)) <= a.hi; };
-  if (inside(0.5 * kPi)) sine_of.hi = 1.0;
-  if (inside(-0.5 * kPi)) sine_of.lo = -1.0;
-  if (inside(0.0)) cosine_of.hi = 1.0;
-  if (inside(kPi)) cosine_of.lo = -1.0;
 }
 
 // The kinetic energy 1/2 v^T M v of the unit task velocity v = (cos psi, sin psi), from below,
@@ -238,11 +226,13 @@ double energy_along(const FiveBarRun& run, const LegBounds& left, const LegBound
 // m2 / 4 + I_f / l2^2; likewise for leg 1.
 double effective_mass_bound(const FiveBarRun& run, const LegBounds& left, const LegBounds& right, Interval mode) {
   const double n1 = 1.0 / (run.l1 * left.sin_gamma.hi), n2 = 1.0 / (run.l1 * right.sin_gamma.hi);
-  const double sin_hi = sup_abs_sin(mode), sin_lo = inf_abs_sin(mode);
+  const Interval sin_mode = abs_sin_of(mode);
+  const double sin_hi = sin_mode.hi, sin_lo = sin_mode.lo;
   const double sum = n1 * n1 + n2 * n2;
   const double top = 0.5 * (sum + std::sqrt(std::max(0.0, sum * sum - 4.0 * n1 * n1 * n2 * n2 * sin_hi * sin_hi)));
   const double half = std::sqrt(0.5 * top);  // |qdot_i| at qdot_i^2 = S / 2
-  const double cos_lo = std::min(left.abs_cos_gamma_lo, right.abs_cos_gamma_lo);
+  const auto abs_lo = [](Interval c) { return (c.lo <= 0.0 && 0.0 <= c.hi) ? 0.0 : std::min(std::abs(c.lo), std::abs(c.hi)); };
+  const double cos_lo = std::min(abs_lo(left.cos_gamma), abs_lo(right.cos_gamma));
   const double centre = std::max(0.0, run.l1 * half - 1.0), turn = std::max(0.0, run.l1 * cos_lo * half - 1.0);
   const double along_top = run.inertia_a * top + 2.0 * (run.mass_f / 4.0 * centre * centre +
                                                         run.inertia_f / (run.l2 * run.l2) * turn * turn);
@@ -292,7 +282,7 @@ bool fivebar_envelope(const FiveBarRun& run, double x, bool effective_mass, Samp
   leg_angles(dx_right, run, right);
   const Interval q2 = left.free, q3_mirrored = right.free;
   const Interval mode{kPi - q3_mirrored.hi - q2.hi, kPi - q3_mirrored.lo - q2.lo};  // q3 - q2
-  const double sin_mode = sup_abs_sin(mode);
+  const double sin_mode = abs_sin_of(mode).hi;
   if (q3_mirrored.hi < -1e-6 || mode.hi < -1e-6 || sin_mode < tol) return fails();
   // J^-1 rows: norms n_i = 1 / (l1 s_i) at the angle q3 - q2, so with
   // g = 2 sigma_1 sigma_2 / (sigma_1^2 + sigma_2^2) = |sin(q3 - q2)| 2 s1 s2 / (s1^2 + s2^2),
