@@ -7,7 +7,9 @@
 //     pose only | pose + velocity | + acceleration | + force (all four)
 //   the same four terms on the block path (solve_block + local_block, 8 samples per call)
 //   one full four-term design evaluation through Problem::evaluate_parallel (1 and 2 threads,
-//   block path) and, as its baseline, through the per-sample loop (1 thread)  [ms/design]
+//   block path, M_v and M_a from the evaluator's block copy), with M_v and M_a gathered lane by
+//   lane (1 thread), and through the per-sample loop (1 thread)  [ms/design]
+//   the GA study's four one-term coverage objectives per design (1 and 2 threads)
 //   per configuration: J, H, gravity and the 6-column solve J^-1 M_a, ours (scalar and block) vs KDL's
 //     ChainJntToJacSolver + ChainDynParam (JntToMass, JntToGravity) + Eigen LU on the same q
 // Read the ratios printed at the end (same run, same machine), not bare times.
@@ -163,6 +165,26 @@ void BM_FullObjectivePerDesign(benchmark::State& state) {
   state.counters["poses"] = study.problem->samples().size();
 }
 
+// The GA study's objectives (problems/haptic6r-ga-paper.json): J_x, J_v, J_a, J_f as four
+// one-term coverage objectives, as a GA evaluates each design (1 and 2 threads, block path).
+void BM_GaObjectivesPerDesign(benchmark::State& state) {
+  static hapsyn::Registry registry({HAPSYN_PLUGIN_DIR});
+  static hapsyn::Study study = hapsyn::load_study(Json::parse(R"({
+    "name": "bench-ga", "mechanism": {"plugin": "haptic6r"},
+    "scene": {"plugin": "human_arm", "options": {"lattice_step": 0.1, "orientations": 505, "joint3_steps": 17}},
+    "design": {"l": {"value": [0.45, 0.45, 0.65, 0.55, 0.15]}, "s": {"value": [3, 3, 2, 2, 1, 1]}, "r": {"value": [2, 2, 3, 2, 3, 3]}},
+    "objectives": [{"metric": "coverage", "name": "J_x", "options": {"terms": ["pose"]}},
+                   {"metric": "coverage", "name": "J_v", "options": {"terms": ["velocity"]}},
+                   {"metric": "coverage", "name": "J_a", "options": {"terms": ["acceleration"]}},
+                   {"metric": "coverage", "name": "J_f", "options": {"terms": ["force"]}}],
+    "solver": {"plugin": "evaluate"}})"), registry);
+  const int threads = static_cast<int>(state.range(0));
+  double j = 0.0;
+  for (auto _ : state) j += study.problem->evaluate_parallel(nullptr, threads).objectives[1];
+  benchmark::DoNotOptimize(j);
+  state.counters["poses"] = study.problem->samples().size();
+}
+
 // Scaling: the full objective of the same design against the scene's lattice step [mm] and
 // orientation count, on 1 and 2 threads (block path). Each scene is built once (and cached on
 // disk by the human_arm scene, like any study's).
@@ -189,6 +211,23 @@ void BM_FullObjectiveScaling(benchmark::State& state) {
   state.counters["poses"] = problem.samples().size();
   state.counters["per_pose"] = benchmark::Counter(static_cast<double>(problem.samples().size()) * static_cast<double>(state.iterations()),
                                                      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+// The same evaluation, one thread, with the scene attributes M_v and M_a gathered lane by lane
+// from their rows instead of read from the evaluator's block copy: the samples in the study's
+// order rotated by one (not a run of whole blocks, so the block path gathers; the same samples
+// and work, the sums in another order).
+void BM_FullObjectivePerDesignGathered(benchmark::State& state) {
+  const hapsyn::Study& study = full_study();
+  auto ws = study.problem->make_eval_scratch();
+  std::vector<int> rotated = study.problem->sample_order();
+  std::rotate(rotated.begin(), rotated.begin() + 1, rotated.end());
+  hapsyn::EvalOptions options;
+  options.subset = &rotated;
+  double j = 0.0;
+  for (auto _ : state) j += study.problem->evaluate(nullptr, *ws, options).objectives[0];
+  benchmark::DoNotOptimize(j);
+  state.counters["poses"] = study.problem->samples().size();
 }
 
 // The baseline: the same evaluation, one thread, forced onto the per-sample loop.
@@ -321,7 +360,9 @@ BENCHMARK(BM_CoveragePoseVelocityAcceleration)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CoverageAllFourTerms)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CoverageAllFourTermsBlock)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FullObjectivePerDesignPerSample)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_FullObjectivePerDesignGathered)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_FullObjectivePerDesign)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_GaObjectivesPerDesign)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_FullObjectiveScaling)
     ->ArgNames({"step_mm", "orientations", "threads"})
     ->ArgsProduct({{200, 100, 50}, {505}, {1, 2}})
@@ -343,6 +384,8 @@ int main(int argc, char** argv) {
   hapsyn::bench::compare("BM_CoverageAllFourTermsBlock", "BM_CoverageAllFourTerms");
   hapsyn::bench::compare("BM_FullObjectivePerDesign/1/real_time", "BM_FullObjectivePerDesignPerSample/real_time");
   hapsyn::bench::compare("BM_FullObjectivePerDesign/2/real_time", "BM_FullObjectivePerDesignPerSample/real_time");
+  hapsyn::bench::compare("BM_GaObjectivesPerDesign/1/real_time", "BM_FullObjectivePerDesign/1/real_time");
+  hapsyn::bench::compare("BM_FullObjectivePerDesign/1/real_time", "BM_FullObjectivePerDesignGathered/real_time");
   hapsyn::bench::compare("BM_OursJacobianInertiaGravitySolve", "BM_KdlJacobianInertiaGravitySolve");
   hapsyn::bench::compare("BM_OursBlockJacobianInertiaGravitySolve", "BM_KdlJacobianInertiaGravitySolve");
   hapsyn::bench::compare("BM_OursJacobianInertiaGravitySolve", "BM_KdlJacobianInertiaGravityOurSolve");

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <random>
 #include <vector>
 
@@ -292,4 +293,49 @@ TEST(BlockPath, AveragingEvaluationsEqualThePerSamplePath) {
     }
     EXPECT_GT(reached, 6) << "too few designs reach the workspace to test anything";
   }
+}
+
+// The evaluator's block copy of the scene attributes (QuantityBlock::attribute_lanes; the
+// coverage test checks the kernel with and without it bit for bit) against the rows gathered
+// per lane: the full order reads the copy, the same samples rotated by one (not a run of whole
+// blocks) gather, and evaluate_parallel's chunks (runs of whole blocks) read the copy again.
+// Two metrics list M_v in the first study (one copy serves both).
+TEST(BlockPath, AttributeBlockCopiesAgreeWithTheGatheredRows) {
+  const auto shared = coverage_problem(
+      Json::array({"velocity"}),
+      Json{{"metric", "coverage"}, {"name", "J"}, {"options", {{"terms", {"pose", "velocity", "acceleration", "force"}}}}});
+  const auto separate =
+      coverage_problem(Json::array({"acceleration"}), Json{{"metric", "coverage"}, {"name", "J_v"}, {"options", {{"terms", {"velocity"}}}}});
+  std::mt19937_64 rng(33);
+  int reached = 0;
+  for (const auto& p : {shared, separate}) {
+    ASSERT_TRUE(p->block_path());
+    auto copy_ws = p->make_eval_scratch(), gather_ws = p->make_eval_scratch();
+    std::vector<int> rotated = p->sample_order();
+    std::rotate(rotated.begin(), rotated.begin() + 1, rotated.end());
+    EvalOptions gathered;
+    gathered.subset = &rotated;
+    Problem::ParallelOptions chunked;
+    chunked.chunks = 5;
+    for (int k = 0; k < 8; ++k) {
+      const std::vector<double> x = haptic6r_design(rng, *p);
+      const Evaluation copied = p->evaluate(x.data(), *copy_ws);
+      const Evaluation gather = p->evaluate(x.data(), *gather_ws, gathered);
+      const Evaluation parallel = p->evaluate_parallel(x.data(), 2, chunked);
+      ASSERT_EQ(copied.status, gather.status);
+      ASSERT_EQ(copied.status, parallel.status);
+      EXPECT_EQ(copied.samples_evaluated, gather.samples_evaluated);
+      EXPECT_EQ(copied.samples_evaluated, parallel.samples_evaluated);
+      if (copied.status != EvalStatus::kFeasible) continue;
+      for (std::size_t m = 0; m < copied.reduced.size(); ++m) {
+        for (std::size_t i = 0; i < copied.reduced[m].size(); ++i) {
+          const double want = gather.reduced[m][i], tolerance = 1e-12 * std::max(1.0, std::abs(want));
+          EXPECT_NEAR(copied.reduced[m][i], want, tolerance) << "design " << k << ", metric " << m << ", local " << i;
+          EXPECT_NEAR(parallel.reduced[m][i], want, tolerance) << "design " << k << ", metric " << m << ", local " << i;
+        }
+      }
+      reached += copied.reduced[0][1] > 0.0;
+    }
+  }
+  EXPECT_GT(reached, 4) << "too few designs reach the workspace to test anything";
 }

@@ -108,6 +108,10 @@ class Problem {
   Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> mechanism,
           std::shared_ptr<const SampleSet> samples, std::vector<MetricEntry> metrics,
           std::vector<Objective> objectives, DesignSpace space);
+  /// Not copyable: the evaluator's block copies of the scene attributes are referred to by
+  /// pointer (with_objectives() and with_design_space() make a new problem instead).
+  Problem(const Problem&) = delete;
+  Problem& operator=(const Problem&) = delete;
 
   /// The same study (mechanism, scene, metrics: shared, not copied) with other objectives,
   /// e.g. other weights for a weighted sum or one objective for a shadow optimum. Cheap: no
@@ -187,6 +191,10 @@ class Problem {
     std::unique_ptr<QuantityBlock> block;
     std::vector<double> block_locals;
     std::vector<double> gathered;
+    // The current block's first position in order_ (its attributes in attribute_blocks_), or
+    // SIZE_MAX for a block of a subset; the pointers QuantityBlock::attribute_lane_data shows.
+    std::size_t block_first = SIZE_MAX;
+    std::vector<const double*> attribute_lane_pointers;
     std::vector<double> saved_accumulator;
     std::vector<int> saved_argument;
     // Design lanes (evaluate_designs): each lane's full design and reductions.
@@ -259,6 +267,9 @@ class Problem {
   void block_locals(EvalScratch& ws) const;
   [[noreturn]] void refuse_non_finite_block_local(const MechanismModel& model, EvalScratch& ws, int sample) const;
   void choose_block_path();
+  void copy_attribute_blocks();
+  std::size_t order_run(const std::vector<int>& subset) const;
+  const double* attribute_block_start(std::size_t i) const;
   void order_extremes_first();
   void size_evaluations(std::vector<Evaluation>& outs, int count) const;
   int start_lanes(const double* const* free_designs, int count, bool constraints_verified, EvalScratch& ws,
@@ -299,6 +310,13 @@ class Problem {
   bool block_path_ = false;
   std::size_t block_stride_ = 0;         // order_ padded to whole blocks
   std::vector<double> block_poses_;       // coordinate c of order_[k] at [c * block_stride_ + k]
+  // The metrics' scene attributes in order_ by blocks, structure of arrays (one copy per
+  // attribute, however many metrics list it): entry e of order_[b * kBlockLanes + i] at
+  // [(b * cols + e) * kBlockLanes + i] from a 64-byte aligned start. Per metric and attribute,
+  // that start (block 0) or null. See QuantityBlock::attribute_lanes.
+  std::vector<std::vector<double>> attribute_blocks_;
+  std::vector<int> order_position_;  // sample -> its position in order_ (block path only)
+  std::vector<std::vector<const double*>> metric_attribute_blocks_;
   int batch_ = 0;  // largest Metric::batch_size(); 0 = the per-sample path only
 };
 

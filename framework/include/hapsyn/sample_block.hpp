@@ -55,6 +55,10 @@ struct QuantityBlock {
   int samples[kBlockLanes] = {-1, -1, -1, -1, -1, -1, -1, -1};
   const AttributeMatrix* const* attributes = nullptr;
   int attribute_count = 0;
+  /// Also set by the evaluator with `attributes`, or null: the same attributes of this block's
+  /// lanes, structure of arrays (attribute_lanes(k)). The evaluator keeps that copy for the
+  /// blocks of the scene's visiting order; the blocks of a sample subset have none.
+  const double* const* attribute_lane_data = nullptr;
 
   SampleStatus lane_status(int lane) const { return static_cast<SampleStatus>(status[lane]); }
   /// Row of lane `lane`'s sample in the calling metric's k-th scene attribute, or null when the
@@ -63,6 +67,14 @@ struct QuantityBlock {
     if (!attributes || k < 0 || k >= attribute_count || !attributes[k]) return nullptr;
     const int sample = samples[lane];
     return sample >= 0 && sample < attributes[k]->rows() ? attributes[k]->row(sample).data() : nullptr;
+  }
+  /// The calling metric's k-th scene attribute for all lanes at once, or null when the evaluator
+  /// has no such copy (then read attribute_row() per lane): entry e of lane i at
+  /// [e * kBlockLanes + i], e < attributes[k]->cols(), 64-byte aligned; the values are those of
+  /// attribute_row(k, i), lanes at or beyond the block's count included.
+  const double* attribute_lanes(int k) const {
+    if (!attribute_lane_data || !attributes || k < 0 || k >= attribute_count) return nullptr;
+    return attribute_lane_data[k];
   }
 };
 

@@ -33,6 +33,26 @@ const double* lane_attribute(const QuantityBlock& q, int index, int lane, const 
   return r;
 }
 
+// The lanes' 6x6 attribute `index` (M_v or M_a) into rhs[r][column + c]: one vector load per
+// entry from the evaluator's block copy when it has one, else gathered from each lane's row one
+// entry of all lanes at a time (the transpose the other way round, one lane's 36 entries at a
+// time, cost a fifth of the whole objective). The errors are local()'s.
+template <int Cols>
+[[gnu::always_inline]] inline void load_attribute(const QuantityBlock& q, int index, const char* name, const char* term,
+                                                  Lanes (&rhs)[6][Cols], int column) {
+  if (const double* lanes = q.attribute_lanes(index); lanes && q.attributes[index]->cols() == 36) {
+    for (int r = 0; r < 6; ++r) {
+      for (int c = 0; c < 6; ++c) rhs[r][column + c] = Lanes::load(lanes + (r * 6 + c) * kBlockLanes);
+    }
+    return;
+  }
+  const double* rows[kBlockLanes];
+  for (int lane = 0; lane < kBlockLanes; ++lane) rows[lane] = lane_attribute(q, index, lane, name, term);
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) rhs[r][column + c] = gather(rows, r * 6 + c);
+  }
+}
+
 // Solves J X = B in place for every lane (B: 6 x Cols right-hand sides). \return per lane 1
 // when every pivot was non-zero (the lane's J regular, as local() decides it), else 0.
 // J is factored first (its row swaps, multipliers and inverse pivots kept), then each column of
@@ -149,20 +169,8 @@ template <int Cols>
   for (int r = 0; r < 6; ++r) {
     for (int c = 0; c < 6; ++c) a[r][c] = jacobian[r][c];
   }
-  // The lanes' 6x6 matrices into lane vectors, one entry of all lanes at a time (the transpose
-  // the other way round, one lane's 36 entries at a time, cost a fifth of the whole objective).
-  const double* m_v[kBlockLanes];
-  const double* m_a[kBlockLanes];
-  for (int lane = 0; lane < kBlockLanes; ++lane) {
-    if (velocity_) m_v[lane] = lane_attribute(q, 0, lane, "M_v", "velocity");
-    if (acceleration_) m_a[lane] = lane_attribute(q, velocity_ ? 1 : 0, lane, "M_a", "acceleration");
-  }
-  for (int r = 0; r < 6; ++r) {
-    for (int c = 0; c < 6; ++c) {
-      if (velocity_) rhs[r][c] = gather(m_v, r * 6 + c);
-      if (acceleration_) rhs[r][m_a_column + c] = gather(m_a, r * 6 + c);
-    }
-  }
+  if (velocity_) load_attribute(q, 0, "M_v", "velocity", rhs, 0);
+  if (acceleration_) load_attribute(q, velocity_ ? 1 : 0, "M_a", "acceleration", rhs, m_a_column);
   const Lanes use = eliminate_lanes(a, rhs) * reachable;
   if (velocity_) {
     const auto velocity = [&](int i, int j) -> const Lanes& { return rhs[i][j]; };

@@ -415,6 +415,22 @@ TEST(Coverage, BlockLocalsEqualLocalLaneByLane) {
       const std::size_t k = metric.locals().size();
       std::vector<double> lanes(k * kBlockLanes), one(k);
       metric.local_block(*block, lanes.data());
+      // The same block with the attributes as the evaluator's block copy: the same values, bit
+      // for bit (only the route of the loads differs).
+      std::vector<std::vector<double>> copies;
+      std::vector<const double*> starts;
+      for (const AttributeMatrix* a : attributes) {
+        std::vector<double>& copy = copies.emplace_back(36 * kBlockLanes);
+        for (int lane = 0; lane < kBlockLanes; ++lane) {
+          for (int e = 0; e < 36; ++e) copy[static_cast<std::size_t>(e * kBlockLanes + lane)] = (*a)(block->samples[lane], e);
+        }
+        starts.push_back(copy.data());
+      }
+      block->attribute_lane_data = starts.data();
+      std::vector<double> copied(k * kBlockLanes);
+      metric.local_block(*block, copied.data());
+      block->attribute_lane_data = nullptr;
+      EXPECT_EQ(copied, lanes) << "trial " << trial << ", terms " << Json(terms).dump();
       for (int lane = 0; lane < kBlockLanes; ++lane) {
         SampleQuantities& q = single[static_cast<std::size_t>(lane)];
         q.attributes = attributes.data();
