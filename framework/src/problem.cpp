@@ -202,7 +202,7 @@ void Problem::copy_attribute_blocks() {
       const std::size_t cols = static_cast<std::size_t>(a->cols());
       std::vector<double>& copy = attribute_blocks_.emplace_back(block_stride_ * cols + kAlign, 0.0);
       copied.push_back(a);
-      double* start = const_cast<double*>(attribute_block_start(attribute_blocks_.size() - 1));
+      double* start = copy.data() + (attribute_block_start(attribute_blocks_.size() - 1) - copy.data());
       for (std::size_t k = 0; k < block_stride_; ++k) {
         const double* row = a->row(order_[std::min(k, n - 1)]).data();
         double* block = start + (k / L) * cols * L + k % L;
