@@ -24,8 +24,9 @@ hapsyn::Study& coarse_study() {
 void BM_CoarseGridStudy(benchmark::State& state) {
   const hapsyn::Study& study = coarse_study();
   const bool prune = state.range(0) != 0;
-  hapsyn::plugins::GridSolver solver(
-      hapsyn::make_options<hapsyn::plugins::GridOptions>(hapsyn::Json{{"prune", prune}, {"progress_interval", 1e9}}));
+  const bool block_bounds = state.range(2) != 0;
+  hapsyn::plugins::GridSolver solver(hapsyn::make_options<hapsyn::plugins::GridOptions>(
+      hapsyn::Json{{"prune", prune}, {"block_bounds", block_bounds}, {"progress_interval", 1e9}}));
   hapsyn::SolverContext context;
   context.threads = static_cast<int>(state.range(1));
   hapsyn::SolverResult result;
@@ -37,16 +38,17 @@ void BM_CoarseGridStudy(benchmark::State& state) {
   state.counters["sample_solves"] = static_cast<double>(result.sample_evaluations);
   state.counters["best_gii"] = result.best ? result.best->objectives[0] : 0.0;
 }
-BENCHMARK(BM_CoarseGridStudy)->ArgNames({"prune", "threads"})->Args({1, 2})->Args({1, 1})->Args({0, 2})->Args({0, 1})
+BENCHMARK(BM_CoarseGridStudy)->ArgNames({"prune", "threads", "block_bounds"})->Args({1, 2, 1})->Args({1, 1, 1})
+    ->Args({1, 2, 0})->Args({1, 1, 0})->Args({0, 2, 0})->Args({0, 1, 0})
     ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 }  // namespace
 
 int main(int argc, char** argv) {
   hapsyn::bench::record_context(coarse_study().resolved, 1);
-  hapsyn::bench::compare("BM_CoarseGridStudy/prune:1/threads:2/min_time:2.000/real_time",
-                         "BM_CoarseGridStudy/prune:0/threads:2/min_time:2.000/real_time");
-  hapsyn::bench::compare("BM_CoarseGridStudy/prune:1/threads:2/min_time:2.000/real_time",
-                         "BM_CoarseGridStudy/prune:1/threads:1/min_time:2.000/real_time");
+  hapsyn::bench::compare("BM_CoarseGridStudy/prune:1/threads:2/block_bounds:1/min_time:2.000/real_time",
+                         "BM_CoarseGridStudy/prune:0/threads:2/block_bounds:0/min_time:2.000/real_time");
+  hapsyn::bench::compare("BM_CoarseGridStudy/prune:1/threads:2/block_bounds:1/min_time:2.000/real_time",
+                         "BM_CoarseGridStudy/prune:1/threads:1/block_bounds:1/min_time:2.000/real_time");
   return hapsyn::bench::run_main(argc, argv);
 }

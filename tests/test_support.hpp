@@ -10,10 +10,14 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <random>
 #include <string>
+#include <tuple>
+#include <vector>
 
 #include <sys/wait.h>
 
@@ -91,6 +95,37 @@ inline Json fivebar_study(const std::string& solver = "grid") {
     "objectives": [{"metric": "gii"}],
     "solver": {"plugin": ")" + solver + R"("}
   })");
+}
+
+/// A random sub-box of the paper's five-bar bounds (l0 in [0, 0.3], l1 and l2 in [0.05, 0.3],
+/// r in [0.05, 0.6]) on a grid of the given step, each variable over min_points to max_points
+/// points, solved by `solver`.
+inline Json fivebar_random_box(std::mt19937& rng, double step, int min_points, int max_points,
+                               const std::string& solver = "culling") {
+  Json doc = fivebar_study(solver);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const std::vector<std::tuple<std::string, double, double>> vars = {
+      {"l0", 0.0, 0.3}, {"l1", 0.05, 0.3}, {"l2", 0.05, 0.3}, {"r", 0.05, 0.6}};
+  for (const auto& [name, lo, hi] : vars) {
+    const int points = min_points + static_cast<int>(u(rng) * (max_points - min_points + 1));
+    const double width = step * (points - 1);
+    const double lower = lo + std::floor(u(rng) * (hi - lo - width) / step) * step;
+    doc["design"][name] = {{"lower", lower}, {"upper", lower + width}, {"step", step}};
+  }
+  return doc;
+}
+
+/// A random sub-box with long lines of r (block bounds act on runs of a line): r on a 5 mm grid
+/// over 30 to 100 points, l0, l1, l2 over 2 to 4 points of 20 mm, a 20 mm workspace grid.
+inline Json fivebar_random_long_lines(std::mt19937& rng, const std::string& solver = "culling") {
+  Json doc = fivebar_random_box(rng, 0.02, 2, 4, solver);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const int points = 30 + static_cast<int>(u(rng) * 71);
+  const double width = 0.005 * (points - 1);
+  const double lower = 0.005 * std::floor(u(rng) * (0.6 - width) / 0.005);
+  doc["design"]["r"] = {{"lower", lower}, {"upper", lower + width}, {"step", 0.005}};
+  doc["scene"]["options"]["step"] = 0.02;
+  return doc;
 }
 
 }  // namespace hapsyn::test

@@ -2,6 +2,7 @@
 
 #include "grid/ledger.hpp"
 #include "grid/line_bound.hpp"
+#include "grid/run_bounds.hpp"
 #include "grid/rank_support.hpp"
 #include "grid/task_bytes.hpp"
 #include "grid/worst_case_check.hpp"
@@ -290,10 +291,7 @@ struct alignas(64) SweepThread {
   std::vector<double> group_x;          // kBlockLanes rows: the line's designs bounded together
   std::vector<Evaluation> group_outs;   // their bounds
   std::vector<int> group_order;         // s.local as the group was bounded
-  std::vector<double> full;             // the current line's full design (block bounds)
-  std::vector<double> check_x;          // a design of a ruled-out run, spot-checked
-  std::vector<int> check_sample;        // the one sample it is checked at
-  long long ruled_out_runs = 0;         // runs this thread ruled out by block bounds
+  std::optional<RunBounds> run_bounds;  // block bounds of runs of the current line
   SweepCounts counts;         // this run's, lines finished or not
   SweepCounts partial;        // of the lines a stop left unfinished
   std::vector<double> bound;  // the objectives' bound at the critical samples of the current design
@@ -395,84 +393,6 @@ void full_search(const Problem& problem, SweepThread& s, long long index, double
   }
 }
 
-// Block bounds (docs/design.md section 13.5). A run of a line is tried at once at the first
-// kBlockSamples critical samples; the runs start at kFirstBlock designs, double after a run is
-// ruled out and halve after one is not, within [kMinBlock, kMaxBlock]. After a try that rules
-// nothing out, the next one waits `gap` designs, doubled on every such try in a row: on lines
-// where the bounds do not help, the tries cost little beside the designs' own bounds.
-constexpr long long kMinBlock = 8, kFirstBlock = 32, kMaxBlock = 4096, kMaxGap = 1024;
-constexpr std::size_t kBlockSamples = 2;
-constexpr long long kCheckEvery = 16;
-
-// Spot check of a ruled-out run (the framework's check of a mechanism's claim, as LineBound
-// checks line bounds): its middle design, evaluated exactly at the sample, must fail there when
-// the bound says every design fails, and must not score above the bound otherwise.
-void check_block_bound(const Problem& problem, SweepThread& s, long long first, long long last, int sample,
-                       double bound) {
-  const std::size_t n = s.x.size();
-  std::copy(s.x.begin(), s.x.end(), s.check_x.begin());
-  const long long middle = first + (last - first) / 2;
-  s.check_x[n - 1] = s.line_bound->value(middle);
-  s.check_sample.assign(1, sample);
-  EvalOptions at_sample;
-  at_sample.subset = &s.check_sample;
-  const Evaluation& e = problem.evaluate(s.check_x.data(), *s.eval_scratch, at_sample);
-  if (e.status != EvalStatus::kFeasible || e.score <= bound) return;
-  std::ostringstream message;
-  message << std::setprecision(17) << "the mechanism's block bound (Mechanism::sample_envelope) is wrong: over "
-          << problem.design_space().components()[static_cast<std::size_t>(problem.design_space().free_indices().back())].name
-          << " in [" << s.line_bound->value(first) << ", " << s.line_bound->value(last) << "] at sample " << sample
-          << " it claims " << (bound == -kInf ? std::string("that every design fails") : "a score of at most " + std::to_string(bound))
-          << ", but grid value " << s.check_x[n - 1] << " reaches the sample and scores " << e.score
-          << " there; culling could cut the optimum: set solver.options.block_bounds = false, and report the mechanism";
-  throw Error("culling", message.str());
-}
-
-// True when every design of the run [first, last] of the current line (s.full) is ruled out
-// at once: infeasible at a critical sample, or bounded there strictly below the reference.
-bool rule_out_run(const Problem& problem, SweepThread& s, long long first, long long last, double threshold) {
-  ++s.counts.block_bounds;
-  const int component = problem.design_space().free_indices().back();
-  const double lower = s.line_bound->value(first), upper = s.line_bound->value(last);
-  const std::size_t tries = std::min(s.local.size(), kBlockSamples);
-  for (std::size_t k = 0; k < tries; ++k) {
-    const int sample = s.local[k];
-    const double bound = problem.block_score_bound(s.full.data(), component, lower, upper, sample);
-    if (!(bound == -kInf || bound < threshold)) continue;
-    // The spot check costs a design's evaluation: every kCheckEvery-th ruled-out run (the first
-    // of each thread included) is checked.
-    if (s.ruled_out_runs++ % kCheckEvery == 0) check_block_bound(problem, s, first, last, sample, bound);
-    s.counts.block_ruled_out += last - first + 1;
-    if (k > 0) std::rotate(s.local.begin(), s.local.begin() + static_cast<std::ptrdiff_t>(k),
-                           s.local.begin() + static_cast<std::ptrdiff_t>(k) + 1);  // as ruled_out_by_bound does
-    return true;
-  }
-  return false;
-}
-
-// Where the next block bound is tried on a line, and how long a run it covers.
-struct BlockTries {
-  long long next = 0, size = kFirstBlock, gap = kMinBlock;
-};
-
-// Tries the run starting at design i (inside the line bound's run, which ends at `last`) when
-// one is due; returns the last design it ruled out, or i - 1.
-long long try_block(const Problem& problem, SweepThread& s, BlockTries& tries, long long i, long long last,
-                    double threshold) {
-  if (i < tries.next || last - i + 1 < kMinBlock) return i - 1;
-  const long long end = std::min(last, i + tries.size - 1);
-  if (rule_out_run(problem, s, i, end, threshold)) {
-    tries.size = std::min(tries.size * 2, kMaxBlock);
-    tries.gap = kMinBlock;
-    tries.next = end + 1;
-    return end;
-  }
-  tries.size = std::max(tries.size / 2, kMinBlock);
-  tries.next = i + tries.gap;
-  tries.gap = std::min(tries.gap * 2, kMaxGap);
-  return i - 1;
-}
-
 // Every design of one grid line (the last variable running), bounded first, searched in full
 // when the bound cannot rule it out. False when a stop request (or a breach) left it unfinished.
 bool cull_line(const Problem& problem, const Grid& grid, long long line, SweepThread& s, Reference& reference,
@@ -485,8 +405,7 @@ bool cull_line(const Problem& problem, const Grid& grid, long long line, SweepTh
   // Block bounds on lines whose run is verified, so that the designs they rule out are known to
   // satisfy the constraints (the counts stay those of a run without them).
   const bool try_blocks = block_bounds && s.line_bound->verified();
-  if (try_blocks) problem.design_space().expand(s.x.data(), s.full.data());
-  BlockTries tries;
+  if (try_blocks) s.run_bounds->start_line(s.x.data());
   for (std::size_t row = 0; row < static_cast<std::size_t>(kBlockLanes); ++row) {
     std::copy(s.x.begin(), s.x.end(), s.group_x.begin() + static_cast<std::ptrdiff_t>(row * n));
   }
@@ -507,11 +426,13 @@ bool cull_line(const Problem& problem, const Grid& grid, long long line, SweepTh
         i = end - 1;
         continue;
       }
-      if (try_blocks && !s.local.empty()) {
-        const long long ruled_out_to =
-            try_block(problem, s, tries, i, s.line_bound->last(), reference.score.load(std::memory_order_relaxed));
-        if (ruled_out_to >= i) {
-          i = ruled_out_to;
+      if (try_blocks) {
+        const RunBounds::Try t = s.run_bounds->try_run(i, s.line_bound->last(), reference.score.load(std::memory_order_relaxed),
+                                                       s.local, *s.line_bound, *s.eval_scratch);
+        if (t.outcome != RunBounds::Outcome::kNotDue) ++s.counts.block_bounds;
+        if (t.ruled_out()) {
+          s.counts.block_ruled_out += t.last - i + 1;
+          i = t.last;
           continue;
         }
       }
@@ -645,8 +566,7 @@ FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions
     s.x.resize(grid.counts.size());
     s.line_bound.emplace(problem, options.line_bounds, "culling");
     s.group_x.assign(static_cast<std::size_t>(kBlockLanes) * grid.counts.size(), 0.0);
-    s.full.assign(problem.design_space().size(), 0.0);
-    s.check_x.assign(grid.counts.size(), 0.0);
+    s.run_bounds.emplace(problem, "culling");
   }
   const RangeLedger skip = reference.ledger;  // finished before this run
   auto last_report = Clock::now(), last_checkpoint = Clock::now();

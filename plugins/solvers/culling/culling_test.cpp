@@ -37,20 +37,6 @@ std::vector<Json> worst_case_objective_sets() {
           Json::array({{{"metric", "gii"}, {"weight", 0.6}}, {{"metric", "gdi"}, {"weight", 0.4}}})};
 }
 
-// A random sub-box of the paper's bounds on a grid of the given step.
-Json random_box(std::mt19937& rng, double step, int min_points, int max_points) {
-  Json doc = hapsyn::test::fivebar_study("culling");
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  const std::vector<std::tuple<std::string, double, double>> vars = {
-      {"l0", 0.0, 0.3}, {"l1", 0.05, 0.3}, {"l2", 0.05, 0.3}, {"r", 0.05, 0.6}};
-  for (const auto& [name, lo, hi] : vars) {
-    const int points = min_points + static_cast<int>(u(rng) * (max_points - min_points + 1));
-    const double width = step * (points - 1);
-    const double lower = lo + std::floor(u(rng) * (hi - lo - width) / step) * step;
-    doc["design"][name] = {{"lower", lower}, {"upper", lower + width}, {"step", step}};
-  }
-  return doc;
-}
 }  // namespace
 
 TEST(Culling, ReturnsTheExhaustiveOptimumOnRandomSubBoxes) {
@@ -58,7 +44,7 @@ TEST(Culling, ReturnsTheExhaustiveOptimumOnRandomSubBoxes) {
   const std::vector<Json> objective_sets = worst_case_objective_sets();
   int compared = 0;
   for (int box = 0; box < 12; ++box) {
-    Json doc = random_box(rng, box < 6 ? 0.02 : 0.01, 4, 9);
+    Json doc = hapsyn::test::fivebar_random_box(rng, box < 6 ? 0.02 : 0.01, 4, 9);
     doc["scene"]["options"]["step"] = 0.02;
     for (const Json& objectives : objective_sets) {
       doc["objectives"] = objectives;
@@ -523,44 +509,13 @@ TEST(Culling, LineBoundsSkipRuledOutDesignsWithTheSameResultAndCounts) {
   EXPECT_GT(a.statistics["constraint_violated"].get<long long>(), 1000);
 }
 
-namespace {
-
-// A random sub-box with long lines of r (block bounds act on runs of a line): r on a 5 mm grid
-// over 30 to 100 points, l0, l1, l2 over 2 to 4 points of 20 mm.
-Json random_long_lines(std::mt19937& rng) {
-  Json doc = random_box(rng, 0.02, 2, 4);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  const int points = 30 + static_cast<int>(u(rng) * 71);
-  const double width = 0.005 * (points - 1);
-  const double lower = 0.005 * std::floor(u(rng) * (0.6 - width) / 0.005);
-  doc["design"]["r"] = {{"lower", lower}, {"upper", lower + width}, {"step", 0.005}};
-  doc["scene"]["options"]["step"] = 0.02;
-  return doc;
-}
-
-// The five-bar, forwarding everything (line bounds and their one-run promise included), with a
-// sample envelope that claims every design of every run fails.
-class FalseEnvelope final : public hapsyn::test::ForwardingMechanism {
- public:
-  using ForwardingMechanism::ForwardingMechanism;
-  bool constraints_quasiconvex(int component) const override { return inner().constraints_quasiconvex(component); }
-  bool sample_envelope(const double*, int, double, double, const double*, hapsyn::Needs,
-                       hapsyn::SampleEnvelope& out) const override {
-    out = hapsyn::SampleEnvelope{};
-    out.all_fail = true;
-    return true;
-  }
-};
-
-}  // namespace
-
 TEST(Culling, BlockBoundsGiveTheExhaustiveOptimumOnLongLines) {
   std::mt19937 rng(77);
   const std::vector<Json> objective_sets = worst_case_objective_sets();
   int compared = 0;
   long long ruled_out = 0, bounded = 0;
   for (int box = 0; box < 10; ++box) {
-    Json doc = random_long_lines(rng);
+    Json doc = hapsyn::test::fivebar_random_long_lines(rng);
     for (const Json& objectives : objective_sets) {
       doc["objectives"] = objectives;
       const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
@@ -626,7 +581,7 @@ TEST(Culling, AFalseBlockBoundStopsTheRunNamingIt) {
   const hapsyn::Problem& p = *study.problem;
   const std::shared_ptr<const hapsyn::Mechanism> fivebar(std::shared_ptr<const hapsyn::Mechanism>{}, &p.mechanism());
   const auto problem = std::make_shared<hapsyn::Problem>(
-      "false-envelope", std::make_shared<FalseEnvelope>(fivebar), std::make_shared<hapsyn::SampleSet>(p.samples()),
+      "false-envelope", std::make_shared<hapsyn::test::AllFailEnvelope>(fivebar), std::make_shared<hapsyn::SampleSet>(p.samples()),
       p.metrics(), p.objectives(), p.design_space());
   const hapsyn::plugins::CullingSolver culling(hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(true, false)));
   expect_error([&] { solve(culling, *problem, 1); },

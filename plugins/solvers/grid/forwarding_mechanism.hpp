@@ -32,4 +32,18 @@ class ForwardingMechanism : public Mechanism {
   std::shared_ptr<const Mechanism> inner_;
 };
 
+/// The five-bar, forwarding everything (line bounds and their one-run promise included), with a
+/// sample envelope that claims every design of every run fails: a wrong block bound, which the
+/// solvers' spot check must refuse.
+class AllFailEnvelope final : public ForwardingMechanism {
+ public:
+  using ForwardingMechanism::ForwardingMechanism;
+  bool constraints_quasiconvex(int component) const override { return inner().constraints_quasiconvex(component); }
+  bool sample_envelope(const double*, int, double, double, const double*, Needs, SampleEnvelope& out) const override {
+    out = SampleEnvelope{};
+    out.all_fail = true;
+    return true;
+  }
+};
+
 }  // namespace hapsyn::test

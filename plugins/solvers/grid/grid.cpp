@@ -2,6 +2,7 @@
 
 #include "ledger.hpp"
 #include "line_bound.hpp"
+#include "run_bounds.hpp"
 #include "rank_support.hpp"
 #include "task_bytes.hpp"
 #include "worst_case_check.hpp"
@@ -64,19 +65,31 @@ void raise_to(std::atomic<double>& target, double value) {
   }
 }
 
-// The grid of the free design variables: points per variable (last fastest) and in all.
+// The grid of the free design variables: points per variable (last fastest) and in all, and the
+// designs per chunk (see below).
 struct GridShape {
   std::vector<long long> counts;
   long long total = 1;
+  long long chunk = 64;
 
   explicit GridShape(const DesignSpace& space) : counts(space.grid_counts()) {
     for (long long c : counts) total *= c;
+    // Grids of a million designs and more: chunks of whole lines (the smallest multiple of the
+    // line length of at least 64 designs), since a chunk's end inside a line splits a group of
+    // the line's designs evaluated together (a third of the pruned 10 mm five-bar search's
+    // time). Smaller grids keep 64 designs, the finest stop and shard granularity.
+    const long long line = counts.empty() ? 1 : std::max(1LL, counts.back());
+    if (total >= (1LL << 20)) chunk = line * ((64 + line - 1) / line);
   }
+  long long chunks() const { return (total + chunk - 1) / chunk; }
 };
 
 // How the evaluations of some grid designs ended.
 struct Tally {
   long long feasible = 0, constraint_violated = 0, sample_failed = 0, pruned = 0, samples = 0;
+  // Block bounds (best mode with pruning): runs tried, and the designs they ruled out (also
+  // counted above: as failing at a sample when all fail there, else as pruned).
+  long long block_bounds = 0, block_ruled_out = 0;
 
   void count(const Evaluation& e) {
     samples += e.samples_evaluated;
@@ -93,11 +106,14 @@ struct Tally {
     sample_failed += t.sample_failed;
     pruned += t.pruned;
     samples += t.samples;
+    block_bounds += t.block_bounds;
+    block_ruled_out += t.block_ruled_out;
   }
   long long designs() const { return feasible + constraint_violated + sample_failed + pruned; }
   Json to_json() const {
     return {{"feasible", feasible}, {"constraint_violated", constraint_violated}, {"sample_failed", sample_failed},
-            {"pruned", pruned}, {"samples", samples}};
+            {"pruned", pruned}, {"samples", samples}, {"block_bounds", block_bounds},
+            {"block_ruled_out", block_ruled_out}};
   }
   // The statistics both modes share.
   Json statistics(const GridShape& grid, bool prune) const {
@@ -108,6 +124,8 @@ struct Tally {
             {"pruned", pruned},
             {"full_workspace_searches", feasible},
             {"prune", prune},
+            {"block_bounds", block_bounds},
+            {"block_ruled_out", block_ruled_out},
             {"grid_counts", grid.counts}};
   }
 };
@@ -116,14 +134,14 @@ struct Tally {
 
 // The grid is visited in chunks of consecutive designs: one chunk is one task of the run's task
 // farm (handed out in order to every thread of every rank; the chunks of one --shard share are a
-// contiguous slice). A chunk counts as finished only when all its designs are, so that a
-// checkpoint can say exactly which designs a resumed run still has to visit.
-constexpr long long kChunk = 64;
+// contiguous slice). A chunk (GridShape::chunk designs) counts as finished only when all its
+// designs are, so that a checkpoint can say exactly which designs a resumed run still has to
+// visit.
 
 // The designs of the finished chunks (the last chunk may be short).
-long long finished_designs(const RangeLedger& ledger, long long total) {
+long long finished_designs(const RangeLedger& ledger, const GridShape& grid) {
   long long n = 0;
-  for (const auto& [first, end] : ledger.ranges()) n += std::min(total, end * kChunk) - first * kChunk;
+  for (const auto& [first, end] : ledger.ranges()) n += std::min(grid.total, end * grid.chunk) - first * grid.chunk;
   return n;
 }
 
@@ -156,23 +174,25 @@ Resumed read_common(const SolverContext& context, const Json& state, const GridS
   const std::string m = checkpoint_field<std::string>(context, state, "state", "mode");
   if (m != mode) throw bad_checkpoint(context, "state.mode = \"" + m + "\", this run's mode is \"" + mode + "\"");
   if (checkpoint_field<long long>(context, state, "state", "grid_designs") != grid.total ||
-      checkpoint_field<long long>(context, state, "state", "chunk_size") != kChunk) {
+      checkpoint_field<long long>(context, state, "state", "chunk_size") != grid.chunk) {
     throw bad_checkpoint(context, "state.grid_designs / state.chunk_size do not match this grid (" +
-                                      std::to_string(grid.total) + " designs in chunks of " + std::to_string(kChunk) + ")");
+                                      std::to_string(grid.total) + " designs in chunks of " + std::to_string(grid.chunk) + ")");
   }
-  r.ledger = RangeLedger::read(context, state, "finished_chunks", "chunk", (grid.total + kChunk - 1) / kChunk);
+  r.ledger = RangeLedger::read(context, state, "finished_chunks", "chunk", grid.chunks());
   const Json tally = checkpoint_field<Json>(context, state, "state", "tally");
   r.tally.feasible = checkpoint_field<long long>(context, tally, "state.tally", "feasible");
   r.tally.constraint_violated = checkpoint_field<long long>(context, tally, "state.tally", "constraint_violated");
   r.tally.sample_failed = checkpoint_field<long long>(context, tally, "state.tally", "sample_failed");
   r.tally.pruned = checkpoint_field<long long>(context, tally, "state.tally", "pruned");
   r.tally.samples = checkpoint_field<long long>(context, tally, "state.tally", "samples");
+  r.tally.block_bounds = checkpoint_field<long long>(context, tally, "state.tally", "block_bounds");
+  r.tally.block_ruled_out = checkpoint_field<long long>(context, tally, "state.tally", "block_ruled_out");
   r.seconds = checkpoint_field<double>(context, state, "state", "elapsed_seconds");
   return r;
 }
 
 Json common_state(const char* mode, const GridShape& grid, const RangeLedger& ledger, const Tally& tally, double seconds) {
-  Json state = {{"mode", mode}, {"grid_designs", grid.total}, {"chunk_size", kChunk}};
+  Json state = {{"mode", mode}, {"grid_designs", grid.total}, {"chunk_size", grid.chunk}};
   ledger.write(state, "finished_chunks");
   state["tally"] = tally.to_json();
   state["elapsed_seconds"] = seconds;
@@ -181,6 +201,7 @@ Json common_state(const char* mode, const GridShape& grid, const RangeLedger& le
 
 void put_tally(ByteWriter& out, const Tally& t) {
   out.put(t.feasible).put(t.constraint_violated).put(t.sample_failed).put(t.pruned).put(t.samples);
+  out.put(t.block_bounds).put(t.block_ruled_out);
 }
 
 Tally get_tally(ByteReader& in) {
@@ -190,7 +211,30 @@ Tally get_tally(ByteReader& in) {
   t.sample_failed = in.get<long long>();
   t.pruned = in.get<long long>();
   t.samples = in.get<long long>();
+  t.block_bounds = in.get<long long>();
+  t.block_ruled_out = in.get<long long>();
   return t;
+}
+
+// The sample that decided a design's evaluation (the one it failed at, or the one after which
+// its bound fell below the incumbent) moves to the front of `hints` (at most kHints samples):
+// neighbouring designs tend to be decided by it too, so the block bounds try it first.
+constexpr std::size_t kHints = 4;
+void note_deciding_sample(const Problem& problem, const Evaluation& e, std::vector<int>& hints) {
+  int sample = -1;
+  if (e.status == EvalStatus::kSampleFailed) {
+    sample = e.failed_sample;
+  } else if (e.status == EvalStatus::kPruned && e.samples_evaluated > 0) {
+    sample = problem.sample_order()[static_cast<std::size_t>(e.samples_evaluated - 1)];
+  }
+  if (sample < 0) return;
+  auto at = std::find(hints.begin(), hints.end(), sample);
+  if (at == hints.end()) {
+    if (hints.size() == kHints) hints.pop_back();
+    hints.push_back(sample);
+    at = hints.end() - 1;
+  }
+  std::rotate(hints.begin(), at, at + 1);
 }
 
 // Per-thread state of a sweep; `Extra` holds what the mode keeps besides the tally.
@@ -201,6 +245,9 @@ struct alignas(64) SweepThread : Extra {
   std::vector<double> x;
   std::optional<LineBound> bound;  // of the line `line` (the last free variable varying)
   long long line = -1;
+  std::optional<RunBounds> run_bounds;  // block bounds of runs of the line `run_line`
+  long long run_line = -1;
+  std::vector<int> hints;  // samples that recently decided a design (failed or pruned it), latest first
   // Designs of the current line waiting to be evaluated together (best mode): grid indices,
   // their free vectors one after the other, and the evaluations' buffer.
   std::vector<long long> pending;
@@ -220,27 +267,12 @@ std::vector<SweepThread<Extra>> make_threads(const Problem& problem, const Solve
     s.eval_scratch = problem.make_eval_scratch();
     s.x.resize(problem.design_space().free_size());
     s.bound.emplace(problem, line_bounds, "grid");
+    s.run_bounds.emplace(problem, "grid");
+    s.hints.reserve(kHints + 1);
     s.pending_x.assign(static_cast<std::size_t>(kBlockLanes) * s.x.size(), 0.0);
     s.row_line.assign(static_cast<std::size_t>(kBlockLanes), -1);
   }
   return states;
-}
-
-// Whether the line bound rules out grid design `index` (then it is counted as violating a
-// constraint); else s.x holds the design. The line (all but the last variable) is decoded and
-// bounded once per line; within it only the last variable changes.
-template <class Extra>
-bool excluded_by_line_bound(SweepThread<Extra>& s, const DesignSpace& space, const GridShape& grid, long long index) {
-  const long long count = grid.counts.back();
-  const long long line = index / count, i = index - line * count;
-  if (line != s.line) {
-    s.line = line;
-    space.grid_point(index, grid.counts, s.x.data());
-    s.bound->update(s.x.data());
-  }
-  if (s.bound->excludes(i)) return true;
-  s.x.back() = s.bound->value(i);
-  return false;
 }
 
 // What the threads of a sweep share besides the mode's result so far. On rank 0 it is also the
@@ -274,26 +306,55 @@ struct SweepControl {
   }
 };
 
-// Visits the designs of `chunk` (visit(index, tally) each), checking for a stop or a breach
-// between designs. False when that left the chunk unfinished.
-template <class Visit>
-bool visit_chunk(const SweepControl& control, long long chunk, Tally& tally, const Visit& visit) {
-  const long long end = std::min(control.grid.total, (chunk + 1) * kChunk);
-  for (long long index = chunk * kChunk; index < end; ++index) {
+// Visits the designs of `chunk` line by line (a line: the last free variable running). Each
+// line is decoded and bounded once (s.bound; s.x holds the line, s.line its number); the designs
+// the line bound excludes are counted at once as violating a constraint, and each other one goes
+// to visit(index, i, last, tally) with s.x.back() set to its value (i: its index on the line,
+// `last`: the last index of the piece of the line in this chunk that the bound leaves), which
+// returns the last index it dealt with (i, or up to `last` when it ruled out a run at once).
+// Checks for a stop or a breach between the pieces of lines. False when that left the chunk
+// unfinished.
+template <class Extra, class Visit>
+bool visit_chunk(const SweepControl& control, SweepThread<Extra>& s, const DesignSpace& space, long long chunk,
+                 Tally& tally, const Visit& visit) {
+  const GridShape& grid = control.grid;
+  const long long count = grid.counts.back();
+  const long long end = std::min(grid.total, (chunk + 1) * grid.chunk);
+  for (long long index = chunk * grid.chunk; index < end;) {
     if (control.halted()) return false;
-    visit(index, tally);
+    const long long line = index / count, line_start = line * count;
+    if (line != s.line) {
+      s.line = line;
+      space.grid_point(line_start, grid.counts, s.x.data());
+      s.bound->update(s.x.data());
+    }
+    const long long piece_end = std::min(end, line_start + count) - line_start;
+    long long i = index - line_start;
+    // The bound excludes a prefix and a suffix of the line: count each part of the piece at once.
+    const long long first = std::min(std::max(i, s.bound->first()), piece_end);
+    const long long last = std::min(piece_end - 1, s.bound->last());
+    tally.constraint_violated += (first - i) + (piece_end - 1 - std::max(last, first - 1));
+    for (i = first; i <= last; ++i) {
+      s.x.back() = s.bound->value(i);
+      i = visit(line_start + i, i, last, tally);
+    }
+    index = line_start + piece_end;
   }
   return true;
 }
 
 // The farm both modes fill in: each task is units_per_task() consecutive chunks (the chunks
-// finished before skipped), the whole grid split by --shard. run_chunk(chunk, thread, breach)
-// evaluates one chunk and returns its result (starting with its tally), or nullopt when a stop
-// left it unfinished; a task's result is its chunks' (index, result) pairs, up to a breach.
-// collect_chunk(chunk, result) takes one on rank 0; partial(thread, tally) counts the
-// evaluations of chunks whose task a stop left unfinished (a resumed run visits them again).
-template <class RunChunk, class CollectChunk, class Partial>
-TaskFarm chunk_farm(const SweepControl& control, RunChunk run_chunk, CollectChunk collect_chunk, Partial partial) {
+// finished before skipped), the whole grid split by --shard. run_chunk(chunk, thread, breach,
+// tally, out) evaluates one chunk, sets its tally and appends its record to `out`, or returns
+// false when a stop left it unfinished; a task's result is its chunks' (index, record) pairs, up
+// to a breach. On rank 0, under control.mutex, collect_chunk(chunk, in) reads one record and
+// returns whether the chunk is finished (false: a breach), and after_task() runs once per task
+// (progress, checkpoint): the per-chunk work is the record alone, since a chunk is only 64
+// designs. partial(thread, tally) counts the evaluations of chunks whose task a stop left
+// unfinished (a resumed run visits them again).
+template <class RunChunk, class CollectChunk, class AfterTask, class Partial>
+TaskFarm chunk_farm(SweepControl& control, RunChunk run_chunk, CollectChunk collect_chunk, AfterTask after_task,
+                    Partial partial) {
   const long long chunks = control.chunks();
   const long long per_task = units_per_task(chunks);
   TaskFarm farm;
@@ -311,24 +372,34 @@ TaskFarm chunk_farm(const SweepControl& control, RunChunk run_chunk, CollectChun
     for (long long c = task * per_task; c < std::min(chunks, (task + 1) * per_task); ++c) {
       if (control.skip.finished(c)) continue;
       bool breach = false;
-      const std::optional<std::string> result = run_chunk(c, thread, breach);
-      if (!result) {
+      Tally tally;
+      out.put(c);
+      if (!run_chunk(c, thread, breach, tally, out)) {
         partial(thread, finished);
         return std::nullopt;
       }
-      ByteReader in(*result);
-      finished.add(get_tally(in));
-      out.put(c).put_string(*result);
+      finished.add(tally);
       if (breach) break;  // this rank's tasks stop; rank 0 learns it from this result
     }
     return out.take();
   };
-  farm.collect = [collect_chunk](long long, std::string&& bytes) {
+  farm.collect = [&control, collect_chunk, after_task](long long, std::string&& bytes) {
     ByteReader in(bytes);
+    std::lock_guard<std::mutex> lock(control.mutex);
+    // The task's finished chunks are consecutive but for chunks skipped or breached: the ledger
+    // takes each run of them at once.
+    long long run_first = -1, run_end = -1;
     while (!in.at_end()) {
       const auto chunk = in.get<long long>();
-      collect_chunk(chunk, in.get_string());
+      if (!collect_chunk(chunk, in)) continue;
+      if (chunk != run_end) {
+        control.ledger.add(run_first, run_end);
+        run_first = chunk;
+      }
+      run_end = chunk + 1;
     }
+    control.ledger.add(run_first, run_end);
+    after_task();
   };
   return farm;
 }
@@ -339,7 +410,7 @@ std::string unfinished_message(const SweepControl& control, bool stopped, const 
   if (!stopped) return control.context.cluster().shard_message() + "; " + best;
   std::ostringstream s;
   s << "stopped on request after " << std::fixed << std::setprecision(1)
-    << 100.0 * static_cast<double>(finished_designs(control.ledger, control.grid.total)) /
+    << 100.0 * static_cast<double>(finished_designs(control.ledger, control.grid)) /
            static_cast<double>(control.grid.total)
     << "% of " << with_commas(control.grid.total) << " grid designs; " << best << "; "
     << (control.context.checkpoint_file.empty() ? std::string("no checkpoint file, a new run starts over")
@@ -354,7 +425,7 @@ std::string unfinished_message(const SweepControl& control, bool stopped, const 
 Resumed merge_common(const std::vector<Json>& states, const GridShape& grid, const char* mode) {
   if (states.empty()) throw Error("merge", "no shard states to merge");
   Resumed merged;
-  merged.ledger = RangeLedger((grid.total + kChunk - 1) / kChunk);
+  merged.ledger = RangeLedger(grid.chunks());
   std::vector<RangeLedger> ledgers;
   for (std::size_t k = 0; k < states.size(); ++k) {
     const Resumed r = merge_read(k, states.size(), [&](const SolverContext& c) { return read_common(c, states[k], grid, mode); });
@@ -362,8 +433,8 @@ Resumed merge_common(const std::vector<Json>& states, const GridShape& grid, con
     if (chunk >= 0) {
       std::size_t other = 0;
       while (other < k && !ledgers[other].finished(chunk)) ++other;
-      throw Error("merge", "chunk " + std::to_string(chunk) + " (grid designs " + std::to_string(chunk * kChunk) + ".." +
-                               std::to_string(std::min(grid.total, (chunk + 1) * kChunk) - 1) + ") is finished in shard " +
+      throw Error("merge", "chunk " + std::to_string(chunk) + " (grid designs " + std::to_string(chunk * grid.chunk) + ".." +
+                               std::to_string(std::min(grid.total, (chunk + 1) * grid.chunk) - 1) + ") is finished in shard " +
                                std::to_string(other + 1) + " and in shard " + std::to_string(k + 1) + " of " +
                                std::to_string(states.size()) +
                                ": the shares overlap; merge the shards of one --shard i/N split, each once");
@@ -626,11 +697,13 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
   // The evaluator prunes a weighted sum only when every objective is maximized with weight >= 0.
   const bool prunes = prune && std::all_of(problem.objectives().begin(), problem.objectives().end(),
                                            [](const Objective& o) { return o.sense == Sense::kMaximize && o.weight >= 0.0; });
+  // Block bounds rule out runs against the incumbent, so only where the evaluator prunes.
+  const bool try_blocks = prunes && options_.block_bounds;
   const std::string fingerprint = fingerprint_of(problem, options_);
 
   // Every rank reads the checkpoint (a collective) and re-evaluates its best alike.
   Resumed resumed;
-  resumed.ledger = RangeLedger((grid.total + kChunk - 1) / kChunk);
+  resumed.ledger = RangeLedger(grid.chunks());
   BestDesign shared_best;  // guarded by control.mutex: this rank's best, and on rank 0 the collected one
   if (const std::optional<Json> state = read_checkpoint(context, "grid", fingerprint)) {
     resumed = read_common(context, *state, grid, "best");
@@ -647,15 +720,15 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
     write_checkpoint(context, "grid", fingerprint, state);
     control.last_checkpoint = Clock::now();
   };
-  // A chunk's result: its tally, its best feasible design (index -1: none) and a breach.
-  const auto run_chunk = [&](long long chunk, int thread, bool& breach_found) -> std::optional<std::string> {
+  // A chunk's record: its tally, its best feasible design (index -1: none) and a breach.
+  const auto run_chunk = [&](long long chunk, int thread, bool& breach_found, Tally& tally, ByteWriter& out) {
     BestThread& s = states[static_cast<std::size_t>(thread)];
-    Tally tally;
     BestDesign chunk_best;
     std::optional<MonotonicityBreach> breach;
     // One design's outcome (`design` its free vector).
     const auto take = [&](long long index, const double* design, const Evaluation& e, Tally& t) {
       t.count(e);
+      if (try_blocks) note_deciding_sample(problem, e, s.hints);
       if (e.status != EvalStatus::kFeasible) return;
       chunk_best.take(e.score, index);
       if (!s.improves_on(e.score, index)) return;
@@ -688,10 +761,21 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
       for (std::size_t i = 0; i < s.pending.size(); ++i) take(s.pending[i], designs[i], s.outs[i], t);
       s.pending.clear();
     };
-    const bool complete = visit_chunk(control, chunk, tally, [&](long long index, Tally& t) {
-      if (excluded_by_line_bound(s, space, grid, index)) {
-        ++t.constraint_violated;
-        return;
+    const bool complete = visit_chunk(control, s, space, chunk, tally, [&](long long index, long long i, long long last, Tally& t) {
+      if (try_blocks && s.bound->verified()) {
+        if (s.run_line != s.line) {
+          s.run_bounds->start_line(s.x.data());
+          s.run_line = s.line;
+        }
+        const RunBounds::Try run = s.run_bounds->try_run(i, last, incumbent.load(std::memory_order_relaxed), s.hints,
+                                                         *s.bound, *s.eval_scratch);
+        if (run.outcome != RunBounds::Outcome::kNotDue) ++t.block_bounds;
+        if (run.ruled_out()) {
+          const long long n = run.last - i + 1;
+          t.block_ruled_out += n;
+          (run.outcome == RunBounds::Outcome::kAllFail ? t.sample_failed : t.pruned) += n;
+          return run.last;
+        }
       }
       if (s.pending_line != s.line || s.pending.size() == static_cast<std::size_t>(kBlockLanes)) flush(t);
       s.pending_line = s.line;
@@ -706,39 +790,39 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
       }
       slot[dim - 1] = s.x[dim - 1];
       s.pending.push_back(index);
+      return i;
     });
     if (complete) flush(tally);
     s.pending.clear();
     if (!complete && !breach) {
       s.partial.add(tally);
-      return std::nullopt;
+      return false;
     }
     breach_found = breach.has_value();
-    ByteWriter out;
     put_tally(out, tally);
     out.put(chunk_best.best_index).put(chunk_best.best_score);
     put_breach(out, breach);
-    return out.take();
+    return true;
   };
-  const auto collect_chunk = [&](long long chunk, const std::string& bytes) {
-    ByteReader in(bytes);
+  const auto collect_chunk = [&](long long, ByteReader& in) {  // caller holds control.mutex
     const Tally tally = get_tally(in);
     const auto index = in.get<long long>();
     const auto score = in.get<double>();
     const std::optional<MonotonicityBreach> breach = get_breach(in);
-    std::lock_guard<std::mutex> lock(control.mutex);
     if (breach) {
       control.record_breach(*breach);  // the chunk stays unfinished
-      return;
+      return false;
     }
-    control.ledger.finish(chunk);
     control.finished.add(tally);
     if (index >= 0) {
       shared_best.take(score, index);
       raise_to(incumbent, score);
     }
+    return true;
+  };
+  const auto after_task = [&] {  // caller holds control.mutex
     if (context.progress) {
-      report_progress(*context.progress, "grid", finished_designs(control.ledger, grid.total), grid.total, control.start,
+      report_progress(*context.progress, "grid", finished_designs(control.ledger, grid), grid.total, control.start,
                       control.last_report, options_.progress_interval, [&](std::ostream& out) {
                         out << "best score " << std::setprecision(6) << incumbent.load();
                       });
@@ -746,7 +830,7 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
     if (control.checkpoint_due(options_.checkpoint_interval)) save();
   };
   const auto partial = [&](int thread, const Tally& t) { states[static_cast<std::size_t>(thread)].partial.add(t); };
-  TaskFarm farm = chunk_farm(control, run_chunk, collect_chunk, partial);
+  TaskFarm farm = chunk_farm(control, run_chunk, collect_chunk, after_task, partial);
   if (prune) {
     farm.share = [&] {
       ByteWriter out;
@@ -825,7 +909,7 @@ SolverResult GridSolver::solve_front(const Problem& problem, const SolverContext
   const std::string fingerprint = fingerprint_of(problem, options_);
 
   Resumed resumed;
-  resumed.ledger = RangeLedger((grid.total + kChunk - 1) / kChunk);
+  resumed.ledger = RangeLedger(grid.chunks());
   if (const std::optional<Json> state = read_checkpoint(context, "grid", fingerprint)) {
     resumed = read_common(context, *state, grid, "front");
     read_front(problem, grid, context, *state, shared);
@@ -839,62 +923,57 @@ SolverResult GridSolver::solve_front(const Problem& problem, const SolverContext
     write_checkpoint(context, "grid", fingerprint, state);
     control.last_checkpoint = Clock::now();
   };
-  // A chunk's result: its tally, the front of its feasible designs and a breach.
-  const auto run_chunk = [&](long long chunk, int thread, bool& breach_found) -> std::optional<std::string> {
+  // A chunk's record: its tally, the front of its feasible designs and a breach.
+  const auto run_chunk = [&](long long chunk, int thread, bool& breach_found, Tally& tally, ByteWriter& out) {
     FrontThread& s = states[static_cast<std::size_t>(thread)];
-    Tally tally;
     std::vector<FrontPoint> chunk_front;
     std::optional<MonotonicityBreach> breach;
-    const bool complete = visit_chunk(control, chunk, tally, [&](long long index, Tally& t) {
+    const bool complete = visit_chunk(control, s, space, chunk, tally, [&](long long index, long long i, long long, Tally& t) {
       if (prune && shared.version.load(std::memory_order_acquire) != s.seen) {
         std::lock_guard<std::mutex> lock(shared.mutex);
         s.snapshot.assign(shared.flat.begin(), shared.flat.end());
         s.seen = shared.version.load(std::memory_order_relaxed);
       }
-      if (excluded_by_line_bound(s, space, grid, index)) {
-        ++t.constraint_violated;
-        return;
-      }
       EvalOptions options;
       if (prune) options.prune_dominated_by = &s.snapshot;
       const Evaluation& e = problem.evaluate(s.x.data(), *s.eval_scratch, options);
       t.count(e);
-      if (e.status != EvalStatus::kFeasible) return;
+      if (e.status != EvalStatus::kFeasible) return i;
       const FrontPoint p = shared.signed_point(e.objectives, index);
       insert_point(chunk_front, p);
-      if (!shared.insert(p)) return;
+      if (!shared.insert(p)) return i;
       // Designs that enter the front are few compared with the grid: the spot check is cheap there.
       if (prune && !breach) {
         breach = spot_check(problem, s.x.data(), *s.eval_scratch, s.check_subset, true);
         if (breach) control.failed = true;
       }
+      return i;
     });
     if (!complete && !breach) {
       s.partial.add(tally);
-      return std::nullopt;
+      return false;
     }
     breach_found = breach.has_value();
-    ByteWriter out;
     put_tally(out, tally);
     put_points(out, chunk_front, m);
     put_breach(out, breach);
-    return out.take();
+    return true;
   };
-  const auto collect_chunk = [&](long long chunk, const std::string& bytes) {
-    ByteReader in(bytes);
+  const auto collect_chunk = [&](long long, ByteReader& in) {  // caller holds control.mutex
     const Tally tally = get_tally(in);
     const std::vector<FrontPoint> points = get_points(in, m);
     const std::optional<MonotonicityBreach> breach = get_breach(in);
-    std::lock_guard<std::mutex> lock(control.mutex);
     if (breach) {
-      control.record_breach(*breach);
-      return;
+      control.record_breach(*breach);  // the chunk stays unfinished
+      return false;
     }
-    control.ledger.finish(chunk);
     control.finished.add(tally);
     for (const FrontPoint& p : points) shared.insert(p);
+    return true;
+  };
+  const auto after_task = [&] {  // caller holds control.mutex
     if (context.progress) {
-      report_progress(*context.progress, "grid (pareto)", finished_designs(control.ledger, grid.total), grid.total,
+      report_progress(*context.progress, "grid (pareto)", finished_designs(control.ledger, grid), grid.total,
                       control.start, control.last_report, options_.progress_interval, [&](std::ostream& out) {
                         std::lock_guard<std::mutex> front_lock(shared.mutex);
                         out << "front " << shared.front.size() << " points";
@@ -903,7 +982,7 @@ SolverResult GridSolver::solve_front(const Problem& problem, const SolverContext
     if (control.checkpoint_due(options_.checkpoint_interval)) save();
   };
   const auto partial = [&](int thread, const Tally& t) { states[static_cast<std::size_t>(thread)].partial.add(t); };
-  TaskFarm farm = chunk_farm(control, run_chunk, collect_chunk, partial);
+  TaskFarm farm = chunk_farm(control, run_chunk, collect_chunk, after_task, partial);
   if (prune) {
     farm.share = [&] { return shared.bytes(); };
     farm.learn = [&](const std::string& bytes) {

@@ -6,7 +6,12 @@
 ///
 /// With `prune` (default on, worst-case studies only) a design's evaluation stops as soon as its
 /// upper bound from the samples seen so far falls strictly below the best score found; no
-/// design that could tie or beat the optimum is ever cut, so the result is the same.
+/// design that could tie or beat the optimum is ever cut, so the result is the same. With
+/// `block_bounds` as well (default on; single objective or weighted sum) runs of a grid line are
+/// ruled out at once where the mechanism's envelope of a sample bounds the run below the best
+/// score found, or shows that every design of the run fails there (grid/run_bounds.hpp); the
+/// counts then differ from a run without them (ruled-out designs count as pruned or failed),
+/// the best design does not.
 ///
 /// With `pareto` (two or more objectives) it returns the exact Pareto front of the grid instead:
 /// every grid design is visited; with `prune` (worst-case studies, maximized objectives) a
@@ -15,8 +20,10 @@
 /// front's objective vectors do not depend on the thread count; of designs with identical
 /// objective vectors the first in grid order is kept. This is the reference front for nbi.
 ///
-/// Stop and resume: the grid is visited in chunks of 64 consecutive designs. A stop request is
-/// honoured between designs (status stopped, the best or front of the designs searched so far);
+/// Stop and resume: the grid is visited in chunks of 64 consecutive designs (grids of 2^20
+/// designs and more: of whole lines of the last variable, the smallest multiple of a line with at
+/// least 64 designs). A stop request is
+/// honoured between pieces of a chunk (status stopped, the best or front of the designs searched so far);
 /// the checkpoint (every checkpoint_interval seconds, at a stop and at the end) holds the
 /// finished chunks, the best (index and score) or the front (indices and objective values) and
 /// the counts. `--resume` re-evaluates the claimed best (every front point) and refuses the
@@ -43,6 +50,7 @@ struct GridOptions {
   bool prune{};
   bool pareto{};
   bool line_bounds{};
+  bool block_bounds{};
   double progress_interval{};
   double checkpoint_interval{};
   double max_designs{};
@@ -60,6 +68,11 @@ struct GridOptions {
           "Skip the designs of a grid line (the last variable varying) that the mechanism's constraint interval "
           "rules out, counting them as violating a constraint (exact: the same result and statistics; "
           "docs/design.md section 13.3)");
+    d.add(&GridOptions::block_bounds, "block_bounds", true,
+          "With prune, single objective or weighted sum: rule out runs of a grid line at once where the mechanism "
+          "bounds a sample over the run (Mechanism::sample_envelope) and the metrics turn that into a score bound "
+          "below the best found, or every design of the run fails there; exact: the same optimum (docs/design.md "
+          "section 13.5). Ruled-out designs are counted as pruned (or failing at a sample) and in block_ruled_out");
     d.add(&GridOptions::progress_interval, "progress_interval", 2.0, "Seconds between progress lines on stderr")
         .greater_than(0)
         .unit("s");

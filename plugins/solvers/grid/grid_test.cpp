@@ -677,7 +677,8 @@ TEST(GridLineBound, SkippingRuledOutDesignsGivesTheSameResultAndStatistics) {
   const hapsyn::Study study = hapsyn::load_study(line_bound_study(), hapsyn::test::registry());
   for (const bool prune : {false, true}) {
     for (const bool pareto : {false, true}) {
-      Json base = {{"prune", prune}, {"pareto", pareto}, {"progress_interval", 2.0}};
+      // Block bounds act on verified lines only, so they would change the counts: off here.
+      Json base = {{"prune", prune}, {"pareto", pareto}, {"block_bounds", false}, {"progress_interval", 2.0}};
       Json off = base;
       off["line_bounds"] = false;
       Json on = base;
@@ -761,4 +762,114 @@ TEST(GridLineBound, ABoundThatCutsAFeasibleDesignStopsTheRunNamingIt) {
   // Without the bound the same problem runs.
   const auto result = grid_solver(Json{{"line_bounds", false}, {"progress_interval", 2.0}}).solve(*problem, hapsyn::SolverContext{});
   EXPECT_TRUE(result.best.has_value());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Block bounds (grid/run_bounds.hpp, docs/design.md section 13.5).
+
+TEST(GridBlockBounds, GiveTheExhaustiveOptimumOnLongLines) {
+  // Random sub-boxes with long lines of r, GII, GDI and a weighted sum of both: the pruned grid
+  // with block bounds returns the unpruned grid's optimum (design and score, bit for bit), on
+  // one thread and two, and its counts add up to the grid.
+  std::mt19937 rng(91);
+  const std::vector<Json> objective_sets = {
+      Json::array({{{"metric", "gii"}}}), Json::array({{{"metric", "gdi"}}}),
+      Json::array({{{"metric", "gii"}, {"weight", 0.6}}, {{"metric", "gdi"}, {"weight", 0.4}}})};
+  int compared = 0;
+  long long ruled_out = 0, failed_or_pruned = 0;
+  for (int box = 0; box < 8; ++box) {
+    Json doc = hapsyn::test::fivebar_random_long_lines(rng, "grid");
+    for (const Json& objectives : objective_sets) {
+      doc["objectives"] = objectives;
+      const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+      hapsyn::SolverContext context;
+      context.threads = 2;
+      const auto exhaustive = grid_solver(Json{{"prune", false}, {"progress_interval", 1e9}}).solve(*study.problem, context);
+      for (int threads : {1, 2}) {
+        context.threads = threads;
+        const auto with = grid_solver(Json{{"block_bounds", true}, {"progress_interval", 1e9}}).solve(*study.problem, context);
+        ASSERT_EQ(with.status, exhaustive.status) << with.message << "\n" << doc.dump();
+        const Json& st = with.statistics;
+        EXPECT_EQ(st["feasible"].get<long long>() + st["constraint_violated"].get<long long>() +
+                      st["sample_failed"].get<long long>() + st["pruned"].get<long long>(),
+                  st["grid_designs"].get<long long>());
+        EXPECT_EQ(st["constraint_violated"], exhaustive.statistics["constraint_violated"]) << doc.dump();
+        ruled_out += st["block_ruled_out"].get<long long>();
+        failed_or_pruned += st["sample_failed"].get<long long>() + st["pruned"].get<long long>();
+        if (!exhaustive.best) continue;
+        ASSERT_TRUE(with.best.has_value());
+        EXPECT_EQ(with.best->design, exhaustive.best->design) << doc.dump();
+        EXPECT_EQ(with.best->score, exhaustive.best->score) << doc.dump();
+        ++compared;
+      }
+    }
+  }
+  EXPECT_GE(compared, 20);
+  EXPECT_GT(ruled_out, failed_or_pruned / 4) << "the block bounds should rule out a good part of these lines";
+}
+
+TEST(GridBlockBounds, OffLeavesTheCountsOfThePrunedSearch) {
+  // block_bounds = false is the pruned search of before (no runs tried); on one thread, with
+  // them, the same optimum and constraint counts, fewer samples solved.
+  Json doc = line_bound_study();
+  doc["design"]["r"]["step"] = 0.005;
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  hapsyn::SolverContext context;
+  context.threads = 1;
+  const auto with = grid_solver(Json{{"progress_interval", 1e9}}).solve(*study.problem, context);
+  const auto without = grid_solver(Json{{"block_bounds", false}, {"progress_interval", 1e9}}).solve(*study.problem, context);
+  ASSERT_TRUE(with.best && without.best);
+  EXPECT_EQ(with.best->design, without.best->design);
+  EXPECT_EQ(with.best->score, without.best->score);
+  EXPECT_EQ(without.statistics["block_bounds"], 0);
+  EXPECT_EQ(without.statistics["block_ruled_out"], 0);
+  EXPECT_GT(with.statistics["block_ruled_out"].get<long long>(), 0);
+  EXPECT_EQ(with.statistics["constraint_violated"], without.statistics["constraint_violated"]);
+  EXPECT_LT(with.sample_evaluations, without.sample_evaluations);
+}
+
+TEST(GridBlockBounds, AWrongEnvelopeStopsTheRunNamingIt) {
+  // A mechanism whose envelope claims every design of every run fails: the spot check of the
+  // first ruled-out run refutes it, and the run stops with an error instead of an optimum.
+  const hapsyn::Study study = hapsyn::load_study(line_bound_study(), hapsyn::test::registry());
+  const hapsyn::Problem& p = *study.problem;
+  const std::shared_ptr<const hapsyn::Mechanism> fivebar(std::shared_ptr<const hapsyn::Mechanism>{}, &p.mechanism());
+  const auto problem = std::make_shared<hapsyn::Problem>(
+      "false-envelope", std::make_shared<hapsyn::test::AllFailEnvelope>(fivebar),
+      std::make_shared<hapsyn::SampleSet>(p.samples()), p.metrics(), p.objectives(), p.design_space());
+  hapsyn::SolverContext context;
+  context.threads = 1;
+  hapsyn::test::expect_error([&] { grid_solver(Json{{"progress_interval", 1e9}}).solve(*problem, context); },
+                             {"grid: the mechanism's block bound (Mechanism::sample_envelope) is wrong: over r in [",
+                              "it claims that every design fails, but grid value", "reaches the sample and scores",
+                              "grid could cut the optimum: set solver.options.block_bounds = false"});
+  const auto result = grid_solver(Json{{"block_bounds", false}, {"progress_interval", 1e9}}).solve(*problem, context);
+  EXPECT_TRUE(result.best.has_value());
+}
+
+TEST(GridChunks, LargeGridsGoInWholeLinesWithTheSameOptimum) {
+  // 1,701,900 designs (the coarse GII study's grid, a 20 mm workspace): chunks of two lines of
+  // 61. The pruned search with block bounds, on two threads, finds the unpruned optimum, and a
+  // checkpoint records the chunk size.
+  Json doc = hapsyn::test::fivebar_study();
+  doc["design"]["l0"] = {{"lower", 0.0}, {"upper", 0.3}, {"step", 0.01}};
+  doc["design"]["l1"] = {{"lower", 0.01}, {"upper", 0.3}, {"step", 0.01}};
+  doc["design"]["l2"] = {{"lower", 0.01}, {"upper", 0.3}, {"step", 0.01}};
+  doc["design"]["r"] = {{"lower", 0.0}, {"upper", 0.6}, {"step", 0.01}};
+  doc["scene"]["options"]["step"] = 0.02;
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  const std::string file = testing::TempDir() + "grid_chunks_checkpoint.json";
+  std::remove(file.c_str());
+  hapsyn::SolverContext context;
+  context.threads = 2;
+  const auto exhaustive = grid_solver(Json{{"prune", false}, {"progress_interval", 1e9}}).solve(*study.problem, context);
+  context.checkpoint_file = file;
+  const auto pruned = grid_solver(Json{{"progress_interval", 1e9}}).solve(*study.problem, context);
+  ASSERT_TRUE(exhaustive.best && pruned.best);
+  EXPECT_EQ(pruned.best->design, exhaustive.best->design);
+  EXPECT_EQ(pruned.best->score, exhaustive.best->score);
+  EXPECT_EQ(exhaustive.statistics["grid_designs"], 1701900);
+  const Json checkpoint = hapsyn::test::read_json_file(file);
+  EXPECT_EQ(checkpoint["state"]["chunk_size"], 122);
+  std::remove(file.c_str());
 }

@@ -1,0 +1,153 @@
+#pragma once
+/// \file
+/// Block bounds of runs of a grid line (header only; grid and culling share it, culling as
+/// "grid/run_bounds.hpp"; docs/design.md section 13.5). Within a line's verified run
+/// (LineBound::verified()), a run of consecutive designs is ruled out at once when, at one
+/// sample, every design of the run fails (all infeasible in a worst-case study) or the study's
+/// score is bounded strictly below a threshold that a real design already reaches
+/// (Problem::block_score_bound, from Mechanism::sample_envelope and Metric::envelope_bound).
+/// No design that ties or beats the threshold is ever ruled out, so a grid optimum found with
+/// block bounds is the optimum found without them.
+///
+/// The runs adapt to the line: they start at kFirst designs, double after a run is ruled out and
+/// halve after one is not, within [kMin, kMax]. After a try that rules nothing out the next one
+/// waits `gap` designs, doubled on every such try in a row, so that on lines where the bounds do
+/// not help the tries cost little beside the designs' own evaluations.
+///
+/// The framework checks the mechanism's claim: every kCheckEvery-th ruled-out run (the first of
+/// each thread included) has its middle design evaluated exactly at the deciding sample; a
+/// design that reaches the sample where the bound says all fail, or scores above the bound,
+/// stops the run with an Error naming the run, the sample and the option that turns the bounds
+/// off, instead of a silently wrong optimum.
+#include "line_bound.hpp"
+
+#include <hapsyn/error.hpp>
+#include <hapsyn/problem.hpp>
+
+#include <algorithm>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace hapsyn::plugins {
+
+class RunBounds {
+ public:
+  /// How a try ended.
+  enum class Outcome {
+    kNotDue,          ///< no try: the run would be too short, or the last failed try asks to wait
+    kNotRuledOut,     ///< tried: no sample bounds the run below the threshold
+    kAllFail,         ///< every design of the run fails at a sample
+    kBelowThreshold,  ///< every design of the run scores strictly below the threshold
+  };
+  struct Try {
+    Outcome outcome = Outcome::kNotDue;
+    long long last = -1;  ///< the run's last line index, when ruled out
+    bool ruled_out() const { return outcome == Outcome::kAllFail || outcome == Outcome::kBelowThreshold; }
+  };
+
+  /// Samples tried per run (the first ones of the caller's list).
+  static constexpr std::size_t kSamples = 2;
+
+  /// \param problem the study; the runs vary its last free design component.
+  /// \param solver the solver's name, which prefixes the spot check's error.
+  RunBounds(const Problem& problem, const char* solver)
+      : problem_(problem),
+        solver_(solver),
+        component_(problem.design_space().free_indices().empty() ? -1 : problem.design_space().free_indices().back()),
+        full_(problem.design_space().size(), 0.0),
+        check_x_(problem.design_space().free_size(), 0.0) {}
+
+  /// Starts a line: `free_design` is a free design vector of the line (its last component is
+  /// ignored). Resets the run size and the wait. No allocation.
+  void start_line(const double* free_design) {
+    const std::size_t n = check_x_.size();
+    std::copy(free_design, free_design + n, check_x_.begin());
+    problem_.design_space().expand(free_design, full_.data());
+    size_ = kFirst;
+    gap_ = kMin;
+    next_ = 0;
+  }
+
+  /// Tries, when one is due, the run [i, min(last, i + size - 1)] of the current line (its
+  /// values from `line`, whose run must be verified and end at `last`) at the first kSamples of
+  /// `samples` (most useful first; the deciding sample moves to the front). `threshold` is a
+  /// score a real design reaches (or -inf: then only runs that all fail are ruled out). The
+  /// spot check may evaluate one design in `scratch` (it overwrites its last evaluation).
+  /// \throws Error(solver, ...) when the spot check refutes the mechanism's bound.
+  Try try_run(long long i, long long last, double threshold, std::vector<int>& samples, const LineBound& line,
+              Problem::EvalScratch& scratch) {
+    Try t;
+    if (component_ < 0 || samples.empty() || i < next_ || last - i + 1 < kMin) return t;
+    const long long end = std::min(last, i + size_ - 1);
+    t.outcome = rule_out(i, end, threshold, samples, line, scratch);
+    if (t.ruled_out()) {
+      size_ = std::min(size_ * 2, kMax);
+      gap_ = kMin;
+      next_ = end + 1;
+      t.last = end;
+    } else {
+      size_ = std::max(size_ / 2, kMin);
+      next_ = i + gap_;
+      gap_ = std::min(gap_ * 2, kMaxGap);
+    }
+    return t;
+  }
+
+ private:
+  static constexpr long long kMin = 8, kFirst = 32, kMax = 4096, kMaxGap = 1024, kCheckEvery = 16;
+  static constexpr double kInf = std::numeric_limits<double>::infinity();
+
+  Outcome rule_out(long long first, long long last, double threshold, std::vector<int>& samples, const LineBound& line,
+                   Problem::EvalScratch& scratch) {
+    const double lower = line.value(first), upper = line.value(last);
+    const std::size_t tries = std::min(samples.size(), kSamples);
+    for (std::size_t k = 0; k < tries; ++k) {
+      const int sample = samples[k];
+      const double bound = problem_.block_score_bound(full_.data(), component_, lower, upper, sample);
+      if (!(bound == -kInf || bound < threshold)) continue;
+      // The spot check costs a design's evaluation at one sample: every kCheckEvery-th run.
+      if (ruled_out_runs_++ % kCheckEvery == 0) check(first, last, sample, bound, line, scratch);
+      if (k > 0) std::rotate(samples.begin(), samples.begin() + static_cast<std::ptrdiff_t>(k),
+                             samples.begin() + static_cast<std::ptrdiff_t>(k) + 1);
+      return bound == -kInf ? Outcome::kAllFail : Outcome::kBelowThreshold;
+    }
+    return Outcome::kNotRuledOut;
+  }
+
+  // The run's middle design, evaluated exactly at the sample, must fail there when the bound
+  // says every design fails, and must not score above the bound otherwise.
+  void check(long long first, long long last, int sample, double bound, const LineBound& line,
+             Problem::EvalScratch& scratch) {
+    const std::size_t n = check_x_.size();
+    const long long middle = first + (last - first) / 2;
+    check_x_[n - 1] = line.value(middle);
+    check_sample_.assign(1, sample);
+    EvalOptions at_sample;
+    at_sample.subset = &check_sample_;
+    const Evaluation& e = problem_.evaluate(check_x_.data(), scratch, at_sample);
+    if (e.status != EvalStatus::kFeasible || e.score <= bound) return;
+    std::ostringstream message;
+    message << std::setprecision(17) << "the mechanism's block bound (Mechanism::sample_envelope) is wrong: over "
+            << problem_.design_space().components()[static_cast<std::size_t>(component_)].name << " in ["
+            << line.value(first) << ", " << line.value(last) << "] at sample " << sample << " it claims "
+            << (bound == -kInf ? std::string("that every design fails") : "a score of at most " + std::to_string(bound))
+            << ", but grid value " << check_x_[n - 1] << " reaches the sample and scores " << e.score
+            << " there; " << solver_ << " could cut the optimum: set solver.options.block_bounds = false, and report "
+            << "the mechanism";
+    throw Error(solver_, message.str());
+  }
+
+  const Problem& problem_;
+  const char* solver_;
+  int component_;
+  std::vector<double> full_;          // the current line's full design
+  std::vector<double> check_x_;       // the current line's free design, for the spot check
+  std::vector<int> check_sample_;     // the one sample it is checked at
+  long long ruled_out_runs_ = 0;      // runs ruled out so far (the spot check's clock)
+  long long size_ = kFirst, gap_ = kMin, next_ = 0;
+};
+
+}  // namespace hapsyn::plugins
