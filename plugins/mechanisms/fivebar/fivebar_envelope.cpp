@@ -35,11 +35,21 @@ void sin_cos_of(Interval a, Interval& sine_of, Interval& cosine_of) {
   fast::sin_cos(a.hi, s1, c1);
   sine_of = hull(s0, s1);
   cosine_of = hull(c0, c1);
-  const auto inside = [&](double phase) { return phase + 2.0 * kPi * std::ceil((a.lo - phase) / (2.0 * kPi)) <= a.hi; };
-  if (inside(0.5 * kPi)) sine_of.hi = 1.0;
-  if (inside(-0.5 * kPi)) sine_of.lo = -1.0;
-  if (inside(0.0)) cosine_of.hi = 1.0;
-  if (inside(kPi)) cosine_of.lo = -1.0;
+  // The extrema lie at the multiples j pi/2 inside the interval (at most four, it is shorter
+  // than 2 pi): j mod 4 = 0 is cos = 1, 1 is sin = 1, 2 is cos = -1, 3 is sin = -1. One product
+  // and one rounding per end instead of a division per extremum; a multiple within rounding of
+  // an end moves the bound by the square of that rounding (the extrema are flat), far inside
+  // the margins.
+  constexpr double kInvHalfPi = 6.36619772367581382433e-01;
+  const double first = std::ceil(a.lo * kInvHalfPi), last = std::floor(a.hi * kInvHalfPi);
+  for (double j = first; j <= last; j += 1.0) {
+    switch (static_cast<long long>(j) & 3) {
+      case 0: cosine_of.hi = 1.0; break;
+      case 1: sine_of.hi = 1.0; break;
+      case 2: cosine_of.lo = -1.0; break;
+      default: sine_of.lo = -1.0; break;
+    }
+  }
 }
 
 // Largest and smallest |sin| over an angle interval.
@@ -223,10 +233,9 @@ double energy_along(const FiveBarRun& run, const LegBounds& left, const LegBound
 // at least twice its value at qdot_i^2 = S / 2. S is increasing in the row norms n_i = 1 / (l1
 // sin(gamma_i)) and decreasing in |sin(q3 - q2)|. Also, along v perpendicular to w_2 (actuator 2
 // at rest, free bar 2 turning about B2 at 1 / l2) the energy is at least I_a sin^2(q3 - q2) n_1^2 +
-// m2 / 4 + I_f / l2^2; likewise for leg 1.
-double effective_mass_bound(const FiveBarRun& run, const LegBounds& left, const LegBounds& right, Interval mode) {
+// m2 / 4 + I_f / l2^2; likewise for leg 1. `sin_mode`: the interval of |sin(q3 - q2)| over the run.
+double effective_mass_bound(const FiveBarRun& run, const LegBounds& left, const LegBounds& right, Interval sin_mode) {
   const double n1 = 1.0 / (run.l1 * left.sin_gamma.hi), n2 = 1.0 / (run.l1 * right.sin_gamma.hi);
-  const Interval sin_mode = abs_sin_of(mode);
   const double sin_hi = sin_mode.hi, sin_lo = sin_mode.lo;
   const double sum = n1 * n1 + n2 * n2;
   const double top = 0.5 * (sum + std::sqrt(std::max(0.0, sum * sum - 4.0 * n1 * n1 * n2 * n2 * sin_hi * sin_hi)));
@@ -282,7 +291,8 @@ bool fivebar_envelope(const FiveBarRun& run, double x, bool effective_mass, Samp
   leg_angles(dx_right, run, right);
   const Interval q2 = left.free, q3_mirrored = right.free;
   const Interval mode{kPi - q3_mirrored.hi - q2.hi, kPi - q3_mirrored.lo - q2.lo};  // q3 - q2
-  const double sin_mode = abs_sin_of(mode).hi;
+  const Interval sin_mode_of = abs_sin_of(mode);  // |sin(q3 - q2)| over the run, computed once
+  const double sin_mode = sin_mode_of.hi;
   if (q3_mirrored.hi < -1e-6 || mode.hi < -1e-6 || sin_mode < tol) return fails();
   // J^-1 rows: norms n_i = 1 / (l1 s_i) at the angle q3 - q2, so with
   // g = 2 sigma_1 sigma_2 / (sigma_1^2 + sigma_2^2) = |sin(q3 - q2)| 2 s1 s2 / (s1^2 + s2^2),
@@ -293,7 +303,7 @@ bool fivebar_envelope(const FiveBarRun& run, double x, bool effective_mass, Samp
   if (effective_mass) {
     leg_actuated_angle(dx_left, run, left);
     leg_actuated_angle(dx_right, run, right);
-    out.effective_mass_sigma_max_min = effective_mass_bound(run, left, right, mode);
+    out.effective_mass_sigma_max_min = effective_mass_bound(run, left, right, sin_mode_of);
   }
   return true;
 }
