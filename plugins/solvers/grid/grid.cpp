@@ -78,10 +78,12 @@ struct GridShape {
     // line length of at least 64 designs), since a chunk's end inside a line splits a group of
     // the line's designs evaluated together (a third of the pruned 10 mm five-bar search's
     // time). Smaller grids keep 64 designs, the finest stop and shard granularity.
-    const long long line = counts.empty() ? 1 : std::max(1LL, counts.back());
+    const long long line = line_length();
     if (total >= (1LL << 20)) chunk = line * ((64 + line - 1) / line);
   }
   long long chunks() const { return (total + chunk - 1) / chunk; }
+  // Designs per line of the last free variable (1 when no variable is free: one design).
+  long long line_length() const { return counts.empty() ? 1 : std::max(1LL, counts.back()); }
 };
 
 // How the evaluations of some grid designs ended.
@@ -318,7 +320,7 @@ template <class Extra, class Visit>
 bool visit_chunk(const SweepControl& control, SweepThread<Extra>& s, const DesignSpace& space, long long chunk,
                  Tally& tally, const Visit& visit) {
   const GridShape& grid = control.grid;
-  const long long count = grid.counts.back();
+  const long long count = grid.line_length();
   const long long end = std::min(grid.total, (chunk + 1) * grid.chunk);
   for (long long index = chunk * grid.chunk; index < end;) {
     if (control.halted()) return false;
@@ -335,7 +337,7 @@ bool visit_chunk(const SweepControl& control, SweepThread<Extra>& s, const Desig
     const long long last = std::min(piece_end - 1, s.bound->last());
     tally.constraint_violated += (first - i) + (piece_end - 1 - std::max(last, first - 1));
     for (i = first; i <= last; ++i) {
-      s.x.back() = s.bound->value(i);
+      if (!s.x.empty()) s.x.back() = s.bound->value(i);  // empty: no free variable, one design
       i = visit(line_start + i, i, last, tally);
     }
     index = line_start + piece_end;
@@ -788,7 +790,7 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
         for (std::size_t k = 0; k < dim; ++k) slot[k] = s.x[k];
         s.row_line[row] = s.line;
       }
-      slot[dim - 1] = s.x[dim - 1];
+      if (dim > 0) slot[dim - 1] = s.x[dim - 1];
       s.pending.push_back(index);
       return i;
     });

@@ -873,3 +873,32 @@ TEST(GridChunks, LargeGridsGoInWholeLinesWithTheSameOptimum) {
   EXPECT_EQ(checkpoint["state"]["chunk_size"], 122);
   std::remove(file.c_str());
 }
+
+TEST(Grid, NoFreeVariableSearchesTheOneDesign) {
+  // Every design variable fixed: the grid is one design, in every mode, pruned or not (this
+  // crashed: the line of the last free variable was read from an empty list).
+  Json doc = hapsyn::test::fivebar_study();
+  doc["design"] = {{"l0", {{"value", 0.0}}}, {"l1", {{"value", 0.3}}}, {"l2", {{"value", 0.3}}}, {"r", {{"value", 0.42}}}};
+  const hapsyn::Study one = hapsyn::load_study(doc, hapsyn::test::registry());
+  doc["objectives"] = Json::array({Json{{"metric", "gii"}}, Json{{"metric", "gdi"}}});
+  const hapsyn::Study two = hapsyn::load_study(doc, hapsyn::test::registry());
+  auto ws = one.problem->make_eval_scratch();
+  const double no_free_variable[1] = {0.0};
+  const hapsyn::Evaluation& alone = one.problem->evaluate(no_free_variable, *ws);
+  ASSERT_EQ(alone.status, hapsyn::EvalStatus::kFeasible);
+  for (const bool prune : {false, true}) {
+    for (int threads : {1, 2}) {
+      hapsyn::SolverContext context;
+      context.threads = threads;
+      const auto best = grid_solver(Json{{"prune", prune}, {"progress_interval", 1e9}}).solve(*one.problem, context);
+      ASSERT_TRUE(best.best.has_value()) << best.message;
+      EXPECT_EQ(best.best->score, alone.score);
+      EXPECT_EQ(best.statistics["grid_designs"], 1);
+      EXPECT_EQ(best.statistics["feasible"], 1);
+      const auto front =
+          grid_solver(Json{{"prune", prune}, {"pareto", true}, {"progress_interval", 1e9}}).solve(*two.problem, context);
+      ASSERT_EQ(front.front.size(), 1u) << front.message;
+      EXPECT_EQ(front.front[0].objectives[0], alone.score);
+    }
+  }
+}
