@@ -114,6 +114,20 @@ class Mechanism {
                                Needs needs, SampleEnvelope& out) const {
     return false;
   }
+  /// Optional line bound of one sample for grid solvers (docs/design.md section 13.5): an
+  /// interval [lower, upper] of design component `component` outside which the sample `pose`
+  /// cannot be solved (its status is not reachable), the other components as in `design` (a
+  /// full design vector). It may be wider than the values where the sample solves, never
+  /// narrower, rounding included: in a study where a failed sample fails the design (one with a
+  /// worst-case metric), a solver counts the designs of a grid line outside it as failing there
+  /// without solving them. An empty interval (lower > upper) means the sample fails for every
+  /// value. The solver spot-checks the claim and stops with an error on a false one. Returns
+  /// false when nothing is known (the default). Called a few times per grid line; must not
+  /// allocate or throw.
+  virtual bool reachable_interval(const double* design, int component, const double* pose, double& lower,
+                                  double& upper) const {
+    return false;
+  }
   /// Optional design-lanes path (docs/design.md section 13.4): solves the one sample `pose` for
   /// up to kBlockLanes designs at once, lane i for the full design vector designs[i] (lanes at
   /// or beyond `count` repeat a valid design), filling out as build(designs[i])->solve_block

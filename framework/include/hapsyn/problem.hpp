@@ -141,6 +141,14 @@ class Problem {
   /// known (a study that is not prunable, a mechanism or a metric without envelopes). No
   /// allocation.
   double block_score_bound(const double* full_design, int component, double lower, double upper, int sample) const;
+  /// Line bound of one sample (docs/design.md section 13.5): sets [lower, upper] to the interval
+  /// of component `component` of `full_design` outside which sample `sample` fails
+  /// (Mechanism::reachable_interval), and returns true, when a failed sample makes a design
+  /// infeasible in this study (a worst-case metric) and the mechanism knows such an interval.
+  /// No allocation.
+  bool reachable_interval(const double* full_design, int component, int sample, double& lower, double& upper) const {
+    return any_worst_case_ && mechanism_->reachable_interval(full_design, component, samples_->pose(sample), lower, upper);
+  }
   /// True when evaluate() solves samples in blocks (hapsyn/sample_block.hpp): the mechanism
   /// solves blocks for the study's needs, every metric is worst-case with a block local and no
   /// scene attributes, and the scene has at most kBlockMaxCoordinates coordinates and no

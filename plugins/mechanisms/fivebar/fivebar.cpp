@@ -374,6 +374,35 @@ bool FiveBar::constraint_interval(const double* design, int component, const Sam
   return true;
 }
 
+bool FiveBar::reachable_interval(const double* design, int component, const double* pose, double& lower,
+                                 double& upper) const {
+  if (component != 3) return false;
+  const FiveBarDesign d = design_from(design);
+  if (!(d.l0 >= 0.0 && d.l1 > 0.0 && d.l2 > 0.0)) return false;
+  const double h0 = 0.5 * d.l0, x = pose[0], y = pose[1];
+  const double a = std::abs(x + h0), b = std::abs(h0 - x);
+  const double near = std::min(a, b), far = std::max(a, b);
+  // Relative slack on the squared distances, far above solve_leg's rounding bound of the law of
+  // cosines (8 eps (l1^2 + l2^2 + rho^2) / (2 l1 rho) on c): a sample the interval leaves out is
+  // unreachable beyond doubt.
+  constexpr double kSlack = 1e-9;
+  const double reach = d.l1 + d.l2, fold = d.l1 - d.l2;
+  const double room = reach * reach * (1.0 + kSlack) - far * far;  // Y^2 the farther leg allows
+  if (room < 0.0) {
+    lower = 1.0;
+    upper = -1.0;
+    return true;
+  }
+  const double gap = fold * fold * (1.0 - kSlack) - near * near;  // Y^2 the nearer leg needs
+  // Below the actuated joints' axis (Y < 0) no elbow-out posture satisfies G: with q2 >= -t
+  // and q1 >= q2 - t, Y = l1 sin q1 + l2 sin q2 >= -(2 l1 + l2) t (t = 1e-9 rad). The margin
+  // covers that and the rounding of y + r.
+  const double margin = 1e-8 * (d.l1 + d.l2 + std::abs(x) + std::abs(y) + h0);
+  lower = (gap > 0.0 ? std::sqrt(gap) : 0.0) - y - margin;
+  upper = std::sqrt(room) - y + margin;
+  return true;
+}
+
 bool FiveBar::sample_envelope(const double* design, int component, double lower, double upper, const double* pose,
                               Needs needs, SampleEnvelope& out) const {
   if (component != 3) return false;  // the run's r enters as y + r: the angles are monotone in it

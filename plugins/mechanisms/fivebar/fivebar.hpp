@@ -176,6 +176,15 @@ class FiveBar final : public Mechanism {
   /// actuated joints' axis. O(1), no allocation.
   bool sample_envelope(const double* design, int component, double lower, double upper, const double* pose,
                        Needs needs, SampleEnvelope& out) const override;
+  /// For r (component 3): the interval of r outside which the sample (x, y) fails, from the
+  /// legs' reach and the end effector's side of the actuated joints' axis (docs/design.md
+  /// section 13.5). With a, b the x distances |x + h0|, |h0 - x| of the sample from the actuated
+  /// joints and Y = y + r its height, a sample solves only with |l1 - l2| <= |E - A_i| <= l1 + l2
+  /// for both legs and Y >= 0 (up to the angle tolerance): Y in [sqrt(max(0, (l1 - l2)^2 -
+  /// min(a, b)^2)), sqrt((l1 + l2)^2 - max(a, b)^2)], widened for rounding and the tolerance.
+  /// Empty when l1 + l2 < max(a, b) beyond rounding. False for other components. O(1).
+  bool reachable_interval(const double* design, int component, const double* pose, double& lower,
+                          double& upper) const override;
   /// The interval of r [m] on which reach_constraint(design with that r, box) <= 0, for the
   /// design's l0, l1, l2 and the box [xmin, xmax] x [ymin, ymax]: with ax the larger x distance
   /// from an actuated joint to the box and R = sqrt((l1 + l2)^2 - ax^2), the farthest corner

@@ -594,3 +594,24 @@ TEST(Culling, AFalseBlockBoundStopsTheRunNamingIt) {
   const auto result = solve(hapsyn::plugins::CullingSolver(hapsyn::make_options<hapsyn::plugins::CullingOptions>(off)), *problem, 1);
   EXPECT_TRUE(result.best.has_value());
 }
+
+TEST(Culling, AFalseReachableIntervalStopsTheRunNamingIt) {
+  Json doc = hapsyn::test::fivebar_study("culling");
+  doc["design"]["r"] = {{"lower", 0.0}, {"upper", 0.6}, {"step", 0.005}};
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  const hapsyn::Problem& p = *study.problem;
+  const std::shared_ptr<const hapsyn::Mechanism> fivebar(std::shared_ptr<const hapsyn::Mechanism>{}, &p.mechanism());
+  const auto problem = std::make_shared<hapsyn::Problem>(
+      "false-reach", std::make_shared<hapsyn::test::NothingReachable>(fivebar), std::make_shared<hapsyn::SampleSet>(p.samples()),
+      p.metrics(), p.objectives(), p.design_space());
+  const hapsyn::plugins::CullingSolver culling(hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(true, false)));
+  expect_error([&] { solve(culling, *problem, 1); },
+               {"culling: the mechanism's line bound (Mechanism::reachable_interval) is wrong: it claims that sample ",
+                "fails for every r outside the interval it gives, but grid value", "lies outside it and reaches the sample",
+                "set solver.options.block_bounds = false"});
+  // Without block bounds the same problem runs to the optimum.
+  Json off = culling_options(true, false);
+  off["block_bounds"] = false;
+  const auto result = solve(hapsyn::plugins::CullingSolver(hapsyn::make_options<hapsyn::plugins::CullingOptions>(off)), *problem, 1);
+  EXPECT_TRUE(result.best.has_value());
+}

@@ -46,4 +46,18 @@ class AllFailEnvelope final : public ForwardingMechanism {
   }
 };
 
+/// The five-bar, forwarding everything (line bounds and their one-run promise included), with a
+/// reachable interval that claims every sample fails for every r: a wrong line bound, which the
+/// solvers' spot check must refuse.
+class NothingReachable final : public ForwardingMechanism {
+ public:
+  using ForwardingMechanism::ForwardingMechanism;
+  bool constraints_quasiconvex(int component) const override { return inner().constraints_quasiconvex(component); }
+  bool reachable_interval(const double*, int, const double*, double& lower, double& upper) const override {
+    lower = 1.0;
+    upper = -1.0;
+    return true;
+  }
+};
+
 }  // namespace hapsyn::test

@@ -847,6 +847,51 @@ TEST(GridBlockBounds, AWrongEnvelopeStopsTheRunNamingIt) {
   EXPECT_TRUE(result.best.has_value());
 }
 
+TEST(GridBlockBounds, AWrongReachableIntervalStopsTheRunNamingIt) {
+  // A mechanism that claims no sample can be solved at any r: the spot check of the first line
+  // it cuts refutes it, and the run stops with an error instead of reporting no feasible design.
+  const hapsyn::Study study = hapsyn::load_study(line_bound_study(), hapsyn::test::registry());
+  const hapsyn::Problem& p = *study.problem;
+  const std::shared_ptr<const hapsyn::Mechanism> fivebar(std::shared_ptr<const hapsyn::Mechanism>{}, &p.mechanism());
+  const auto problem = std::make_shared<hapsyn::Problem>(
+      "false-reach", std::make_shared<hapsyn::test::NothingReachable>(fivebar),
+      std::make_shared<hapsyn::SampleSet>(p.samples()), p.metrics(), p.objectives(), p.design_space());
+  hapsyn::SolverContext context;
+  context.threads = 1;
+  hapsyn::test::expect_error([&] { grid_solver(Json{{"progress_interval", 1e9}}).solve(*problem, context); },
+                             {"grid: the mechanism's line bound (Mechanism::reachable_interval) is wrong: it claims "
+                              "that sample ",
+                              "fails for every r outside the interval it gives, but grid value",
+                              "lies outside it and reaches the sample; grid could cut the optimum: set "
+                              "solver.options.block_bounds = false"});
+  const auto result = grid_solver(Json{{"block_bounds", false}, {"progress_interval", 1e9}}).solve(*problem, context);
+  EXPECT_TRUE(result.best.has_value());
+}
+
+TEST(GridBlockBounds, ReachableIntervalsCutLinesWithTheSameOptimumAndCounts) {
+  // A five-bar grid with lines of 61 values of r, with and without block bounds: the same optimum, and the designs
+  // cut by the samples' reachable intervals are counted as failing at a sample, so that the
+  // counts add up to the grid and only sample failures and prunes trade places.
+  Json doc = hapsyn::test::fivebar_study("grid");
+  doc["design"]["l0"]["step"] = 0.05;
+  doc["design"]["l1"]["step"] = 0.025;
+  doc["design"]["l2"]["step"] = 0.025;
+  doc["design"]["r"]["step"] = 0.01;
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  hapsyn::SolverContext context;
+  context.threads = 2;
+  const auto with = grid_solver(Json{{"progress_interval", 1e9}}).solve(*study.problem, context);
+  const auto without = grid_solver(Json{{"block_bounds", false}, {"progress_interval", 1e9}}).solve(*study.problem, context);
+  ASSERT_TRUE(with.best && without.best);
+  EXPECT_EQ(with.best->design, without.best->design);
+  EXPECT_EQ(with.best->score, without.best->score);
+  EXPECT_EQ(with.design_evaluations, without.design_evaluations);
+  EXPECT_EQ(with.statistics["constraint_violated"], without.statistics["constraint_violated"]);
+  // Most designs that fail do so without a sample solved.
+  EXPECT_GT(with.statistics["block_ruled_out"].get<long long>() * 2, with.statistics["sample_failed"].get<long long>());
+  EXPECT_LT(with.sample_evaluations * 2, without.sample_evaluations);
+}
+
 TEST(GridChunks, LargeGridsGoInWholeLinesWithTheSameOptimum) {
   // 1,701,900 designs (the coarse GII study's grid, a 20 mm workspace): chunks of two lines of
   // 61. The pruned search with block bounds, on two threads, finds the unpruned optimum, and a

@@ -14,17 +14,26 @@
 /// waits `gap` designs, doubled on every such try in a row, so that on lines where the bounds do
 /// not help the tries cost little beside the designs' own evaluations.
 ///
-/// The framework checks the mechanism's claim: every kCheckEvery-th ruled-out run (the first of
+/// Before any run, a line is cut to the values where the first kReachSamples samples of the
+/// caller's list can be solved (Problem::reachable_interval, from
+/// Mechanism::reachable_interval): the designs of the line outside that interval fail at a
+/// sample and are ruled out at once, without an envelope (in a worst-case study a failed sample
+/// makes a design infeasible).
+///
+/// The framework checks the mechanism's claims: every kCheckEvery-th ruled-out run (the first of
 /// each thread included) has its middle design evaluated exactly at the deciding sample; a
 /// design that reaches the sample where the bound says all fail, or scores above the bound,
 /// stops the run with an Error naming the run, the sample and the option that turns the bounds
-/// off, instead of a silently wrong optimum.
+/// off, instead of a silently wrong optimum. A line cut by a sample's reachable interval has,
+/// on the same clock, its excluded design nearest the interval solved at that sample, which
+/// must fail.
 #include "line_bound.hpp"
 
 #include <hapsyn/error.hpp>
 #include <hapsyn/problem.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <iomanip>
 #include <limits>
 #include <sstream>
@@ -50,37 +59,56 @@ class RunBounds {
 
   /// Samples tried per run (the first ones of the caller's list).
   static constexpr std::size_t kSamples = 2;
+  /// Samples whose reachable intervals cut a line (the first ones of the caller's list).
+  static constexpr std::size_t kReachSamples = 2;
 
   /// \param problem the study; the runs vary its last free design component.
   /// \param solver the solver's name, which prefixes the spot check's error.
-  RunBounds(const Problem& problem, const char* solver)
+  RunBounds(const Problem& problem, const char* solver, bool carry_wait = false)
       : problem_(problem),
         solver_(solver),
+        carry_wait_(carry_wait),
         component_(problem.design_space().free_indices().empty() ? -1 : problem.design_space().free_indices().back()),
         full_(problem.design_space().size(), 0.0),
         check_x_(problem.design_space().free_size(), 0.0) {}
 
   /// Starts a line: `free_design` is a free design vector of the line (its last component is
-  /// ignored). Resets the run size and the wait. No allocation.
+  /// ignored). The run size and the wait carry over from the line before (the designs still to
+  /// wait count from the new line's start), so that where the bounds do not pay, tries stay
+  /// rare on short lines too. No allocation.
   void start_line(const double* free_design) {
     const std::size_t n = check_x_.size();
     std::copy(free_design, free_design + n, check_x_.begin());
     problem_.design_space().expand(free_design, full_.data());
-    size_ = kFirst;
-    gap_ = kMin;
-    next_ = 0;
+    if (carry_wait_) {
+      next_ = std::max(0LL, next_ - (seen_ + 1));
+    } else {
+      size_ = kFirst;
+      gap_ = kMin;
+      next_ = 0;
+    }
+    seen_ = -1;
+    reach_pending_ = true;
   }
 
-  /// Tries, when one is due, the run [i, min(last, i + size - 1)] of the current line (its
-  /// values from `line`, whose run must be verified and end at `last`) at the first kSamples of
-  /// `samples` (most useful first; the deciding sample moves to the front). `threshold` is a
+  /// Rules out the designs from i to the end of the current line's reachable interval when i
+  /// lies outside it (the interval is found at the first call of a line, from the first
+  /// kReachSamples of `samples`); else tries, when one is due, the run [i, min(last, i + size -
+  /// 1)] of the current line (its values from `line`, whose run must be verified and end at
+  /// `last`) at the first kSamples of `samples` (most useful first; the deciding sample moves
+  /// to the front). `threshold` is a
   /// score a real design reaches (or -inf: then only runs that all fail are ruled out). The
   /// spot check may evaluate one design in `scratch` (it overwrites its last evaluation).
   /// \throws Error(solver, ...) when the spot check refutes the mechanism's bound.
   Try try_run(long long i, long long last, double threshold, std::vector<int>& samples, const LineBound& line,
               Problem::EvalScratch& scratch) {
     Try t;
-    if (component_ < 0 || samples.empty() || i < next_ || last - i + 1 < kMin) return t;
+    if (component_ < 0 || samples.empty()) return t;
+    seen_ = std::max(seen_, last);
+    if (reach_pending_) find_reachable(samples, line);
+    if (i < reach_first_ || i > reach_last_) return unreachable_run(i, last, line, scratch);
+    last = std::min(last, reach_last_);
+    if (i < next_ || last - i + 1 < kMin) return t;
     const long long end = std::min(last, i + size_ - 1);
     t.outcome = rule_out(i, end, threshold, samples, line, scratch);
     if (t.ruled_out()) {
@@ -99,6 +127,85 @@ class RunBounds {
  private:
   static constexpr long long kMin = 8, kFirst = 32, kMax = 4096, kMaxGap = 1024, kCheckEvery = 16;
   static constexpr double kInf = std::numeric_limits<double>::infinity();
+
+  // The reachable interval of the current line: [reach_first_, reach_last_] within the line's
+  // run [line.first(), line.last()], cut by each of the first kReachSamples samples; the sample
+  // that set each end is its witness.
+  void find_reachable(const std::vector<int>& samples, const LineBound& line) {
+    reach_pending_ = false;
+    reach_first_ = line.first();
+    reach_last_ = line.last();
+    const std::size_t tries = std::min(samples.size(), kReachSamples);
+    for (std::size_t k = 0; k < tries; ++k) {
+      double lower = 0.0, upper = 0.0;
+      if (!problem_.reachable_interval(full_.data(), component_, samples[k], lower, upper)) continue;
+      if (!(lower <= upper)) {
+        if (lower > upper) {  // the sample fails everywhere (NaN: nothing is known)
+          reach_first_ = line.last() + 1;
+          witness_below_ = samples[k];
+          return;
+        }
+        continue;
+      }
+      const long long first = first_at_or_above(lower, line);
+      if (first > reach_first_) {
+        reach_first_ = first;
+        witness_below_ = samples[k];
+      }
+      const long long last = first_at_or_above(std::nextafter(upper, kInf), line) - 1;
+      if (last < reach_last_) {
+        reach_last_ = last;
+        witness_above_ = samples[k];
+      }
+    }
+  }
+
+  // The first index of the line's run whose value is >= v (line.last() + 1 when none is).
+  static long long first_at_or_above(double v, const LineBound& line) {
+    long long lo = line.first(), hi = line.last() + 1;
+    while (lo < hi) {
+      const long long mid = lo + (hi - lo) / 2;
+      if (line.value(mid) >= v) {
+        hi = mid;
+      } else {
+        lo = mid + 1;
+      }
+    }
+    return lo;
+  }
+
+  // Rules out the designs from i (outside the reachable interval) to the interval's start, or
+  // to `last` beyond its end: each fails at the witness sample.
+  Try unreachable_run(long long i, long long last, const LineBound& line, Problem::EvalScratch& scratch) {
+    const bool below = i < reach_first_;
+    Try t;
+    t.outcome = Outcome::kAllFail;
+    t.last = below ? std::min(last, reach_first_ - 1) : last;
+    // The design nearest the interval is the one a wrong bound most likely cuts.
+    if (ruled_out_runs_++ % kCheckEvery == 0) {
+      check_fails(below ? t.last : i, below ? witness_below_ : witness_above_, line, scratch);
+    }
+    return t;
+  }
+
+  // The design at line index i, solved at `sample` alone, must fail there.
+  void check_fails(long long i, int sample, const LineBound& line, Problem::EvalScratch& scratch) {
+    const std::size_t n = check_x_.size();
+    check_x_[n - 1] = line.value(i);
+    check_sample_.assign(1, sample);
+    EvalOptions at_sample;
+    at_sample.subset = &check_sample_;
+    const Evaluation& e = problem_.evaluate(check_x_.data(), scratch, at_sample);
+    if (e.status != EvalStatus::kFeasible) return;
+    std::ostringstream message;
+    message << std::setprecision(17)
+            << "the mechanism's line bound (Mechanism::reachable_interval) is wrong: it claims that sample " << sample
+            << " fails for every " << problem_.design_space().components()[static_cast<std::size_t>(component_)].name
+            << " outside the interval it gives, but grid value " << check_x_[n - 1]
+            << " lies outside it and reaches the sample; " << solver_
+            << " could cut the optimum: set solver.options.block_bounds = false, and report the mechanism";
+    throw Error(solver_, message.str());
+  }
 
   Outcome rule_out(long long first, long long last, double threshold, std::vector<int>& samples, const LineBound& line,
                    Problem::EvalScratch& scratch) {
@@ -142,12 +249,17 @@ class RunBounds {
 
   const Problem& problem_;
   const char* solver_;
+  bool carry_wait_;  // the wait carries over from line to line (else each line starts afresh)
   int component_;
   std::vector<double> full_;          // the current line's full design
   std::vector<double> check_x_;       // the current line's free design, for the spot check
   std::vector<int> check_sample_;     // the one sample it is checked at
   long long ruled_out_runs_ = 0;      // runs ruled out so far (the spot check's clock)
   long long size_ = kFirst, gap_ = kMin, next_ = 0;
+  long long seen_ = -1;  // the last line index the current line's calls reached
+  bool reach_pending_ = true;                       // the current line's reachable interval is not found yet
+  long long reach_first_ = 0, reach_last_ = std::numeric_limits<long long>::max();  // the current line's reachable interval (line indices)
+  int witness_below_ = -1, witness_above_ = -1;     // the samples that set its ends
 };
 
 }  // namespace hapsyn::plugins
