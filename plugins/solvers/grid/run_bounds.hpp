@@ -42,6 +42,16 @@
 
 namespace hapsyn::plugins {
 
+/// How a RunBounds' tries adapt, per solver.
+struct RunPolicy {
+  /// Samples tried per run (the first ones of the caller's list).
+  std::size_t samples = 2;
+  /// The wait after failed tries carries over from line to line (else each line starts
+  /// afresh): for grids of many short lines, where a try costs about what the designs of a
+  /// short run cost.
+  bool carry_wait = false;
+};
+
 class RunBounds {
  public:
   /// How a try ended.
@@ -57,17 +67,17 @@ class RunBounds {
     bool ruled_out() const { return outcome == Outcome::kAllFail || outcome == Outcome::kBelowThreshold; }
   };
 
-  /// Samples tried per run (the first ones of the caller's list).
-  static constexpr std::size_t kSamples = 2;
+  using Policy = RunPolicy;
   /// Samples whose reachable intervals cut a line (the first ones of the caller's list).
   static constexpr std::size_t kReachSamples = 2;
 
   /// \param problem the study; the runs vary its last free design component.
   /// \param solver the solver's name, which prefixes the spot check's error.
-  RunBounds(const Problem& problem, const char* solver, bool carry_wait = false)
+  /// \param policy how the tries adapt (Policy).
+  RunBounds(const Problem& problem, const char* solver, Policy policy = {})
       : problem_(problem),
         solver_(solver),
-        carry_wait_(carry_wait),
+        policy_(policy),
         component_(problem.design_space().free_indices().empty() ? -1 : problem.design_space().free_indices().back()),
         full_(problem.design_space().size(), 0.0),
         check_x_(problem.design_space().free_size(), 0.0) {}
@@ -80,7 +90,7 @@ class RunBounds {
     const std::size_t n = check_x_.size();
     std::copy(free_design, free_design + n, check_x_.begin());
     problem_.design_space().expand(free_design, full_.data());
-    if (carry_wait_) {
+    if (policy_.carry_wait) {
       next_ = std::max(0LL, next_ - (seen_ + 1));
     } else {
       size_ = kFirst;
@@ -95,7 +105,7 @@ class RunBounds {
   /// lies outside it (the interval is found at the first call of a line, from the first
   /// kReachSamples of `samples`); else tries, when one is due, the run [i, min(last, i + size -
   /// 1)] of the current line (its values from `line`, whose run must be verified and end at
-  /// `last`) at the first kSamples of `samples` (most useful first; the deciding sample moves
+  /// `last`) at the first Policy::samples of `samples` (most useful first; the deciding sample moves
   /// to the front). `threshold` is a
   /// score a real design reaches (or -inf: then only runs that all fail are ruled out). The
   /// spot check may evaluate one design in `scratch` (it overwrites its last evaluation).
@@ -210,7 +220,7 @@ class RunBounds {
   Outcome rule_out(long long first, long long last, double threshold, std::vector<int>& samples, const LineBound& line,
                    Problem::EvalScratch& scratch) {
     const double lower = line.value(first), upper = line.value(last);
-    const std::size_t tries = std::min(samples.size(), kSamples);
+    const std::size_t tries = std::min(samples.size(), policy_.samples);
     for (std::size_t k = 0; k < tries; ++k) {
       const int sample = samples[k];
       const double bound = problem_.block_score_bound(full_.data(), component_, lower, upper, sample);
@@ -249,7 +259,7 @@ class RunBounds {
 
   const Problem& problem_;
   const char* solver_;
-  bool carry_wait_;  // the wait carries over from line to line (else each line starts afresh)
+  Policy policy_;
   int component_;
   std::vector<double> full_;          // the current line's full design
   std::vector<double> check_x_;       // the current line's free design, for the spot check
