@@ -32,7 +32,10 @@ model name, avx512f/avx2 flags, cores), the date and the load average around eac
 The machine may be shared: the load average before and after each row is recorded, and
 --wait-load LOAD (e.g. 0.7) makes each row wait until the 1-minute load average is below LOAD
 (at most --wait-max seconds, 900) so that no row starts while another job is busy; compare
-ratios, not bare seconds.
+ratios, not bare seconds. The one-thread rows (hapsyn, numba, numpy) run on one CPU, both sides
+alike (`taskset -c`, --pin CPU, default the highest-numbered one; --no-pin lets the OS place
+them): on a 2-core VM seen here, hapsyn's pruned grid took 24 to 25 ms on CPU 1 and 31 to 37 ms
+on CPU 0 in alternated runs, and a fresh process lands on either.
 """
 import argparse
 import copy
@@ -106,10 +109,19 @@ class Runner:
         self.python = sys.executable
         self.headers = {}  # result.json's "hapsyn" and "machine" of the first run
 
+    def pinned(self, argv, threads):
+        """argv under `taskset -c CPU` for one-thread runs when --pin is on: both sides of a row
+        then run on the same CPU (on a VM the CPUs can differ by a third in speed, and a fresh
+        process lands on either)."""
+        if threads != 1 or self.args.pin is None:
+            return argv
+        return ["taskset", "-c", str(self.args.pin)] + argv
+
     def hapsyn_run(self, problem_path, threads, name, sets=()):
         """Runs hapsyn; returns (result.json, wall seconds)."""
         out = os.path.join(self.work, name)
-        argv = [self.hapsyn, "run", problem_path, "--threads", str(threads), "--out", out, "--quiet", "--force"]
+        argv = self.pinned([self.hapsyn, "run", problem_path, "--threads", str(threads), "--out", out, "--quiet",
+                            "--force"], threads)
         for s in sets:
             argv += ["--set", s]
         attempts = 5
@@ -130,8 +142,8 @@ class Runner:
         self.headers.setdefault("machine", result.get("machine"))
         return result, wall, argv
 
-    def peer(self, *argv):
-        full = [self.python, PEERS] + list(argv)
+    def peer(self, *argv, threads=0):
+        full = self.pinned([self.python, PEERS] + list(argv), threads)
         p = subprocess.run(full, capture_output=True, text=True)
         if p.returncode not in (0, 1) or not p.stdout.strip():
             sys.exit(f"failed: {' '.join(full)}\n{p.stderr[-3000:]}")
@@ -167,7 +179,7 @@ def row_grid(runner, report, table):
             result_path = os.path.join(runner.work, f"grid-{prune}-{threads}-0", "result.json")
             peer_args = ["numba-grid", "--threads", str(threads), "--repeats", str(runner.args.repeats),
                          "--check", result_path] + (["--prune"] if prune else [])
-            peer, peer_argv = runner.peer(*peer_args)
+            peer, peer_argv = runner.peer(*peer_args, threads=threads)
             after = load()
             h = min(runs)
             label = f"10 mm GII grid, {'pruned' if prune else 'unpruned'}, {threads} thread{'s' if threads > 1 else ''}"
@@ -237,7 +249,8 @@ def row_numpy(runner, report, table):
     result, _, argv = runner.hapsyn_run(grid_copy(runner, True), 2, "numpy-reference")
     wait_quiet(runner.args, "numpy grid")
     before = load()
-    peer, peer_argv = runner.peer("numpy-grid", "--check", os.path.join(runner.work, "numpy-reference", "result.json"))
+    peer, peer_argv = runner.peer("numpy-grid", "--check", os.path.join(runner.work, "numpy-reference", "result.json"),
+                                  threads=1)
     after = load()
     report["numpy_seconds"] = peer["seconds"]
     report["rows"].append({"row": "numpy 10 mm exhaustive GII search, 1 core", "kind": "numpy", "peer": peer,
@@ -294,7 +307,13 @@ def main():
     ap.add_argument("--wait-load", type=float, default=0.0, metavar="LOAD",
                     help="before each row, wait until the 1-minute load average is below LOAD (0: do not wait)")
     ap.add_argument("--wait-max", type=float, default=900.0, metavar="S", help="longest wait per row [s]")
+    ap.add_argument("--pin", type=int, default=max(os.sched_getaffinity(0)), metavar="CPU",
+                    help="run the one-thread rows (hapsyn, numba, numpy) on this CPU (default: the highest one; "
+                         "on the VM seen here CPU 0 was the slower one); --no-pin lets the OS place them")
+    ap.add_argument("--no-pin", dest="pin", action="store_const", const=None)
     args = ap.parse_args()
+    if args.pin is not None and args.pin not in os.sched_getaffinity(0):
+        sys.exit(f"--pin {args.pin}: not a CPU this process may run on ({sorted(os.sched_getaffinity(0))})")
     if not os.path.isfile(args.hapsyn):
         sys.exit(f"no hapsyn binary at {args.hapsyn}: pass --hapsyn PATH or set HAPSYN")
     only = set(args.only.split(",")) if args.only else set(ROWS)
@@ -312,7 +331,8 @@ def main():
         "benchmark": "fivebar_speed", "date": datetime.datetime.now().astimezone().isoformat(timespec="seconds"),
         "hapsyn_binary": os.path.abspath(args.hapsyn), "hapsyn_version": version,
         "git_describe": {"benchmarks": git_describe(ROOT), "binary_tree": git_describe(binary_root)},
-        "machine": machine(), "repeats": args.repeats, "wait_load": args.wait_load, "load_start": load(),
+        "machine": machine(), "repeats": args.repeats, "wait_load": args.wait_load, "pinned_cpu": args.pin,
+        "load_start": load(),
         "uptime_start": subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip(),
         "python": sys.executable, "rows": [],
     }

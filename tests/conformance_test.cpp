@@ -200,6 +200,51 @@ TEST_P(Conformance, BlockPathsEqualThePerSampleLoop) {
   }
 }
 
+// Mechanism::reachable_interval, where a mechanism has one, never leaves out a value at which
+// the sample solves: the grid solvers rule whole runs of designs out on it. Each component of
+// the study's design is scanned over the interval and as far again on either side, at the
+// study's first samples.
+TEST_P(Conformance, ReachableIntervalsHoldEverySolvedValue) {
+  const hapsyn::PluginRecord& plugin = hapsyn::test::registry().find(GetParam());
+  const hapsyn::Study study = hapsyn::load_study(study_for(plugin), hapsyn::test::registry());
+  const hapsyn::Problem& problem = *study.problem;
+  const hapsyn::Mechanism& mechanism = problem.mechanism();
+  const hapsyn::DesignSpace& space = problem.design_space();
+  std::vector<double> design(space.size());
+  for (std::size_t c = 0; c < space.size(); ++c) {
+    const hapsyn::DesignComponent& component = space.components()[c];
+    design[c] = 0.5 * (component.lower + component.upper);
+  }
+  auto scratch = mechanism.make_scratch();
+  hapsyn::SampleQuantities q;
+  const std::size_t samples = std::min<std::size_t>(12, problem.sample_order().size());
+  for (std::size_t c = 0; c < space.size(); ++c) {
+    for (std::size_t k = 0; k < samples; ++k) {
+      const double* pose = problem.samples().pose(problem.sample_order()[k]);
+      double lower = 0.0, upper = 0.0;
+      if (!mechanism.reachable_interval(design.data(), static_cast<int>(c), pose, lower, upper)) continue;
+      const double centre = lower <= upper ? 0.5 * (lower + upper) : design[c];
+      const double half = lower <= upper ? std::max(0.5 * (upper - lower), 1e-3) : 1.0;
+      std::vector<double> x = design;
+      for (int i = 0; i <= 300; ++i) {
+        x[c] = centre + 3.0 * half * (i / 150.0 - 1.0);
+        std::unique_ptr<const hapsyn::MechanismModel> model;
+        try {
+          model = mechanism.build(x.data());
+        } catch (const hapsyn::Error&) {
+          continue;  // a value the mechanism refuses (outside its hard limits)
+        }
+        q.sample = problem.sample_order()[k];
+        model->solve(pose, problem.needs(), *scratch, q);
+        if (q.status != hapsyn::SampleStatus::kReachable) continue;
+        EXPECT_TRUE(x[c] >= lower && x[c] <= upper)
+            << space.components()[c].name << " = " << x[c] << " solves sample " << problem.sample_order()[k]
+            << " outside the reachable interval [" << lower << ", " << upper << "]";
+      }
+    }
+  }
+}
+
 // Metric::combine_block, where a metric has it, is combine() per lane bit for bit (the design
 // lanes' pruning decisions rest on it), also for reductions at their identities, zero and
 // negative values.

@@ -83,9 +83,9 @@ class RunBounds {
         check_x_(problem.design_space().free_size(), 0.0) {}
 
   /// Starts a line: `free_design` is a free design vector of the line (its last component is
-  /// ignored). The run size and the wait carry over from the line before (the designs still to
-  /// wait count from the new line's start), so that where the bounds do not pay, tries stay
-  /// rare on short lines too. No allocation.
+  /// ignored). With Policy::carry_wait the run size and the wait carry over from the line before
+  /// (the designs still to wait count from the new line's start), so that where the bounds do
+  /// not pay, tries stay rare on short lines too; else both start afresh. No allocation.
   void start_line(const double* free_design) {
     const std::size_t n = check_x_.size();
     std::copy(free_design, free_design + n, check_x_.begin());
@@ -101,14 +101,14 @@ class RunBounds {
     reach_pending_ = true;
   }
 
-  /// Rules out the designs from i to the end of the current line's reachable interval when i
-  /// lies outside it (the interval is found at the first call of a line, from the first
-  /// kReachSamples of `samples`); else tries, when one is due, the run [i, min(last, i + size -
-  /// 1)] of the current line (its values from `line`, whose run must be verified and end at
-  /// `last`) at the first Policy::samples of `samples` (most useful first; the deciding sample moves
-  /// to the front). `threshold` is a
-  /// score a real design reaches (or -inf: then only runs that all fail are ruled out). The
-  /// spot check may evaluate one design in `scratch` (it overwrites its last evaluation).
+  /// Design i of the current line (its values from `line`, whose run must be verified and end
+  /// at `last`). When i lies outside the line's reachable interval (found at the line's first
+  /// call, from the first kReachSamples of `samples`), rules out the designs from i to the
+  /// interval's start, or to `last`. Else tries, when one is due, the run [i, min(last, i +
+  /// size - 1)] at the first Policy::samples of `samples` (most useful first; the deciding
+  /// sample moves to the front). `threshold` is a score a real design reaches (or -inf: then
+  /// only runs that all fail are ruled out). The spot check may evaluate one design in
+  /// `scratch` (it overwrites its last evaluation).
   /// \throws Error(solver, ...) when the spot check refutes the mechanism's bound.
   Try try_run(long long i, long long last, double threshold, std::vector<int>& samples, const LineBound& line,
               Problem::EvalScratch& scratch) {
@@ -267,9 +267,11 @@ class RunBounds {
   long long ruled_out_runs_ = 0;      // runs ruled out so far (the spot check's clock)
   long long size_ = kFirst, gap_ = kMin, next_ = 0;
   long long seen_ = -1;  // the last line index the current line's calls reached
-  bool reach_pending_ = true;                       // the current line's reachable interval is not found yet
-  long long reach_first_ = 0, reach_last_ = std::numeric_limits<long long>::max();  // the current line's reachable interval (line indices)
-  int witness_below_ = -1, witness_above_ = -1;     // the samples that set its ends
+  // The current line's reachable interval (line indices; found at the line's first try_run)
+  // and the samples that set its ends.
+  bool reach_pending_ = true;
+  long long reach_first_ = 0, reach_last_ = std::numeric_limits<long long>::max();
+  int witness_below_ = -1, witness_above_ = -1;
 };
 
 }  // namespace hapsyn::plugins
