@@ -114,7 +114,7 @@ class Mechanism {
                                Needs needs, SampleEnvelope& out) const {
     return false;
   }
-  /// Optional line bound of one sample for grid solvers (docs/design.md section 13.5): an
+  /// Optional line bound of one sample for grid solvers (docs/design.md section 13.6): an
   /// interval [lower, upper] of design component `component` outside which the sample `pose`
   /// cannot be solved (its status is not reachable), the other components as in `design` (a
   /// full design vector). It may be wider than the values where the sample solves, never

@@ -141,7 +141,7 @@ class Problem {
   /// known (a study that is not prunable, a mechanism or a metric without envelopes). No
   /// allocation.
   double block_score_bound(const double* full_design, int component, double lower, double upper, int sample) const;
-  /// Line bound of one sample (docs/design.md section 13.5): sets [lower, upper] to the interval
+  /// Line bound of one sample (docs/design.md section 13.6): sets [lower, upper] to the interval
   /// of component `component` of `full_design` outside which sample `sample` fails
   /// (Mechanism::reachable_interval), and returns true, when a failed sample makes a design
   /// infeasible in this study (a worst-case metric) and the mechanism knows such an interval.

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// Block bounds of runs of a grid line (header only; grid and culling share it, culling as
-/// "grid/run_bounds.hpp"; docs/design.md section 13.5). Within a line's verified run
+/// "grid/run_bounds.hpp"; docs/design.md sections 13.5 and 13.6). Within a line's verified run
 /// (LineBound::verified()), a run of consecutive designs is ruled out at once when, at one
 /// sample, every design of the run fails (all infeasible in a worst-case study) or the study's
 /// score is bounded strictly below a threshold that a real design already reaches
