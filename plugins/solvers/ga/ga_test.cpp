@@ -186,6 +186,36 @@ TEST(PagmoAdapter, InfeasibleDesignsArePenalisedAndFeasibleOnesNegated) {
   EXPECT_EQ(evaluator->cache_hits(), 2);
 }
 
+// A batch that mixes cached designs, designs repeated within it and genotypes that decode to one
+// phenotype (integers rounded) gives, design for design, what fitness() gives one
+// at a time on a fresh evaluator, and counts each distinct new phenotype as one evaluation.
+TEST(PagmoAdapter, MixedBatchOfCachedRepeatedAndNewDesignsMatchesOneAtATime) {
+  const auto problem = toy_problem();
+  const std::vector<pagmo::vector_double> designs = {
+      {0.3, 1.2, 2, 2, 2, 2, 4, 2},        // cached before the batch
+      {0.1, 0.4, 3, 2, 2, 1, 1, 5},        // new
+      {0.1, 0.4, 3, 2, 2, 1, 1, 5},        // repeated in the batch
+      {0.1, 0.4, 2.6, 2.2, 1.9, 1, 1, 5},  // rounds to the previous phenotype
+      {0.3, 1.2, 1, 3, 1, 3, 4, 2},        // new, violates a constraint
+      {0.3, 1.2, 2, 2, 2, 2, 4, 2},        // cached again
+      {0.0, 0.0, 1, 1, 1, 1, 6, 6},        // new
+  };
+  pagmo::vector_double xs;
+  for (const auto& x : designs) xs.insert(xs.end(), x.begin(), x.end());
+  pa::Evaluator batch(*problem, pa::Encoding(*problem, {}, {}, "ga"), pa::EvaluationSettings{2, true, 4}, false);
+  (void)batch.fitness(designs[0]);
+  const pagmo::vector_double got = batch.batch_fitness(xs);
+  EXPECT_EQ(batch.design_evaluations(), 4);  // designs 0, 1 (with 2 and 3), 4 and 6
+  EXPECT_EQ(batch.cache_hits(), 4);          // designs 0 and 5 cached, 2 and 3 repeats of 1
+  pa::Evaluator single(*problem, pa::Encoding(*problem, {}, {}, "ga"), pa::EvaluationSettings{}, false);
+  for (std::size_t i = 0; i < designs.size(); ++i) {
+    EXPECT_EQ(got[i], single.fitness(designs[i])[0]) << "design " << i;
+  }
+  // The records stay reachable after the batch (the cache owns the keys now).
+  EXPECT_EQ(batch.batch_fitness(xs), got);
+  EXPECT_EQ(batch.design_evaluations(), 4);
+}
+
 TEST(PagmoAdapter, BatchOverIndividualsAndOverSamplesAgreeWithTheSingleEvaluation) {
   const auto problem = toy_problem();
   pagmo::vector_double xs;

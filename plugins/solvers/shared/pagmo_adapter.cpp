@@ -71,7 +71,7 @@ Encoding::Encoding(const Problem& problem, const std::vector<std::string>& sort_
   ascending_ = sort_groups(problem, sort_ascending, "sort_ascending", component);
 }
 
-std::vector<double> Encoding::decode(const pagmo::vector_double& x) const {
+std::vector<double> Encoding::decode(const double* x) const {
   std::vector<double> free(to_free_.size());
   const std::size_t first_integer = to_free_.size() - integer_count_;
   for (std::size_t i = 0; i < to_free_.size(); ++i) {
@@ -158,18 +158,20 @@ DesignRecord Evaluator::make_record(const Evaluation& e) const {
 }
 
 Evaluator::Outcome Evaluator::evaluate(const std::vector<double>& free, int thread) {
-  Outcome out;
-  Evaluation e;
   if (settings_.over_individuals) {
     EvalOptions options;
     options.subset = subset_;
-    e = problem_.evaluate(free.data(), *workspaces_[static_cast<std::size_t>(thread)], options);
-  } else {
-    Problem::ParallelOptions options;
-    options.chunks = settings_.sample_chunks;
-    options.subset = subset_;
-    e = problem_.evaluate_parallel(free.data(), settings_.threads, options);
+    // The scratch's own evaluation, read in place: copying it cost a few allocations per design.
+    return outcome_of(free, problem_.evaluate(free.data(), *workspaces_[static_cast<std::size_t>(thread)], options));
   }
+  Problem::ParallelOptions options;
+  options.chunks = settings_.sample_chunks;
+  options.subset = subset_;
+  return outcome_of(free, problem_.evaluate_parallel(free.data(), settings_.threads, options));
+}
+
+Evaluator::Outcome Evaluator::outcome_of(const std::vector<double>& free, const Evaluation& e) const {
+  Outcome out;
   out.samples = e.samples_evaluated;
   out.record = make_record(e);
   if (e.status == EvalStatus::kConstraintViolated) add_violation(free, out.record);
@@ -233,15 +235,36 @@ void get_record(ByteReader& in, DesignRecord& r, long long& samples) {
 
 }  // namespace
 
-std::vector<std::vector<double>> Evaluator::fill_cache(const std::vector<std::vector<double>>& decoded) {
-  // Distinct phenotypes not in the cache, in order of first appearance.
-  std::vector<std::vector<double>> todo;
-  std::unordered_set<std::vector<double>, VectorHash> queued;
-  for (const auto& free : decoded) {
-    if (cache_.count(Key(fidelity_level_, free)) || !queued.insert(free).second) continue;
-    todo.push_back(free);
+std::size_t Evaluator::fill_cache(std::vector<std::vector<double>>& decoded, std::vector<const DesignRecord*>& found,
+                                  std::vector<std::vector<double>>* evaluated) {
+  // Distinct phenotypes not in the cache, in order of first appearance: todo[k] is the index in
+  // `decoded` of the k-th; slot[i] the todo entry design i waits for (-1: cached). Looked up in
+  // place (a key borrows the vector and gives it back), so that a design costs no copy here.
+  const std::size_t count = decoded.size();
+  found.assign(count, nullptr);
+  std::vector<std::size_t> todo;
+  std::vector<std::ptrdiff_t> slot(count, -1);
+  struct DerefHash {
+    std::size_t operator()(const std::vector<double>* v) const { return VectorHash()(*v); }
+  };
+  struct DerefEqual {
+    bool operator()(const std::vector<double>* a, const std::vector<double>* b) const { return *a == *b; }
+  };
+  std::unordered_map<const std::vector<double>*, std::size_t, DerefHash, DerefEqual> queued;
+  for (std::size_t i = 0; i < count; ++i) {
+    Key key(fidelity_level_, std::move(decoded[i]));
+    const auto cached = cache_.find(key);
+    decoded[i] = std::move(key.second);
+    if (cached != cache_.end()) {
+      found[i] = &cached->second;
+      continue;
+    }
+    const auto [queued_at, added] = queued.emplace(&decoded[i], todo.size());
+    if (added) todo.push_back(i);
+    slot[i] = static_cast<std::ptrdiff_t>(queued_at->second);
   }
   const std::size_t n = todo.size();
+  const auto design = [&](std::size_t k) -> const std::vector<double>& { return decoded[todo[k]]; };
   std::vector<DesignRecord> records(n);
   std::vector<long long> samples(n, 0);
   std::vector<char> have(n, 0);
@@ -252,7 +275,7 @@ std::vector<std::vector<double>> Evaluator::fill_cache(const std::vector<std::ve
   TaskFarm farm;
   farm.count = static_cast<long long>(n);
   farm.run = [&](long long i, int thread) -> std::optional<std::string> {
-    Outcome o = evaluate(todo[static_cast<std::size_t>(i)], thread);
+    Outcome o = evaluate(design(static_cast<std::size_t>(i)), thread);
     if (!several) {
       records[static_cast<std::size_t>(i)] = std::move(o.record);
       samples[static_cast<std::size_t>(i)] = o.samples;
@@ -299,7 +322,7 @@ std::vector<std::vector<double>> Evaluator::fill_cache(const std::vector<std::ve
   if (!missing.empty()) {
     const auto one = [&](long long k, int thread) {
       const std::size_t i = static_cast<std::size_t>(missing[static_cast<std::size_t>(k)]);
-      Outcome o = evaluate(todo[i], thread);
+      Outcome o = evaluate(design(i), thread);
       records[i] = std::move(o.record);
       samples[i] = o.samples;
     };
@@ -309,12 +332,22 @@ std::vector<std::vector<double>> Evaluator::fill_cache(const std::vector<std::ve
       for (long long k = 0; k < static_cast<long long>(missing.size()); ++k) one(k, 0);
     }
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    ++designs_;
-    samples_ += samples[i];
-    cache_.emplace(Key(fidelity_level_, todo[i]), std::move(records[i]));
+  if (evaluated) {
+    evaluated->clear();
+    for (std::size_t k = 0; k < n; ++k) evaluated->push_back(design(k));
   }
-  return todo;
+  // The queue's keys point into `decoded`, whose vectors move into the cache now.
+  queued.clear();
+  std::vector<const DesignRecord*> records_of(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    ++designs_;
+    samples_ += samples[k];
+    records_of[k] = &cache_.emplace(Key(fidelity_level_, std::move(decoded[todo[k]])), std::move(records[k])).first->second;
+  }
+  for (std::size_t i = 0; i < count; ++i) {
+    if (slot[i] >= 0) found[i] = records_of[static_cast<std::size_t>(slot[i])];
+  }
+  return n;
 }
 
 pagmo::vector_double Evaluator::batch_fitness(const pagmo::vector_double& xs) {
@@ -322,15 +355,12 @@ pagmo::vector_double Evaluator::batch_fitness(const pagmo::vector_double& xs) {
   const std::size_t n = dim == 0 ? 0 : xs.size() / dim;
   const std::size_t nf = objective_count();
   std::vector<std::vector<double>> decoded(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    decoded[i] = encoding_.decode(pagmo::vector_double(xs.begin() + static_cast<std::ptrdiff_t>(i * dim),
-                                                       xs.begin() + static_cast<std::ptrdiff_t>((i + 1) * dim)));
-  }
-  const std::size_t evaluated = fill_cache(decoded).size();
+  for (std::size_t i = 0; i < n; ++i) decoded[i] = encoding_.decode(xs.data() + i * dim);
+  std::vector<const DesignRecord*> found;
+  const std::size_t evaluated = fill_cache(decoded, found);
   pagmo::vector_double out(n * nf);
   for (std::size_t i = 0; i < n; ++i) {
-    const DesignRecord& r = cache_.at(Key(fidelity_level_, decoded[i]));
-    std::copy(r.fitness.begin(), r.fitness.end(), out.begin() + static_cast<std::ptrdiff_t>(i * nf));
+    std::copy(found[i]->fitness.begin(), found[i]->fitness.end(), out.begin() + static_cast<std::ptrdiff_t>(i * nf));
   }
   cache_hits_ += static_cast<long long>(n - evaluated);
   return out;
@@ -350,12 +380,11 @@ void Evaluator::prefetch(const pagmo::algorithm& algorithm, const pagmo::populat
   recording_ = false;
   const std::size_t dim = encoding_.size();
   const std::size_t n = dim == 0 ? 0 : recorded_.size() / dim;
-  std::vector<std::vector<double>> decoded(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    decoded[i] = encoding_.decode(pagmo::vector_double(recorded_.begin() + static_cast<std::ptrdiff_t>(i * dim),
-                                                       recorded_.begin() + static_cast<std::ptrdiff_t>((i + 1) * dim)));
-  }
-  for (auto& free : fill_cache(decoded)) prefetched_.emplace(fidelity_level_, std::move(free));
+  std::vector<std::vector<double>> decoded(n), evaluated;
+  for (std::size_t i = 0; i < n; ++i) decoded[i] = encoding_.decode(recorded_.data() + i * dim);
+  std::vector<const DesignRecord*> found;
+  fill_cache(decoded, found, &evaluated);
+  for (auto& free : evaluated) prefetched_.emplace(fidelity_level_, std::move(free));
 }
 
 pagmo::problem make_problem(const std::shared_ptr<Evaluator>& evaluator) { return pagmo::problem{Udp(evaluator)}; }

@@ -75,7 +75,9 @@ class Encoding {
   const pagmo::vector_double& lower() const { return lower_; }
   const pagmo::vector_double& upper() const { return upper_; }
   /// Free vector (hapsyn order) of a pagmo vector: integers rounded, clamped, repaired.
-  std::vector<double> decode(const pagmo::vector_double& x) const;
+  std::vector<double> decode(const pagmo::vector_double& x) const { return decode(x.data()); }
+  /// The same for the size() values at `x` (one design of a concatenated batch).
+  std::vector<double> decode(const double* x) const;
   /// Pagmo vector of a free vector (no repair).
   pagmo::vector_double encode(const std::vector<double>& free) const;
   /// Free indices of each sort group (descending groups first), for the README/statistics.
@@ -185,12 +187,16 @@ class Evaluator {
   // Evaluates one design by the settings' path; `thread` picks the scratch of the
   // over-individuals path (the samples path splits over all threads itself).
   Outcome evaluate(const std::vector<double>& free, int thread);
+  // The outcome of design `free`'s evaluation `e`.
+  Outcome outcome_of(const std::vector<double>& free, const Evaluation& e) const;
   // Adds the design's constraint violation (the sum of its positive constraint values) to
   // every fitness component of a constraint-violating design's record.
   void add_violation(const std::vector<double>& free, DesignRecord& record) const;
   // Evaluates the distinct designs of `decoded` not in the cache (over the cluster) and caches
-  // them; returns those it evaluated.
-  std::vector<std::vector<double>> fill_cache(const std::vector<std::vector<double>>& decoded);
+  // them (the keys moved out of `decoded`); found[i] is then design i's record. Returns how many
+  // designs it evaluated, and their keys in `evaluated` when not null.
+  std::size_t fill_cache(std::vector<std::vector<double>>& decoded, std::vector<const DesignRecord*>& found,
+                         std::vector<std::vector<double>>* evaluated = nullptr);
 
   const Problem& problem_;
   Encoding encoding_;
