@@ -24,6 +24,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include <cmath>
+#include <random>
 #include <vector>
 
 namespace {
@@ -210,6 +212,46 @@ void BM_FiveBarReachConstraint(benchmark::State& state) {
   }
   per_sample(state);
 }
+
+// The block bound of one sample over a run of r (FiveBar::sample_envelope, docs/design.md
+// section 13.5), as culling and the pruned grid call it: 4,096 runs of 8 to 64 designs at a 2 mm
+// step (seed 1) of designs and samples of the paper's kind, each tried above the joints' axis.
+// Argument: 0 the GII envelope (no mass bound), 1 GDI's (with the bound of sigma_max(M)).
+void BM_FiveBarSampleEnvelope(benchmark::State& state) {
+  const FiveBar fivebar(hapsyn::default_options<FiveBarOptions>());
+  const hapsyn::Needs needs = state.range(0) != 0 ? hapsyn::kNeedJacobian | hapsyn::kNeedInertia | hapsyn::kNeedEffectiveMass
+                                                  : hapsyn::kNeedJacobian;
+  struct Run {
+    double design[4], lower, upper, pose[2];
+  };
+  std::vector<Run> runs;
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  while (runs.size() < 4096) {
+    Run run{};
+    run.design[0] = 0.002 * std::floor(150 * u(rng));
+    run.design[1] = 0.01 + 0.002 * std::floor(145 * u(rng));
+    run.design[2] = 0.01 + 0.002 * std::floor(145 * u(rng));
+    run.lower = 0.002 * std::floor(300 * u(rng));
+    run.upper = run.lower + 0.002 * (7 + std::floor(57 * u(rng)));
+    run.design[3] = run.lower;
+    run.pose[0] = -0.05 + 0.001 * std::floor(101 * u(rng));
+    run.pose[1] = -0.05 + 0.001 * std::floor(101 * u(rng));
+    if (run.pose[1] + run.lower > 0.0) runs.push_back(run);
+  }
+  double sum = 0.0;
+  for (auto _ : state) {
+    for (const Run& run : runs) {
+      hapsyn::SampleEnvelope out;
+      fivebar.sample_envelope(run.design, 3, run.lower, run.upper, run.pose, needs, out);
+      sum += out.jacobian_inverse_condition_max + out.effective_mass_sigma_max_min;
+    }
+  }
+  benchmark::DoNotOptimize(sum);
+  state.counters["per_run"] = benchmark::Counter(static_cast<double>(runs.size()),
+                                                 benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_FiveBarSampleEnvelope)->ArgName("mass")->Arg(0)->Arg(1);
 
 BENCHMARK(BM_FiveBarPoseOnly);
 BENCHMARK(BM_FiveBarIkJacobian);

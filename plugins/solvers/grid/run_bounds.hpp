@@ -99,6 +99,9 @@ class RunBounds {
     }
     seen_ = -1;
     reach_pending_ = true;
+    deciders_before_.swap(deciders_);
+    deciders_.clear();
+    decider_cursor_ = 0;
   }
 
   /// Design i of the current line (its values from `line`, whose run must be verified and end
@@ -221,7 +224,16 @@ class RunBounds {
                    Problem::EvalScratch& scratch) {
     const double lower = line.value(first), upper = line.value(last);
     const std::size_t tries = std::min(samples.size(), policy_.samples);
-    for (std::size_t k = 0; k < tries; ++k) {
+    // The sample that ruled out this part of the previous line goes first: neighbouring lines
+    // differ in one other component by a grid step, and which critical sample bounds a run
+    // depends mostly on where along the line it lies.
+    std::size_t first_try = 0;
+    const int hint = decider_before(first);
+    for (std::size_t k = 1; k < tries && hint >= 0; ++k) {
+      if (samples[k] == hint) first_try = k;
+    }
+    for (std::size_t n = 0; n < tries; ++n) {
+      const std::size_t k = n == 0 ? first_try : (n <= first_try ? n - 1 : n);
       const int sample = samples[k];
       const double bound = problem_.block_score_bound(full_.data(), component_, lower, upper, sample);
       if (!(bound == -kInf || bound < threshold)) continue;
@@ -229,9 +241,17 @@ class RunBounds {
       if (ruled_out_runs_++ % kCheckEvery == 0) check(first, last, sample, bound, line, scratch);
       if (k > 0) std::rotate(samples.begin(), samples.begin() + static_cast<std::ptrdiff_t>(k),
                              samples.begin() + static_cast<std::ptrdiff_t>(k) + 1);
+      deciders_.push_back({last, sample});
       return bound == -kInf ? Outcome::kAllFail : Outcome::kBelowThreshold;
     }
     return Outcome::kNotRuledOut;
+  }
+
+  // The sample that ruled out the previous line's run containing line index i, or the nearest
+  // run after it; -1 when there is none. The calls of a line come with increasing i.
+  int decider_before(long long i) {
+    while (decider_cursor_ < deciders_before_.size() && deciders_before_[decider_cursor_].last < i) ++decider_cursor_;
+    return decider_cursor_ < deciders_before_.size() ? deciders_before_[decider_cursor_].sample : -1;
   }
 
   // The run's middle design, evaluated exactly at the sample, must fail there when the bound
@@ -272,6 +292,14 @@ class RunBounds {
   bool reach_pending_ = true;
   long long reach_first_ = 0, reach_last_ = std::numeric_limits<long long>::max();
   int witness_below_ = -1, witness_above_ = -1;
+  // The runs ruled out by an envelope on the current line and on the line before: each run's
+  // last line index and its deciding sample, in line order.
+  struct Decider {
+    long long last;
+    int sample;
+  };
+  std::vector<Decider> deciders_, deciders_before_;
+  std::size_t decider_cursor_ = 0;
 };
 
 }  // namespace hapsyn::plugins
