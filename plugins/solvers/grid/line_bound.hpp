@@ -93,6 +93,17 @@ class LineBound {
   /// solver may then set EvalOptions::constraints_verified for them.
   bool verified() const { return verified_; }
 
+  /// The first grid index of the line whose value is >= v (the line's length when none is): the
+  /// arithmetic estimate, then steps to the exact index (a few at most: the values are the
+  /// grid's, lower + i step rounded).
+  long long first_at_or_above(double v) const {
+    const DesignComponent& c = problem_.design_space().components()[static_cast<std::size_t>(component_)];
+    long long i = estimate((v - c.lower) / c.step);
+    while (i > 0 && value(i - 1) >= v) --i;
+    while (i < count_ && value(i) < v) ++i;
+    return i;
+  }
+
   /// True when grid index `i` of the line's component lies outside the bound.
   /// (Inline and branch-light: called for every design of the grid.)
   bool excludes(long long i) const { return i < first_ || i > last_; }

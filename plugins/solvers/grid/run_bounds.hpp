@@ -175,16 +175,7 @@ class RunBounds {
 
   // The first index of the line's run whose value is >= v (line.last() + 1 when none is).
   static long long first_at_or_above(double v, const LineBound& line) {
-    long long lo = line.first(), hi = line.last() + 1;
-    while (lo < hi) {
-      const long long mid = lo + (hi - lo) / 2;
-      if (line.value(mid) >= v) {
-        hi = mid;
-      } else {
-        lo = mid + 1;
-      }
-    }
-    return lo;
+    return std::clamp(line.first_at_or_above(v), line.first(), line.last() + 1);
   }
 
   // Rules out the designs from i (outside the reachable interval) to the interval's start, or
