@@ -1,6 +1,7 @@
 // The grid solver is the oracle of later solvers: check it against a plain loop over the grid.
 #include "grid.hpp"
 #include "line_bound.hpp"
+#include "run_bounds.hpp"
 
 #include "analytic_problems.hpp"
 #include "forwarding_mechanism.hpp"
@@ -845,6 +846,66 @@ TEST(GridBlockBounds, AWrongEnvelopeStopsTheRunNamingIt) {
                               "grid could cut the optimum: set solver.options.block_bounds = false"});
   const auto result = grid_solver(Json{{"block_bounds", false}, {"progress_interval", 1e9}}).solve(*problem, context);
   EXPECT_TRUE(result.best.has_value());
+}
+
+// The five-bar (line bounds and their one-run promise included) whose envelope bounds only
+// sample `decider` (GII <= 1, true of every design) and proves nothing elsewhere; it counts the
+// envelopes asked for, per sample.
+class OneDecidingSample final : public hapsyn::test::ForwardingMechanism {
+ public:
+  OneDecidingSample(std::shared_ptr<const hapsyn::Mechanism> inner, const hapsyn::SampleSet& scene, int decider)
+      : ForwardingMechanism(std::move(inner)), scene_(scene), decider_(decider), calls_(scene.size(), 0) {}
+  bool constraints_quasiconvex(int component) const override { return inner().constraints_quasiconvex(component); }
+  bool sample_envelope(const double*, int, double, double, const double* pose, hapsyn::Needs,
+                       hapsyn::SampleEnvelope& out) const override {
+    int sample = 0;
+    while (scene_.pose(sample) != pose) ++sample;
+    ++calls_[static_cast<std::size_t>(sample)];
+    if (sample != decider_) return false;
+    out = hapsyn::SampleEnvelope{};
+    out.jacobian_inverse_condition_max = 1.0;
+    return true;
+  }
+  long long calls(int sample) const { return calls_[static_cast<std::size_t>(sample)]; }
+
+ private:
+  const hapsyn::SampleSet& scene_;
+  int decider_;
+  mutable std::vector<long long> calls_;
+};
+
+TEST(RunBounds, ATryStartsWithTheSampleThatDecidedThePreviousLineThere) {
+  const hapsyn::Study study = hapsyn::load_study(line_bound_study(), hapsyn::test::registry());
+  const hapsyn::Problem& p = *study.problem;
+  const std::shared_ptr<const hapsyn::Mechanism> fivebar(std::shared_ptr<const hapsyn::Mechanism>{}, &p.mechanism());
+  const auto scene = std::make_shared<hapsyn::SampleSet>(p.samples());
+  const int first = 0, decider = 1;
+  const auto mechanism = std::make_shared<OneDecidingSample>(fivebar, *scene, decider);
+  const hapsyn::Problem problem("one-decider", mechanism, scene, p.metrics(), p.objectives(), p.design_space());
+  hapsyn::plugins::LineBound line(problem, true, "grid");
+  hapsyn::plugins::RunBounds runs(problem, "grid", hapsyn::plugins::RunPolicy{2, false});
+  auto scratch = problem.make_eval_scratch();
+  // A line with designs inside its bound: l0 = 0, l1 = l2 = 0.3 (r free).
+  const std::vector<double> x = {0.0, 0.3, 0.3, 0.0};
+  line.update(x.data());
+  ASSERT_LE(line.first(), line.last());
+  const double above_every_score = 1.5;  // the envelope's bound 1 is below it: the decider rules out
+  // The first line has no history: the thread's order decides, and the first sample proves nothing.
+  std::vector<int> order = {first, decider};
+  runs.start_line(x.data());
+  auto t = runs.try_run(line.first(), line.last(), above_every_score, order, line, *scratch);
+  ASSERT_TRUE(t.ruled_out());
+  EXPECT_EQ(mechanism->calls(first), 1);
+  EXPECT_EQ(mechanism->calls(decider), 1);
+  EXPECT_EQ(order.front(), decider);  // the deciding sample moved to the front
+  // The next line, with the thread's order put back: the previous line's decider goes first.
+  order = {first, decider};
+  runs.start_line(x.data());
+  t = runs.try_run(line.first(), line.last(), above_every_score, order, line, *scratch);
+  ASSERT_TRUE(t.ruled_out());
+  EXPECT_EQ(mechanism->calls(first), 1) << "the sample that proved nothing here on the previous line was tried again";
+  EXPECT_EQ(mechanism->calls(decider), 2);
+  EXPECT_EQ(order.front(), decider);
 }
 
 TEST(GridBlockBounds, AWrongReachableIntervalStopsTheRunNamingIt) {

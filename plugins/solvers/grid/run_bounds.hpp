@@ -12,7 +12,10 @@
 /// The runs adapt to the line: they start at kFirst designs, double after a run is ruled out and
 /// halve after one is not, within [kMin, kMax]. After a try that rules nothing out the next one
 /// waits `gap` designs, doubled on every such try in a row, so that on lines where the bounds do
-/// not help the tries cost little beside the designs' own evaluations.
+/// not help the tries cost little beside the designs' own evaluations. A try takes first the
+/// sample that ruled out the same part of the previous line (the run that contains its first
+/// design, or the next one): which critical sample bounds a run depends mostly on where along
+/// the line it lies.
 ///
 /// Before any run, a line is cut to the values where the first kReachSamples samples of the
 /// caller's list can be solved (Problem::reachable_interval, from
