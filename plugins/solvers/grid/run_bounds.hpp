@@ -14,8 +14,8 @@
 /// waits `gap` designs, doubled on every such try in a row, so that on lines where the bounds do
 /// not help the tries cost little beside the designs' own evaluations. A try takes first the
 /// sample that ruled out the same part of the previous line (the run that contains its first
-/// design, or the next one): which critical sample bounds a run depends mostly on where along
-/// the line it lies.
+/// design, or the next one): which critical sample bounds a run changes along a line, and the
+/// caller's order only remembers the last one (docs/design.md section 13.5).
 ///
 /// Before any run, a line is cut to the values where the first kReachSamples samples of the
 /// caller's list can be solved (Problem::reachable_interval, from
@@ -219,8 +219,7 @@ class RunBounds {
     const double lower = line.value(first), upper = line.value(last);
     const std::size_t tries = std::min(samples.size(), policy_.samples);
     // The sample that ruled out this part of the previous line goes first: neighbouring lines
-    // differ in one other component by a grid step, and which critical sample bounds a run
-    // depends mostly on where along the line it lies.
+    // differ in one other component by a grid step (measured: design.md section 13.5).
     std::size_t first_try = 0;
     const int hint = decider_before(first);
     for (std::size_t k = 1; k < tries && hint >= 0; ++k) {
