@@ -32,9 +32,9 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 // SQP seed and polish: the shared min-max SQP (plugins/solvers/shared) on the study's score.
 SqpOutcome run_sqp(const Problem& problem, const std::vector<double>& x, const std::vector<double>& lower,
-                   const std::vector<double>& upper, const CullingOptions& options) {
+                   const std::vector<double>& upper, const CullingOptions& options, double xtol) {
   SqpSettings settings;
-  settings.xtol = options.sqp_xtol;
+  settings.xtol = xtol;
   settings.ftol = options.sqp_ftol;
   settings.max_evaluations = options.sqp_max_evaluations;
   return run_minmax_sqp(problem, x, lower, upper, settings, score_goal(problem));
@@ -261,7 +261,7 @@ Seed seed_reference(const Problem& problem, const Grid& grid, const Bounds& boun
   if (!start.empty() && !context.stop_requested()) {
     std::vector<double> continuous = start;
     if (!bounds.any_integer) {
-      const SqpOutcome sqp = run_sqp(problem, start, bounds.lower, bounds.upper, options);
+      const SqpOutcome sqp = run_sqp(problem, start, bounds.lower, bounds.upper, options, options.seed_xtol);
       seed.designs += sqp.evaluations;
       seed.samples += sqp.samples;
       seed.statistics["sqp"] = {{"status", sqp.status}, {"evaluations", sqp.evaluations}, {"score", sqp.merit},
@@ -704,7 +704,7 @@ Json polish_cell(const Problem& problem, const std::vector<double>& x, const Cul
     lo[k] = std::max(c.lower, x[k] - c.step);
     hi[k] = std::min(c.upper, x[k] + c.step);
   }
-  const SqpOutcome sqp = run_sqp(problem, x, lo, hi, options);
+  const SqpOutcome sqp = run_sqp(problem, x, lo, hi, options, options.sqp_xtol);
   result.design_evaluations += sqp.evaluations;
   result.sample_evaluations += sqp.samples;
   Json polish = {{"status", sqp.status}, {"evaluations", sqp.evaluations}, {"rounds", sqp.rounds},

@@ -45,6 +45,7 @@ struct CullingOptions {
   bool polish{};
   int start_points{};
   double sqp_xtol{};
+  double seed_xtol{};
   double sqp_ftol{};
   int sqp_max_evaluations{};
   bool line_bounds{};
@@ -64,7 +65,12 @@ struct CullingOptions {
     d.add(&CullingOptions::start_points, "start_points", 5,
           "Points per free variable of the coarse grid the SQP seed starts from")
         .range(2, 50);
-    d.add(&CullingOptions::sqp_xtol, "sqp_xtol", 1e-7, "SLSQP relative tolerance on the design variables")
+    d.add(&CullingOptions::sqp_xtol, "sqp_xtol", 1e-7, "SLSQP relative tolerance on the design variables (polish)")
+        .greater_than(0);
+    d.add(&CullingOptions::seed_xtol, "seed_xtol", 1e-5,
+          "SLSQP relative tolerance on the design variables in the seed, which only needs a grid cell near the "
+          "optimum (at the paper's resolution 1e-5 took a quarter of the evaluations of 1e-7; docs/design.md "
+          "section 13.5)")
         .greater_than(0);
     d.add(&CullingOptions::sqp_ftol, "sqp_ftol", 1e-10, "SLSQP absolute tolerance on the score").greater_than(0);
     d.add(&CullingOptions::sqp_max_evaluations, "sqp_max_evaluations", 400,

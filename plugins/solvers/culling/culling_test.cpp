@@ -107,6 +107,28 @@ TEST(Culling, PolishingKeepsTheCellAndNeverLosesValue) {
   EXPECT_TRUE(result.statistics["polish"].contains("status"));
 }
 
+// The seed only needs a grid cell near the optimum: its SLSQP stops at seed_xtol, while the
+// polish keeps sqp_xtol, so a loose seed changes neither the grid optimum nor the polished one.
+TEST(Culling, SeedStopsAtItsOwnToleranceAndThePolishAtSqpXtol) {
+  Json doc = hapsyn::test::fivebar_study("culling");
+  const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  const auto run = [&](double seed_xtol) {
+    Json options = culling_options(true, true);
+    options["seed_xtol"] = seed_xtol;
+    options["sqp_max_evaluations"] = 400;
+    const hapsyn::plugins::CullingSolver culling(hapsyn::make_options<hapsyn::plugins::CullingOptions>(options));
+    return solve(culling, *study.problem, 2);
+  };
+  const auto tight = run(1e-9), loose = run(1e-2);
+  ASSERT_TRUE(tight.best && loose.best);
+  EXPECT_LT(loose.statistics["seed"]["sqp"]["evaluations"].get<long long>(),
+            tight.statistics["seed"]["sqp"]["evaluations"].get<long long>());
+  EXPECT_EQ(loose.statistics["grid_optimum"], tight.statistics["grid_optimum"]);
+  EXPECT_EQ(loose.statistics["polish"]["evaluations"], tight.statistics["polish"]["evaluations"]);
+  EXPECT_EQ(loose.best->score, tight.best->score);
+  EXPECT_EQ(loose.best->design, tight.best->design);
+}
+
 TEST(Culling, WeightedSumOfWorstCaseMetricsHasAValidBound) {
   Json doc = hapsyn::test::fivebar_study("culling");
   doc["objectives"] = Json::array({{{"metric", "gii"}, {"weight", 0.5}}, {{"metric", "gdi"}, {"weight", 2.0}}});
