@@ -15,6 +15,10 @@
 ///   series of atan(u), u = (t - k/8) / (1 + t k/8), |u| <= 1/16, to u^13 (truncation < 2e-19).
 /// Both are checked against libm over random and edge-case arguments in
 /// tests/fast_math_test.cpp; benchmarks/fast_math_benchmark.cpp measures them against libm.
+///
+/// They are always inlined: a caller compiled for a wider instruction set (HAPSYN_MULTIVERSION,
+/// hapsyn/multiversion.hpp) would otherwise call the baseline copy through the PLT, as the
+/// five-bar's envelope did (docs/design.md section 13.5).
 #include <cmath>
 
 namespace hapsyn::fast {
@@ -24,7 +28,7 @@ namespace hapsyn::fast {
 /// integer-valued number) and s, c = sin, cos of the reduced argument x - n pi/2. The caller
 /// maps (s, c) to the quadrant n mod 4.
 template <typename T>
-inline void sin_cos_reduced(const T& x, T& n, T& s, T& c) {
+[[gnu::always_inline]] inline void sin_cos_reduced(const T& x, T& n, T& s, T& c) {
   // n = round(x / (pi/2)) by the 1.5 * 2^52 trick (no SSE4.1 round instruction at baseline x86-64).
   constexpr double kInvHalfPi = 6.36619772367581382433e-01;
   constexpr double kToInt = 6755399441055744.0;  // 1.5 * 2^52
@@ -48,7 +52,7 @@ inline void sin_cos_reduced(const T& x, T& n, T& s, T& c) {
 }
 
 /// sin(x) and cos(x) together [x in rad]. See the file comment for the accuracy.
-inline void sin_cos(double x, double& sine, double& cosine) {
+[[gnu::always_inline]] inline void sin_cos(double x, double& sine, double& cosine) {
   if (!(std::abs(x) <= 1e6)) {  // also NaN and infinities
     sine = std::sin(x);
     cosine = std::cos(x);
@@ -79,7 +83,7 @@ inline constexpr double kAtanTable[9] = {0.0,
 /// hapsyn/lanes.hpp): atan(t) for t = smallest / largest in [0, 1], given ck = k / 8 (k the
 /// nearest integer to 8 t) and table_k = kAtanTable[k]. The caller maps it to the octant.
 template <typename T>
-inline T atan_reduced(const T& t, const T& ck, const T& table_k) {
+[[gnu::always_inline]] inline T atan_reduced(const T& t, const T& ck, const T& table_k) {
   const T u = (t - ck) / (1.0 + t * ck);  // |u| <= 1/16
   const T z = u * u;
   const T series =
@@ -90,7 +94,7 @@ inline T atan_reduced(const T& t, const T& ck, const T& table_k) {
 }
 
 /// atan2(y, x) [rad] in [-pi, pi]. See the file comment for the accuracy.
-inline double atan2(double y, double x) {
+[[gnu::always_inline]] inline double atan2(double y, double x) {
   const double ax = std::abs(x), ay = std::abs(y);
   const double largest = ax > ay ? ax : ay, smallest = ax > ay ? ay : ax;
   if (!(largest > 0.0) || !(largest <= 1.7976931348623157e308) || !(smallest >= 0.0)) return std::atan2(y, x);
@@ -99,8 +103,10 @@ inline double atan2(double y, double x) {
   double angle = atan_reduced(t, 0.125 * k, kAtanTable[k]);
   constexpr double kHalfPi = 1.5707963267948966, kPi = 3.141592653589793;
   if (ay > ax) angle = kHalfPi - angle;
-  if (std::signbit(x)) angle = kPi - angle;
-  return std::signbit(y) ? -angle : angle;
+  // The builtin, not std::signbit: libstdc++'s is an out-of-line call from a multiversioned
+  // caller (hapsyn/multiversion.hpp).
+  if (__builtin_signbit(x)) angle = kPi - angle;
+  return __builtin_signbit(y) ? -angle : angle;
 }
 
 }  // namespace hapsyn::fast

@@ -22,10 +22,25 @@ constexpr double kRelativeMargin = 1e-9;
 
 struct Interval {
   double lo, hi;
-  Interval widened(double by) const { return {lo - by, hi + by}; }
+  [[gnu::always_inline]] Interval widened(double by) const { return {lo - by, hi + by}; }
 };
 
-Interval hull(double a, double b) { return {std::min(a, b), std::max(a, b)}; }
+// ceil and floor of the small multiples of pi/2 below, without a library call: GCC does not
+// expand std::ceil inline in a multiversioned function, and the call spills every live vector
+// register. Exact for |v| < 2^52 (the conversion truncates toward zero); the rest (not met
+// here: angles of a few turns) goes to std::ceil / std::floor, NaN included.
+[[gnu::always_inline]] inline double ceil_of(double v) {
+  if (!(std::abs(v) < 4.5e15)) return std::ceil(v);
+  const double t = static_cast<double>(static_cast<long long>(v));
+  return t < v ? t + 1.0 : t;
+}
+[[gnu::always_inline]] inline double floor_of(double v) {
+  if (!(std::abs(v) < 4.5e15)) return std::floor(v);
+  const double t = static_cast<double>(static_cast<long long>(v));
+  return t > v ? t - 1.0 : t;
+}
+
+[[gnu::always_inline]] inline Interval hull(double a, double b) { return {std::min(a, b), std::max(a, b)}; }
 
 // sin and cos over an angle interval: the ends, and 1 or -1 where an extremum lies inside. The
 // inline sin_cos of hapsyn/fast_math.hpp (absolute error below 1e-15, far inside the margins):
@@ -46,7 +61,7 @@ Interval hull(double a, double b) { return {std::min(a, b), std::max(a, b)}; }
   // an end moves the bound by the square of that rounding (the extrema are flat), far inside
   // the margins.
   constexpr double kInvHalfPi = 6.36619772367581382433e-01;
-  const double first = std::ceil(a.lo * kInvHalfPi), last = std::floor(a.hi * kInvHalfPi);
+  const double first = ceil_of(a.lo * kInvHalfPi), last = floor_of(a.hi * kInvHalfPi);
   for (double j = first; j <= last; j += 1.0) {
     switch (static_cast<long long>(j) & 3) {
       case 0: cosine_of.hi = 1.0; break;
@@ -112,13 +127,15 @@ struct LegBounds {
 // third side b, over rho in [lo, hi]: (rho + (a^2 - b^2) / rho) / (2 a), smallest at rho =
 // sqrt(a^2 - b^2) when a > b, monotone on either side of it (at E: a = l2, b = l1, the angle
 // beta; at A: a = l1, b = l2, the angle alpha). Clamped to [-1, 1] and widened by the margin.
+[[gnu::always_inline]] inline double triangle_cosine_at(double a, double d, double rho) {
+  return (rho + d / rho) / (2.0 * a);
+}
 [[gnu::always_inline]] inline Interval triangle_cosine(double a, double b, double lo, double hi) {
   const double d = (a - b) * (a + b);
-  const auto cosine = [&](double rho) { return (rho + d / rho) / (2.0 * a); };
-  Interval c = hull(cosine(lo), cosine(hi));
+  Interval c = hull(triangle_cosine_at(a, d, lo), triangle_cosine_at(a, d, hi));
   if (d > 0.0) {
     const double turn = std::sqrt(d);
-    if (turn > lo && turn < hi) c.lo = std::min(c.lo, cosine(turn));
+    if (turn > lo && turn < hi) c.lo = std::min(c.lo, triangle_cosine_at(a, d, turn));
   }
   return {std::max(-1.0, c.lo - kAngleMargin), std::min(1.0, c.hi + kAngleMargin)};
 }
@@ -127,11 +144,11 @@ struct LegBounds {
 // is atan2(y, dx) -+ acos(c) modulo 2 pi, one arc tangent instead of two.
 struct Turned {
   double x, y;
-  double angle() const { return fast::atan2(y, x); }
+  [[gnu::always_inline]] double angle() const { return fast::atan2(y, x); }
   // Within 1e-6 rad of atan2's branch cut at +-pi.
-  bool near_cut() const { return x < 0.0 && std::abs(y) <= 1e-6 * -x; }
+  [[gnu::always_inline]] bool near_cut() const { return x < 0.0 && std::abs(y) <= 1e-6 * -x; }
   // Within 1e-6 rad of 0.
-  bool near_zero() const { return x > 0.0 && std::abs(y) <= 1e-6 * x; }
+  [[gnu::always_inline]] bool near_zero() const { return x > 0.0 && std::abs(y) <= 1e-6 * x; }
 };
 [[gnu::always_inline]] inline Turned turned(double dx, double y, double c, double turn) {
   const double s = std::sqrt((1.0 - c) * (1.0 + c)) * turn;
@@ -181,14 +198,14 @@ struct Turned {
 
 // Interval arithmetic for the energy along one direction. Each operation rounds by a few 1e-16
 // relative; the result's margin covers that.
-Interval operator+(Interval a, Interval b) { return {a.lo + b.lo, a.hi + b.hi}; }
-Interval operator-(Interval a) { return {-a.hi, -a.lo}; }
-Interval operator*(double k, Interval a) { return k >= 0.0 ? Interval{k * a.lo, k * a.hi} : Interval{k * a.hi, k * a.lo}; }
-Interval operator*(Interval a, Interval b) {
+[[gnu::always_inline]] inline Interval operator+(Interval a, Interval b) { return {a.lo + b.lo, a.hi + b.hi}; }
+[[gnu::always_inline]] inline Interval operator-(Interval a) { return {-a.hi, -a.lo}; }
+[[gnu::always_inline]] inline Interval operator*(double k, Interval a) { return k >= 0.0 ? Interval{k * a.lo, k * a.hi} : Interval{k * a.hi, k * a.lo}; }
+[[gnu::always_inline]] inline Interval operator*(Interval a, Interval b) {
   const double p[4] = {a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi};
   return {std::min(std::min(p[0], p[1]), std::min(p[2], p[3])), std::max(std::max(p[0], p[1]), std::max(p[2], p[3]))};
 }
-Interval square(Interval a) {
+[[gnu::always_inline]] inline Interval square(Interval a) {
   if (a.lo >= 0.0) return {a.lo * a.lo, a.hi * a.hi};
   if (a.hi <= 0.0) return {a.hi * a.hi, a.lo * a.lo};
   return {0.0, std::max(a.lo * a.lo, a.hi * a.hi)};
@@ -229,6 +246,11 @@ Interval square(Interval a) {
          run.inertia_f * (square(turn1).lo + square(turn2).lo);
 }
 
+// The smallest |c| over an interval.
+[[gnu::always_inline]] inline double abs_lo(Interval c) {
+  return (c.lo <= 0.0 && 0.0 <= c.hi) ? 0.0 : std::min(std::abs(c.lo), std::abs(c.hi));
+}
+
 // sigma_max(M) from below: the kinetic energy 1/2 v^T M v of a unit task velocity v, over the
 // designs of the run. With qdot = J^-1 v, each leg's actuated bar gives I_a qdot_i^2, its free
 // bar's centre moves at (v_B + v) / 2 with |v_B| = l1 |qdot_i|, so m2 |.|^2 >= m2 / 4
@@ -247,7 +269,6 @@ Interval square(Interval a) {
   const double sum = n1 * n1 + n2 * n2;
   const double top = 0.5 * (sum + std::sqrt(std::max(0.0, sum * sum - 4.0 * n1 * n1 * n2 * n2 * sin_hi * sin_hi)));
   const double half = std::sqrt(0.5 * top);  // |qdot_i| at qdot_i^2 = S / 2
-  const auto abs_lo = [](Interval c) { return (c.lo <= 0.0 && 0.0 <= c.hi) ? 0.0 : std::min(std::abs(c.lo), std::abs(c.hi)); };
   const double cos_lo = std::min(abs_lo(left.cos_gamma), abs_lo(right.cos_gamma));
   const double centre = std::max(0.0, run.l1 * half - 1.0), turn = std::max(0.0, run.l1 * cos_lo * half - 1.0);
   const double along_top = run.inertia_a * top + 2.0 * (run.mass_f / 4.0 * centre * centre +
