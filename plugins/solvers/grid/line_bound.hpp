@@ -18,6 +18,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -74,15 +75,10 @@ class LineBound {
       }
       return;
     }
-    // Grid values lower + i step grow with i: start from the arithmetic estimate, then step to
-    // the exact first index at or above `lower` and the last at or below `upper`.
-    const DesignComponent& c = space.components()[static_cast<std::size_t>(component_)];
-    first_ = estimate((lower - c.lower) / c.step);
-    while (first_ > 0 && space.grid_value(free_k_, first_ - 1) >= lower) --first_;
-    while (first_ < count_ && space.grid_value(free_k_, first_) < lower) ++first_;
-    last_ = estimate((upper - c.lower) / c.step) - 1;
-    while (last_ + 1 < count_ && space.grid_value(free_k_, last_ + 1) <= upper) ++last_;
-    while (last_ >= 0 && space.grid_value(free_k_, last_) > upper) --last_;
+    // The first index at or above `lower`; the last at or below `upper` is the one before the
+    // first above it.
+    first_ = first_at_or_above(lower);
+    last_ = first_at_or_above(std::nextafter(upper, std::numeric_limits<double>::infinity())) - 1;
     if (first_ > 0) confirm_violated(first_ - 1);
     if (last_ < count_ - 1) confirm_violated(last_ + 1);
     if (one_run_) make_exact();
@@ -117,11 +113,13 @@ class LineBound {
   long long excluded() const { return count_ - std::max(0LL, last_ - first_ + 1); }
 
  private:
-  // ceil(steps) clamped to the line: a starting point, made exact by the caller.
+  // ceil(steps) clamped to the line: a starting point, made exact by the caller. (The integer
+  // conversion, not std::ceil: a library call on the baseline instruction set.)
   long long estimate(double steps) const {
     if (!(steps > 0.0)) return 0;
     if (steps >= static_cast<double>(count_)) return count_;
-    return static_cast<long long>(std::ceil(steps));
+    const long long whole = static_cast<long long>(steps);  // steps in (0, count_): truncates exactly
+    return static_cast<double>(whole) < steps ? whole + 1 : whole;
   }
 
   // Narrows [first_, last_] to the designs whose constraints hold, from both ends (the
