@@ -908,6 +908,59 @@ TEST(RunBounds, ATryStartsWithTheSampleThatDecidedThePreviousLineThere) {
   EXPECT_EQ(order.front(), decider);
 }
 
+// The five-bar whose envelope bounds sample 0 (GII at most 1) only over runs of r at most
+// `width` wide, and knows nothing otherwise; it counts the envelopes asked for.
+class ShortRunsOnly final : public hapsyn::test::ForwardingMechanism {
+ public:
+  ShortRunsOnly(std::shared_ptr<const hapsyn::Mechanism> inner, double width)
+      : ForwardingMechanism(std::move(inner)), width_(width) {}
+  bool constraints_quasiconvex(int component) const override { return inner().constraints_quasiconvex(component); }
+  bool sample_envelope(const double*, int, double lower, double upper, const double*, hapsyn::Needs,
+                       hapsyn::SampleEnvelope& out) const override {
+    ++calls;
+    if (upper - lower > width_) return false;
+    out = hapsyn::SampleEnvelope{};
+    out.jacobian_inverse_condition_max = 1.0;
+    return true;
+  }
+  mutable long long calls = 0;
+
+ private:
+  double width_;
+};
+
+TEST(RunBounds, ATryThatRulesNothingOutRetriesItsFirstHalfOnce) {
+  const hapsyn::Study study = hapsyn::load_study(line_bound_study(), hapsyn::test::registry());
+  const hapsyn::Problem& p = *study.problem;
+  const std::shared_ptr<const hapsyn::Mechanism> fivebar(std::shared_ptr<const hapsyn::Mechanism>{}, &p.mechanism());
+  const auto scene = std::make_shared<hapsyn::SampleSet>(p.samples());
+  const std::vector<double> x = {0.0, 0.3, 0.3, 0.0};  // l0 = 0, l1 = l2 = 0.3, r free (step 0.01)
+  const double above_every_score = 1.5;               // a bound of 1 rules a run out
+  // A line's first try covers 32 designs (0.31 m of r), its first half 16 (0.15 m).
+  const auto first_try = [&](double width, std::vector<int> order) {
+    const auto mechanism = std::make_shared<ShortRunsOnly>(fivebar, width);
+    const hapsyn::Problem problem("short-runs", mechanism, scene, p.metrics(), p.objectives(), p.design_space());
+    hapsyn::plugins::LineBound line(problem, true, "grid");
+    hapsyn::plugins::RunBounds runs(problem, "grid", hapsyn::plugins::RunPolicy{1, false});
+    auto scratch = problem.make_eval_scratch();
+    line.update(x.data());
+    EXPECT_GE(line.last() - line.first() + 1, 32);
+    runs.start_line(x.data());
+    const auto t = runs.try_run(line.first(), line.last(), above_every_score, order, line, *scratch);
+    return std::make_tuple(t, line.first(), mechanism->calls);
+  };
+  // The envelope proves the half: it is ruled out in the same try, after two envelopes.
+  const auto [half, first, calls] = first_try(0.2, {0});
+  ASSERT_TRUE(half.ruled_out());
+  EXPECT_EQ(half.last, first + 15);
+  EXPECT_EQ(calls, 2);
+  // Nor the half: no further retry (a quarter would be proved), the designs are left to the caller.
+  const auto [none, first_none, calls_none] = first_try(0.1, {0});
+  EXPECT_FALSE(none.ruled_out());
+  EXPECT_EQ(none.outcome, hapsyn::plugins::RunBounds::Outcome::kNotRuledOut);
+  EXPECT_EQ(calls_none, 2);
+}
+
 TEST(GridBlockBounds, AWrongReachableIntervalStopsTheRunNamingIt) {
   // A mechanism that claims no sample can be solved at any r: the spot check of the first line
   // it cuts refutes it, and the run stops with an error instead of reporting no feasible design.

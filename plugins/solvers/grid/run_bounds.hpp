@@ -10,7 +10,8 @@
 /// block bounds is the optimum found without them.
 ///
 /// The runs adapt to the line: they start at kFirst designs, double after a run is ruled out and
-/// halve after one is not, within [kMin, kMax]. After a try that rules nothing out the next one
+/// halve after one is not, within [kMin, kMax]; a try that rules nothing out tries the first half
+/// of its run at once (when that half holds kMin designs or more). After a try that rules nothing out the next one
 /// waits `gap` designs, doubled on every such try in a row, so that on lines where the bounds do
 /// not help the tries cost little beside the designs' own evaluations. A try takes first the
 /// sample that ruled out the same part of the previous line (the run that contains its first
@@ -125,8 +126,16 @@ class RunBounds {
     if (i < reach_first_ || i > reach_last_) return unreachable_run(i, last, line, scratch);
     last = std::min(last, reach_last_);
     if (i < next_ || last - i + 1 < kMin) return t;
-    const long long end = std::min(last, i + size_ - 1);
+    long long end = std::min(last, i + size_ - 1);
     t.outcome = rule_out(i, end, threshold, samples, line, scratch);
+    if (!t.ruled_out() && end - i + 1 >= 2 * kMin) {
+      // The envelope of a narrower run is tighter: the first half, at once, before its designs
+      // are left to the caller one by one (docs/design.md section 13.5). It starts the next
+      // runs at half its size.
+      end = i + (end - i + 1) / 2 - 1;
+      t.outcome = rule_out(i, end, threshold, samples, line, scratch);
+      if (t.ruled_out()) size_ = std::max(size_ / 4, kMin);
+    }
     if (t.ruled_out()) {
       size_ = std::min(size_ * 2, kMax);
       gap_ = kMin;
