@@ -69,8 +69,8 @@ struct CullingOptions {
         .greater_than(0);
     d.add(&CullingOptions::seed_xtol, "seed_xtol", 1e-5,
           "SLSQP relative tolerance on the design variables in the seed, which only needs a grid cell near the "
-          "optimum (at the paper's resolution 1e-5 took a quarter of the evaluations of 1e-7; docs/design.md "
-          "section 13.5)")
+          "optimum (the paper's GII file: 245 full searches at 1e-5, 1,049 at 1e-7; docs/design.md "
+          "section 3.9)")
         .greater_than(0);
     d.add(&CullingOptions::sqp_ftol, "sqp_ftol", 1e-10, "SLSQP absolute tolerance on the score").greater_than(0);
     d.add(&CullingOptions::sqp_max_evaluations, "sqp_max_evaluations", 400,
