@@ -908,7 +908,7 @@ TEST(RunBounds, ATryStartsWithTheSampleThatDecidedThePreviousLineThere) {
   EXPECT_EQ(order.front(), decider);
 }
 
-// The five-bar whose envelope bounds sample 0 (GII at most 1) only over runs of r at most
+// The five-bar whose envelope bounds every sample (GII at most 1) only over runs of r at most
 // `width` wide, and knows nothing otherwise; it counts the envelopes asked for.
 class ShortRunsOnly final : public hapsyn::test::ForwardingMechanism {
  public:
