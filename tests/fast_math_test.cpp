@@ -151,6 +151,21 @@ TEST(FastMath, LaneAtan2EqualsTheScalarCallLaneByLane) {
   }
 }
 
+TEST(FastMath, FloorAndCeilOfSmallValuesEqualLibmAndLargeOnesFallBack) {
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<double> xs = {0.0, -0.0, 0.25, 0.5, 1.0, 1.5, -0.25, -1.0, -1.5, 2.0 - 1e-16, -2.0 + 1e-15,
+                            4.4e15 + 0.5, -4.4e15 - 0.5, 1e300, -1e300, inf, -inf};
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1e6, 1e6);
+  for (int k = 0; k < 10000; ++k) xs.push_back(u(rng));
+  for (double x : xs) {
+    EXPECT_EQ(hapsyn::fast::floor_small(x), std::floor(x)) << x;
+    EXPECT_EQ(hapsyn::fast::ceil_small(x), std::ceil(x)) << x;
+  }
+  EXPECT_TRUE(std::isnan(hapsyn::fast::floor_small(std::nan(""))));
+  EXPECT_TRUE(std::isnan(hapsyn::fast::ceil_small(std::nan(""))));
+}
+
 TEST(FastMath, LaneFloorOfSmallValues) {
   const std::vector<double> xs = {0.0, 0.25, 0.5, 0.75, 1.0, 1.5, 2.5, -0.25, -0.5, -1.0, -1.5, -2.5, 1e15 + 0.5, -3e14 - 0.25};
   for (std::size_t first = 0; first < xs.size(); first += hapsyn::kBlockLanes) {

@@ -68,6 +68,22 @@ template <typename T>
   cosine = ((quadrant + 1) & 2) ? -swapped_cosine : swapped_cosine;
 }
 
+/// floor(x) and ceil(x) without a library call: GCC does not expand std::floor / std::ceil
+/// inline on the baseline instruction set, nor in a multiversioned function
+/// (hapsyn/multiversion.hpp), and the call spills every live vector register. Exact for
+/// |x| < 2^52 (the conversion truncates toward zero); larger, infinite or NaN x go to
+/// std::floor / std::ceil. (hapsyn::floor_small in hapsyn/lanes.hpp is the lane version.)
+[[gnu::always_inline]] inline double floor_small(double x) {
+  if (!(std::abs(x) < 4.5e15)) return std::floor(x);
+  const double t = static_cast<double>(static_cast<long long>(x));
+  return t > x ? t - 1.0 : t;
+}
+[[gnu::always_inline]] inline double ceil_small(double x) {
+  if (!(std::abs(x) < 4.5e15)) return std::ceil(x);
+  const double t = static_cast<double>(static_cast<long long>(x));
+  return t < x ? t + 1.0 : t;
+}
+
 /// atan(k / 8), k = 0..8, correctly rounded: the table of atan2().
 inline constexpr double kAtanTable[9] = {0.0,
                                          0.12435499454676144,

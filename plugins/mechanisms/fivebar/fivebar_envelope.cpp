@@ -25,21 +25,6 @@ struct Interval {
   [[gnu::always_inline]] Interval widened(double by) const { return {lo - by, hi + by}; }
 };
 
-// ceil and floor of the small multiples of pi/2 below, without a library call: GCC does not
-// expand std::ceil inline in a multiversioned function, and the call spills every live vector
-// register. Exact for |v| < 2^52 (the conversion truncates toward zero); the rest (not met
-// here: angles of a few turns) goes to std::ceil / std::floor, NaN included.
-[[gnu::always_inline]] inline double ceil_of(double v) {
-  if (!(std::abs(v) < 4.5e15)) return std::ceil(v);
-  const double t = static_cast<double>(static_cast<long long>(v));
-  return t < v ? t + 1.0 : t;
-}
-[[gnu::always_inline]] inline double floor_of(double v) {
-  if (!(std::abs(v) < 4.5e15)) return std::floor(v);
-  const double t = static_cast<double>(static_cast<long long>(v));
-  return t > v ? t - 1.0 : t;
-}
-
 [[gnu::always_inline]] inline Interval hull(double a, double b) { return {std::min(a, b), std::max(a, b)}; }
 
 // sin and cos over an angle interval: the ends, and 1 or -1 where an extremum lies inside. The
@@ -61,7 +46,7 @@ struct Interval {
   // an end moves the bound by the square of that rounding (the extrema are flat), far inside
   // the margins.
   constexpr double kInvHalfPi = 6.36619772367581382433e-01;
-  const double first = ceil_of(a.lo * kInvHalfPi), last = floor_of(a.hi * kInvHalfPi);
+  const double first = fast::ceil_small(a.lo * kInvHalfPi), last = fast::floor_small(a.hi * kInvHalfPi);
   for (double j = first; j <= last; j += 1.0) {
     switch (static_cast<long long>(j) & 3) {
       case 0: cosine_of.hi = 1.0; break;

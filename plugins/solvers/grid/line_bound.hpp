@@ -13,6 +13,7 @@
 /// the constraints are evaluated at the run's ends (stepping inward past violators), and the
 /// designs between need no constraint evaluation of their own (verified()).
 #include <hapsyn/error.hpp>
+#include <hapsyn/fast_math.hpp>
 #include <hapsyn/problem.hpp>
 
 #include <Eigen/Core>
@@ -113,13 +114,11 @@ class LineBound {
   long long excluded() const { return count_ - std::max(0LL, last_ - first_ + 1); }
 
  private:
-  // ceil(steps) clamped to the line: a starting point, made exact by the caller. (The integer
-  // conversion, not std::ceil: a library call on the baseline instruction set.)
+  // ceil(steps) clamped to the line: a starting point, made exact by the caller.
   long long estimate(double steps) const {
     if (!(steps > 0.0)) return 0;
     if (steps >= static_cast<double>(count_)) return count_;
-    const long long whole = static_cast<long long>(steps);  // steps in (0, count_): truncates exactly
-    return static_cast<double>(whole) < steps ? whole + 1 : whole;
+    return static_cast<long long>(fast::ceil_small(steps));
   }
 
   // Narrows [first_, last_] to the designs whose constraints hold, from both ends (the
