@@ -196,6 +196,26 @@ struct Turned {
   return {0.0, std::max(a.lo * a.lo, a.hi * a.hi)};
 }
 
+// The smallest l1^2 qdot^2 + 1 - 2 l1 qdot s = (l1 qdot - s)^2 + (1 - s^2) over l1 qdot in `a`
+// and s in `s` (|s| <= 1): the squared gap between the two intervals plus 1 - max s^2. Each
+// term's minimum is a lower bound, as the interval sum is; this one keeps l1 qdot and s
+// together in one square.
+[[gnu::always_inline]] inline double squared_centre(Interval a, Interval s) {
+  const double gap = std::max(0.0, std::max(a.lo - s.hi, s.lo - a.hi));
+  return gap * gap + (1.0 - square(s).hi);
+}
+
+// The smallest squared turning rate of a free bar, cos^2(q_act - psi) / (l2 sin(gamma))^2, over
+// `c` (the interval of cos(q_act - psi)) and sin(gamma) <= sin_gamma_hi. From q_act - q_free =
+// +-(pi - gamma) (the leg triangle's angles add up to pi), (sin(psi - q_free) + l1 qdot
+// cos(gamma)) / l2 with qdot = -+cos(q_free - psi) / (l1 sin(gamma)) is +-cos(q_act - psi) /
+// (l2 sin(gamma)): one interval instead of three.
+[[gnu::always_inline]] inline double turn_squared(Interval c, double sin_gamma_hi, double l2) {
+  const double smallest = (c.lo <= 0.0 && 0.0 <= c.hi) ? 0.0 : std::min(std::abs(c.lo), std::abs(c.hi));
+  const double d = l2 * sin_gamma_hi;
+  return smallest * smallest / (d * d);
+}
+
 // The kinetic energy 1/2 v^T M v of the unit task velocity v = (cos psi, sin psi), from below,
 // over the designs of the run that reach the sample (transmission sines >= the tolerance). The
 // angles in the mechanism frame: q1 = theta_1 + alpha_1, q2 = theta_1 - beta_1 (left leg); the
@@ -224,11 +244,14 @@ struct Turned {
   const Interval one{1.0, 1.0};
   const Interval centre1 = (l1 * l1) * square(qdot1) + one + (-2.0 * l1) * (qdot1 * s1);  // sin(psi - q1) = -s1
   const Interval centre4 = (l1 * l1) * square(qdot4) + one + (-2.0 * l1) * (qdot4 * s4);
+  const double centre1_lo = std::max(centre1.lo, squared_centre(l1 * qdot1, s1));
+  const double centre4_lo = std::max(centre4.lo, squared_centre(l1 * qdot4, s4));
   const Interval turn1 = inv_l2 * (-s2 + l1 * (qdot1 * left.cos_gamma));
   const Interval turn2 = inv_l2 * (-s3 + l1 * (qdot4 * right.cos_gamma));
   return run.inertia_a * (square(qdot1).lo + square(qdot4).lo) +
-         run.mass_f / 4.0 * (std::max(0.0, centre1.lo) + std::max(0.0, centre4.lo)) +
-         run.inertia_f * (square(turn1).lo + square(turn2).lo);
+         run.mass_f / 4.0 * (std::max(0.0, centre1_lo) + std::max(0.0, centre4_lo)) +
+         run.inertia_f * (std::max(square(turn1).lo, turn_squared(c1, left.sin_gamma.hi, run.l2)) +
+                          std::max(square(turn2).lo, turn_squared(c4, right.sin_gamma.hi, run.l2)));
 }
 
 // The smallest |c| over an interval.
