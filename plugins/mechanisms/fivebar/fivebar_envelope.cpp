@@ -196,6 +196,11 @@ struct Turned {
   return {0.0, std::max(a.lo * a.lo, a.hi * a.hi)};
 }
 
+// The smallest |c| over an interval.
+[[gnu::always_inline]] inline double abs_lo(Interval c) {
+  return (c.lo <= 0.0 && 0.0 <= c.hi) ? 0.0 : std::min(std::abs(c.lo), std::abs(c.hi));
+}
+
 // The smallest l1^2 qdot^2 + 1 - 2 l1 qdot s = (l1 qdot - s)^2 + (1 - s^2) over l1 qdot in `a`
 // and s in `s` (|s| <= 1): the squared gap between the two intervals plus 1 - max s^2. Each
 // term's minimum is a lower bound, as the interval sum is; this one keeps l1 qdot and s
@@ -211,7 +216,7 @@ struct Turned {
 // cos(gamma)) / l2 with qdot = -+cos(q_free - psi) / (l1 sin(gamma)) is +-cos(q_act - psi) /
 // (l2 sin(gamma)): one interval instead of three.
 [[gnu::always_inline]] inline double turn_squared(Interval c, double sin_gamma_hi, double l2) {
-  const double smallest = (c.lo <= 0.0 && 0.0 <= c.hi) ? 0.0 : std::min(std::abs(c.lo), std::abs(c.hi));
+  const double smallest = abs_lo(c);
   const double d = l2 * sin_gamma_hi;
   return smallest * smallest / (d * d);
 }
@@ -252,11 +257,6 @@ struct Turned {
          run.mass_f / 4.0 * (std::max(0.0, centre1_lo) + std::max(0.0, centre4_lo)) +
          run.inertia_f * (std::max(square(turn1).lo, turn_squared(c1, left.sin_gamma.hi, run.l2)) +
                           std::max(square(turn2).lo, turn_squared(c4, right.sin_gamma.hi, run.l2)));
-}
-
-// The smallest |c| over an interval.
-[[gnu::always_inline]] inline double abs_lo(Interval c) {
-  return (c.lo <= 0.0 && 0.0 <= c.hi) ? 0.0 : std::min(std::abs(c.lo), std::abs(c.hi));
 }
 
 // sigma_max(M) from below: the kinetic energy 1/2 v^T M v of a unit task velocity v, over the
