@@ -21,6 +21,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <numeric>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -33,6 +34,11 @@ using ga::with_digits;
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// The evaluator's fidelity levels (its cache keeps the values of each apart).
+constexpr int kFullLevel = 0;
+constexpr int kSubsetLevel = 1;
+constexpr int kRefineLevel = 2;
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
@@ -125,7 +131,9 @@ class GaSearch {
   void start_run(Run& run) const;
   bool evolve(Run& run);
   bool note_best(ga::RunState& state, const pagmo::population& population) const;
-  void switch_to_full(Run& run);
+  void switch_fidelity(Run& run, bool to_full_scene);
+  void finish_run(Run& run);
+  void rank_on_full_scene(Run& run);
   void report_generation(const Run& run);
   Json run_record(const Run& run) const;
   void add_finished(const Json& record, double seconds);
@@ -141,6 +149,7 @@ class GaSearch {
   const pa::Encoding encoding_;
   const bool multi_fidelity_;
   const std::vector<int> subset_;  // the multi-fidelity subset (empty without one)
+  const std::vector<int> refine_subset_;  // the refine subset (empty: the switch goes to the full scene)
   pa::ProgressReporter reporter_;
   const std::string fingerprint_;
 
@@ -165,6 +174,9 @@ GaSearch::GaSearch(const GaOptions& options, const Problem& problem, const Solve
       multi_fidelity_(options.fidelity.generations > 0),
       subset_(multi_fidelity_ ? stratified_subset(problem.samples().size(), options.fidelity.subset_fraction)
                               : std::vector<int>{}),
+      refine_subset_(multi_fidelity_ && options.fidelity.refine_fraction < 1.0
+                         ? stratified_subset(problem.samples().size(), options.fidelity.refine_fraction)
+                         : std::vector<int>{}),
       reporter_(context.progress, context.log, options.progress_interval),
       fingerprint_(study_fingerprint(problem, options_to_json(options))) {}
 
@@ -331,7 +343,7 @@ void GaSearch::run_one_after_another(const std::vector<int>& todo) {
     const std::unique_ptr<Run> run = make_run(r, context_, context_.threads, &context_.cluster(), false);
     start_run(*run);
     if (!evolve(*run)) stopped_ = true;  // the checkpoint is written
-    if (!run->state.switched) switch_to_full(*run);  // the final ranking on the full scene
+    finish_run(*run);  // the final ranking on the full scene
     if (stopped_ && run->state.best_x.empty()) break;
     // A stopped run's best so far is in the result; the checkpoint keeps the run in progress.
     designs_ += run->evaluator->design_evaluations();
@@ -376,7 +388,7 @@ void GaSearch::run_as_farm(const std::vector<int>& todo) {
     const std::unique_ptr<Run> run = make_run(static_cast<int>(index), task, run_threads, nullptr, true);
     start_run(*run);
     if (!evolve(*run)) return std::nullopt;
-    if (!run->state.switched) switch_to_full(*run);
+    finish_run(*run);
     Json result;
     result["record"] = run_record(*run);
     result["seconds"] = run->state.seconds_before + seconds_since(run->clock);
@@ -430,12 +442,17 @@ void GaSearch::start_run(Run& run) const {
   pa::Evaluator& evaluator = *run.evaluator;
   if (resumed_ && resumed_->at("run").get<int>() == state.run) {
     ga::restore_run(context_, *resumed_, run.problem, state, run.algorithm, run.population);
-    const bool on_subset = multi_fidelity_ && !state.switched;
-    evaluator.set_subset(on_subset ? &subset_ : nullptr, on_subset ? 1 : 0);
+    if (multi_fidelity_ && !state.switched) {
+      evaluator.set_subset(&subset_, kSubsetLevel);
+    } else if (state.refining) {
+      evaluator.set_subset(&refine_subset_, kRefineLevel);
+    } else {
+      evaluator.set_subset(nullptr, kFullLevel);
+    }
   } else {
     const std::uint64_t seed = pa::derive_seed(context_.seed, static_cast<std::uint64_t>(state.run));
     state.switched = !multi_fidelity_;
-    evaluator.set_subset(multi_fidelity_ ? &subset_ : nullptr, multi_fidelity_ ? 1 : 0);
+    evaluator.set_subset(multi_fidelity_ ? &subset_ : nullptr, multi_fidelity_ ? kSubsetLevel : kFullLevel);
     run.algorithm = make_algorithm(options_, seed);
     run.population =
         pa::random_population(run.problem, evaluator, static_cast<std::size_t>(options_.population), seed);
@@ -454,7 +471,7 @@ bool GaSearch::evolve(Run& run) {
       if (!run.in_task) write_checkpoint(&run);  // between generations: a resumed run continues exactly from here
       return false;
     }
-    if (!state.switched && state.generation >= options_.fidelity.generations) switch_to_full(run);
+    if (!state.switched && state.generation >= options_.fidelity.generations) switch_fidelity(run, false);
     // sga asks for its offspring one at a time: evaluated first as one batch (over the ranks).
     if (options_.algorithm == "sga") run.evaluator->prefetch(run.algorithm, run.population);
     run.population = run.algorithm.evolve(run.population);
@@ -496,20 +513,67 @@ bool GaSearch::note_best(ga::RunState& state, const pagmo::population& populatio
   return false;
 }
 
-// The multi-fidelity switch: the population re-evaluated on the full scene.
-void GaSearch::switch_to_full(Run& run) {
+// The multi-fidelity switch after the subset generations: the population re-evaluated on the
+// refine subset (fidelity.refine_fraction < 1, unless `to_full_scene`) or on the full scene;
+// stalling is counted from here.
+void GaSearch::switch_fidelity(Run& run, bool to_full_scene) {
   ga::RunState& state = run.state;
   const long long b = best_feasible(run.population);
   const double subset_best = b >= 0 ? -run.population.get_f()[static_cast<std::size_t>(b)][0] : -INFINITY;
-  run.evaluator->set_subset(nullptr, 0);
+  state.refining = !to_full_scene && !refine_subset_.empty();
+  if (state.refining) {
+    run.evaluator->set_subset(&refine_subset_, kRefineLevel);
+  } else {
+    run.evaluator->set_subset(nullptr, kFullLevel);
+  }
   pa::reevaluate(run.population, *run.evaluator);
   state.switched = true;
   state.stall = 0;
   note_best(state, run.population);
   if (run.in_task) return;
+  const std::string where = state.refining ? "the refine subset (" + std::to_string(refine_subset_.size()) + " samples)"
+                                           : std::string("the full scene");
   reporter_.line("ga: run " + std::to_string(state.run + 1) + " generation " + std::to_string(state.generation) +
-                     ": fidelity switch, population re-evaluated on the full scene (best " + with_digits(subset_best) +
-                     " on the subset, " + with_digits(state.best_score) + " on the full scene)",
+                     ": fidelity switch, population re-evaluated on " + where + " (best " + with_digits(subset_best) +
+                     " on the subset, " + with_digits(state.best_score) + " on " + where + ")",
+                 true);
+}
+
+// A run that ended (converged, budget spent or stopped) gets its best from the full scene: the
+// whole population re-evaluated when it never left the subset, its best candidates when it
+// ended on the refine subset.
+void GaSearch::finish_run(Run& run) {
+  if (!run.state.switched) {
+    switch_fidelity(run, true);
+  } else if (run.state.refining) {
+    rank_on_full_scene(run);
+  }
+}
+
+// The refine stage's end: the final_candidates best of the population (at the refine fidelity,
+// best first; feasible before infeasible, as pagmo ranks) evaluated on the full scene, and the
+// run's best chosen among them. The population itself is left as the run ended.
+void GaSearch::rank_on_full_scene(Run& run) {
+  ga::RunState& state = run.state;
+  const auto& f = run.population.get_f();
+  const auto& x = run.population.get_x();
+  std::vector<std::size_t> order(f.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&f](std::size_t a, std::size_t b) { return f[a][0] < f[b][0]; });
+  const std::size_t count = std::min(order.size(), static_cast<std::size_t>(options_.fidelity.final_candidates));
+  const double refine_best = state.best_score;
+  pagmo::population candidates(run.problem, 0u, 0u);
+  for (std::size_t k = 0; k < count; ++k) candidates.push_back(x[order[k]], f[order[k]]);
+  run.evaluator->set_subset(nullptr, kFullLevel);
+  pa::reevaluate(candidates, *run.evaluator);
+  state.refining = false;
+  state.best_x.clear();
+  state.best_score = -INFINITY;
+  note_best(state, candidates);
+  if (run.in_task) return;
+  reporter_.line("ga: run " + std::to_string(state.run + 1) + ": its " + std::to_string(count) +
+                     " best ranked on the full scene (best " + with_digits(refine_best) + " on the refine subset, " +
+                     with_digits(state.best_score) + " on the full scene)",
                  true);
 }
 
@@ -533,7 +597,7 @@ void GaSearch::report_generation(const Run& run) {
   const double designs_per_second = run.evaluator->design_evaluations() / std::max(1e-9, seconds_since(run.clock));
   std::ostringstream line;
   line << "ga: run " << (state.run + 1) << "/" << options_.runs << " gen " << state.generation << "/" << generations
-       << (state.switched ? "" : " (subset)") << " best " << with_digits(best) << " mean "
+       << (state.switched ? (state.refining ? " (refine)" : "") : " (subset)") << " best " << with_digits(best) << " mean "
        << (feasible ? with_digits(mean / feasible) : std::string("-")) << " feasible " << feasible << "/"
        << run.population.size() << " | " << with_digits(designs_per_second, 4) << " designs/s | stall " << state.stall
        << "/" << options_.stall_generations << " | elapsed "
@@ -616,6 +680,7 @@ SolverResult GaSearch::summary() {
   figures.cache_hits = cache_hits_;
   figures.repair = encoding_.describe_repair(problem_);
   figures.subset_samples = subset_.size();
+  figures.refine_samples = refine_subset_.size();
   Json runs = Json::array();
   std::vector<double> run_seconds;
   for (const auto& [index, f] : finished_) {
@@ -660,6 +725,15 @@ GaSolver::GaSolver(const GaOptions& options) : options_(options) {
   if (o.fidelity.generations > 0 && o.fidelity.subset_fraction >= 1.0) {
     throw Error("ga", "options.fidelity.generations = " + std::to_string(o.fidelity.generations) +
                           ": needs options.fidelity.subset_fraction < 1 (the share of the samples evaluated early)");
+  }
+  if (o.fidelity.refine_fraction < 1.0 && o.fidelity.generations == 0) {
+    throw Error("ga", "options.fidelity.refine_fraction = " + with_digits(o.fidelity.refine_fraction) +
+                          ": needs options.fidelity.generations >= 1 (the refine subset follows the subset generations)");
+  }
+  if (o.fidelity.refine_fraction < 1.0 && !(o.fidelity.refine_fraction > o.fidelity.subset_fraction)) {
+    throw Error("ga", "options.fidelity.refine_fraction = " + with_digits(o.fidelity.refine_fraction) +
+                          ": must be greater than options.fidelity.subset_fraction (" +
+                          with_digits(o.fidelity.subset_fraction) + ") or 1 (the full scene)");
   }
   try {
     (void)make_algorithm(o, 1);

@@ -67,6 +67,7 @@ Json run_to_json(const RunState& state, const pagmo::algorithm& algorithm, const
   current["generation"] = state.generation;
   current["stall"] = state.stall;
   current["switched"] = state.switched;
+  current["refining"] = state.refining;
   current["best_score"] = state.best_x.empty() ? Json(nullptr) : Json(state.best_score);
   current["best_x"] = state.best_x;
   current["run_designs"] = state.designs;
@@ -90,6 +91,7 @@ void restore_run(const SolverContext& context, const Json& current, const pagmo:
     state.generation = current.at("generation");
     state.stall = current.at("stall");
     state.switched = current.at("switched");
+    state.refining = current.at("refining");
     state.best_x = current.at("best_x").get<pagmo::vector_double>();
     if (!state.best_x.empty()) state.best_score = current.at("best_score");
     // Absent in checkpoints of earlier versions (they counted the study's designs instead).

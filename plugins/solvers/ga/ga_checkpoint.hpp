@@ -34,9 +34,10 @@ struct RunState {
   int run = 0;             ///< 0-based index of the run
   int generation = 0;      ///< generations done
   int stall = 0;           ///< generations at full fidelity without an improvement > ftol
-  bool switched = false;   ///< on the full scene (or never on a subset)
+  bool switched = false;   ///< past the subset generations (or never on a subset): stalling is counted
+  bool refining = false;   ///< switched to the refine subset (fidelity.refine_fraction < 1), not the full scene
   double best_score = -std::numeric_limits<double>::infinity();
-  pagmo::vector_double best_x;   ///< best full-fidelity individual seen (pagmo order); empty: none
+  pagmo::vector_double best_x;   ///< best individual seen since the switch, at its fidelity (pagmo order); empty: none
   long long designs = 0;         ///< the run's design evaluations before a resume
   double seconds_before = 0.0;   ///< run time before a resume [s]
 };

@@ -15,6 +15,8 @@ namespace hapsyn::plugins {
 struct GaFidelityOptions {
   double subset_fraction{};  ///< share of the samples evaluated early, in (0, 1]
   int generations{};         ///< generations of each run on the subset (0 = none)
+  double refine_fraction{};  ///< share of the samples evaluated after them, until the stall, in (0, 1]
+  int final_candidates{};    ///< with refine_fraction < 1: the best ranked on the full scene at the end
 
   static void declare(OptionDeclarations<GaFidelityOptions>& d) {
     d.add(&GaFidelityOptions::subset_fraction, "subset_fraction", 1.0,
@@ -23,6 +25,16 @@ struct GaFidelityOptions {
         .maximum(1);
     d.add(&GaFidelityOptions::generations, "generations", 0, "Generations of each run on the subset (0 = none)")
         .minimum(0);
+    d.add(&GaFidelityOptions::refine_fraction, "refine_fraction", 1.0,
+          "Share of the samples the generations after the subset ones evaluate, until the run stalls (every k-th in "
+          "sample index order; 1 = the full scene). Below 1, each run ends by evaluating its final_candidates best "
+          "on the full scene, and its best is the best of them")
+        .greater_than(0)
+        .maximum(1);
+    d.add(&GaFidelityOptions::final_candidates, "final_candidates", 20,
+          "With refine_fraction < 1: how many of a run's last population (best first, at the refine fidelity) are "
+          "evaluated on the full scene when the run ends")
+        .range(1, 1000000);
   }
 };
 

@@ -237,6 +237,11 @@ SolverResult summarise_runs(const Problem& problem, const GaOptions& options, co
     statistics["fidelity"] = {{"subset_fraction", options.fidelity.subset_fraction},
                               {"subset_samples", figures.subset_samples},
                               {"generations", options.fidelity.generations}};
+    if (options.fidelity.refine_fraction < 1.0) {
+      statistics["fidelity"]["refine_fraction"] = options.fidelity.refine_fraction;
+      statistics["fidelity"]["refine_samples"] = figures.refine_samples;
+      statistics["fidelity"]["final_candidates"] = options.fidelity.final_candidates;
+    }
   }
   const int best_run = best_run_index(runs);
   if (best_run >= 0) report_best_run(problem, runs, best_run, result, statistics);

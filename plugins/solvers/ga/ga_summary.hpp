@@ -31,6 +31,7 @@ struct SolveFigures {
   long long cache_hits = 0;
   Json repair;                      ///< pagmo_adapter::Encoding::describe_repair
   std::size_t subset_samples = 0;   ///< samples of the multi-fidelity subset (unused without one)
+  std::size_t refine_samples = 0;   ///< samples of the refine subset (unused without one)
 };
 
 /// The solve's result from its finished runs.

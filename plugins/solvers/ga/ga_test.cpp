@@ -305,6 +305,16 @@ TEST(Ga, BadOptionsNameThePathTheValueAndTheRule) {
                {"ga: options.fidelity.subset_fraction = 0.1", "needs options.fidelity.generations >= 1"});
   expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"fidelity", {{"generations", 4}}}})); },
                {"ga: options.fidelity.generations = 4", "subset_fraction < 1"});
+  expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"fidelity", {{"refine_fraction", 0.5}}}})); },
+               {"ga: options.fidelity.refine_fraction = 0.5", "needs options.fidelity.generations >= 1"});
+  expect_error(
+      [] {
+        hapsyn::plugins::GaSolver s(
+            ga_options({{"fidelity", {{"subset_fraction", 0.2}, {"generations", 3}, {"refine_fraction", 0.2}}}}));
+      },
+      {"ga: options.fidelity.refine_fraction = 0.2", "must be greater than options.fidelity.subset_fraction (0.2)"});
+  expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"fidelity", {{"final_candidates", 0}}}})); },
+               {"solver.options.fidelity.final_candidates", "0"});
   const auto problem = toy_problem();
   expect_error([&] { hapsyn::plugins::GaSolver(ga_options({{"sort_descending", {"q"}}})).check(*problem); },
                {"ga: options.sort_descending[0] = \"q\": no such design variable", "x, s, r"});
@@ -337,6 +347,43 @@ TEST(Ga, MultiFidelityRanksTheFinalPopulationOnTheFullScene) {
   const hapsyn::Evaluation full = study.problem->evaluate_parallel(free.data(), 1);
   ASSERT_EQ(full.status, hapsyn::EvalStatus::kFeasible);
   EXPECT_DOUBLE_EQ(full.objectives[0], r.best->objectives[0]);
+}
+
+TEST(Ga, RefineSubsetRunsEndWithTheirCandidatesRankedOnTheFullScene) {
+  const Json doc = fivebar_ga_study(
+      {{"population", 16}, {"generations", 14}, {"stall_generations", 50},
+       {"fidelity", {{"subset_fraction", 0.1}, {"generations", 4}, {"refine_fraction", 0.3}, {"final_candidates", 5}}}});
+  hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  std::ostringstream log;
+  hapsyn::SolverContext context;
+  context.threads = 2;
+  context.seed = 3;
+  context.log = &log;
+  const auto r = study.solver->solve(*study.problem, context);
+  ASSERT_TRUE(r.best.has_value()) << r.message;
+  EXPECT_EQ(r.statistics["fidelity"]["refine_samples"], 133);  // ceil(0.3 * 441)
+  EXPECT_EQ(r.statistics["fidelity"]["final_candidates"], 5);
+  EXPECT_NE(log.str().find("re-evaluated on the refine subset (133 samples)"), std::string::npos) << log.str();
+  EXPECT_NE(log.str().find("its 5 best ranked on the full scene"), std::string::npos) << log.str();
+  EXPECT_NE(log.str().find("gen 6/14 (refine)"), std::string::npos) << log.str();
+  // The reported values are the full scene's, not the refine subset's (an upper bound of them
+  // for this worst-case metric, so a mix-up would show).
+  Eigen::VectorXd free(static_cast<Eigen::Index>(study.problem->dimension()));
+  for (std::size_t k = 0; k < study.problem->dimension(); ++k) {
+    free[static_cast<Eigen::Index>(k)] = r.best->design[study.problem->design_space().free_indices()[k]];
+  }
+  const hapsyn::Evaluation full = study.problem->evaluate_parallel(free.data(), 1);
+  ASSERT_EQ(full.status, hapsyn::EvalStatus::kFeasible);
+  EXPECT_DOUBLE_EQ(full.objectives[0], r.best->objectives[0]);
+  // The run's best is the best of the candidates on the full scene (the log gives it), not the
+  // refine stage's best carried over.
+  const std::string ranked = "on the refine subset, ";
+  const std::size_t at = log.str().find(ranked, log.str().find("its 5 best ranked"));
+  ASSERT_NE(at, std::string::npos) << log.str();
+  EXPECT_NEAR(std::stod(log.str().substr(at + ranked.size())), r.best->score, 1e-5) << log.str();
+  // 16 initial designs at the subset, the population again at each switch, the final 5: every
+  // later generation's new designs come on top.
+  EXPECT_GE(r.design_evaluations, 16 + 16 + 5);
 }
 
 // Another valid value of a declared option (its schema property): another choice, another
@@ -383,7 +430,7 @@ TEST(Ga, CheckpointFingerprintChangesWithEveryOption) {
     }
   };
   visit(hapsyn::options_schema<hapsyn::plugins::GaOptions>(), {});
-  EXPECT_EQ(options_changed, 31);
+  EXPECT_EQ(options_changed, 33);
 }
 
 TEST(GaCli, FinishedStudyIsNotOverwrittenWithoutForce) {
@@ -574,6 +621,30 @@ TEST(Ga, StopMidRunCheckpointsAndResumeGivesTheUninterruptedResult) {
     EXPECT_EQ(runs_without_counts(resumed.statistics["runs"]), runs_without_counts(uninterrupted.statistics["runs"]));
     fs::remove_all(dir);
   }
+}
+
+TEST(Ga, StopInTheRefineStageResumesAsTheUninterruptedRun) {
+  const Json options = {{"population", 16}, {"generations", 30}, {"runs", 2}, {"stall_generations", 100},
+                        {"checkpoint_every", 7},
+                        {"fidelity", {{"subset_fraction", 0.25}, {"generations", 5}, {"refine_fraction", 0.5},
+                                      {"final_candidates", 4}}}};
+  const fs::path dir = fresh_dir("stop-refine");
+  fs::create_directories(dir);
+  const std::string file = (dir / "checkpoint.json").string();
+  const auto uninterrupted = solve_toy_with(options, "", false, 0);
+  ASSERT_TRUE(uninterrupted.best.has_value()) << uninterrupted.message;
+  const auto stopped = solve_toy_with(options, file, false, 50);  // in the second run's refine stage
+  EXPECT_EQ(stopped.status, hapsyn::SolverStatus::kStopped);
+  const Json checkpoint = read_json(file);
+  ASSERT_TRUE(checkpoint["state"].contains("current"));
+  EXPECT_EQ(checkpoint["state"]["current"]["run"], 1);
+  EXPECT_EQ(checkpoint["state"]["current"]["refining"], true);
+  const auto resumed = solve_toy_with(options, file, true, 0);
+  ASSERT_TRUE(resumed.best.has_value()) << resumed.message;
+  EXPECT_EQ(resumed.best->design, uninterrupted.best->design);
+  EXPECT_EQ(resumed.best->score, uninterrupted.best->score);
+  EXPECT_EQ(runs_without_counts(resumed.statistics["runs"]), runs_without_counts(uninterrupted.statistics["runs"]));
+  fs::remove_all(dir);
 }
 
 TEST(Ga, DamagedEditedAndForeignCheckpointsAreRefused) {
