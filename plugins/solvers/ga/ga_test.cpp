@@ -155,6 +155,18 @@ Json fivebar_ga_study(const Json& options) {
   return doc;
 }
 
+// The solver's reported best has the values of a full-scene evaluation of its design.
+void expect_full_scene_values(const hapsyn::Study& study, const hapsyn::SolverResult& r) {
+  ASSERT_TRUE(r.best.has_value()) << r.message;
+  Eigen::VectorXd free(static_cast<Eigen::Index>(study.problem->dimension()));
+  for (std::size_t k = 0; k < study.problem->dimension(); ++k) {
+    free[static_cast<Eigen::Index>(k)] = r.best->design[study.problem->design_space().free_indices()[k]];
+  }
+  const hapsyn::Evaluation full = study.problem->evaluate_parallel(free.data(), 1);
+  ASSERT_EQ(full.status, hapsyn::EvalStatus::kFeasible);
+  EXPECT_DOUBLE_EQ(full.objectives[0], r.best->objectives[0]);
+}
+
 }  // namespace
 
 TEST(PagmoAdapter, EncodingPutsIntegersLastAndRepairSortsDescending) {
@@ -339,14 +351,7 @@ TEST(Ga, MultiFidelityRanksTheFinalPopulationOnTheFullScene) {
   const auto r = study.solver->solve(*study.problem, context);
   ASSERT_TRUE(r.best.has_value()) << r.message;
   EXPECT_EQ(r.statistics["fidelity"]["subset_samples"], 45);  // ceil(0.1 * 441)
-  // The reported value is the full scene's.
-  Eigen::VectorXd free(static_cast<Eigen::Index>(study.problem->dimension()));
-  for (std::size_t k = 0; k < study.problem->dimension(); ++k) {
-    free[static_cast<Eigen::Index>(k)] = r.best->design[study.problem->design_space().free_indices()[k]];
-  }
-  const hapsyn::Evaluation full = study.problem->evaluate_parallel(free.data(), 1);
-  ASSERT_EQ(full.status, hapsyn::EvalStatus::kFeasible);
-  EXPECT_DOUBLE_EQ(full.objectives[0], r.best->objectives[0]);
+  expect_full_scene_values(study, r);
 }
 
 TEST(Ga, RefineSubsetRunsEndWithTheirCandidatesRankedOnTheFullScene) {
@@ -368,13 +373,7 @@ TEST(Ga, RefineSubsetRunsEndWithTheirCandidatesRankedOnTheFullScene) {
   EXPECT_NE(log.str().find("gen 6/14 (refine)"), std::string::npos) << log.str();
   // The reported values are the full scene's, not the refine subset's (an upper bound of them
   // for this worst-case metric, so a mix-up would show).
-  Eigen::VectorXd free(static_cast<Eigen::Index>(study.problem->dimension()));
-  for (std::size_t k = 0; k < study.problem->dimension(); ++k) {
-    free[static_cast<Eigen::Index>(k)] = r.best->design[study.problem->design_space().free_indices()[k]];
-  }
-  const hapsyn::Evaluation full = study.problem->evaluate_parallel(free.data(), 1);
-  ASSERT_EQ(full.status, hapsyn::EvalStatus::kFeasible);
-  EXPECT_DOUBLE_EQ(full.objectives[0], r.best->objectives[0]);
+  expect_full_scene_values(study, r);
   // The run's best is the best of the candidates on the full scene (the log gives it), not the
   // refine stage's best carried over.
   const std::string ranked = "on the refine subset, ";
