@@ -129,6 +129,7 @@ class GaSearch {
   std::unique_ptr<Run> make_run(int index, const SolverContext& context, int threads, Cluster* cluster,
                                 bool in_task) const;
   void start_run(Run& run) const;
+  void use_stage_samples(Run& run) const;
   bool evolve(Run& run);
   bool note_best(ga::RunState& state, const pagmo::population& population) const;
   void switch_fidelity(Run& run, bool to_full_scene);
@@ -436,23 +437,31 @@ void GaSearch::run_as_farm(const std::vector<int>& todo) {
   write_checkpoint(nullptr);
 }
 
+// Points the run's evaluator at the samples of its stage: the subset before the switch, the
+// refine subset while refining, else the full scene (each at its own cache level). A study
+// without a subset is on the full scene whatever a checkpoint says.
+void GaSearch::use_stage_samples(Run& run) const {
+  const ga::RunState& state = run.state;
+  if (multi_fidelity_ && !state.switched) {
+    run.evaluator->set_subset(&subset_, kSubsetLevel);
+  } else if (state.refining) {
+    run.evaluator->set_subset(&refine_subset_, kRefineLevel);
+  } else {
+    run.evaluator->set_subset(nullptr, kFullLevel);
+  }
+}
+
 // A fresh run (random population from the run's seed), or the checkpoint's run in progress.
 void GaSearch::start_run(Run& run) const {
   ga::RunState& state = run.state;
   pa::Evaluator& evaluator = *run.evaluator;
   if (resumed_ && resumed_->at("run").get<int>() == state.run) {
     ga::restore_run(context_, *resumed_, run.problem, state, run.algorithm, run.population);
-    if (multi_fidelity_ && !state.switched) {
-      evaluator.set_subset(&subset_, kSubsetLevel);
-    } else if (state.refining) {
-      evaluator.set_subset(&refine_subset_, kRefineLevel);
-    } else {
-      evaluator.set_subset(nullptr, kFullLevel);
-    }
+    use_stage_samples(run);
   } else {
     const std::uint64_t seed = pa::derive_seed(context_.seed, static_cast<std::uint64_t>(state.run));
     state.switched = !multi_fidelity_;
-    evaluator.set_subset(multi_fidelity_ ? &subset_ : nullptr, multi_fidelity_ ? kSubsetLevel : kFullLevel);
+    use_stage_samples(run);
     run.algorithm = make_algorithm(options_, seed);
     run.population =
         pa::random_population(run.problem, evaluator, static_cast<std::size_t>(options_.population), seed);
@@ -521,13 +530,9 @@ void GaSearch::switch_fidelity(Run& run, bool to_full_scene) {
   const long long b = best_feasible(run.population);
   const double subset_best = b >= 0 ? -run.population.get_f()[static_cast<std::size_t>(b)][0] : -INFINITY;
   state.refining = !to_full_scene && !refine_subset_.empty();
-  if (state.refining) {
-    run.evaluator->set_subset(&refine_subset_, kRefineLevel);
-  } else {
-    run.evaluator->set_subset(nullptr, kFullLevel);
-  }
-  pa::reevaluate(run.population, *run.evaluator);
   state.switched = true;
+  use_stage_samples(run);
+  pa::reevaluate(run.population, *run.evaluator);
   state.stall = 0;
   note_best(state, run.population);
   if (run.in_task) return;
@@ -564,9 +569,9 @@ void GaSearch::rank_on_full_scene(Run& run) {
   const double refine_best = state.best_score;
   pagmo::population candidates(run.problem, 0u, 0u);
   for (std::size_t k = 0; k < count; ++k) candidates.push_back(x[order[k]], f[order[k]]);
-  run.evaluator->set_subset(nullptr, kFullLevel);
-  pa::reevaluate(candidates, *run.evaluator);
   state.refining = false;
+  use_stage_samples(run);
+  pa::reevaluate(candidates, *run.evaluator);
   state.best_x.clear();
   state.best_score = -INFINITY;
   note_best(state, candidates);

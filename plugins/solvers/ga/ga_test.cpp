@@ -829,16 +829,16 @@ TEST(PagmoAdapter, BatchesOverRanksAndStoppedFarmsGiveTheLocalValues) {
 }
 
 TEST(Ga, RunsAsRankTasksAndBatchesOverRanksGiveThePlainResult) {
-  for (const char* algorithm : {"sga", "gaco", "sga with a refine subset"}) {
+  // The switch and the final ranking of a refine subset re-evaluate over the ranks, as the
+  // generations do.
+  const Json refine = {{"subset_fraction", 0.25}, {"generations", 3}, {"refine_fraction", 0.5}, {"final_candidates", 4}};
+  for (const auto& [algorithm, fidelity] : {std::pair<const char*, Json>{"sga", Json::object()},
+                                            {"gaco", Json::object()}, {"sga", refine}}) {
     Json options = kShardOptions;
-    options["algorithm"] = std::string(algorithm).substr(0, 4) == "gaco" ? "gaco" : "sga";
+    options["algorithm"] = algorithm;
     options["gaco"] = {{"ker", 8}};
-    if (std::string(algorithm) != options["algorithm"]) {
-      // The switch and the final ranking re-evaluate over the ranks, as the generations do.
-      options["fidelity"] = {{"subset_fraction", 0.25}, {"generations", 3}, {"refine_fraction", 0.5},
-                             {"final_candidates", 4}};
-    }
-    SCOPED_TRACE(algorithm);
+    if (!fidelity.empty()) options["fidelity"] = fidelity;
+    SCOPED_TRACE(options.dump());
     const auto plain = solve_toy_on(options, nullptr, 2);
     PretendTwoRanks farm;  // 5 runs >= 2 ranks: the runs farm
     expect_same_result(solve_toy_on(options, &farm, 2), plain);
