@@ -60,10 +60,23 @@ HAPSYN_LANES_OPERATOR(/)
 // Comparisons select rather than return a mask, so that no mask type appears in an interface:
 // `x < y ? a : b` lane by lane is one compare and one blend. Truth values that a kernel carries
 // along are Lanes holding 0 or 1.
+//
+// Each selection's result passes an association barrier (GCC 12 and later; no instruction). These
+// functions are compiled for the default target and inlined into the AVX-512 clones of
+// HAPSYN_MULTIVERSION_WIDE kernels; without the barrier GCC folds two selections into one logic
+// operation on their comparison masks, typed for the default target (a vector of 64-bit truth
+// values, not an AVX-512 mask register), which the AVX-512 clone then computes lane by lane:
+// scalar compares, sets and inserts for every nested or combined selection (docs/design.md
+// section 14.2).
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 12
+#define HAPSYN_LANES_BARRIER(value) __builtin_assoc_barrier(value)
+#else
+#define HAPSYN_LANES_BARRIER(value) (value)
+#endif
 #define HAPSYN_LANES_WHERE(name, op)                                                                          \
   /** Lane-wise `x op y ? a : b`. */                                                                          \
   [[gnu::always_inline]] inline Lanes name(const Lanes& x, const Lanes& y, const Lanes& a, const Lanes& b) { \
-    return Lanes{x.v op y.v ? a.v : b.v};                                                                     \
+    return Lanes{HAPSYN_LANES_BARRIER(x.v op y.v ? a.v : b.v)};                                               \
   }
 HAPSYN_LANES_WHERE(where_less, <)
 HAPSYN_LANES_WHERE(where_greater, >)
@@ -109,7 +122,7 @@ HAPSYN_LANES_WHERE(where_equal, ==)
 /// Lane-wise `x has its sign bit set ? a : b` (as std::signbit: true for -0 and negative NaNs).
 [[gnu::always_inline]] inline Lanes where_sign_bit(const Lanes& x, const Lanes& a, const Lanes& b) {
   typedef std::int64_t Bits __attribute__((vector_size(kBlockLanes * sizeof(double))));
-  return Lanes{reinterpret_cast<Bits>(x.v) < 0 ? a.v : b.v};
+  return Lanes{HAPSYN_LANES_BARRIER(reinterpret_cast<Bits>(x.v) < 0 ? a.v : b.v)};
 }
 
 /// Lane-wise std::sqrt. One vector instruction where the translation unit is compiled with
@@ -153,9 +166,17 @@ HAPSYN_LANES_WHERE(where_equal, ==)
   angle = where_sign_bit(x, kPi - angle, angle);
   angle = where_sign_bit(y, -angle, angle);
   if (any_zero(in_range)) {
+    // Through memory: reading the lanes of in_range and angle in place makes GCC 12 compute
+    // them lane by lane (scalar compares) from the start of the function.
+    double flag[kBlockLanes], value[kBlockLanes], ys[kBlockLanes], xs[kBlockLanes];
+    in_range.store(flag);
+    angle.store(value);
+    y.store(ys);
+    x.store(xs);
     for (int i = 0; i < kBlockLanes; ++i) {
-      if (in_range.v[i] == 0.0) angle.v[i] = std::atan2(y.v[i], x.v[i]);
+      if (flag[i] == 0.0) value[i] = std::atan2(ys[i], xs[i]);
     }
+    angle = Lanes::load(value);
   }
   return angle;
 }

@@ -139,14 +139,17 @@ struct Haptic6ROptions {
         .one_of({"closest_to_home", "elbow_left", "elbow_right"});
     d.add(&Haptic6ROptions::home, "home", {0, 90, 0, 90, 90, 0}, "Reference configuration of the selection rule.")
         .size(6)
+        .range(-720, 720)
         .unit("deg");
     d.add(&Haptic6ROptions::joint_lower, "joint_lower", {-180, -180, -180, 0, -180, -180},
           "Joint lower limits (q4 in [0, 180] keeps l4 on one side of joint 3's plane: one of each mirror pair).")
         .size(6)
+        .range(-720, 720)
         .unit("deg");
     d.add(&Haptic6ROptions::joint_upper, "joint_upper", {180, 180, 180, 180, 180, 180},
           "Joint upper limits (span at most 360 deg).")
         .size(6)
+        .range(-720, 720)
         .unit("deg");
     d.add(&Haptic6ROptions::singularity_tolerance, "singularity_tolerance", 1e-4,
           "A configuration with |sin q2|, |cos theta4| (l4 vertical) or the horizontal part of the roll axis below "
@@ -217,6 +220,9 @@ struct IkModel {
   double L1 = 0.0, L2 = 0.0, L3 = 0.0, L4 = 0.0, L5 = 0.0;  // a1, a2, -d3, a4, d6 [m]
   std::array<double, 6> ca{}, sa{}, offset{};               // cos, sin alpha_i; theta_offset_i [rad]
   std::array<double, 6> lower{}, upper{}, home{};            // joint limits and home [rad]
+  // At least as many turns as admissible()'s first and second loops take for a wrapped angle in
+  // [-pi, pi] (the block kernel takes this many conditional turns instead of the loops).
+  std::array<int, 6> turns_up{}, turns_down{};
   Haptic6RSelection selection = Haptic6RSelection::kClosestToHome;
   double singularity_tolerance = 0.0;
 };

@@ -82,31 +82,17 @@ void Haptic6RModel::solve_block_impl(const PoseBlock& poses, Needs needs, Quanti
   for (int c = 0; c < 7; ++c) pose[c] = where_equal(ok, zero, Lanes::splat(kIdentity[c]), pose[c]);
   norm = where_equal(ok, zero, one, norm);
   const haptic6r_ik::IkModel& m = ik_;
-  // The branches' angles for all lanes at once (branch-free arithmetic: 13 atan2, 9 square roots
-  // and the rotations), then the assembly, selection and classification per lane: branchy work
-  // that costs more as lane-wise selections than as the per-pose code on this data.
+  // The branches' angles (13 atan2, 9 square roots and the rotations), then the assembly,
+  // selection and classification, all of it for the eight lanes at once (haptic6r_ik.hpp).
   haptic6r_ik::Target<Lanes> target;
   haptic6r_ik::target_of(pose, norm, target);
   haptic6r_ik::Branches<Lanes> branches;
   haptic6r_ik::branch_angles(target, m, branches);
-  Lanes cosine[6], sine[6];
-  for (int lane = 0; lane < kBlockLanes; ++lane) {
-    SampleStatus status = SampleStatus::kUnreachable;
-    haptic6r_ik::PoseOutcome o;
-    if (ok.v[lane] != 0.0) {
-      haptic6r_ik::Branches<double> b;
-      haptic6r_ik::lane_of(branches, lane, b);
-      haptic6r_ik::configure_branches(b, m, o);
-      status = o.status;
-    }
-    out.status[lane] = static_cast<std::int32_t>(status);
-    // Other lanes compute the zero configuration: finite values, ignored.
-    const bool chosen = status == SampleStatus::kReachable;
-    for (int i = 0; i < 6; ++i) {
-      cosine[i].v[lane] = chosen ? o.c[i] : 1.0;
-      sine[i].v[lane] = chosen ? o.s[i] : 0.0;
-    }
-  }
+  haptic6r_ik::LaneOutcomes outcome;
+  haptic6r_ik::configure_lanes(branches, m, ok, outcome);
+  for (int lane = 0; lane < kBlockLanes; ++lane) out.status[lane] = static_cast<std::int32_t>(outcome.status[lane]);
+  const Lanes(&cosine)[6] = outcome.c;
+  const Lanes(&sine)[6] = outcome.s;
   fill_block(cosine, sine, needs, out);
 }
 

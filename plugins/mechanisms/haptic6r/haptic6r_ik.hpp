@@ -234,9 +234,9 @@ template <typename T>
 }
 
 /// Steps 1 to 3 and the remaining angles (the yaw of h, theta4 of both branches): everything
-/// the branches are assembled from. All of it is arithmetic without branches (the lane part of
-/// the block kernel); assembling, selecting and classifying is per pose. Only T members, in
-/// order: lane_of() reads one lane of a Branches<Lanes> as a Branches<double>.
+/// the branches are assembled from. All of it is arithmetic without branches; solve() then
+/// assembles, selects and classifies with the per-pose code below, the block kernel with
+/// configure_lanes().
 template <typename T>
 struct Branches {
   Target<T> target;
@@ -257,20 +257,9 @@ template <typename T>
   b.theta4_branch[1] = angle_of(b.g.s4, -b.g.c4_abs);
 }
 
-/// Lane `lane` of `in` (a struct of Lanes only) as the same struct of doubles.
-template <template <typename> class S>
-[[gnu::always_inline]] inline void lane_of(const S<Lanes>& in, int lane, S<double>& out) {
-  static_assert(sizeof(S<Lanes>) == kBlockLanes * sizeof(S<double>), "S holds numbers of its type only");
-  constexpr std::size_t kCount = sizeof(S<double>) / sizeof(double);
-  const Lanes* from = reinterpret_cast<const Lanes*>(&in);
-  double* to = reinterpret_cast<double*>(&out);
-  for (std::size_t i = 0; i < kCount; ++i) to[i] = from[i].v[lane];
-}
-
-// Step 4 and after: per pose (T = double). The block kernel computes the branches for all lanes
-// (branch_angles at T = Lanes) and runs this per lane: assembling, selecting and classifying
-// branch on data that differs between lanes, and as lane-wise selections they cost more than
-// the whole per-pose code (measured: docs/design.md section 14.4).
+// Step 4 and after, per pose (T = double): solve() and inverse_kinematics(). The block kernel
+// does the same for eight poses at once with configure_lanes() (below), whose statuses and
+// cosines and sines the tests compare with these.
 
 /// The eight branches in the order (h sign, theta4 branch, elbow), slot 4 hs + 2 b4 + b2: q
 /// [rad] wrapped into [-pi, pi), the DH-angle cosines c and sines s (when asked for), valid where
@@ -439,6 +428,160 @@ template <typename T>
   const double wrist = std::sqrt(b.target.r[0][2] * b.target.r[0][2] + b.target.r[1][2] * b.target.r[1][2]);
   const bool singular = std::fabs(out.s[1]) < singular_below || std::fabs(out.c[3]) < singular_below || wrist < singular_below;
   out.status = singular ? SampleStatus::kSingular : SampleStatus::kReachable;
+}
+
+// ---- Step 4 and after for a block (T = Lanes): what configure_branches() decides for each
+// lane, as lane-wise selections (docs/design.md section 14.4). The eight slots share their
+// angles (theta1 and theta2 come from two planar solutions and two elbows, theta4 from two
+// branches, theta5 and theta6 from two branches and two h signs; only theta3 is the slot's
+// own), so 26 wrapped angles serve the 48 of the per-pose code, each wrapped, tested against
+// its limits and measured from home once for eight poses.
+
+/// One joint's admissibility for every lane (1 or 0) as admissible() decides it for a wrapped
+/// angle q: inside [lower, upper], or a representative in [lower, lower + 2 pi) that does not
+/// pass upper (with tolerance); the representative by the same additions as admissible()'s
+/// loops, which run while any lane still needs them.
+[[gnu::always_inline]] inline Lanes admissible_lanes(const Lanes& q, const IkModel& m, std::size_t i) {
+  constexpr double tol = kHaptic6RAngleTolerance;
+  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
+  const Lanes lower = Lanes::splat(m.lower[i]), upper = Lanes::splat(m.upper[i]);
+  // Written with < , > and == only: GCC 12 compiles a lane-wise <= or >= of doubles as one scalar
+  // comparison per lane. A NaN is not inside (the last test), as in admissible().
+  const Lanes inside = where_less(q, lower, zero, where_greater(q, upper, zero, where_equal(q, q, one, zero)));
+  if (!any_zero(inside)) return inside;  // the common case
+  const Lanes low = Lanes::splat(m.lower[i] - tol), high = Lanes::splat(m.lower[i] + 2.0 * kPi - tol);
+  Lanes v = q;
+  for (int t = 0; t < m.turns_up[i]; ++t) v = where_less(v, low, v + 2.0 * kPi, v);
+  for (int t = 0; t < m.turns_down[i]; ++t) v = where_greater(v, high, v - 2.0 * kPi, v);
+  v = where_less(v, low, v + 2.0 * kPi, v);
+  const Lanes below_upper = where_greater(v, Lanes::splat(m.upper[i] + tol), zero, where_equal(v, v, one, zero));
+  return where_equal(inside, one, one, below_upper);
+}
+
+/// One joint's wrapped angle q = wrap(theta - offset), its admissibility and its wrapped
+/// difference to home, for every lane.
+struct JointLanes {
+  Lanes q, admissible, from_home;
+};
+
+[[gnu::always_inline]] inline void joint_lanes(const Lanes& theta, const IkModel& m, std::size_t i, JointLanes& out) {
+  out.q = wrap(theta - m.offset[i]);
+  out.admissible = admissible_lanes(out.q, m, i);
+  out.from_home = wrap(out.q - m.home[i]);
+}
+
+/// What the block kernel needs of each lane's outcome: the status, and the chosen
+/// configuration's DH-angle cosines c and sines s where it is reachable (1 and 0 elsewhere).
+struct LaneOutcomes {
+  SampleStatus status[kBlockLanes];
+  Lanes c[6], s[6];
+};
+
+/// configure_branches() for every lane of a block at once: the same statuses and, for reachable
+/// lanes, the same cosines and sines (the same expressions in the same order). `solvable` is 1
+/// for lanes whose pose solve() takes to the IK (finite position, quaternion of norm > 1e-9),
+/// 0 for lanes it settles as unreachable before.
+[[gnu::always_inline]] inline void configure_lanes(const Branches<Lanes>& b, const IkModel& m, const Lanes& solvable,
+                                                   LaneOutcomes& out) {
+  constexpr double tol = kHaptic6RAngleTolerance;
+  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
+  const WristAngles<Lanes>& wrist = b.wrist;
+  // Joints 1 and 2 of planar solution k and elbow b2 (slots 4 hs + 2 b4 + b2 with hs ^ b4 = k).
+  JointLanes j1[2][2], j2[2][2];
+  Lanes theta1[2][2], theta2[2][2], valid[2];
+  for (int k = 0; k < 2; ++k) {
+    const PlanarSolution<Lanes>& p = b.planar[k];
+    valid[k] = solvable * b.g.ok * p.valid;
+    for (int b2 = 0; b2 < 2; ++b2) {
+      theta2[k][b2] = b2 == 0 ? p.theta2 : -p.theta2;
+      theta1[k][b2] = b2 == 0 ? p.phi - p.beta : p.phi + p.beta;
+      joint_lanes(theta1[k][b2], m, 0, j1[k][b2]);
+      joint_lanes(theta2[k][b2], m, 1, j2[k][b2]);
+      if (m.selection == Haptic6RSelection::kElbowLeft) {
+        j2[k][b2].admissible = where_less(j2[k][b2].q, Lanes::splat(-tol), zero, j2[k][b2].admissible);
+      } else if (m.selection == Haptic6RSelection::kElbowRight) {
+        j2[k][b2].admissible = where_greater(j2[k][b2].q, Lanes::splat(tol), zero, j2[k][b2].admissible);
+      }
+    }
+  }
+  // Joint 4 of branch b4; joints 5 and 6 of h sign hs and branch b4.
+  JointLanes j4[2], j5[2][2], j6[2][2];
+  for (int b4 = 0; b4 < 2; ++b4) joint_lanes(b.theta4_branch[b4], m, 3, j4[b4]);
+  for (int hs = 0; hs < 2; ++hs) {
+    for (int b4 = 0; b4 < 2; ++b4) {
+      const Lanes theta5 = hs == 0 ? wrist.theta5[b4] : kPi - wrist.theta5[1 - b4];
+      const Lanes theta6 = hs == 0 ? wrist.theta6[b4] : wrist.theta6[1 - b4] + kPi;
+      joint_lanes(theta5, m, 4, j5[hs][b4]);
+      joint_lanes(theta6, m, 5, j6[hs][b4]);
+    }
+  }
+  // select(): the admissible valid slot closest to home, the first on ties.
+  Lanes best = Lanes::splat(-1.0), best_distance = Lanes::splat(INFINITY);
+  for (int slot = 0; slot < 8; ++slot) {
+    const int hs = slot >> 2, b4 = (slot >> 1) & 1, b2 = slot & 1, k = hs ^ b4;
+    if (!any_nonzero(valid[k])) continue;
+    const Lanes yaw = hs == 0 ? b.yaw0 : b.yaw0 + kPi;
+    JointLanes j3;
+    joint_lanes(yaw - theta1[k][b2] - theta2[k][b2], m, 2, j3);
+    const JointLanes* joint[6] = {&j1[k][b2], &j2[k][b2], &j3, &j4[b4], &j5[hs][b4], &j6[hs][b4]};
+    Lanes candidate = valid[k], distance = zero;
+    for (int i = 0; i < 6; ++i) {
+      candidate = candidate * joint[i]->admissible;
+      distance += joint[i]->from_home * joint[i]->from_home;
+    }
+    const Lanes take = where_less(distance, best_distance, candidate, zero);
+    best_distance = where_equal(take, one, distance, best_distance);
+    best = where_equal(take, one, Lanes::splat(slot), best);
+  }
+  // slot_trig() of each lane's chosen slot, its bits as truth values.
+  const Lanes hs = where_greater(best, Lanes::splat(3.5), one, zero);
+  const Lanes b4 = where_greater(best - 4.0 * hs, Lanes::splat(1.5), one, zero);
+  const Lanes b2 = best - 4.0 * hs - 2.0 * b4;
+  const Lanes k = where_equal(hs, b4, zero, one);
+  const PlanarSolution<Lanes>&p0 = b.planar[0], &p1 = b.planar[1];
+  const Lanes cos_phi = pick(k, p1.cos_phi, p0.cos_phi), sin_phi = pick(k, p1.sin_phi, p0.sin_phi);
+  const Lanes cos_beta = pick(k, p1.cos_beta, p0.cos_beta), sin_beta = pick(k, p1.sin_beta, p0.sin_beta);
+  const Lanes c2 = pick(k, p1.c2, p0.c2), s2 = pick(k, p1.s2, p0.s2);
+  Lanes (&c)[6] = out.c;
+  Lanes (&s)[6] = out.s;
+  const Lanes sb = pick(b2, sin_beta, -sin_beta);
+  c[0] = cos_phi * cos_beta - sin_phi * sb;
+  s[0] = sin_phi * cos_beta + cos_phi * sb;
+  c[1] = c2;
+  s[1] = pick(b2, -s2, s2);
+  const Lanes c12 = c[0] * c[1] - s[0] * s[1], s12 = s[0] * c[1] + c[0] * s[1];
+  const Lanes sign = pick(hs, Lanes::splat(-1.0), one);
+  const Lanes cy = -sign * b.g.hy, sy = sign * b.g.hx;
+  c[2] = cy * c12 + sy * s12;
+  s[2] = sy * c12 - cy * s12;
+  c[3] = pick(b4, -b.g.c4_abs, b.g.c4_abs);
+  s[3] = b.g.s4;
+  const Lanes cos5_same = pick(b4, wrist.cos5[1], wrist.cos5[0]), cos5_other = pick(b4, wrist.cos5[0], wrist.cos5[1]);
+  const Lanes sin5_same = pick(b4, wrist.sin5[1], wrist.sin5[0]), sin5_other = pick(b4, wrist.sin5[0], wrist.sin5[1]);
+  const Lanes cos6_same = pick(b4, wrist.cos6[1], wrist.cos6[0]), cos6_other = pick(b4, wrist.cos6[0], wrist.cos6[1]);
+  const Lanes sin6_same = pick(b4, wrist.sin6[1], wrist.sin6[0]), sin6_other = pick(b4, wrist.sin6[0], wrist.sin6[1]);
+  c[4] = pick(hs, -cos5_other, cos5_same);
+  s[4] = pick(hs, sin5_other, sin5_same);
+  c[5] = pick(hs, -cos6_other, cos6_same);
+  s[5] = pick(hs, -sin6_other, sin6_same);
+  // The classification, and the zero configuration (1, 0) for lanes that are not reachable.
+  const Lanes below = Lanes::splat(m.singularity_tolerance);
+  const Lanes wrist_norm = root(b.target.r[0][2] * b.target.r[0][2] + b.target.r[1][2] * b.target.r[1][2]);
+  const Lanes singular = where_less(abs(s[1]), below, one,
+                                    where_less(abs(c[3]), below, one, where_less(wrist_norm, below, one, zero)));
+  const Lanes found = where_equal(valid[0] + valid[1], zero, zero, one);
+  const Lanes chosen = where_less(best, zero, zero, one);
+  const Lanes reachable = chosen * (one - singular);
+  for (int i = 0; i < 6; ++i) {
+    c[i] = pick(reachable, c[i], one);
+    s[i] = pick(reachable, s[i], zero);
+  }
+  for (int lane = 0; lane < kBlockLanes; ++lane) {
+    out.status[lane] = found.v[lane] == 0.0    ? SampleStatus::kUnreachable
+                       : chosen.v[lane] == 0.0 ? SampleStatus::kInvalid
+                       : singular.v[lane] != 0.0 ? SampleStatus::kSingular
+                                                 : SampleStatus::kReachable;
+  }
 }
 
 /// IK, selection and classification of a pose whose position is finite and whose quaternion has

@@ -12,6 +12,7 @@
 
 #include <hapsyn/multiversion.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 
@@ -32,6 +33,13 @@ void Haptic6RModel::ik_model(haptic6r_ik::IkModel& m) const {
     m.lower[i] = o.joint_lower(k);
     m.upper[i] = o.joint_upper(k);
     m.home[i] = o.home(k);
+    // The first loop lifts an angle >= -pi by 2 pi until it reaches lower - tol, the second
+    // lowers one <= pi until it is at most lower + 2 pi - tol; one turn more for the rounding
+    // of the repeated additions.
+    const double up = std::ceil((m.lower[i] + haptic6r_ik::kPi) / (2.0 * haptic6r_ik::kPi)),
+                 down = std::ceil((haptic6r_ik::kPi - m.lower[i]) / (2.0 * haptic6r_ik::kPi)) - 1.0;
+    m.turns_up[i] = static_cast<int>(std::max(0.0, up)) + 1;
+    m.turns_down[i] = static_cast<int>(std::max(0.0, down)) + 1;
   }
   m.selection = o.selection;
   m.singularity_tolerance = o.options.singularity_tolerance;

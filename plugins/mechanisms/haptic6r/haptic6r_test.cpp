@@ -600,6 +600,11 @@ TEST(Haptic6R, ErrorMessagesNameTheOptionValueAndRule) {
   expect_error([] { haptic6r(Json{{"joint_lower", {0, 0, 0, 90, 0, 0}}, {"joint_upper", {10, 10, 10, 80, 10, 10}}}); },
                {"options.joint_upper[3]", "must be >= joint_lower[3]"});
   expect_error([] { haptic6r(Json{{"tube_wall", 0.2}}); }, {"options.tube_wall", "tube_outer_diameter"});
+  // Angles within two turns either way (the lane selection takes a bounded number of turns).
+  expect_error([] { haptic6r(Json{{"home", {0, 90, 0, 90, 900, 0}}}); }, {"options.home[4]", "900", "720"});
+  expect_error([] { haptic6r(Json{{"joint_lower", {-180, -180, -1e300, 0, -180, -180}}}); },
+               {"options.joint_lower[2]", "-720"});
+  expect_error([] { haptic6r(Json{{"joint_upper", {180, 180, 180, 180, 180, 721}}}); }, {"options.joint_upper[5]", "721"});
   expect_error([] { haptic6r(Json{{"dh_file", "/nonexistent/dh.json"}}); }, {"options.dh_file", "no such file"});
   const std::string dir = ::testing::TempDir();
   {
@@ -731,7 +736,14 @@ TEST(Haptic6R, BlockStatusesAndQuantitiesEqualSolveUnderEveryRule) {
       Json::object(), Json{{"selection", "elbow_left"}}, Json{{"selection", "elbow_right"}},
       Json{{"home", {10, -60, 20, 45, 30, 0}}},
       Json{{"joint_lower", {-90, -150, -180, 60, -120, -180}}, {"joint_upper", {90, 150, 180, 120, 120, 180}}},
-      Json{{"joint_lower", {0, 0, 0, 0, 0, 0}}, {"joint_upper", {350, 350, 350, 350, 350, 350}}}};
+      Json{{"joint_lower", {0, 0, 0, 0, 0, 0}}, {"joint_upper", {350, 350, 350, 350, 350, 350}}},
+      // Limits and home up to two turns away: the per-pose loops turn an angle several times.
+      Json{{"joint_lower", {400, -720, 200, 360, -540, 500}},
+           {"joint_upper", {700, -400, 500, 540, -300, 720}},
+           {"home", {600, -600, 300, 450, -400, 650}}},
+      Json{{"joint_lower", {-720, -700, -500, -360, 180, -380}},
+           {"joint_upper", {-400, -380, -200, -180, 500, -20}},
+           {"home", {-700, 720, -720, -270, 360, -200}}}};
   auto scratch = std::make_unique<MechanismScratch>();
   const Needs all = kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits;
   std::map<SampleStatus, long> seen;
