@@ -240,9 +240,9 @@ class Haptic6RModel final : public MechanismModel {
 
   void solve(const double* pose, Needs needs, MechanismScratch& scratch,
              SampleQuantities& out) const override;
-  /// The block kernel (docs/design.md section 14): the IK, selection and classification per lane
-  /// as solve() does them (the same statuses), then the Jacobian, inertia and gravity torque of
-  /// every lane at once (haptic6r_block.cpp); agreement with solve() to 1e-12 relative. Serves
+  /// The block kernel (docs/design.md section 14): the IK, selection and classification of every
+  /// lane at once with the same outcome as solve() (the same statuses), then the Jacobian,
+  /// inertia and gravity torque of every lane at once (haptic6r_block.cpp); agreement with solve() to 1e-12 relative. Serves
   /// needs within kNeedPose | kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits
   /// (Haptic6R::solves_blocks).
   void solve_block(const PoseBlock& poses, Needs needs, MechanismScratch& scratch, QuantityBlock& out) const override;
