@@ -223,6 +223,8 @@ struct IkModel {
   // At least as many turns as admissible()'s first and second loops take for a wrapped angle in
   // [-pi, pi] (the block kernel takes this many conditional turns instead of the loops).
   std::array<int, 6> turns_up{}, turns_down{};
+  // Whether [lower, upper] holds all of [-pi, pi] (a wrapped angle is then inside unless NaN).
+  std::array<bool, 6> full_turn{};
   Haptic6RSelection selection = Haptic6RSelection::kClosestToHome;
   double singularity_tolerance = 0.0;
 };

@@ -444,6 +444,7 @@ template <typename T>
 [[gnu::always_inline]] inline Lanes admissible_lanes(const Lanes& q, const IkModel& m, std::size_t i) {
   constexpr double tol = kHaptic6RAngleTolerance;
   const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
+  if (m.full_turn[i]) return where_equal(q, q, one, zero);  // q in [-pi, pi] is inside unless NaN
   const Lanes lower = Lanes::splat(m.lower[i]), upper = Lanes::splat(m.upper[i]);
   // Written with < , > and == only: GCC 12 compiles a lane-wise <= or >= of doubles as one scalar
   // comparison per lane. A NaN is not inside (the last test), as in admissible().

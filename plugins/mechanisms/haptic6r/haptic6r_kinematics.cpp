@@ -40,6 +40,7 @@ void Haptic6RModel::ik_model(haptic6r_ik::IkModel& m) const {
                  down = std::ceil((haptic6r_ik::kPi - m.lower[i]) / (2.0 * haptic6r_ik::kPi)) - 1.0;
     m.turns_up[i] = static_cast<int>(std::max(0.0, up)) + 1;
     m.turns_down[i] = static_cast<int>(std::max(0.0, down)) + 1;
+    m.full_turn[i] = m.lower[i] <= -haptic6r_ik::kPi && m.upper[i] >= haptic6r_ik::kPi;
   }
   m.selection = o.selection;
   m.singularity_tolerance = o.options.singularity_tolerance;

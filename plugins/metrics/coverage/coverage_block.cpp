@@ -7,6 +7,7 @@
 #include <hapsyn/lanes.hpp>
 #include <hapsyn/multiversion.hpp>
 
+#include <cstdint>
 #include <limits>
 #include <string>
 
@@ -53,6 +54,19 @@ template <int Cols>
   }
 }
 
+// The set of the lanes' row indices (each lane holds a small whole number) as bits: bit r is set
+// when some lane holds r. One conversion, one shift and a fold of the lanes, where reading the
+// lanes one by one cost a conversion and a shift per lane.
+[[gnu::always_inline]] inline unsigned row_bits(const Lanes& row) {
+  typedef std::int64_t Bits __attribute__((vector_size(kBlockLanes * sizeof(double))));
+  static_assert(kBlockLanes == 8, "the fold below halves eight lanes three times");
+  Bits m = (Bits{} + 1) << __builtin_convertvector(row.v, Bits);
+  m |= __builtin_shufflevector(m, m, 4, 5, 6, 7, 0, 1, 2, 3);
+  m |= __builtin_shufflevector(m, m, 2, 3, 0, 1, 6, 7, 4, 5);
+  m |= __builtin_shufflevector(m, m, 1, 0, 3, 2, 5, 4, 7, 6);
+  return static_cast<unsigned>(m[0]);
+}
+
 // Solves J X = B in place for every lane (B: 6 x Cols right-hand sides). \return per lane 1
 // when every pivot was non-zero (the lane's J regular, as local() decides it), else 0.
 // J is factored first (its row swaps, multipliers and inverse pivots kept), then each column of
@@ -74,7 +88,7 @@ template <int Cols>
     }
     pivot_row[k] = row;
     regular = where_equal(best, zero, zero, regular);
-    for (int lane = 0; lane < kBlockLanes; ++lane) swapped[k] |= 1u << static_cast<int>(row.v[lane]);
+    swapped[k] = row_bits(row);
     for (int i = k + 1; i < 6; ++i) {  // swap rows k and the pivot row, lane by lane
       if (!(swapped[k] >> i & 1u)) continue;  // most rows are no lane's pivot: skip their blends
       const Lanes here = Lanes::splat(i);
