@@ -439,8 +439,9 @@ template <typename T>
 
 /// One joint's admissibility for every lane (1 or 0) as admissible() decides it for a wrapped
 /// angle q: inside [lower, upper], or a representative in [lower, lower + 2 pi) that does not
-/// pass upper (with tolerance); the representative by the same additions as admissible()'s
-/// loops, which run while any lane still needs them.
+/// pass upper (with tolerance). admissible()'s loops become a fixed number of conditional turns
+/// (IkModel::turns_up, turns_down, enough for any wrapped angle): each is the loop's addition
+/// where a lane still needs it and leaves the other lanes unchanged.
 [[gnu::always_inline]] inline Lanes admissible_lanes(const Lanes& q, const IkModel& m, std::size_t i) {
   constexpr double tol = kHaptic6RAngleTolerance;
   const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
@@ -471,6 +472,107 @@ struct JointLanes {
   out.from_home = wrap(out.q - m.home[i]);
 }
 
+/// The joints the eight slots share, each computed once: joints 1 and 2 of planar solution k
+/// and elbow b2 (the slots with hs ^ b4 = k), joint 4 of branch b4, joints 5 and 6 of h sign hs
+/// and branch b4; theta1 and theta2 unwrapped (theta3 is each slot's own); valid[k] is 1 where
+/// planar solution k's slots are solutions.
+struct SharedJoints {
+  JointLanes j1[2][2], j2[2][2], j4[2], j5[2][2], j6[2][2];
+  Lanes theta1[2][2], theta2[2][2], valid[2];
+};
+
+[[gnu::always_inline]] inline void shared_joints(const Branches<Lanes>& b, const IkModel& m, const Lanes& solvable,
+                                                 SharedJoints& out) {
+  constexpr double tol = kHaptic6RAngleTolerance;
+  const Lanes zero = Lanes::splat(0.0);
+  for (int k = 0; k < 2; ++k) {
+    const PlanarSolution<Lanes>& p = b.planar[k];
+    out.valid[k] = solvable * b.g.ok * p.valid;
+    for (int b2 = 0; b2 < 2; ++b2) {  // assemble()'s angles of joints 1 and 2
+      out.theta2[k][b2] = b2 == 0 ? p.theta2 : -p.theta2;
+      out.theta1[k][b2] = b2 == 0 ? p.phi - p.beta : p.phi + p.beta;
+      joint_lanes(out.theta1[k][b2], m, 0, out.j1[k][b2]);
+      JointLanes& j2 = out.j2[k][b2];
+      joint_lanes(out.theta2[k][b2], m, 1, j2);
+      if (m.selection == Haptic6RSelection::kElbowLeft) {  // admissible()'s elbow side
+        j2.admissible = where_less(j2.q, Lanes::splat(-tol), zero, j2.admissible);
+      } else if (m.selection == Haptic6RSelection::kElbowRight) {
+        j2.admissible = where_greater(j2.q, Lanes::splat(tol), zero, j2.admissible);
+      }
+    }
+  }
+  for (int b4 = 0; b4 < 2; ++b4) joint_lanes(b.theta4_branch[b4], m, 3, out.j4[b4]);
+  for (int hs = 0; hs < 2; ++hs) {
+    for (int b4 = 0; b4 < 2; ++b4) {  // assemble()'s theta5 and theta6
+      const Lanes theta5 = hs == 0 ? b.wrist.theta5[b4] : kPi - b.wrist.theta5[1 - b4];
+      const Lanes theta6 = hs == 0 ? b.wrist.theta6[b4] : b.wrist.theta6[1 - b4] + kPi;
+      joint_lanes(theta5, m, 4, out.j5[hs][b4]);
+      joint_lanes(theta6, m, 5, out.j6[hs][b4]);
+    }
+  }
+}
+
+/// select() for every lane: the slot (as a number, -1 for none) of the admissible valid slot
+/// closest to home, the first on ties (a strict < in slot order).
+[[gnu::always_inline]] inline Lanes select_lanes(const Branches<Lanes>& b, const IkModel& m, const SharedJoints& j) {
+  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
+  Lanes best = Lanes::splat(-1.0), best_distance = Lanes::splat(INFINITY);
+  for (int slot = 0; slot < 8; ++slot) {
+    const int hs = slot >> 2, b4 = (slot >> 1) & 1, b2 = slot & 1, k = hs ^ b4;
+    if (!any_nonzero(j.valid[k])) continue;
+    const Lanes yaw = hs == 0 ? b.yaw0 : b.yaw0 + kPi;
+    JointLanes j3;
+    joint_lanes(yaw - j.theta1[k][b2] - j.theta2[k][b2], m, 2, j3);
+    const JointLanes* joint[6] = {&j.j1[k][b2], &j.j2[k][b2], &j3, &j.j4[b4], &j.j5[hs][b4], &j.j6[hs][b4]};
+    Lanes candidate = j.valid[k], distance = zero;
+    for (int i = 0; i < 6; ++i) {
+      candidate = candidate * joint[i]->admissible;
+      distance += joint[i]->from_home * joint[i]->from_home;
+    }
+    const Lanes take = where_less(distance, best_distance, candidate, zero);
+    best_distance = where_equal(take, one, distance, best_distance);
+    best = where_equal(take, one, Lanes::splat(slot), best);
+  }
+  return best;
+}
+
+/// slot_trig() for every lane's slot `slot` (0..7; a lane without a slot gets slot 0's values):
+/// the same expressions on the inputs the slot's bits pick.
+[[gnu::always_inline]] inline void slot_trig_lanes(const Branches<Lanes>& b, const Lanes& slot, Lanes (&c)[6],
+                                                   Lanes (&s)[6]) {
+  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
+  const Lanes hs = where_greater(slot, Lanes::splat(3.5), one, zero);
+  const Lanes b4 = where_greater(slot - 4.0 * hs, Lanes::splat(1.5), one, zero);
+  const Lanes b2 = slot - 4.0 * hs - 2.0 * b4;
+  const Lanes k = where_equal(hs, b4, zero, one);  // hs ^ b4
+  const PlanarSolution<Lanes>&p0 = b.planar[0], &p1 = b.planar[1];
+  const Lanes cos_phi = pick(k, p1.cos_phi, p0.cos_phi), sin_phi = pick(k, p1.sin_phi, p0.sin_phi);
+  const Lanes cos_beta = pick(k, p1.cos_beta, p0.cos_beta), sin_beta = pick(k, p1.sin_beta, p0.sin_beta);
+  const Lanes c2 = pick(k, p1.c2, p0.c2), s2 = pick(k, p1.s2, p0.s2);
+  const Lanes sb = pick(b2, sin_beta, -sin_beta);
+  c[0] = cos_phi * cos_beta - sin_phi * sb;
+  s[0] = sin_phi * cos_beta + cos_phi * sb;
+  c[1] = c2;
+  s[1] = pick(b2, -s2, s2);
+  const Lanes c12 = c[0] * c[1] - s[0] * s[1], s12 = s[0] * c[1] + c[0] * s[1];
+  const Lanes sign = pick(hs, Lanes::splat(-1.0), one);
+  const Lanes cy = -sign * b.g.hy, sy = sign * b.g.hx;
+  c[2] = cy * c12 + sy * s12;
+  s[2] = sy * c12 - cy * s12;
+  c[3] = pick(b4, -b.g.c4_abs, b.g.c4_abs);
+  s[3] = b.g.s4;
+  // hs = 0 takes branch b4's wrist angles, hs = 1 the other branch's (pi - theta5, theta6 + pi).
+  const WristAngles<Lanes>& w = b.wrist;
+  const Lanes cos5_same = pick(b4, w.cos5[1], w.cos5[0]), cos5_other = pick(b4, w.cos5[0], w.cos5[1]);
+  const Lanes sin5_same = pick(b4, w.sin5[1], w.sin5[0]), sin5_other = pick(b4, w.sin5[0], w.sin5[1]);
+  const Lanes cos6_same = pick(b4, w.cos6[1], w.cos6[0]), cos6_other = pick(b4, w.cos6[0], w.cos6[1]);
+  const Lanes sin6_same = pick(b4, w.sin6[1], w.sin6[0]), sin6_other = pick(b4, w.sin6[0], w.sin6[1]);
+  c[4] = pick(hs, -cos5_other, cos5_same);
+  s[4] = pick(hs, sin5_other, sin5_same);
+  c[5] = pick(hs, -cos6_other, cos6_same);
+  s[5] = pick(hs, -sin6_other, sin6_same);
+}
+
 /// What the block kernel needs of each lane's outcome: the status, and the chosen
 /// configuration's DH-angle cosines c and sines s where it is reachable (1 and 0 elsewhere).
 struct LaneOutcomes {
@@ -484,102 +586,26 @@ struct LaneOutcomes {
 /// 0 for lanes it settles as unreachable before.
 [[gnu::always_inline]] inline void configure_lanes(const Branches<Lanes>& b, const IkModel& m, const Lanes& solvable,
                                                    LaneOutcomes& out) {
-  constexpr double tol = kHaptic6RAngleTolerance;
   const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
-  const WristAngles<Lanes>& wrist = b.wrist;
-  // Joints 1 and 2 of planar solution k and elbow b2 (slots 4 hs + 2 b4 + b2 with hs ^ b4 = k).
-  JointLanes j1[2][2], j2[2][2];
-  Lanes theta1[2][2], theta2[2][2], valid[2];
-  for (int k = 0; k < 2; ++k) {
-    const PlanarSolution<Lanes>& p = b.planar[k];
-    valid[k] = solvable * b.g.ok * p.valid;
-    for (int b2 = 0; b2 < 2; ++b2) {
-      theta2[k][b2] = b2 == 0 ? p.theta2 : -p.theta2;
-      theta1[k][b2] = b2 == 0 ? p.phi - p.beta : p.phi + p.beta;
-      joint_lanes(theta1[k][b2], m, 0, j1[k][b2]);
-      joint_lanes(theta2[k][b2], m, 1, j2[k][b2]);
-      if (m.selection == Haptic6RSelection::kElbowLeft) {
-        j2[k][b2].admissible = where_less(j2[k][b2].q, Lanes::splat(-tol), zero, j2[k][b2].admissible);
-      } else if (m.selection == Haptic6RSelection::kElbowRight) {
-        j2[k][b2].admissible = where_greater(j2[k][b2].q, Lanes::splat(tol), zero, j2[k][b2].admissible);
-      }
-    }
-  }
-  // Joint 4 of branch b4; joints 5 and 6 of h sign hs and branch b4.
-  JointLanes j4[2], j5[2][2], j6[2][2];
-  for (int b4 = 0; b4 < 2; ++b4) joint_lanes(b.theta4_branch[b4], m, 3, j4[b4]);
-  for (int hs = 0; hs < 2; ++hs) {
-    for (int b4 = 0; b4 < 2; ++b4) {
-      const Lanes theta5 = hs == 0 ? wrist.theta5[b4] : kPi - wrist.theta5[1 - b4];
-      const Lanes theta6 = hs == 0 ? wrist.theta6[b4] : wrist.theta6[1 - b4] + kPi;
-      joint_lanes(theta5, m, 4, j5[hs][b4]);
-      joint_lanes(theta6, m, 5, j6[hs][b4]);
-    }
-  }
-  // select(): the admissible valid slot closest to home, the first on ties.
-  Lanes best = Lanes::splat(-1.0), best_distance = Lanes::splat(INFINITY);
-  for (int slot = 0; slot < 8; ++slot) {
-    const int hs = slot >> 2, b4 = (slot >> 1) & 1, b2 = slot & 1, k = hs ^ b4;
-    if (!any_nonzero(valid[k])) continue;
-    const Lanes yaw = hs == 0 ? b.yaw0 : b.yaw0 + kPi;
-    JointLanes j3;
-    joint_lanes(yaw - theta1[k][b2] - theta2[k][b2], m, 2, j3);
-    const JointLanes* joint[6] = {&j1[k][b2], &j2[k][b2], &j3, &j4[b4], &j5[hs][b4], &j6[hs][b4]};
-    Lanes candidate = valid[k], distance = zero;
-    for (int i = 0; i < 6; ++i) {
-      candidate = candidate * joint[i]->admissible;
-      distance += joint[i]->from_home * joint[i]->from_home;
-    }
-    const Lanes take = where_less(distance, best_distance, candidate, zero);
-    best_distance = where_equal(take, one, distance, best_distance);
-    best = where_equal(take, one, Lanes::splat(slot), best);
-  }
-  // slot_trig() of each lane's chosen slot, its bits as truth values.
-  const Lanes hs = where_greater(best, Lanes::splat(3.5), one, zero);
-  const Lanes b4 = where_greater(best - 4.0 * hs, Lanes::splat(1.5), one, zero);
-  const Lanes b2 = best - 4.0 * hs - 2.0 * b4;
-  const Lanes k = where_equal(hs, b4, zero, one);
-  const PlanarSolution<Lanes>&p0 = b.planar[0], &p1 = b.planar[1];
-  const Lanes cos_phi = pick(k, p1.cos_phi, p0.cos_phi), sin_phi = pick(k, p1.sin_phi, p0.sin_phi);
-  const Lanes cos_beta = pick(k, p1.cos_beta, p0.cos_beta), sin_beta = pick(k, p1.sin_beta, p0.sin_beta);
-  const Lanes c2 = pick(k, p1.c2, p0.c2), s2 = pick(k, p1.s2, p0.s2);
-  Lanes (&c)[6] = out.c;
-  Lanes (&s)[6] = out.s;
-  const Lanes sb = pick(b2, sin_beta, -sin_beta);
-  c[0] = cos_phi * cos_beta - sin_phi * sb;
-  s[0] = sin_phi * cos_beta + cos_phi * sb;
-  c[1] = c2;
-  s[1] = pick(b2, -s2, s2);
-  const Lanes c12 = c[0] * c[1] - s[0] * s[1], s12 = s[0] * c[1] + c[0] * s[1];
-  const Lanes sign = pick(hs, Lanes::splat(-1.0), one);
-  const Lanes cy = -sign * b.g.hy, sy = sign * b.g.hx;
-  c[2] = cy * c12 + sy * s12;
-  s[2] = sy * c12 - cy * s12;
-  c[3] = pick(b4, -b.g.c4_abs, b.g.c4_abs);
-  s[3] = b.g.s4;
-  const Lanes cos5_same = pick(b4, wrist.cos5[1], wrist.cos5[0]), cos5_other = pick(b4, wrist.cos5[0], wrist.cos5[1]);
-  const Lanes sin5_same = pick(b4, wrist.sin5[1], wrist.sin5[0]), sin5_other = pick(b4, wrist.sin5[0], wrist.sin5[1]);
-  const Lanes cos6_same = pick(b4, wrist.cos6[1], wrist.cos6[0]), cos6_other = pick(b4, wrist.cos6[0], wrist.cos6[1]);
-  const Lanes sin6_same = pick(b4, wrist.sin6[1], wrist.sin6[0]), sin6_other = pick(b4, wrist.sin6[0], wrist.sin6[1]);
-  c[4] = pick(hs, -cos5_other, cos5_same);
-  s[4] = pick(hs, sin5_other, sin5_same);
-  c[5] = pick(hs, -cos6_other, cos6_same);
-  s[5] = pick(hs, -sin6_other, sin6_same);
+  SharedJoints joints;
+  shared_joints(b, m, solvable, joints);
+  const Lanes best = select_lanes(b, m, joints);
+  slot_trig_lanes(b, best, out.c, out.s);
   // The classification, and the zero configuration (1, 0) for lanes that are not reachable.
   const Lanes below = Lanes::splat(m.singularity_tolerance);
   const Lanes wrist_norm = root(b.target.r[0][2] * b.target.r[0][2] + b.target.r[1][2] * b.target.r[1][2]);
-  const Lanes singular = where_less(abs(s[1]), below, one,
-                                    where_less(abs(c[3]), below, one, where_less(wrist_norm, below, one, zero)));
-  const Lanes found = where_equal(valid[0] + valid[1], zero, zero, one);
+  const Lanes singular = where_less(abs(out.s[1]), below, one,
+                                    where_less(abs(out.c[3]), below, one, where_less(wrist_norm, below, one, zero)));
+  const Lanes found = where_equal(joints.valid[0] + joints.valid[1], zero, zero, one);
   const Lanes chosen = where_less(best, zero, zero, one);
   const Lanes reachable = chosen * (one - singular);
   for (int i = 0; i < 6; ++i) {
-    c[i] = pick(reachable, c[i], one);
-    s[i] = pick(reachable, s[i], zero);
+    out.c[i] = pick(reachable, out.c[i], one);
+    out.s[i] = pick(reachable, out.s[i], zero);
   }
   for (int lane = 0; lane < kBlockLanes; ++lane) {
-    out.status[lane] = found.v[lane] == 0.0    ? SampleStatus::kUnreachable
-                       : chosen.v[lane] == 0.0 ? SampleStatus::kInvalid
+    out.status[lane] = found.v[lane] == 0.0      ? SampleStatus::kUnreachable
+                       : chosen.v[lane] == 0.0   ? SampleStatus::kInvalid
                        : singular.v[lane] != 0.0 ? SampleStatus::kSingular
                                                  : SampleStatus::kReachable;
   }
