@@ -269,6 +269,7 @@ class Problem {
                                      bool prune, bool prune_front) const;
   const Evaluation& evaluate_blocks(const MechanismModel& model, EvalScratch& ws, const EvalOptions& options,
                                     bool prune, bool prune_front) const;
+  bool block_moves(std::size_t i, const double* v, double current, int lanes) const;
   bool fold_block(const MechanismModel& model, EvalScratch& ws, const EvalOptions& options, const int* lane_sample,
                   int lanes, bool prune, bool prune_front) const;
   void fold_block_sums(const MechanismModel& model, EvalScratch& ws, const int* lane_sample, int lanes) const;

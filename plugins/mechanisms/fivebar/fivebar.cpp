@@ -17,6 +17,8 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr const char* kName = "fivebar";
+// solve_leg's rounding bound of its area term, in units of spread^2 (26 eps, rounded up).
+constexpr double kAreaTolerance = 32.0 * kEps;
 
 std::string show(double value) { return Json(value).dump(); }
 
@@ -33,33 +35,36 @@ struct Leg {
 enum class LegResult { kSolved, kUnreachable, kOnJoint };
 
 /// Elbow-out inverse kinematics of one leg with E - A = (dx, dy).
+///
+/// Without the angle at A or rho = |E - A| (docs/design.md section 13.2): with along = 2 l1 rho
+/// cos(angle) = l1^2 - l2^2 + rho^2 and root = 2 l1 rho sin(angle) >= 0, the law of cosines in
+/// Heron's form gives root^2 = ((l1 + l2)^2 - rho^2)(rho^2 - (l1 - l2)^2), and the actuated link's
+/// unit vector is (along (dx, dy) + root (-dy, dx)) / (2 l1 rho^2): one square root and one
+/// division, where the cosine, the sine and the unit vector of E - A took three and two (on this
+/// kind of CPU a vector square root or division costs 16 to 24 multiplications).
 LegResult solve_leg(double dx, double dy, double l1, double l2, Leg& leg) {
   const double rho2 = dx * dx + dy * dy;
-  const double rho = std::sqrt(rho2);
   const double diff = (l1 - l2) * (l1 + l2);  // l1^2 - l2^2 without cancellation
   const double spread = l1 * l1 + l2 * l2 + rho2;
-  if (!(rho > 0.0)) {
+  if (!(rho2 > 0.0)) {
     // E on the actuated joint: reachable only folded (l1 = l2), with any q1; singular.
     return std::abs(diff) <= 8.0 * kEps * spread ? LegResult::kOnJoint : LegResult::kUnreachable;
   }
-  // Reciprocals once, then products: a vector divides at a fraction of the rate it multiplies,
-  // and the block kernel (fivebar_block.cpp) does the same operations.
-  const double inv_rho = 1.0 / rho;
-  const double den = 2.0 * l1 * rho;
-  const double inv_den = 1.0 / den;
-  double c = (diff + rho2) * inv_den;  // cosine of the angle between E - A and the actuated link
-  // Rounding bound of c: a sample on the reach boundary (|E - A| = l1 + l2 or |l1 - l2|) may
-  // compute |c| a few ulps above 1; it is clamped (and then classified singular), never NaN.
-  const double tolerance = 8.0 * kEps * spread * inv_den;
-  if (!(std::abs(c) <= 1.0 + tolerance)) return LegResult::kUnreachable;
-  c = std::clamp(c, -1.0, 1.0);
-  const double s = std::sqrt((1.0 - c) * (1.0 + c));  // sin(acos(c)) >= 0
-  const double ex = dx * inv_rho, ey = dy * inv_rho;
-  leg.ux = c * ex - s * ey;  // E - A rotated counter-clockwise by acos(c): elbow out
-  leg.uy = c * ey + s * ex;
+  const double sum = l1 + l2, fold = l1 - l2;
+  const double area = (sum * sum - rho2) * (rho2 - fold * fold);  // root^2
+  // Rounding bound of area (each factor is off by at most 10 eps spread, and |factor| <= 2
+  // spread): a sample on the reach boundary (rho = l1 + l2 or |l1 - l2|) may compute a slightly
+  // negative area; it counts as 0 (and is then classified singular), never NaN.
+  const double tolerance = kAreaTolerance * spread * spread;
+  if (!(area >= -tolerance)) return LegResult::kUnreachable;
+  const double root = std::sqrt(area > 0.0 ? area : 0.0);
+  const double along = diff + rho2;
+  const double inv = 1.0 / (2.0 * l1 * rho2);
+  leg.ux = (along * dx - root * dy) * inv;  // E - A rotated counter-clockwise by the angle: elbow out
+  leg.uy = (along * dy + root * dx) * inv;
   leg.wx = dx - l1 * leg.ux;
   leg.wy = dy - l1 * leg.uy;
-  leg.q_act = std::atan2(dy, dx) + std::acos(c);
+  leg.q_act = std::atan2(dy, dx) + std::atan2(root, along);
   double q_free = std::atan2(leg.wy, leg.wx);
   if (q_free < -0.5 * kPi) q_free += 2.0 * kPi;
   leg.q_free = q_free;

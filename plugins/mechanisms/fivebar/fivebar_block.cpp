@@ -40,6 +40,8 @@ using M = hn::Mask<D>;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 // tan(kFiveBarAngleTolerance); tan(1e-9) rounds to 1e-9.
 constexpr double kTanAngleTolerance = 1e-9;
+// fivebar.cpp's rounding bound of the leg's area term, in units of spread^2.
+constexpr double kAreaTolerance = 32.0 * kEps;
 
 // One leg in its own frame, for the lanes of one vector.
 struct Leg {
@@ -51,28 +53,23 @@ struct Leg {
 };
 
 // Elbow-out inverse kinematics of one leg with E - A = (dx, dy): fivebar.cpp's solve_leg minus
-// the angles.
+// the angles (Heron's form of the law of cosines: one square root and one division).
 HWY_INLINE Leg SolveLeg(D d, V dx, V dy, double l1, double l2) {
-  const double diff = (l1 - l2) * (l1 + l2);
+  const double diff = (l1 - l2) * (l1 + l2), sum = l1 + l2, fold = l1 - l2;
   const V zero = hn::Zero(d), one = hn::Set(d, 1.0);
   const V rho2 = hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy));
-  const V rho = hn::Sqrt(rho2);
   const V spread = hn::Add(hn::Set(d, l1 * l1 + l2 * l2), rho2);
-  const V den = hn::Mul(hn::Set(d, 2.0 * l1), rho);
-  const V inv_den = hn::Div(one, den);
-  const V c_raw = hn::Mul(hn::Add(hn::Set(d, diff), rho2), inv_den);
-  const V tolerance = hn::Mul(hn::Mul(hn::Set(d, 8.0 * kEps), spread), inv_den);
-  const M positive = hn::Gt(rho, zero);
+  const V area = hn::Mul(hn::Sub(hn::Set(d, sum * sum), rho2), hn::Sub(rho2, hn::Set(d, fold * fold)));
+  const V tolerance = hn::Mul(hn::Mul(hn::Set(d, kAreaTolerance), spread), spread);
+  const M positive = hn::Gt(rho2, zero);
   Leg leg;
   leg.on_joint = hn::AndNot(positive, hn::Le(hn::Set(d, std::abs(diff)), hn::Mul(hn::Set(d, 8.0 * kEps), spread)));
-  leg.solved = hn::And(positive, hn::Le(hn::Abs(c_raw), hn::Add(one, tolerance)));
-  const V c = hn::IfThenElse(positive, hn::Min(hn::Max(c_raw, hn::Set(d, -1.0)), one), one);
-  const V s = hn::Sqrt(hn::Mul(hn::Sub(one, c), hn::Add(one, c)));
-  const V safe_rho = hn::IfThenElse(positive, rho, one);
-  const V inv_rho = hn::Div(one, safe_rho);
-  const V ex = hn::Mul(dx, inv_rho), ey = hn::Mul(dy, inv_rho);
-  leg.ux = hn::Sub(hn::Mul(c, ex), hn::Mul(s, ey));
-  leg.uy = hn::Add(hn::Mul(c, ey), hn::Mul(s, ex));
+  leg.solved = hn::And(positive, hn::Ge(area, hn::Neg(tolerance)));
+  const V root = hn::Sqrt(hn::IfThenElse(hn::Gt(area, zero), area, zero));
+  const V along = hn::Add(hn::Set(d, diff), rho2);
+  const V inv = hn::Div(one, hn::Mul(hn::Set(d, 2.0 * l1), hn::IfThenElse(positive, rho2, one)));
+  leg.ux = hn::Mul(hn::Sub(hn::Mul(along, dx), hn::Mul(root, dy)), inv);
+  leg.uy = hn::Mul(hn::Add(hn::Mul(along, dy), hn::Mul(root, dx)), inv);
   const V l1v = hn::Set(d, l1);
   leg.wx = hn::Sub(dx, hn::Mul(l1v, leg.ux));
   leg.wy = hn::Sub(dy, hn::Mul(l1v, leg.uy));
