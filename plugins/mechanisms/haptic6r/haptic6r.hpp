@@ -225,6 +225,10 @@ struct IkModel {
   std::array<int, 6> turns_up{}, turns_down{};
   // Whether [lower, upper] holds all of [-pi, pi] (a wrapped angle is then inside unless NaN).
   std::array<bool, 6> full_turn{};
+  // Whether |theta_offset_i| <= 3 pi / 4 and |home_i| <= pi: the IK's angles minus the offset
+  // (all but theta3's) and a wrapped angle minus home then lie within [-3 pi, 3 pi), and
+  // haptic6r_ik::wrap_near() wraps them with two selections, the same value as wrap().
+  std::array<bool, 6> near_offset{}, near_home{};
   Haptic6RSelection selection = Haptic6RSelection::kClosestToHome;
   double singularity_tolerance = 0.0;
 };

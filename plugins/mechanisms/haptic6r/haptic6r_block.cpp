@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstring>
 #include <string>
 
 namespace hapsyn::plugins {
@@ -68,9 +69,13 @@ void Haptic6RModel::solve_block_impl(const PoseBlock& poses, Needs needs, Quanti
   // status unreachable below.
   static constexpr double kIdentity[7] = {0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0};
   Lanes pose[7];
-  for (int c = 0; c < 7; ++c) {
-    for (int lane = 0; lane < kBlockLanes; ++lane) {
-      pose[c].v[lane] = lane < poses.count && c < poses.dimension ? poses.coordinate[c][lane] : kIdentity[c];
+  if (poses.count == kBlockLanes && poses.dimension == 7) {  // the usual block: a vector load per coordinate
+    for (int c = 0; c < 7; ++c) pose[c] = Lanes::load(poses.coordinate[c]);
+  } else {
+    for (int c = 0; c < 7; ++c) {
+      for (int lane = 0; lane < kBlockLanes; ++lane) {
+        pose[c].v[lane] = lane < poses.count && c < poses.dimension ? poses.coordinate[c][lane] : kIdentity[c];
+      }
     }
   }
   Lanes norm = haptic6r_ik::quaternion_norm(pose);
@@ -90,7 +95,7 @@ void Haptic6RModel::solve_block_impl(const PoseBlock& poses, Needs needs, Quanti
   haptic6r_ik::branch_angles(target, m, branches);
   haptic6r_ik::LaneOutcomes outcome;
   haptic6r_ik::configure_lanes(branches, m, ok, outcome);
-  for (int lane = 0; lane < kBlockLanes; ++lane) out.status[lane] = static_cast<std::int32_t>(outcome.status[lane]);
+  std::memcpy(out.status, outcome.status, sizeof out.status);
   const Lanes(&cosine)[6] = outcome.c;
   const Lanes(&sine)[6] = outcome.s;
   fill_block(cosine, sine, needs, out);

@@ -19,6 +19,8 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <cstring>
 #include <type_traits>
 
 namespace hapsyn::plugins::haptic6r_ik {
@@ -79,6 +81,30 @@ template <typename T>
   T r = angle - 2.0 * kPi * round_down((angle + kPi) * kInverseTwoPi);
   r = where_less(r, splat<T>(kPi), r, r - 2.0 * kPi);
   return where_less(r, splat<T>(-kPi), r + 2.0 * kPi, r);
+}
+
+/// wrap() of an angle in [-3 pi, 3 pi): wrap()'s two corrections without its turn count (for
+/// such an angle the count is -1, 0 or 1, and subtracting 2 pi n is the correction's own
+/// subtraction), so the same value with a third of the operations; the IK's angles minus
+/// their offsets and wrapped angles minus home are in that range (IkModel::near_offset,
+/// near_home; for theta1, phi -+ beta in [-2 pi, 2 pi], minus at most 3 pi / 4).
+template <typename T>
+[[gnu::always_inline]] inline T wrap_near(const T& angle) {
+  const T r = where_less(angle, splat<T>(kPi), angle, angle - 2.0 * kPi);
+  return where_less(r, splat<T>(-kPi), r + 2.0 * kPi, r);
+}
+
+/// Joint i's q = wrap(theta - theta_offset_i) for an angle theta of the IK: theta1 in [-2 pi, 2
+/// pi], theta3 (i = 2) any, the others in [-pi, 2 pi].
+template <typename T>
+[[gnu::always_inline]] inline T joint_angle(const T& theta, const IkModel& m, std::size_t i) {
+  return i != 2 && m.near_offset[i] ? wrap_near(theta - m.offset[i]) : wrap(theta - m.offset[i]);
+}
+
+/// wrap(q - home_i) for a wrapped q (in [-pi, pi)).
+template <typename T>
+[[gnu::always_inline]] inline T from_home(const T& q, const IkModel& m, std::size_t i) {
+  return m.near_home[i] ? wrap_near(q - m.home[i]) : wrap(q - m.home[i]);
 }
 
 /// A target frame: position p [m] and rotation r (r[row][col], columns x_E, y_E, z_E).
@@ -313,7 +339,7 @@ struct Slots {
         const double theta1 = b2 == 0 ? p.phi - p.beta : p.phi + p.beta;
         const double theta3 = yaw - theta1 - theta2;
         const double theta[6] = {theta1, theta2, theta3, b.theta4_branch[b4], theta5, theta6};
-        for (int i = 0; i < 6; ++i) out.q[slot][i] = wrap(theta[i] - m.offset[static_cast<std::size_t>(i)]);
+        for (std::size_t i = 0; i < 6; ++i) out.q[slot][i] = joint_angle(theta[i], m, i);
         if (with_trig) slot_trig(b, slot, out.c[slot], out.s[slot]);
       }
     }
@@ -354,7 +380,7 @@ struct Slots {
     if (!slots.valid[k] || !admissible(slots.q[k], m)) continue;
     double distance = 0.0;
     for (std::size_t i = 0; i < 6; ++i) {
-      const double e = wrap(slots.q[k][i] - m.home[i]);
+      const double e = from_home(slots.q[k][i], m, i);
       distance += e * e;
     }
     if (distance < best_distance) {
@@ -467,9 +493,9 @@ struct JointLanes {
 };
 
 [[gnu::always_inline]] inline void joint_lanes(const Lanes& theta, const IkModel& m, std::size_t i, JointLanes& out) {
-  out.q = wrap(theta - m.offset[i]);
+  out.q = joint_angle(theta, m, i);
   out.admissible = admissible_lanes(out.q, m, i);
-  out.from_home = wrap(out.q - m.home[i]);
+  out.from_home = from_home(out.q, m, i);
 }
 
 /// The joints the eight slots share, each computed once: joints 1 and 2 of planar solution k
@@ -576,7 +602,7 @@ struct SharedJoints {
 /// What the block kernel needs of each lane's outcome: the status, and the chosen
 /// configuration's DH-angle cosines c and sines s where it is reachable (1 and 0 elsewhere).
 struct LaneOutcomes {
-  SampleStatus status[kBlockLanes];
+  alignas(64) std::int32_t status[kBlockLanes];  // SampleStatus values
   Lanes c[6], s[6];
 };
 
@@ -603,12 +629,16 @@ struct LaneOutcomes {
     out.c[i] = pick(reachable, out.c[i], one);
     out.s[i] = pick(reachable, out.s[i], zero);
   }
-  for (int lane = 0; lane < kBlockLanes; ++lane) {
-    out.status[lane] = found.v[lane] == 0.0      ? SampleStatus::kUnreachable
-                       : chosen.v[lane] == 0.0   ? SampleStatus::kInvalid
-                       : singular.v[lane] != 0.0 ? SampleStatus::kSingular
-                                                 : SampleStatus::kReachable;
-  }
+  // The status codes as lane selections, converted to integers at once (reading the truth values
+  // lane by lane cost a store and a reload per lane).
+  const Lanes code = where_equal(
+      found, zero, Lanes::splat(static_cast<double>(SampleStatus::kUnreachable)),
+      where_equal(chosen, zero, Lanes::splat(static_cast<double>(SampleStatus::kInvalid)),
+                  where_equal(singular, zero, Lanes::splat(static_cast<double>(SampleStatus::kReachable)),
+                              Lanes::splat(static_cast<double>(SampleStatus::kSingular)))));
+  typedef std::int32_t Codes __attribute__((vector_size(kBlockLanes * sizeof(std::int32_t))));
+  const Codes codes = __builtin_convertvector(code.v, Codes);
+  std::memcpy(out.status, &codes, sizeof codes);
 }
 
 /// IK, selection and classification of a pose whose position is finite and whose quaternion has

@@ -41,6 +41,8 @@ void Haptic6RModel::ik_model(haptic6r_ik::IkModel& m) const {
     m.turns_up[i] = static_cast<int>(std::max(0.0, up)) + 1;
     m.turns_down[i] = static_cast<int>(std::max(0.0, down)) + 1;
     m.full_turn[i] = m.lower[i] <= -haptic6r_ik::kPi && m.upper[i] >= haptic6r_ik::kPi;
+    m.near_offset[i] = std::abs(m.offset[i]) <= 0.75 * haptic6r_ik::kPi;
+    m.near_home[i] = std::abs(m.home[i]) <= haptic6r_ik::kPi;
   }
   m.selection = o.selection;
   m.singularity_tolerance = o.options.singularity_tolerance;
