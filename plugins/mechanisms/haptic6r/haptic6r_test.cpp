@@ -1,6 +1,7 @@
 // Tests of the haptic6r mechanism: IK/FK round trips, Jacobian vs finite differences, inertia
 // and gravity vs KDL and vs an independent energy computation, extremes, selection, errors.
 #include "haptic6r.hpp"
+#include "haptic6r_ik.hpp"
 
 #include "test_support.hpp"
 
@@ -13,6 +14,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
+#include <iomanip>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <random>
@@ -721,6 +725,35 @@ TEST(Haptic6R, BlockKernelEqualsSolveLaneByLane) {
   }
   EXPECT_GT(reachable, 100);  // both kinds of lanes were exercised
   EXPECT_GT(other, 50);
+}
+
+// wrap_near() is wrap() for angles in [-3 pi, 3 pi) (the range the IK gives it): bit for bit
+// on random angles, at the neighbours of every multiple of pi in the range, and for lanes.
+TEST(Haptic6RWrap, NearWrapEqualsWrapInItsRange) {
+  namespace ik = hapsyn::plugins::haptic6r_ik;
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> angle(-3.0 * kPi, 3.0 * kPi);
+  std::vector<double> angles;
+  for (int i = 0; i < 200000; ++i) angles.push_back(angle(rng));
+  for (int k = -3; k <= 3; ++k) {
+    double x = k * kPi;
+    for (int step = 0; step < 40; ++step) x = std::nextafter(x, -INFINITY);
+    for (int step = 0; step < 80; ++step, x = std::nextafter(x, INFINITY)) {
+      if (x >= -3.0 * kPi && x < 3.0 * kPi) angles.push_back(x);
+    }
+  }
+  for (const double x : angles) {
+    const double near = ik::wrap_near(x), full = ik::wrap(x);
+    ASSERT_EQ(std::memcmp(&near, &full, sizeof near), 0) << std::setprecision(17) << x << ": " << near << " vs " << full;
+    ASSERT_GE(near, -kPi) << x;
+    ASSERT_LT(near, kPi) << x;
+  }
+  for (std::size_t first = 0; first + kBlockLanes <= angles.size(); first += kBlockLanes) {
+    const hapsyn::Lanes lanes = ik::wrap_near(hapsyn::Lanes::load(angles.data() + first));
+    for (int lane = 0; lane < kBlockLanes; ++lane) ASSERT_EQ(lanes.v[lane], ik::wrap(angles[first + static_cast<std::size_t>(lane)]));
+  }
+  // Outside the range it would not be wrap(): the selection guards its use (IkModel::near_offset).
+  EXPECT_NE(ik::wrap_near(3.5 * kPi), ik::wrap(3.5 * kPi));
 }
 
 TEST(Haptic6R, BlockStatusesAndQuantitiesEqualSolveUnderEveryRule) {
