@@ -781,8 +781,28 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
     return starts;
   };
   const auto reverse_solve = [&](std::size_t k, const Solved& start) {
-    if (start.name == progress.subproblems[k]->record.value("start", std::string())) {
-      // The first sweep's start: the same run again would give the same result.
+    const std::string first_start = progress.subproblems[k]->record.value("start", std::string());
+    if (start.name == first_start) {
+      // The first sweep's start: the same run again would give the same result. The nearest
+      // (L1, ties to the first in grid order) other grid point the first sweep solved gives a
+      // second start instead: the subproblem next to a shadow optimum otherwise only ever
+      // starts from the shadow, and near the five-bar's GDI optimum (on a reach cliff) a
+      // shadow a few 1e-4 m off left it well below the front. The first sweep's results are
+      // final while this sweep runs, so the choice does not depend on the threads.
+      std::optional<std::size_t> nearest;
+      for (std::size_t j = 0; j < n; ++j) {
+        if (j == k || !progress.subproblems[j] || !progress.subproblems[j]->point) continue;
+        if ("subproblems[" + std::to_string(j) + "]" == first_start) continue;
+        if (!nearest || l1_distance(interior[j], interior[k]) < l1_distance(interior[*nearest], interior[k]) - kSameDistance) {
+          nearest = j;
+        }
+      }
+      if (nearest) {
+        const Solved second{interior[*nearest],
+                            free_design(problem.design_space(), progress.subproblems[*nearest]->point->design),
+                            "subproblems[" + std::to_string(*nearest) + "]"};
+        return solve_subproblem(problem, options_, chim, sub, interior[k], second, nullptr);
+      }
       FinishedSubproblem same;
       same.record = {{"beta", interior[k]}, {"start", start.name}, {"status", "not solved again: the first sweep's start"}};
       return same;

@@ -623,7 +623,21 @@ std::string one_by_one_reverse_start(const Json& subproblems, const Json& revers
     }
   }
   n.consider_shadows();
-  return n.start;
+  if (n.start != subproblems[k]["start"].get<std::string>()) return n.start;
+  // The first sweep's start again: the nearest other point the first sweep solved instead.
+  std::string second;
+  double nearest = INFINITY;
+  for (std::size_t j = 0; j < subproblems.size(); ++j) {
+    const std::string name = "subproblems[" + std::to_string(j) + "]";
+    if (j == k || !subproblems[j].contains("objectives") || name == n.start) continue;
+    double dist = 0.0;
+    for (std::size_t i = 0; i < beta_of(subproblems, k).size(); ++i) dist += std::abs(beta_of(subproblems, j)[i] - beta_of(subproblems, k)[i]);
+    if (dist < nearest - 1e-9) {
+      nearest = dist;
+      second = name;
+    }
+  }
+  return second.empty() ? n.start : second;
 }
 
 const Json kThreeObjectiveOptions = {
