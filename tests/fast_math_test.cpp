@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <vector>
@@ -135,13 +136,22 @@ TEST(FastMath, LaneAtan2EqualsTheScalarCallLaneByLane) {
     }
     const hapsyn::Lanes angle = hapsyn::atan2(hapsyn::Lanes::load(ys), hapsyn::Lanes::load(xs));
     const hapsyn::Lanes root = hapsyn::sqrt(hapsyn::abs(hapsyn::Lanes::load(xs)));
+    // The pair atan2(y, x), atan2(y, -x) sharing their work: the two scalar calls bit for bit.
+    hapsyn::Lanes pair_angle, pair_mirrored;
+    hapsyn::atan2_and_mirrored(hapsyn::Lanes::load(ys), hapsyn::Lanes::load(xs), pair_angle, pair_mirrored);
     for (int lane = 0; lane < hapsyn::kBlockLanes; ++lane) {
       const double expected = hapsyn::fast::atan2(ys[lane], xs[lane]);
+      const double expected_mirrored = hapsyn::fast::atan2(ys[lane], -xs[lane]);
       if (std::isnan(expected)) {
         EXPECT_TRUE(std::isnan(angle.v[lane])) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
+        EXPECT_TRUE(std::isnan(pair_angle.v[lane])) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
+        EXPECT_TRUE(std::isnan(pair_mirrored.v[lane])) << "atan2(" << ys[lane] << ", " << -xs[lane] << ")";
       } else {
         EXPECT_EQ(std::signbit(angle.v[lane]), std::signbit(expected)) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
         EXPECT_EQ(angle.v[lane], expected) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
+        EXPECT_EQ(std::memcmp(&pair_angle.v[lane], &expected, sizeof expected), 0) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
+        EXPECT_EQ(std::memcmp(&pair_mirrored.v[lane], &expected_mirrored, sizeof expected), 0)
+            << "atan2(" << ys[lane] << ", " << -xs[lane] << ")";
       }
       const double expected_root = std::sqrt(std::fabs(xs[lane]));
       if (!std::isnan(expected_root)) {

@@ -6,6 +6,8 @@
 
 #include <atomic>
 #include <set>
+#include <stdexcept>
+#include <thread>
 #include <mutex>
 #include <vector>
 
@@ -70,4 +72,54 @@ TEST(Parallel, WithoutALimitEveryThreadRunsAndNothingIsPrinted) {
   hapsyn::parallel_for_dynamic(1000, 4, 1, [&](long long i, int) { sum += i; });
   EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
   EXPECT_EQ(sum.load(), 499500);
+}
+
+// The workers persist between loops: many short loops in a row, each with every index once and
+// thread numbers below the count; an exception from a worker's share reaches the caller and the
+// next loop runs normally.
+TEST(Parallel, PersistentWorkersRunLoopAfterLoopAndPassExceptionsOn) {
+  for (int loop = 0; loop < 500; ++loop) {
+    std::vector<std::atomic<int>> done(64);
+    std::atomic<int> highest{0};
+    hapsyn::parallel_for_dynamic(64, 3, 1, [&](long long i, int t) {
+      done[static_cast<std::size_t>(i)]++;
+      int seen = highest.load();
+      while (t > seen && !highest.compare_exchange_weak(seen, t)) {
+      }
+    });
+    for (const auto& d : done) ASSERT_EQ(d.load(), 1) << "loop " << loop;
+    ASSERT_LT(highest.load(), 3);
+  }
+  std::atomic<int> thrown_on{-1};
+  EXPECT_THROW(hapsyn::parallel_for_dynamic(1000, 2, 1,
+                                            [&](long long i, int t) {
+                                              if (i == 999) {
+                                                thrown_on = t;
+                                                throw std::runtime_error("deliberate");
+                                              }
+                                            }),
+               std::runtime_error);
+  std::atomic<long long> sum{0};
+  hapsyn::parallel_for_dynamic(100, 2, 1, [&](long long i, int) { sum += i; });
+  EXPECT_EQ(sum.load(), 4950);
+}
+
+// A loop inside a loop, and loops started by two threads at once: the workers serve one loop at
+// a time, the others start threads of their own; every index runs once.
+TEST(Parallel, NestedAndConcurrentLoopsEachRunEveryIndexOnce) {
+  std::vector<std::atomic<int>> inner(8 * 50);
+  hapsyn::parallel_for_dynamic(8, 2, 1, [&](long long outer, int) {
+    hapsyn::parallel_for_dynamic(50, 2, 1, [&](long long i, int) { inner[static_cast<std::size_t>(outer * 50 + i)]++; });
+  });
+  for (const auto& d : inner) EXPECT_EQ(d.load(), 1);
+  std::vector<std::atomic<int>> a(2000), b(2000);
+  std::thread other([&] {
+    for (int r = 0; r < 20; ++r) hapsyn::parallel_for_dynamic(100, 2, 1, [&](long long i, int) { a[static_cast<std::size_t>(r * 100 + i)]++; });
+  });
+  for (int r = 0; r < 20; ++r) hapsyn::parallel_for_dynamic(100, 2, 1, [&](long long i, int) { b[static_cast<std::size_t>(r * 100 + i)]++; });
+  other.join();
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].load(), 1) << i;
+    EXPECT_EQ(b[i].load(), 1) << i;
+  }
 }

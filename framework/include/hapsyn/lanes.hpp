@@ -133,20 +133,24 @@ HAPSYN_LANES_WHERE(where_equal, ==)
   return r;
 }
 
-/// fast::atan2 (hapsyn/fast_math.hpp) of every lane: the same table and series (one template,
-/// fast::atan_reduced), so a lane gets what the scalar call gives (up to the compiler's
-/// multiply-add fusion); lanes with a zero or non-finite argument take libm, as the scalar does.
-[[gnu::always_inline]] inline Lanes atan2(const Lanes& y, const Lanes& x) {
+namespace lanes_detail {
+// atan2's work that depends on |x| and |y| only: the angle of (|x|, |y|) in [0, pi/2] and the
+// lanes inside fast::atan2's range (1 or 0).
+struct AtanCore {
+  Lanes angle, in_range;
+};
+[[gnu::always_inline]] inline AtanCore atan_core(const Lanes& y, const Lanes& x) {
   const Lanes ax = abs(x), ay = abs(y), zero = Lanes::splat(0.0);
   const Lanes largest = where_greater(ax, ay, ax, ay), smallest = where_greater(ax, ay, ay, ax);
   // Lanes outside fast::atan2's range compute atan(0) here (no NaN reaches the table index).
   // The scalar's !(largest > 0) || !(largest <= DBL_MAX) || !(smallest >= 0): zero, infinite
   // or NaN arguments (smallest == smallest is false for a NaN |x| next to a finite |y|).
   const Lanes one = Lanes::splat(1.0);
-  const Lanes in_range = where_greater(
+  AtanCore core;
+  core.in_range = where_greater(
       largest, zero, where_greater(largest, Lanes::splat(1.7976931348623157e308), zero, where_equal(smallest, smallest, one, zero)),
       zero);
-  const Lanes t = where_equal(in_range, zero, zero, smallest / where_equal(in_range, zero, one, largest));
+  const Lanes t = where_equal(core.in_range, zero, zero, smallest / where_equal(core.in_range, zero, one, largest));
   const Lanes k = floor_small(t * 8.0 + 0.5);  // t * 8 + 0.5 >= 0.5: floor is the scalar's truncation
   Lanes table_k;
 #if defined(__clang__)
@@ -160,16 +164,21 @@ HAPSYN_LANES_WHERE(where_equal, ==)
   const Lanes::Vector high = {fast::kAtanTable[8], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
   table_k.v = __builtin_shuffle(low, high, __builtin_convertvector(k.v, Index));
 #endif
-  Lanes angle = fast::atan_reduced(t, 0.125 * k, table_k);
-  constexpr double kHalfPi = 1.5707963267948966, kPi = 3.141592653589793;
-  angle = where_greater(ay, ax, kHalfPi - angle, angle);
-  angle = where_sign_bit(x, kPi - angle, angle);
+  const Lanes angle = fast::atan_reduced(t, 0.125 * k, table_k);
+  constexpr double kHalfPi = 1.5707963267948966;
+  core.angle = where_greater(ay, ax, kHalfPi - angle, angle);
+  return core;
+}
+// The core's angle in the quadrant of (x, y), and libm's atan2 for the lanes outside the range.
+[[gnu::always_inline]] inline Lanes atan_quadrant(const AtanCore& core, const Lanes& y, const Lanes& x) {
+  constexpr double kPi = 3.141592653589793;
+  Lanes angle = where_sign_bit(x, kPi - core.angle, core.angle);
   angle = where_sign_bit(y, -angle, angle);
-  if (any_zero(in_range)) {
+  if (any_zero(core.in_range)) {
     // Through memory: reading the lanes of in_range and angle in place makes GCC 12 compute
     // them lane by lane (scalar compares) from the start of the function.
     double flag[kBlockLanes], value[kBlockLanes], ys[kBlockLanes], xs[kBlockLanes];
-    in_range.store(flag);
+    core.in_range.store(flag);
     angle.store(value);
     y.store(ys);
     x.store(xs);
@@ -179,6 +188,22 @@ HAPSYN_LANES_WHERE(where_equal, ==)
     angle = Lanes::load(value);
   }
   return angle;
+}
+}  // namespace lanes_detail
+
+/// fast::atan2 (hapsyn/fast_math.hpp) of every lane: the same table and series (one template,
+/// fast::atan_reduced), so a lane gets what the scalar call gives (up to the compiler's
+/// multiply-add fusion); lanes with a zero or non-finite argument take libm, as the scalar does.
+[[gnu::always_inline]] inline Lanes atan2(const Lanes& y, const Lanes& x) {
+  return lanes_detail::atan_quadrant(lanes_detail::atan_core(y, x), y, x);
+}
+
+/// atan2(y, x) and atan2(y, -x) of every lane, bit for bit the two calls: everything but the
+/// quadrant depends on |x| and |y| only, so it is computed once.
+[[gnu::always_inline]] inline void atan2_and_mirrored(const Lanes& y, const Lanes& x, Lanes& angle, Lanes& mirrored) {
+  const lanes_detail::AtanCore core = lanes_detail::atan_core(y, x);
+  angle = lanes_detail::atan_quadrant(core, y, x);
+  mirrored = lanes_detail::atan_quadrant(core, y, -x);
 }
 
 /// fast::sin_cos (hapsyn/fast_math.hpp) of every lane: the same reduction and polynomials, so a

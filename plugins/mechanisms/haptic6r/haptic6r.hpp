@@ -301,7 +301,7 @@ class Haptic6RModel final : public MechanismModel {
   SampleStatus configure(const double* pose, Vector6d& q, JointTrig& trig) const;  // inlined into both
   void solve_block_impl(const PoseBlock& poses, Needs needs, QuantityBlock& out) const;
   void quantities_block_impl(const Vector6d* q, int count, Needs needs, QuantityBlock& out) const;
-  void fill_block(const Lanes* cosine, const Lanes* sine, Needs needs, QuantityBlock& out) const;  // inlined into both
+  void fill_block(const Lanes* cosine, const Lanes* sine, const Lanes& reachable, Needs needs, QuantityBlock& out) const;  // inlined into both
   int inverse_kinematics_impl(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions,
                               std::array<JointTrig, 8>* trig) const;
   void quantities_impl(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const;

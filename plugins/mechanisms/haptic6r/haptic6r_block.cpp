@@ -35,8 +35,8 @@ bool Haptic6R::solves_blocks(Needs needs) const { return (needs & ~kBlockNeeds) 
 
 // The block's Jacobian, inertia and gravity torque (those in `needs`) from each lane's DH-angle
 // cosines and sines, with the chain kernels of haptic6r_chain.hpp at T = Lanes.
-[[gnu::always_inline]] inline void Haptic6RModel::fill_block(const Lanes* cosine, const Lanes* sine, Needs needs,
-                                                            QuantityBlock& out) const {
+[[gnu::always_inline]] inline void Haptic6RModel::fill_block(const Lanes* cosine, const Lanes* sine, const Lanes& reachable,
+                                                            Needs needs, QuantityBlock& out) const {
   if (needs & kNeedActuatorLimits) {
     out.actuator_count = 6;
     for (int j = 0; j < 6; ++j) {
@@ -45,17 +45,20 @@ bool Haptic6R::solves_blocks(Needs needs) const { return (needs & ~kBlockNeeds) 
     }
   }
   if (!(needs & (kNeedJacobian | kNeedInertia | kNeedGravity))) return;
+  if (needs & kNeedJacobian) out.jacobian_rows = out.jacobian_cols = 6;
+  if (needs & kNeedInertia) out.inertia_size = 6;
+  if (needs & kNeedGravity) out.gravity_size = 6;
+  // The quantities of lanes that are not reachable are never read (QuantityBlock's contract):
+  // a block without a reachable lane (a few percent of a human-arm scene) computes none.
+  if (!any_nonzero(reachable)) return;
   haptic6r_chain::ChainOf<Lanes> chain;
   haptic6r_chain::chain_from(cosine, sine, d_, a_, ca_, sa_, chain);
   if (needs & kNeedJacobian) {
-    out.jacobian_rows = out.jacobian_cols = 6;
     const BlockMatrix jacobian{out.jacobian, 6};
     haptic6r_chain::jacobian_from(chain, jacobian);
   }
   if (needs & (kNeedInertia | kNeedGravity)) {
     const BlockMatrix inertia{out.inertia, 6}, gravity{out.gravity, 1};
-    if (needs & kNeedInertia) out.inertia_size = 6;
-    if (needs & kNeedGravity) out.gravity_size = 6;
     haptic6r_chain::dynamics_from(chain, bodies_, setup_->options.gravity, (needs & kNeedInertia) ? &inertia : nullptr,
                                   (needs & kNeedGravity) ? &gravity : nullptr);
   }
@@ -98,7 +101,7 @@ void Haptic6RModel::solve_block_impl(const PoseBlock& poses, Needs needs, Quanti
   std::memcpy(out.status, outcome.status, sizeof out.status);
   const Lanes(&cosine)[6] = outcome.c;
   const Lanes(&sine)[6] = outcome.s;
-  fill_block(cosine, sine, needs, out);
+  fill_block(cosine, sine, outcome.reachable, needs, out);
 }
 
 HAPSYN_MULTIVERSION_WIDE
@@ -110,7 +113,7 @@ void Haptic6RModel::quantities_block_impl(const Vector6d* q, int count, Needs ne
     out.status[lane] = static_cast<std::int32_t>(lane < count ? SampleStatus::kReachable : SampleStatus::kUnreachable);
   }
   for (std::size_t i = 0; i < 6; ++i) sin_cos(theta[i], sine[i], cosine[i]);  // as quantities() does, per lane
-  fill_block(cosine, sine, needs, out);
+  fill_block(cosine, sine, Lanes::splat(1.0), needs, out);  // every lane holds a configuration (count >= 1)
 }
 
 void Haptic6RModel::quantities_block(const Vector6d* q, int count, Needs needs, QuantityBlock& out) const {

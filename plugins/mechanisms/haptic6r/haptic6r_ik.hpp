@@ -41,6 +41,14 @@ constexpr double kBoundaryTolerance = 1e-12;
 [[gnu::always_inline]] inline Lanes root(const Lanes& a) { return hapsyn::sqrt(a); }
 [[gnu::always_inline]] inline double angle_of(double y, double x) { return fast::atan2(y, x); }
 [[gnu::always_inline]] inline Lanes angle_of(const Lanes& y, const Lanes& x) { return hapsyn::atan2(y, x); }
+/// angle_of(y, x) and angle_of(y, -x); the lanes share the work of the two (the same values).
+[[gnu::always_inline]] inline void angles_of(double y, double x, double& angle, double& mirrored) {
+  angle = fast::atan2(y, x);
+  mirrored = fast::atan2(y, -x);
+}
+[[gnu::always_inline]] inline void angles_of(const Lanes& y, const Lanes& x, Lanes& angle, Lanes& mirrored) {
+  atan2_and_mirrored(y, x, angle, mirrored);
+}
 [[gnu::always_inline]] inline double round_down(double a) { return std::floor(a); }
 [[gnu::always_inline]] inline Lanes round_down(const Lanes& a) { return floor_small(a); }  // |a| < 2^51 here
 /// Whether any lane holds a non-zero truth value.
@@ -279,8 +287,7 @@ template <typename T>
   solve_planar(b.g, m, b.planar);
   solve_wrist(target, b.g, b.planar, m, b.wrist);
   b.yaw0 = angle_of(b.g.hx, -b.g.hy);
-  b.theta4_branch[0] = angle_of(b.g.s4, b.g.c4_abs);
-  b.theta4_branch[1] = angle_of(b.g.s4, -b.g.c4_abs);
+  angles_of(b.g.s4, b.g.c4_abs, b.theta4_branch[0], b.theta4_branch[1]);
 }
 
 // Step 4 and after, per pose (T = double): solve() and inverse_kinematics(). The block kernel
@@ -603,6 +610,7 @@ struct SharedJoints {
 /// configuration's DH-angle cosines c and sines s where it is reachable (1 and 0 elsewhere).
 struct LaneOutcomes {
   alignas(64) std::int32_t status[kBlockLanes];  // SampleStatus values
+  Lanes reachable;  // 1 where the status is kReachable, else 0
   Lanes c[6], s[6];
 };
 
@@ -625,6 +633,7 @@ struct LaneOutcomes {
   const Lanes found = where_equal(joints.valid[0] + joints.valid[1], zero, zero, one);
   const Lanes chosen = where_less(best, zero, zero, one);
   const Lanes reachable = chosen * (one - singular);
+  out.reachable = reachable;
   for (int i = 0; i < 6; ++i) {
     out.c[i] = pick(reachable, out.c[i], one);
     out.s[i] = pick(reachable, out.s[i], zero);

@@ -212,6 +212,13 @@ void Coverage::local_block_impl(const QuantityBlock& q, double* out) const {
     throw Error(kName, "the mechanism's Jacobian is " + std::to_string(q.jacobian_rows) + "x" +
                            std::to_string(q.jacobian_cols) + ": coverage needs a 6x6 (omega, v) Jacobian of a 6-joint arm");
   }
+  if (!any_nonzero(reachable)) {  // every term is 0 for such lanes: a block without one skips them
+    int terms = 2;
+    for (const bool term : {velocity_, acceleration_, force_}) {
+      if (term) zero.store(out + kBlockLanes * terms++);
+    }
+    return;
+  }
   Lanes jacobian[6][6], gravity[6];
   for (int r = 0; r < 6; ++r) {
     for (int c = 0; c < 6; ++c) jacobian[r][c] = Lanes::load(q.jacobian[r * 6 + c]);
