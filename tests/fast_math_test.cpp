@@ -149,8 +149,9 @@ TEST(FastMath, LaneAtan2EqualsTheScalarCallLaneByLane) {
       } else {
         EXPECT_EQ(std::signbit(angle.v[lane]), std::signbit(expected)) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
         EXPECT_EQ(angle.v[lane], expected) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
-        EXPECT_EQ(std::memcmp(&pair_angle.v[lane], &expected, sizeof expected), 0) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
-        EXPECT_EQ(std::memcmp(&pair_mirrored.v[lane], &expected_mirrored, sizeof expected), 0)
+        const double got = pair_angle.v[lane], got_mirrored = pair_mirrored.v[lane];  // clang: no address of a vector element
+        EXPECT_EQ(std::memcmp(&got, &expected, sizeof expected), 0) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
+        EXPECT_EQ(std::memcmp(&got_mirrored, &expected_mirrored, sizeof expected), 0)
             << "atan2(" << ys[lane] << ", " << -xs[lane] << ")";
       }
       const double expected_root = std::sqrt(std::fabs(xs[lane]));
