@@ -65,16 +65,15 @@ class WorkerPool {
       std::lock_guard<std::mutex> lock(mutex_);
       job_ = &job;
       helpers_ = helpers;
-      pending_ = helpers;
-      pending_left_.store(helpers, std::memory_order_relaxed);
+      pending_.store(helpers, std::memory_order_relaxed);
       generation_.store(generation_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
     }
     if (helpers > 0) work_ready_.notify_all();
     job(0);
-    spin_until([&] { return pending_left_.load(std::memory_order_acquire) == 0; });
+    spin_until([&] { return pending_.load(std::memory_order_acquire) == 0; });
     {
       std::unique_lock<std::mutex> lock(mutex_);
-      done_.wait(lock, [&] { return pending_ == 0; });
+      done_.wait(lock, [&] { return pending_.load(std::memory_order_acquire) == 0; });
       job_ = nullptr;
     }
     busy_.store(false, std::memory_order_release);
@@ -95,9 +94,8 @@ class WorkerPool {
       const std::function<void(int)>* job = job_;
       lock.unlock();
       (*job)(index);
-      lock.lock();
-      pending_left_.fetch_sub(1, std::memory_order_release);
-      if (--pending_ == 0) done_.notify_one();
+      lock.lock();  // the caller may be about to wait on done_: decrement and notify under mutex_
+      if (pending_.fetch_sub(1, std::memory_order_acq_rel) == 1) done_.notify_one();
     }
   }
 
@@ -120,9 +118,9 @@ class WorkerPool {
   std::mutex mutex_;
   std::condition_variable work_ready_, done_;
   std::atomic<std::uint64_t> generation_{0};  // written under mutex_, read without it while spinning
-  std::atomic<int> pending_left_{0};          // pending_, readable without mutex_
+  std::atomic<int> pending_{0};  // helpers still running the loop; written under mutex_, read while spinning
   const std::function<void(int)>* job_ = nullptr;
-  int helpers_ = 0, pending_ = 0;
+  int helpers_ = 0;
 };
 
 std::atomic<WorkerPool*> worker_pool{nullptr};
