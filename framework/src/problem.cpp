@@ -1114,10 +1114,12 @@ Evaluation Problem::evaluate_parallel(const double* free_design, int threads, co
   std::vector<std::unique_ptr<EvalScratch>> spaces(static_cast<std::size_t>(chunk_count));
   std::vector<std::vector<int>> chunks(static_cast<std::size_t>(chunk_count));
   for (int t = 0; t < chunk_count; ++t) {
-    spaces[static_cast<std::size_t>(t)] = make_eval_scratch();
     chunks[static_cast<std::size_t>(t)].assign(indices.begin() + boundary(t), indices.begin() + boundary(t + 1));
   }
   parallel_for_dynamic(chunk_count, threads, 1, [&](long long t, int) {
+    // Made by the thread that fills it: scratches made one after the other on this thread can
+    // share cache lines, and then every write of one thread evicts the other's.
+    spaces[static_cast<std::size_t>(t)] = make_eval_scratch();
     EvalOptions o;
     o.subset = &chunks[static_cast<std::size_t>(t)];
     evaluate(free_design, *spaces[static_cast<std::size_t>(t)], o);

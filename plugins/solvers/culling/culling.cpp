@@ -561,13 +561,16 @@ template <class Save>
 FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions& options, const SolverContext& context,
                   Reference& reference, const Save& save, SweepCounts& partial) {
   std::vector<SweepThread> states(static_cast<std::size_t>(std::max(1, context.threads)));
-  for (SweepThread& s : states) {
+  // Each thread builds its own state at its first line: built one after the other on the
+  // calling thread, the threads' small buffers shared cache lines, and each thread's writes
+  // evicted the other's (paper GII culling on 2 threads: 1.49 s against 1.30 s, one binary).
+  const auto prepare = [&](SweepThread& s) {
     s.eval_scratch = problem.make_eval_scratch();
     s.x.resize(grid.counts.size());
     s.line_bound.emplace(problem, options.line_bounds, "culling");
     s.group_x.assign(static_cast<std::size_t>(kBlockLanes) * grid.counts.size(), 0.0);
     s.run_bounds.emplace(problem, "culling");
-  }
+  };
   const RangeLedger skip = reference.ledger;  // finished before this run
   auto last_report = Clock::now(), last_checkpoint = Clock::now();
   const auto t_sweep = Clock::now();
@@ -576,6 +579,7 @@ FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions
   // counts then go to the thread's partial counts) or a breach ended it (task.breach set).
   const auto run_line = [&](long long line, int thread, TaskLines& task) {
     SweepThread& s = states[static_cast<std::size_t>(thread)];
+    if (!s.eval_scratch) prepare(s);
     const SweepCounts before = s.counts;
     s.line_best = Best{};
     s.line_critical.clear();

@@ -120,7 +120,9 @@ Evaluator::Evaluator(const Problem& problem, Encoding encoding, EvaluationSettin
     : problem_(problem), encoding_(std::move(encoding)), settings_(settings), multi_objective_(multi_objective) {
   settings_.threads = std::max(1, settings_.threads);
   settings_.sample_chunks = std::max(1, settings_.sample_chunks);
-  for (int t = 0; t < settings_.threads; ++t) workspaces_.push_back(problem_.make_eval_scratch());
+  // Each thread makes its scratch at its first design (evaluate()): made here, one after the
+  // other, the threads' small buffers would share cache lines (see the culling sweep).
+  workspaces_.resize(static_cast<std::size_t>(settings_.threads));
 }
 
 void Evaluator::set_subset(const std::vector<int>* subset, int fidelity_level) {
@@ -161,8 +163,10 @@ Evaluator::Outcome Evaluator::evaluate(const std::vector<double>& free, int thre
   if (settings_.over_individuals) {
     EvalOptions options;
     options.subset = subset_;
+    std::unique_ptr<Problem::EvalScratch>& ws = workspaces_[static_cast<std::size_t>(thread)];
+    if (!ws) ws = problem_.make_eval_scratch();
     // The scratch's own evaluation, read in place: copying it cost a few allocations per design.
-    return outcome_of(free, problem_.evaluate(free.data(), *workspaces_[static_cast<std::size_t>(thread)], options));
+    return outcome_of(free, problem_.evaluate(free.data(), *ws, options));
   }
   Problem::ParallelOptions options;
   options.chunks = settings_.sample_chunks;
