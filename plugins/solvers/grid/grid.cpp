@@ -715,8 +715,10 @@ SolverResult GridSolver::solve_best(const Problem& problem, const SolverContext&
     shared_best = read_best(problem, grid, context, *state);
   }
   SweepControl control(context, grid, resumed);
-  // The pruning threshold: the best score known on this rank, its own or another rank's.
-  std::atomic<double> incumbent{shared_best.best_score};
+  // The pruning threshold: the best score known on this rank, its own or another rank's. Read
+  // by every thread at every group of designs: on a cache line of its own, so that writes to
+  // its neighbours on this stack do not evict it (coarse pruned grid, 2 threads: 11.9 ms to 11.4 ms).
+  alignas(64) std::atomic<double> incumbent{shared_best.best_score};
   std::vector<BestThread> states(static_cast<std::size_t>(std::max(1, context.threads)));
 
   auto save = [&] {  // caller holds control.mutex
