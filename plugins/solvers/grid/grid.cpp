@@ -265,7 +265,7 @@ struct alignas(64) SweepThread : Extra {
 // A thread's sweep state, built on the thread that uses it (at its first chunk): built together
 // on the calling thread, the threads' small buffers (accumulators, the design vector) shared
 // cache lines and every write of one thread evicted the other's (paper-resolution culling on
-// 2 threads: 1.48 s against 1.31 s built in place).
+// 2 threads in one binary: 1.49 s against 1.30 s built in place; docs/design.md section 1.5).
 template <class Extra>
 void prepare_thread(SweepThread<Extra>& s, const Problem& problem, bool line_bounds) {
   if (s.eval_scratch) return;
