@@ -1117,8 +1117,7 @@ Evaluation Problem::evaluate_parallel(const double* free_design, int threads, co
     chunks[static_cast<std::size_t>(t)].assign(indices.begin() + boundary(t), indices.begin() + boundary(t + 1));
   }
   parallel_for_dynamic(chunk_count, threads, 1, [&](long long t, int) {
-    // Made by the thread that fills it: scratches made one after the other on this thread can
-    // share cache lines, and then every write of one thread evicts the other's.
+    // Made by the thread that fills it (docs/design.md section 1.5).
     spaces[static_cast<std::size_t>(t)] = make_eval_scratch();
     EvalOptions o;
     o.subset = &chunks[static_cast<std::size_t>(t)];

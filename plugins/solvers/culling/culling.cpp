@@ -561,9 +561,8 @@ template <class Save>
 FarmOutcome sweep(const Problem& problem, const Grid& grid, const CullingOptions& options, const SolverContext& context,
                   Reference& reference, const Save& save, SweepCounts& partial) {
   std::vector<SweepThread> states(static_cast<std::size_t>(std::max(1, context.threads)));
-  // Each thread builds its own state at its first line: built one after the other on the
-  // calling thread, the threads' small buffers shared cache lines, and each thread's writes
-  // evicted the other's (paper GII culling on 2 threads: 1.49 s against 1.30 s, one binary).
+  // Each thread builds its own state at its first line, on that thread (docs/design.md section
+  // 1.5: built here, the threads' buffers shared cache lines).
   const auto prepare = [&](SweepThread& s) {
     s.eval_scratch = problem.make_eval_scratch();
     s.x.resize(grid.counts.size());

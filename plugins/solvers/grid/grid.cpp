@@ -262,10 +262,8 @@ struct alignas(64) SweepThread : Extra {
   Tally partial;                  // evaluations of chunks this thread left unfinished (a stop)
 };
 
-// A thread's sweep state, built on the thread that uses it (at its first chunk): built together
-// on the calling thread, the threads' small buffers (accumulators, the design vector) shared
-// cache lines and every write of one thread evicted the other's (paper-resolution culling on
-// 2 threads in one binary: 1.49 s against 1.30 s built in place; docs/design.md section 1.5).
+// A thread's sweep state, built on the thread that uses it, at its first chunk (docs/design.md
+// section 1.5: built together on the calling thread, the threads' buffers shared cache lines).
 template <class Extra>
 void prepare_thread(SweepThread<Extra>& s, const Problem& problem, bool line_bounds) {
   if (s.eval_scratch) return;

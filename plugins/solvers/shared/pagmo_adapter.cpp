@@ -120,8 +120,7 @@ Evaluator::Evaluator(const Problem& problem, Encoding encoding, EvaluationSettin
     : problem_(problem), encoding_(std::move(encoding)), settings_(settings), multi_objective_(multi_objective) {
   settings_.threads = std::max(1, settings_.threads);
   settings_.sample_chunks = std::max(1, settings_.sample_chunks);
-  // Each thread makes its scratch at its first design (evaluate()): made here, one after the
-  // other, the threads' small buffers would share cache lines (see the culling sweep).
+  // Each thread makes its scratch at its first design, in evaluate() (docs/design.md section 1.5).
   workspaces_.resize(static_cast<std::size_t>(settings_.threads));
 }
 
