@@ -218,6 +218,7 @@ namespace haptic6r_ik {
 /// by rebuild(), read by the IK templates of haptic6r_ik.hpp for every pose.
 struct IkModel {
   double L1 = 0.0, L2 = 0.0, L3 = 0.0, L4 = 0.0, L5 = 0.0;  // a1, a2, -d3, a4, d6 [m]
+  double inverse_L4 = 0.0, inverse_2L1L2 = 0.0;             // 1 / L4, 1 / (2 L1 L2) [1/m, 1/m^2]
   std::array<double, 6> ca{}, sa{}, offset{};               // cos, sin alpha_i; theta_offset_i [rad]
   std::array<double, 6> lower{}, upper{}, home{};            // joint limits and home [rad]
   // At least as many turns as admissible()'s first and second loops take for a wrapped angle in

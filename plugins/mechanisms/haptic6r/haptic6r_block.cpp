@@ -52,7 +52,7 @@ bool Haptic6R::solves_blocks(Needs needs) const { return (needs & ~kBlockNeeds) 
   // a block without a reachable lane (a few percent of a human-arm scene) computes none.
   if (!any_nonzero(reachable)) return;
   haptic6r_chain::ChainOf<Lanes> chain;
-  haptic6r_chain::chain_from(cosine, sine, d_, a_, ca_, sa_, chain);
+  haptic6r_chain::chain_from(cosine, sine, d_, a_, chain);
   if (needs & kNeedJacobian) {
     const BlockMatrix jacobian{out.jacobian, 6};
     haptic6r_chain::jacobian_from(chain, jacobian);

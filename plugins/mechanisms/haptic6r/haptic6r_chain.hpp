@@ -31,54 +31,117 @@ using Chain = ChainOf<double>;
 [[gnu::always_inline]] inline void assign(double& t, double value) { t = value; }
 [[gnu::always_inline]] inline void assign(Lanes& t, double value) { t = Lanes::splat(value); }
 
-// R_{i+1} = R_i Rz(theta) Rx(alpha) column by column, o_{i+1} = o_i + R_i (a ct, a st, d):
-// 24 multiplications per joint instead of a 3x3 product.
-// cosine[i], sine[i]: of the DH angle theta_i (i = 0..5).
+// The structure read_haptic6r_dh() admits (docs/design.md section 4.4): alpha = (0, 0, 90, 0, 90,
+// 0) deg, a = (l1, l2, 0, l4, 0, 0), d = (0, 0, -l3, 0, 0, l5). The kernels below multiply none of
+// its zeros and ones: joints 1 to 3 turn about e_z, frames 1 and 2 and the axis z_3 = z_4 are
+// horizontal, y_3 = e_z and o_0 = 0. The values are those of the general DH recursion
+// (R_{i+1} = R_i Rz(theta) Rx(alpha), o_{i+1} = o_i + R_i (a ct, a st, d)) up to the sign of a zero.
+
+// One turn of the general recursion where the axis does not change (alpha = 0): x' = ct x + st y,
+// y' = ct y - st x, z' = z; rows r0..r1 only (the others are zero in both x and y).
+template <typename T>
+[[gnu::always_inline]] inline void turn_about_z(const T& ct, const T& st, int r0, int r1, const ChainOf<T>& c, int i,
+                                                ChainOf<T>& out) {
+  for (int r = r0; r <= r1; ++r) {
+    out.x[i + 1][r] = ct * c.x[i][r] + st * c.y[i][r];
+    out.y[i + 1][r] = ct * c.y[i][r] - st * c.x[i][r];
+  }
+}
+
+// cosine[i], sine[i]: of the DH angle theta_i (i = 0..5); d, a: the design's DH lengths [m]
+// (entries the structure fixes at zero are not read).
 template <typename T>
 [[gnu::always_inline]] inline void chain_from(const T* cosine, const T* sine, const std::array<double, 6>& d,
-                                              const std::array<double, 6>& a, const std::array<double, 6>& ca,
-                                              const std::array<double, 6>& sa, ChainOf<T>& c) {
+                                              const std::array<double, 6>& a, ChainOf<T>& c) {
+  T zero, one;
+  assign(zero, 0.0);
+  assign(one, 1.0);
   for (int r = 0; r < 3; ++r) {
-    assign(c.x[0][r], r == 0 ? 1.0 : 0.0);
-    assign(c.y[0][r], r == 1 ? 1.0 : 0.0);
-    assign(c.z[0][r], r == 2 ? 1.0 : 0.0);
-    assign(c.o[0][r], 0.0);
+    c.x[0][r] = r == 0 ? one : zero;
+    c.y[0][r] = r == 1 ? one : zero;
+    c.o[0][r] = zero;
   }
-  for (std::size_t i = 0; i < 6; ++i) {
-    const T ct = cosine[i], st = sine[i];
-    for (int r = 0; r < 3; ++r) {
-      const T xr = c.x[i][r], yr = c.y[i][r], zr = c.z[i][r];
-      const T x_new = ct * xr + st * yr;
-      const T u = ct * yr - st * xr;
-      c.x[i + 1][r] = x_new;
-      c.y[i + 1][r] = ca[i] * u + sa[i] * zr;
-      c.z[i + 1][r] = ca[i] * zr - sa[i] * u;
-      c.o[i + 1][r] = c.o[i][r] + a[i] * x_new + d[i] * zr;
-    }
+  for (int i = 0; i < 3; ++i) {  // frames 0 to 2: z = e_z, x and y horizontal
+    c.z[i][0] = c.z[i][1] = zero;
+    c.z[i][2] = one;
+  }
+  // Joint 1 (a = l1) from the base: x_1 = (c1, s1, 0), y_1 = (-s1, c1, 0).
+  c.x[1][0] = cosine[0];
+  c.x[1][1] = sine[0];
+  c.y[1][0] = -sine[0];
+  c.y[1][1] = cosine[0];
+  c.x[1][2] = c.y[1][2] = c.o[1][2] = zero;
+  c.o[1][0] = a[0] * cosine[0];
+  c.o[1][1] = a[0] * sine[0];
+  // Joint 2 (a = l2).
+  turn_about_z(cosine[1], sine[1], 0, 1, c, 1, c);
+  c.x[2][2] = c.y[2][2] = c.o[2][2] = zero;
+  for (int r = 0; r < 2; ++r) c.o[2][r] = c.o[1][r] + a[1] * c.x[2][r];
+  // Joint 3 (d = -l3, alpha = 90 deg): x_3 = c3 x_2 + s3 y_2, y_3 = z_2 = e_z, z_3 = -(c3 y_2 - s3 x_2).
+  for (int r = 0; r < 2; ++r) {
+    c.x[3][r] = cosine[2] * c.x[2][r] + sine[2] * c.y[2][r];
+    c.z[3][r] = -(cosine[2] * c.y[2][r] - sine[2] * c.x[2][r]);
+    c.y[3][r] = zero;
+    c.o[3][r] = c.o[2][r];
+  }
+  c.x[3][2] = c.z[3][2] = zero;
+  c.y[3][2] = one;
+  assign(c.o[3][2], d[2]);
+  // Joint 4 (a = l4): x_4 = c4 x_3 + s4 e_z, y_4 = c4 e_z - s4 x_3, z_4 = z_3.
+  for (int r = 0; r < 2; ++r) {
+    c.x[4][r] = cosine[3] * c.x[3][r];
+    c.y[4][r] = -(sine[3] * c.x[3][r]);
+  }
+  c.x[4][2] = sine[3];
+  c.y[4][2] = cosine[3];
+  for (int r = 0; r < 3; ++r) {
+    c.z[4][r] = c.z[3][r];
+    c.o[4][r] = c.o[3][r] + a[3] * c.x[4][r];
+  }
+  // Joint 5 (alpha = 90 deg): x_5 = c5 x_4 + s5 y_4, y_5 = z_4, z_5 = -(c5 y_4 - s5 x_4), o_5 = o_4.
+  for (int r = 0; r < 3; ++r) {
+    c.x[5][r] = cosine[4] * c.x[4][r] + sine[4] * c.y[4][r];
+    c.z[5][r] = -(cosine[4] * c.y[4][r] - sine[4] * c.x[4][r]);
+    c.y[5][r] = c.z[4][r];
+    c.o[5][r] = c.o[4][r];
+  }
+  // Joint 6 (d = l5): y_5 is horizontal.
+  turn_about_z(cosine[5], sine[5], 0, 1, c, 5, c);
+  c.x[6][2] = cosine[5] * c.x[5][2];
+  c.y[6][2] = -(sine[5] * c.x[5][2]);
+  for (int r = 0; r < 3; ++r) {
+    c.z[6][r] = c.z[5][r];
+    c.o[6][r] = c.o[5][r] + d[5] * c.z[5][r];
   }
 }
 
 [[gnu::always_inline]] inline void chain_from(const JointTrig& trig, const std::array<double, 6>& d, const std::array<double, 6>& a,
-                const std::array<double, 6>& ca, const std::array<double, 6>& sa, Chain& c) {
-  chain_from(trig.c.data(), trig.s.data(), d, a, ca, sa, c);
+                                              Chain& c) {
+  chain_from(trig.c.data(), trig.s.data(), d, a, c);
 }
 
 [[gnu::always_inline]] inline void chain_from(const Vector6d& q, const std::array<double, 6>& offset, const std::array<double, 6>& d,
-                const std::array<double, 6>& a, const std::array<double, 6>& ca, const std::array<double, 6>& sa,
-                Chain& c) {
+                                              const std::array<double, 6>& a, Chain& c) {
   JointTrig trig;
   for (std::size_t i = 0; i < 6; ++i) {
     const double theta = q(static_cast<Eigen::Index>(i)) + offset[i];
     fast::sin_cos(theta, trig.s[i], trig.c[i]);
   }
-  chain_from(trig, d, a, ca, sa, c);
+  chain_from(trig, d, a, c);
 }
 
 // Geometric Jacobian of E, column i = (z_i, z_i x (p - o_i)), written into `j` (6 x 6).
+// Columns 0 to 2 (z = e_z) are (0, 0, 1, -r_y, r_x, 0).
 template <typename T, typename Matrix>
 [[gnu::always_inline]] inline void jacobian_from(const ChainOf<T>& c, Matrix& j) {
   const T* p = c.o[6];
-  for (int i = 0; i < 6; ++i) {
+  for (int i = 0; i < 3; ++i) {
+    j(0, i) = j(1, i) = j(5, i) = c.z[i][0];  // zero
+    j(2, i) = c.z[i][2];                      // one
+    j(3, i) = -(p[1] - c.o[i][1]);
+    j(4, i) = p[0] - c.o[i][0];
+  }
+  for (int i = 3; i < 6; ++i) {
     const T* z = c.z[i];
     const T rx = p[0] - c.o[i][0], ry = p[1] - c.o[i][1], rz = p[2] - c.o[i][2];
     j(0, i) = z[0];
@@ -99,10 +162,15 @@ template <typename T, typename Matrix>
 template <typename T, typename InertiaMatrix, typename GravityVector>
 [[gnu::always_inline]] inline void dynamics_from(const ChainOf<T>& c, const std::array<Haptic6RBody, 6>& bodies, double g, InertiaMatrix* inertia,
                    GravityVector* gravity) {
-  T mass, h[3], kxx, kyy, kzz, kxy, kxz, kyz;
-  for (T* t : {&mass, &h[0], &h[1], &h[2], &kxx, &kyy, &kzz, &kxy, &kxz, &kyz}) assign(*t, 0.0);
-  T arm[6][3];  // z_i x o_i
-  for (int i = 0; i < 6; ++i) {
+  T zero, mass, h[3], kxx, kyy, kzz, kxy, kxz, kyz;
+  for (T* t : {&zero, &mass, &h[0], &h[1], &h[2], &kxx, &kyy, &kzz, &kxy, &kxz, &kyz}) assign(*t, 0.0);
+  T arm[6][3];  // z_i x o_i: (-o_y, o_x, 0) for the vertical axes 0 to 2 (arm_0 = 0: o_0 = 0)
+  for (int i = 0; i < 3; ++i) {
+    arm[i][0] = -c.o[i][1];
+    arm[i][1] = c.o[i][0];
+    arm[i][2] = zero;
+  }
+  for (int i = 3; i < 6; ++i) {
     const T *z = c.z[i], *o = c.o[i];
     arm[i][0] = z[1] * o[2] - z[2] * o[1];
     arm[i][1] = z[2] * o[0] - z[0] * o[2];
@@ -154,22 +222,37 @@ template <typename T, typename InertiaMatrix, typename GravityVector>
     const T *zj = c.z[j], *oj = c.o[j];
     const T lever[3] = {h[0] - mass * oj[0], h[1] - mass * oj[1], h[2] - mass * oj[2]};  // M (c - o_j)
     if (inertia) {
-      const T momentum[3] = {zj[1] * lever[2] - zj[2] * lever[1], zj[2] * lever[0] - zj[0] * lever[2],
-                                  zj[0] * lever[1] - zj[1] * lever[0]};
       const T* aj = arm[j];
-      const T angular[3] = {kxx * zj[0] + kxy * zj[1] + kxz * zj[2] - (h[1] * aj[2] - h[2] * aj[1]),
-                                 kxy * zj[0] + kyy * zj[1] + kyz * zj[2] - (h[2] * aj[0] - h[0] * aj[2]),
-                                 kxz * zj[0] + kyz * zj[1] + kzz * zj[2] - (h[0] * aj[1] - h[1] * aj[0])};
+      T momentum[3] = {zero, zero, zero}, angular[3] = {zero, zero, zero};
+      if (j < 3) {  // z_j = e_z: only the z component of L and the horizontal ones of P are read
+        momentum[0] = -lever[1];
+        momentum[1] = lever[0];
+        angular[2] = kzz - (h[0] * aj[1] - h[1] * aj[0]);
+      } else {
+        momentum[0] = zj[1] * lever[2] - zj[2] * lever[1];
+        momentum[1] = zj[2] * lever[0] - zj[0] * lever[2];
+        momentum[2] = zj[0] * lever[1] - zj[1] * lever[0];
+        angular[0] = kxx * zj[0] + kxy * zj[1] + kxz * zj[2] - (h[1] * aj[2] - h[2] * aj[1]);
+        angular[1] = kxy * zj[0] + kyy * zj[1] + kyz * zj[2] - (h[2] * aj[0] - h[0] * aj[2]);
+        angular[2] = kxz * zj[0] + kyz * zj[1] + kzz * zj[2] - (h[0] * aj[1] - h[1] * aj[0]);
+      }
       for (int i = 0; i <= j; ++i) {
         const T *zi = c.z[i], *ai = arm[i];
-        const T value = zi[0] * angular[0] + zi[1] * angular[1] + zi[2] * angular[2] -
-                             (ai[0] * momentum[0] + ai[1] * momentum[1] + ai[2] * momentum[2]);
+        T value;
+        if (i == 0) {  // z_0 = e_z, arm_0 = 0
+          value = angular[2];
+        } else if (i < 3) {  // z_i = e_z, arm_i horizontal
+          value = angular[2] - (ai[0] * momentum[0] + ai[1] * momentum[1]);
+        } else {
+          value = zi[0] * angular[0] + zi[1] * angular[1] + zi[2] * angular[2] -
+                  (ai[0] * momentum[0] + ai[1] * momentum[1] + ai[2] * momentum[2]);
+        }
         (*inertia)(i, j) = value;
         (*inertia)(j, i) = value;
       }
     }
-    // lever x e_z = (lever_y, -lever_x, 0).
-    if (gravity) (*gravity)(j) = g * (zj[0] * lever[1] - zj[1] * lever[0]);
+    // lever x e_z = (lever_y, -lever_x, 0); zero about the vertical axes 0 to 2.
+    if (gravity) (*gravity)(j) = j < 3 ? zero : g * (zj[0] * lever[1] - zj[1] * lever[0]);
   }
 }
 

@@ -123,6 +123,9 @@ Haptic6RDh read_haptic6r_dh(const std::string& path) {
                              ": the closed-form IK serves a = (l1, l2, 0, l4, 0, 0), d = (0, 0, -l3, 0, 0, l5), "
                              "alpha = (0, 0, 90, 0, 90, 0) deg; only theta_offset may differ");
     }
+    // Within 1e-12 rad is the structure's angle: the kinematics (haptic6r_chain.hpp) and the
+    // IK assume it exactly.
+    dh.rows[i].alpha = alpha_deg[i] * kDeg;
   }
   return dh;
 }

@@ -24,7 +24,7 @@ Matrix6d jacobian_of(const Chain& c) {
 
 void Haptic6RModel::frames(const Vector6d& q, std::array<Eigen::Isometry3d, 7>& out) const {
   Chain c;
-  chain_from(q, offset_, d_, a_, ca_, sa_, c);
+  chain_from(q, offset_, d_, a_, c);
   for (std::size_t i = 0; i < 7; ++i) {
     out[i].setIdentity();
     out[i].linear().col(0) = Eigen::Vector3d(c.x[i][0], c.x[i][1], c.x[i][2]);
@@ -42,20 +42,20 @@ Eigen::Isometry3d Haptic6RModel::forward(const Vector6d& q) const {
 
 Matrix6d Haptic6RModel::jacobian(const Vector6d& q) const {
   Chain c;
-  chain_from(q, offset_, d_, a_, ca_, sa_, c);
+  chain_from(q, offset_, d_, a_, c);
   return jacobian_of(c);
 }
 
 void Haptic6RModel::dynamics(const Vector6d& q, Matrix6d* inertia, Vector6d* gravity) const {
   Chain c;
-  chain_from(q, offset_, d_, a_, ca_, sa_, c);
+  chain_from(q, offset_, d_, a_, c);
   dynamics_from(c, bodies_, setup_->options.gravity, inertia, gravity);
 }
 
 HAPSYN_MULTIVERSION
 void Haptic6RModel::quantities_impl(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const {
   Chain c;
-  chain_from(q, offset_, d_, a_, ca_, sa_, c);
+  chain_from(q, offset_, d_, a_, c);
   if (jacobian) *jacobian = jacobian_of(c);
   if (inertia || gravity) dynamics_from(c, bodies_, setup_->options.gravity, inertia, gravity);
 }

@@ -163,10 +163,10 @@ template <typename T>
   const T vertical = where_less(n_roll, tiny, one, zero);
   const T n = pick(vertical, n_x, n_roll);
   const T rotation_ok = where_less(n, tiny, zero, one);  // else not a rotation
-  const T n_safe = pick(rotation_ok, n, one);
-  g.hx = pick(vertical, hx_x, hx_roll) / n_safe;
-  g.hy = pick(vertical, hy_x, hy_roll) / n_safe;
-  const T s4 = (g.w[2] + m.L3) / m.L4;
+  const T inverse_n = 1.0 / pick(rotation_ok, n, one);
+  g.hx = pick(vertical, hx_x, hx_roll) * inverse_n;
+  g.hy = pick(vertical, hy_x, hy_roll) * inverse_n;
+  const T s4 = (g.w[2] + m.L3) * m.inverse_L4;
   const T reach_ok = where_greater(magnitude(s4), splat<T>(1.0 + kBoundaryTolerance), zero, one);
   g.s4 = clamp_to(s4, splat<T>(-1.0), one);
   g.c4_abs = root(at_least_zero(1.0 - g.s4 * g.s4));
@@ -188,7 +188,7 @@ template <typename T>
   for (int k = 0; k < 2; ++k) {
     const T c4x3 = (k == 0 ? g.c4_abs : -g.c4_abs) * m.L4;  // L4 c4 times the sign of x3
     const T ox = g.w[0] + c4x3 * g.hy, oy = g.w[1] - c4x3 * g.hx;  // x3 = (-h_y, h_x, 0)
-    const T c2_raw = (ox * ox + oy * oy - L1 * L1 - L2 * L2) / (2.0 * L1 * L2);
+    const T c2_raw = (ox * ox + oy * oy - L1 * L1 - L2 * L2) * m.inverse_2L1L2;
     PlanarSolution<T>& p = planar[k];
     p.valid = where_greater(magnitude(c2_raw), splat<T>(1.0 + kBoundaryTolerance), zero, one);
     if (!any(g.ok * p.valid)) {  // out of reach for every lane: nothing else of it is read
@@ -203,11 +203,11 @@ template <typename T>
     p.beta = angle_of(by, bx);
     // Lengths of order 1 m: sqrt(x^2 + y^2) cannot overflow, and is several times cheaper than hypot.
     const T ro = root(ox * ox + oy * oy), rb = root(bx * bx + by * by);
-    const T ro_safe = where_greater(ro, zero, ro, one), rb_safe = where_greater(rb, zero, rb, one);
-    p.cos_phi = where_greater(ro, zero, ox / ro_safe, one);
-    p.sin_phi = where_greater(ro, zero, oy / ro_safe, zero);
-    p.cos_beta = where_greater(rb, zero, bx / rb_safe, one);
-    p.sin_beta = where_greater(rb, zero, by / rb_safe, zero);
+    const T inverse_ro = 1.0 / where_greater(ro, zero, ro, one), inverse_rb = 1.0 / where_greater(rb, zero, rb, one);
+    p.cos_phi = where_greater(ro, zero, ox * inverse_ro, one);
+    p.sin_phi = where_greater(ro, zero, oy * inverse_ro, zero);
+    p.cos_beta = where_greater(rb, zero, bx * inverse_rb, one);
+    p.sin_beta = where_greater(rb, zero, by * inverse_rb, zero);
   }
 }
 
@@ -247,9 +247,9 @@ template <typename T>
     // z_5 in frame 4 is Rz(theta5) (0, -sin alpha5, cos alpha5) = (sin theta5, -cos theta5, 0).
     wrist.theta5[b4] = angle_of(a4[0], -a4[1]);
     const T n5 = root(a4[0] * a4[0] + a4[1] * a4[1]);  // 1 up to rounding: the approach is normal to h
-    const T n5_safe = where_greater(n5, zero, n5, one);
-    wrist.cos5[b4] = where_greater(n5, zero, -a4[1] / n5_safe, one);
-    wrist.sin5[b4] = where_greater(n5, zero, a4[0] / n5_safe, zero);
+    const T inverse_n5 = 1.0 / where_greater(n5, zero, n5, one);
+    wrist.cos5[b4] = where_greater(n5, zero, -a4[1] * inverse_n5, one);
+    wrist.sin5[b4] = where_greater(n5, zero, a4[0] * inverse_n5, zero);
     dh_rotation(wrist.cos5[b4], wrist.sin5[b4], m.ca[4], m.sa[4], r5);
     // theta6 from x_E in frame 5: (x_5 . x_E, y_5 . x_E), x_5 = R_04 r5.col(0), y_5 = R_04 r5.col(1).
     T along_x = zero, along_y = zero;
@@ -261,9 +261,9 @@ template <typename T>
     }
     wrist.theta6[b4] = angle_of(along_y, along_x);
     const T n6 = root(along_y * along_y + along_x * along_x);
-    const T n6_safe = where_greater(n6, zero, n6, one);
-    wrist.cos6[b4] = where_greater(n6, zero, along_x / n6_safe, one);
-    wrist.sin6[b4] = where_greater(n6, zero, along_y / n6_safe, zero);
+    const T inverse_n6 = 1.0 / where_greater(n6, zero, n6, one);
+    wrist.cos6[b4] = where_greater(n6, zero, along_x * inverse_n6, one);
+    wrist.sin6[b4] = where_greater(n6, zero, along_y * inverse_n6, zero);
   }
 }
 
@@ -411,6 +411,9 @@ struct PoseOutcome {
 template <typename T>
 [[gnu::always_inline]] inline void target_of(const T (&pose)[7], const T& quaternion_norm, Target<T>& t) {
   for (int i = 0; i < 3; ++i) t.p[i] = pose[i];
+  // Four divisions, not a reciprocal and four products (as the IK's other shared denominators
+  // are): with the reciprocal, solve() and solve_block() differed by 1.6e-11 relative in an
+  // inertia entry (haptic6r_test, BlockStatusesAndQuantitiesEqualSolveUnderEveryRule, rule 1).
   const T w = pose[3] / quaternion_norm, x = pose[4] / quaternion_norm, y = pose[5] / quaternion_norm,
           z = pose[6] / quaternion_norm;
   const T tx = 2.0 * x, ty = 2.0 * y, tz = 2.0 * z;

@@ -24,6 +24,8 @@ void Haptic6RModel::ik_model(haptic6r_ik::IkModel& m) const {
   m.L3 = -d_[2];
   m.L4 = a_[3];
   m.L5 = d_[5];
+  m.inverse_L4 = 1.0 / m.L4;
+  m.inverse_2L1L2 = 1.0 / (2.0 * m.L1 * m.L2);
   m.ca = ca_;
   m.sa = sa_;
   m.offset = offset_;
@@ -127,7 +129,7 @@ void Haptic6RModel::solve_sample(const double* pose, Needs needs, SampleQuantiti
   constexpr Needs kMotion = kNeedJointVelocity | kNeedJointAcceleration | kNeedVelocityTorque;
   if (needs & (kNeedJacobian | kNeedInertia | kNeedGravity | kMotion)) {
     haptic6r_chain::Chain f;
-    haptic6r_chain::chain_from(trig, d_, a_, ca_, sa_, f);
+    haptic6r_chain::chain_from(trig, d_, a_, f);
     if (needs & kNeedJacobian) {
       out.jacobian.resize(6, 6);
       haptic6r_chain::jacobian_from(f, out.jacobian);
