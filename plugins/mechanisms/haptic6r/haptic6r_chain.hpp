@@ -176,6 +176,8 @@ template <typename T, typename InertiaMatrix, typename GravityVector>
     arm[i][1] = z[2] * o[0] - z[0] * o[2];
     arm[i][2] = z[0] * o[1] - z[1] * o[0];
   }
+  // Unrolled, so that the structure's cases below are decided at compile time.
+#pragma GCC unroll 6
   for (int j = 5; j >= 0; --j) {
     const Haptic6RBody& b = bodies[static_cast<std::size_t>(j)];
     if (b.mass > 0.0) {
@@ -236,6 +238,7 @@ template <typename T, typename InertiaMatrix, typename GravityVector>
         angular[1] = kxy * zj[0] + kyy * zj[1] + kyz * zj[2] - (h[2] * aj[0] - h[0] * aj[2]);
         angular[2] = kxz * zj[0] + kyz * zj[1] + kzz * zj[2] - (h[0] * aj[1] - h[1] * aj[0]);
       }
+#pragma GCC unroll 6
       for (int i = 0; i <= j; ++i) {
         const T *zi = c.z[i], *ai = arm[i];
         T value;

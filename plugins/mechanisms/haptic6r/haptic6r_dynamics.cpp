@@ -15,7 +15,9 @@ using haptic6r_chain::chain_from;
 using haptic6r_chain::dynamics_from;
 
 namespace {
-Matrix6d jacobian_of(const Chain& c) {
+// Inlined into its multiversioned caller (hapsyn/multiversion.hpp): out of line it was a
+// baseline-only copy and took 14 % of haptic6r_benchmark's BM_OursJacobianInertiaGravitySolve.
+[[gnu::always_inline]] inline Matrix6d jacobian_of(const Chain& c) {
   Matrix6d j;
   haptic6r_chain::jacobian_from(c, j);
   return j;
