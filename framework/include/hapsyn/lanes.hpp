@@ -37,6 +37,9 @@ struct Lanes {
   [[gnu::always_inline]] void store(double* p) const { std::memcpy(p, &v, sizeof v); }
 };
 
+/// The lanes as 64-bit integers: comparison masks (all ones or zero) and bit patterns.
+typedef std::int64_t LaneBits __attribute__((vector_size(kBlockLanes * sizeof(double))));
+
 #define HAPSYN_LANES_OPERATOR(op)                                                                                \
   [[gnu::always_inline]] inline Lanes operator op(const Lanes& a, const Lanes& b) { return Lanes{a.v op b.v}; } \
   [[gnu::always_inline]] inline Lanes operator op(const Lanes& a, double b) { return Lanes{a.v op b}; }         \
@@ -85,8 +88,7 @@ HAPSYN_LANES_WHERE(where_equal, ==)
 
 /// Lane-wise |a| (as std::fabs: the sign bit cleared).
 [[gnu::always_inline]] inline Lanes abs(const Lanes& a) {
-  typedef std::int64_t Bits __attribute__((vector_size(kBlockLanes * sizeof(double))));
-  return Lanes{reinterpret_cast<Lanes::Vector>(reinterpret_cast<Bits>(a.v) & (Bits{} + INT64_MAX))};
+  return Lanes{reinterpret_cast<Lanes::Vector>(reinterpret_cast<LaneBits>(a.v) & (LaneBits{} + INT64_MAX))};
 }
 /// Lane-wise max(a, b) as `a > b ? a : b` (b when either is NaN).
 [[gnu::always_inline]] inline Lanes max(const Lanes& a, const Lanes& b) { return where_greater(a, b, a, b); }
@@ -98,31 +100,25 @@ HAPSYN_LANES_WHERE(where_equal, ==)
   return where_greater(nearest, a, nearest - 1.0, nearest);
 }
 
-/// Whether any lane of `a` is non-zero (NaN counts as non-zero): one compare and a logarithmic
-/// fold of the lanes, instead of a branch per lane.
-[[gnu::always_inline]] inline bool any_nonzero(const Lanes& a) {
-  typedef std::int64_t Bits __attribute__((vector_size(kBlockLanes * sizeof(double))));
+/// The bitwise OR of the lanes of `m`: a logarithmic fold (three halvings of eight lanes)
+/// instead of reading the lanes one by one.
+[[gnu::always_inline]] inline std::int64_t or_of_lanes(LaneBits m) {
   static_assert(kBlockLanes == 8, "the fold below halves eight lanes three times");
-  Bits m = a.v != 0.0;
   m |= __builtin_shufflevector(m, m, 4, 5, 6, 7, 0, 1, 2, 3);
   m |= __builtin_shufflevector(m, m, 2, 3, 0, 1, 6, 7, 4, 5);
   m |= __builtin_shufflevector(m, m, 1, 0, 3, 2, 5, 4, 7, 6);
-  return m[0] != 0;
+  return m[0];
 }
+
+/// Whether any lane of `a` is non-zero (NaN counts as non-zero): one compare and or_of_lanes(),
+/// instead of a branch per lane.
+[[gnu::always_inline]] inline bool any_nonzero(const Lanes& a) { return or_of_lanes(a.v != 0.0) != 0; }
 /// Whether any lane of `a` is zero.
-[[gnu::always_inline]] inline bool any_zero(const Lanes& a) {
-  typedef std::int64_t Bits __attribute__((vector_size(kBlockLanes * sizeof(double))));
-  Bits m = a.v == 0.0;
-  m |= __builtin_shufflevector(m, m, 4, 5, 6, 7, 0, 1, 2, 3);
-  m |= __builtin_shufflevector(m, m, 2, 3, 0, 1, 6, 7, 4, 5);
-  m |= __builtin_shufflevector(m, m, 1, 0, 3, 2, 5, 4, 7, 6);
-  return m[0] != 0;
-}
+[[gnu::always_inline]] inline bool any_zero(const Lanes& a) { return or_of_lanes(a.v == 0.0) != 0; }
 
 /// Lane-wise `x has its sign bit set ? a : b` (as std::signbit: true for -0 and negative NaNs).
 [[gnu::always_inline]] inline Lanes where_sign_bit(const Lanes& x, const Lanes& a, const Lanes& b) {
-  typedef std::int64_t Bits __attribute__((vector_size(kBlockLanes * sizeof(double))));
-  return Lanes{HAPSYN_LANES_BARRIER(reinterpret_cast<Bits>(x.v) < 0 ? a.v : b.v)};
+  return Lanes{HAPSYN_LANES_BARRIER(reinterpret_cast<LaneBits>(x.v) < 0 ? a.v : b.v)};
 }
 
 /// Lane-wise std::sqrt. One vector instruction where the translation unit is compiled with
@@ -158,11 +154,10 @@ struct AtanCore {
 #else
   // The table as two vectors and one two-source permutation (one instruction with AVX-512).
   static_assert(kBlockLanes == 8, "the permuted table holds 16 entries");
-  typedef std::int64_t Index __attribute__((vector_size(kBlockLanes * sizeof(double))));
   const Lanes::Vector low = {fast::kAtanTable[0], fast::kAtanTable[1], fast::kAtanTable[2], fast::kAtanTable[3],
                              fast::kAtanTable[4], fast::kAtanTable[5], fast::kAtanTable[6], fast::kAtanTable[7]};
   const Lanes::Vector high = {fast::kAtanTable[8], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
-  table_k.v = __builtin_shuffle(low, high, __builtin_convertvector(k.v, Index));
+  table_k.v = __builtin_shuffle(low, high, __builtin_convertvector(k.v, LaneBits));
 #endif
   const Lanes angle = fast::atan_reduced(t, 0.125 * k, table_k);
   constexpr double kHalfPi = 1.5707963267948966;

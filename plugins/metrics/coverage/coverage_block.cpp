@@ -55,16 +55,10 @@ template <int Cols>
 }
 
 // The set of the lanes' row indices (each lane holds a small whole number) as bits: bit r is set
-// when some lane holds r. One conversion, one shift and a fold of the lanes, where reading the
-// lanes one by one cost a conversion and a shift per lane.
+// when some lane holds r. One conversion, one shift and or_of_lanes(), where reading the lanes
+// one by one cost a conversion and a shift per lane.
 [[gnu::always_inline]] inline unsigned row_bits(const Lanes& row) {
-  typedef std::int64_t Bits __attribute__((vector_size(kBlockLanes * sizeof(double))));
-  static_assert(kBlockLanes == 8, "the fold below halves eight lanes three times");
-  Bits m = (Bits{} + 1) << __builtin_convertvector(row.v, Bits);
-  m |= __builtin_shufflevector(m, m, 4, 5, 6, 7, 0, 1, 2, 3);
-  m |= __builtin_shufflevector(m, m, 2, 3, 0, 1, 6, 7, 4, 5);
-  m |= __builtin_shufflevector(m, m, 1, 0, 3, 2, 5, 4, 7, 6);
-  return static_cast<unsigned>(m[0]);
+  return static_cast<unsigned>(or_of_lanes((LaneBits{} + 1) << __builtin_convertvector(row.v, LaneBits)));
 }
 
 // Solves J X = B in place for every lane (B: 6 x Cols right-hand sides). \return per lane 1
