@@ -35,7 +35,8 @@ using Chain = ChainOf<double>;
 // 0) deg, a = (l1, l2, 0, l4, 0, 0), d = (0, 0, -l3, 0, 0, l5). The kernels below multiply none of
 // its zeros and ones: joints 1 to 3 turn about e_z, frames 1 and 2 and the axis z_3 = z_4 are
 // horizontal, y_3 = e_z and o_0 = 0. The values are those of the general DH recursion
-// (R_{i+1} = R_i Rz(theta) Rx(alpha), o_{i+1} = o_i + R_i (a ct, a st, d)) up to the sign of a zero.
+// (R_{i+1} = R_i Rz(theta) Rx(alpha), o_{i+1} = o_i + R_i (a ct, a st, d)) up to the sign of a
+// zero and the compiler's fusion of multiply-adds (KDL checks them, haptic6r_test).
 
 // One turn of the general recursion where the axis does not change (alpha = 0): x' = ct x + st y,
 // y' = ct y - st x, z' = z; rows r0..r1 only (the others are zero in both x and y).
