@@ -100,10 +100,12 @@ HAPSYN_LANES_WHERE(where_equal, ==)
   return where_greater(nearest, a, nearest - 1.0, nearest);
 }
 
-/// The bitwise OR of the lanes of `m`: a logarithmic fold (three halvings of eight lanes)
-/// instead of reading the lanes one by one.
-[[gnu::always_inline]] inline std::int64_t or_of_lanes(LaneBits m) {
+/// The bitwise OR of the lanes of `bits`: a logarithmic fold (three halvings of eight lanes)
+/// instead of reading the lanes one by one. By reference, as every Lanes argument: a 64-byte
+/// vector passed by value has a different ABI in the AVX-512 clones (clang's -Wpsabi).
+[[gnu::always_inline]] inline std::int64_t or_of_lanes(const LaneBits& bits) {
   static_assert(kBlockLanes == 8, "the fold below halves eight lanes three times");
+  LaneBits m = bits;
   m |= __builtin_shufflevector(m, m, 4, 5, 6, 7, 0, 1, 2, 3);
   m |= __builtin_shufflevector(m, m, 2, 3, 0, 1, 6, 7, 4, 5);
   m |= __builtin_shufflevector(m, m, 1, 0, 3, 2, 5, 4, 7, 6);
