@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
+#include <filesystem>
 #include <set>
 #include <stdexcept>
 #include <thread>
@@ -18,6 +20,13 @@ struct StartLimit {
   explicit StartLimit(int limit) { hapsyn::set_thread_start_limit_for_testing(limit); }
   ~StartLimit() { hapsyn::set_thread_start_limit_for_testing(-1); }
 };
+
+// Threads of this process now (Linux: one entry per thread in /proc/self/task).
+std::size_t process_threads() {
+  std::size_t n = 0;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator("/proc/self/task")) ++n;
+  return n;
+}
 
 }  // namespace
 
@@ -121,5 +130,42 @@ TEST(Parallel, NestedAndConcurrentLoopsEachRunEveryIndexOnce) {
   for (std::size_t i = 0; i < a.size(); ++i) {
     EXPECT_EQ(a[i].load(), 1) << i;
     EXPECT_EQ(b[i].load(), 1) << i;
+  }
+}
+
+// start_worker_threads starts the pool's workers ahead of the first loop: a loop of that many
+// threads afterwards starts none of its own and still runs on every thread index.
+TEST(Parallel, StartedWorkersServeTheNextLoopWithoutStartingThreads) {
+  constexpr int kThreads = 7;  // more than any other test of this file uses
+  const std::size_t before = process_threads();
+  hapsyn::start_worker_threads(kThreads);
+  const std::size_t started = process_threads();
+  EXPECT_GT(started, before);
+  hapsyn::start_worker_threads(kThreads);  // already running: nothing new
+  EXPECT_EQ(process_threads(), started);
+  std::vector<std::atomic<int>> ran_on(kThreads);
+  std::atomic<int> waiting{kThreads};
+  std::atomic<std::size_t> during{0};
+  hapsyn::parallel_for_dynamic(kThreads, kThreads, 1, [&](long long, int t) {
+    ran_on[static_cast<std::size_t>(t)]++;
+    // Hold each index until all have started (at most 10 s), so that every thread takes one.
+    waiting--;
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (waiting.load() > 0 && std::chrono::steady_clock::now() < until) std::this_thread::yield();
+    if (t == 0) during = process_threads();
+  });
+  for (int t = 0; t < kThreads; ++t) EXPECT_EQ(ran_on[static_cast<std::size_t>(t)].load(), 1) << "thread " << t;
+  EXPECT_EQ(during.load(), started);  // the loop ran on the started workers, no thread of its own
+}
+
+// Under the test seam's limit (which loops bypass the pool for) and for one thread it does nothing.
+TEST(Parallel, StartingWorkersUnderTheSeamOrForOneThreadStartsNone) {
+  const std::size_t before = process_threads();
+  hapsyn::start_worker_threads(1);
+  EXPECT_EQ(process_threads(), before);
+  {
+    StartLimit limit(0);
+    hapsyn::start_worker_threads(64);
+    EXPECT_EQ(process_threads(), before);
   }
 }

@@ -13,6 +13,7 @@
 #include <hapsyn/groups.hpp>
 #include <hapsyn/merge.hpp>
 #include <hapsyn/output_files.hpp>
+#include <hapsyn/parallel.hpp>
 #include <hapsyn/plot.hpp>
 #include <hapsyn/problem_file.hpp>
 #include <hapsyn/registry.hpp>
@@ -502,6 +503,19 @@ void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
 // The processes of this run (see ranks.hpp); kept for main()'s error report.
 std::unique_ptr<hapsyn::Cluster> run_cluster;
 
+// Starts the run's worker threads before the study loads, so that the scheduler has placed them
+// by the time the solver's first parallel loop starts (hapsyn::start_worker_threads). A bad
+// thread count is left to the load and the run, which report it.
+void start_workers_for(const Json& document, int threads_option) {
+  hapsyn::RunOptions options;
+  options.threads = threads_option;
+  std::vector<std::string> ignored;  // the run reports the cap
+  try {
+    hapsyn::start_worker_threads(hapsyn::run_threads(document, options, ignored));
+  } catch (const hapsyn::Error&) {
+  }
+}
+
 int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& registry) {
   run_cluster = hapsyn_cli::make_run_cluster(a.shard, a.rank_timeout, &stop_requested, &stop_agreed);
   hapsyn::Cluster* cluster = run_cluster.get();
@@ -512,6 +526,7 @@ int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& r
   hapsyn::Study study = hapsyn_cli::load_on_ranks(cluster, [&] {
     document = hapsyn::read_problem_file(a.file);
     for (const std::string& s : a.sets) hapsyn::apply_override(document, s);
+    start_workers_for(document, a.threads);
     const hapsyn::ProblemDirectoryScope scope(a.file);
     return hapsyn::load_study(document, registry, {}, load_settings(a.threads, quiet));
   });

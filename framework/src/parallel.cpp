@@ -50,17 +50,17 @@ class WorkerPool {
   /// Runs job(t) for t in [1, helpers] on the workers (started as needed; `helpers` drops to the
   /// ones that could be started, with the shortfall warning) and job(0) on the caller; returns
   /// after every call returned. False, running nothing, when the workers are busy. job must not throw.
+  /// Starts workers until `helpers` run (fewer, with the shortfall warning, when no more can
+  /// start); does nothing when the workers are busy.
+  void start(int helpers, int threads) {
+    if (busy_.exchange(true, std::memory_order_acquire)) return;
+    start_workers(helpers, threads);
+    busy_.store(false, std::memory_order_release);
+  }
+
   bool run(int helpers, int threads, const std::function<void(int)>& job) {
     if (busy_.exchange(true, std::memory_order_acquire)) return false;
-    while (static_cast<int>(started_) < helpers) {
-      try {
-        std::thread(&WorkerPool::work, this, static_cast<int>(started_) + 1).detach();
-        ++started_;
-      } catch (const std::system_error& e) {
-        warn_shortfall(static_cast<int>(started_) + 1, threads, e);
-        helpers = static_cast<int>(started_);
-      }
-    }
+    helpers = start_workers(helpers, threads);
     {
       std::lock_guard<std::mutex> lock(mutex_);
       job_ = &job;
@@ -81,6 +81,20 @@ class WorkerPool {
   }
 
  private:
+  // Starts workers until `helpers` run; returns how many run (caller holds busy_).
+  int start_workers(int helpers, int threads) {
+    while (static_cast<int>(started_) < helpers) {
+      try {
+        std::thread(&WorkerPool::work, this, static_cast<int>(started_) + 1).detach();
+        ++started_;
+      } catch (const std::system_error& e) {
+        warn_shortfall(static_cast<int>(started_) + 1, threads, e);
+        return static_cast<int>(started_);
+      }
+    }
+    return helpers;
+  }
+
   void work(int index) {
     std::uint64_t seen = 0;
     for (;;) {
@@ -179,6 +193,11 @@ void run_threads(int threads, const std::function<void(int)>& fn) {
   if (first) std::rethrow_exception(first);
 }
 }  // namespace
+
+void start_worker_threads(int threads) {
+  // The test seam's loops bypass the pool (run_threads), so the seam bypasses this as well.
+  if (threads > 1 && start_limit.load() < 0) pool().start(threads - 1, threads);
+}
 
 void set_thread_start_limit_for_testing(int limit) {
   start_limit = limit;

@@ -16,6 +16,16 @@ namespace hapsyn {
 void parallel_for_dynamic(long long n, int threads, long long block,
                           const std::function<void(long long, int)>& body);
 
+/// Starts the worker threads that parallel_for_dynamic's loops of up to `threads` threads use
+/// (they stay alive between loops), unless they run already, and returns without waiting for
+/// them. Optional: the first such loop starts them otherwise. Call it early, when the thread
+/// count is known and before a timed or short first loop: on Linux a thread started by a busy
+/// thread may wait for the scheduler's next balancing tick before it runs anywhere, measured at 1
+/// to 4 ms on a 2-core VM, during which that first loop ran on the caller alone (hapsyn run calls
+/// it before loading the study). A thread that cannot start gives the warning described above,
+/// once; the loops then run as described there. Does nothing for threads <= 1.
+void start_worker_threads(int threads);
+
 /// Hardware concurrency (>= 1).
 int hardware_threads();
 

@@ -457,7 +457,7 @@ TEST(Culling, EmulatedRanksGiveThePlainRun) {
 }
 
 TEST(Culling, LargeGridsRunGroupsOfLinesPerTaskWithTheSameResult) {
-  // 16 x 15 x 15 = 3,600 lines: three per task (hapsyn::plugins::units_per_task).
+  // 16 x 15 x 15 = 3,600 lines: 14 per task (hapsyn::plugins::units_per_task).
   Json doc = hapsyn::test::fivebar_study("culling");
   doc["design"]["l0"] = {{"lower", 0.0}, {"upper", 0.3}, {"step", 0.02}};
   doc["design"]["l1"] = {{"lower", 0.02}, {"upper", 0.3}, {"step", 0.02}};
@@ -472,9 +472,9 @@ TEST(Culling, LargeGridsRunGroupsOfLinesPerTaskWithTheSameResult) {
   const auto run = [&](const hapsyn::SolverContext& context) { return culling.solve(*study.problem, context); };
   const auto merged = hapsyn::test::shard_merge_resume(culling, *study.problem, 2, dir, run, [](int, const hapsyn::SolverResult&) {});
   expect_same_optimum(merged, plain);
-  // The shares are whole tasks: 1,200 tasks of 3 lines, the second share from task 600.
+  // The shares are whole tasks: 258 tasks of 14 lines (the last of 2), the second share from task 129.
   const Json state = hapsyn::test::read_json_file(dir + "/shard-1.json")["state"];
-  EXPECT_EQ(state["finished_ranges"], Json::array({Json::array({1800, 3600})}));
+  EXPECT_EQ(state["finished_ranges"], Json::array({Json::array({1806, 3600})}));
   hapsyn::test::EmulatedRanks job(3);
   const auto results = job.run([&](hapsyn::Cluster& cluster) {
     hapsyn::SolverContext context;

@@ -592,7 +592,7 @@ TEST(Grid, EmulatedRanksGiveThePlainRunInBothModes) {
 }
 
 TEST(Grid, LargeGridsRunGroupsOfChunksPerTaskWithTheSameResult) {
-  // 501 x 501 designs: 3,922 chunks, three per task (hapsyn::plugins::units_per_task).
+  // 501 x 501 designs: 3,922 chunks, 15 per task (hapsyn::plugins::units_per_task).
   hapsyn::test::StopAfter counter;
   const auto problem = hapsyn::test::stopping_problem(counter, 0.002);
   const Json options = {{"progress_interval", 1e9}};
@@ -603,9 +603,9 @@ TEST(Grid, LargeGridsRunGroupsOfChunksPerTaskWithTheSameResult) {
   const auto solve = [&](const hapsyn::SolverContext& context) { return solver.solve(*problem, context); };
   const auto merged = hapsyn::test::shard_merge_resume(solver, *problem, 3, dir, solve, [](int, const hapsyn::SolverResult&) {});
   expect_same_result(merged, plain);
-  // The shares are whole tasks: 1,308 tasks of 3 chunks, the middle share tasks 436..871.
+  // The shares are whole tasks: 262 tasks of 15 chunks (the last of 7), the middle share tasks 87..173.
   const Json state = hapsyn::test::read_json_file(dir + "/shard-1.json")["state"];
-  EXPECT_EQ(state["finished_ranges"], Json::array({Json::array({1308, 2616})}));
+  EXPECT_EQ(state["finished_ranges"], Json::array({Json::array({1305, 2610})}));
   hapsyn::test::EmulatedRanks job(2);
   const auto results = job.run([&](hapsyn::Cluster& cluster) {
     hapsyn::SolverContext context;
