@@ -27,8 +27,8 @@ namespace hapsyn::plugins {
 /// its record and collection stay small against its work, and each thread's stretch of the grid
 /// stays long. With units/1,024 (about a thousand tasks) the pruned 10 mm five-bar GII grid took
 /// 11.3 ms on 2 threads against 10.3 ms now (best of 7 `hapsyn run`s): the second thread started
-/// closer to the first, and the incumbent rose later (282,000 sample solves against 245,000;
-/// 274,000 on one thread). It depends on the sweep alone, never on the rank or thread count: a
+/// closer to the first, and the incumbent rose later (about 282,000 sample solves against
+/// 251,000; 274,000 on one thread). It depends on the sweep alone, never on the rank or thread count: a
 /// --shard share is whole tasks.
 inline long long units_per_task(long long units) { return std::clamp(units / 256, 1LL, 256LL); }
 
