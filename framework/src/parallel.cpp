@@ -47,9 +47,6 @@ void warn_shortfall(int started, int wanted, const std::system_error& e) {
 // as before. The pool is never destroyed: its workers are detached and end with the process.
 class WorkerPool {
  public:
-  /// Runs job(t) for t in [1, helpers] on the workers (started as needed; `helpers` drops to the
-  /// ones that could be started, with the shortfall warning) and job(0) on the caller; returns
-  /// after every call returned. False, running nothing, when the workers are busy. job must not throw.
   /// Starts workers until `helpers` run (fewer, with the shortfall warning, when no more can
   /// start); does nothing when the workers are busy.
   void start(int helpers, int threads) {
@@ -58,6 +55,9 @@ class WorkerPool {
     busy_.store(false, std::memory_order_release);
   }
 
+  /// Runs job(t) for t in [1, helpers] on the workers (started as needed; `helpers` drops to the
+  /// ones that could be started, with the shortfall warning) and job(0) on the caller; returns
+  /// after every call returned. False, running nothing, when the workers are busy. job must not throw.
   bool run(int helpers, int threads, const std::function<void(int)>& job) {
     if (busy_.exchange(true, std::memory_order_acquire)) return false;
     helpers = start_workers(helpers, threads);
