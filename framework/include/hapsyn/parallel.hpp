@@ -23,7 +23,8 @@ void parallel_for_dynamic(long long n, int threads, long long block,
 /// thread may wait for the scheduler's next balancing tick before it runs anywhere, measured at 1
 /// to 4 ms on a 2-core VM, during which that first loop ran on the caller alone (hapsyn run calls
 /// it before loading the study). A thread that cannot start gives the warning described above,
-/// once; the loops then run as described there. Does nothing for threads <= 1.
+/// once; the loops then run as described there. Does nothing for threads <= 1, nor under the
+/// test seam's limit below (whose loops start their own threads).
 void start_worker_threads(int threads);
 
 /// Hardware concurrency (>= 1).

@@ -23,13 +23,11 @@ namespace hapsyn::plugins {
 
 /// How many consecutive units one task of a sweep's task farm covers: one for up to 511 units,
 /// then about units/256 (at most 256), so that a sweep is about 256 tasks until its tasks reach
-/// 256 units, and more beyond. The round trip a task costs under MPI (tens of microseconds) and
-/// its record and collection stay small against its work, and each thread's stretch of the grid
-/// stays long. With units/1,024 (about a thousand tasks) the pruned 10 mm five-bar GII grid took
-/// 11.3 ms on 2 threads against 10.3 ms now (best of 7 `hapsyn run`s): the second thread started
-/// closer to the first, and the incumbent rose later (about 282,000 sample solves against
-/// 251,000; 274,000 on one thread). It depends on the sweep alone, never on the rank or thread count: a
-/// --shard share is whole tasks.
+/// 256 units, and more beyond. Tasks this large keep the round trip a task costs under MPI (tens
+/// of microseconds) and its record and collection small against its work, and give each thread
+/// long stretches of the grid (about a thousand tasks made the pruned 10 mm five-bar grid 10 %
+/// slower on 2 threads: docs/design.md section 12.2). It depends on the sweep alone, never on the
+/// rank or thread count: a --shard share is whole tasks.
 inline long long units_per_task(long long units) { return std::clamp(units / 256, 1LL, 256LL); }
 
 class RangeLedger {
