@@ -5,6 +5,9 @@
 
 #include <hapsyn/output_files.hpp>
 
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -289,6 +292,80 @@ TEST(Cli, SceneBuildsSummarizesAndExportsTheHumanArmScene) {
   ASSERT_EQ(second.code, 0) << second.out;
   EXPECT_NE(second.out.find("from_cache: true"), std::string::npos) << second.out;
   EXPECT_NE(second.out.find("n_reach: " + std::to_string(n_reach)), std::string::npos) << second.out;
+  fs::remove_all(dir);
+}
+
+// The arm file's palm position in S at q (standard DH, as share/human_arm/README.md states it),
+// computed here from the file alone.
+Eigen::Vector3d arm_file_palm(const std::string& file, const std::array<double, 7>& q_degrees) {
+  std::ifstream in(file);
+  const Json arm = Json::parse(in);
+  const auto length = [&](const Json& v) {
+    if (v.is_number()) return v.get<double>();
+    std::string name = v.get<std::string>();
+    const double sign = name[0] == '-' ? -1.0 : 1.0;
+    if (sign < 0) name = name.substr(1);
+    return sign * arm.at("segments").at(name).get<double>();
+  };
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < 7; ++i) {
+    const Json& r = arm.at("dh")[static_cast<std::size_t>(i)];
+    const double theta = (q_degrees[static_cast<std::size_t>(i)] + r.at("theta_offset").get<double>()) * M_PI / 180.0;
+    T = T * Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ()) * Eigen::Translation3d(0, 0, length(r.at("d"))) *
+        Eigen::Translation3d(length(r.at("a")), 0, 0) *
+        Eigen::AngleAxisd(r.at("alpha").get<double>() * M_PI / 180.0, Eigen::Vector3d::UnitX());
+  }
+  return T.translation();
+}
+
+// What a user checks with `hapsyn scene PROBLEM --csv F`: the rotation that carries the exported
+// shoulder-frame positions onto the base-frame positions (a least-squares fit, Kabsch) hangs the
+// arm file's rest pose along -z_B (gravity) and moves it horizontally when the arm is raised
+// sideways or forward.
+TEST(Cli, ExportedSceneOfTheEvaluateStudyHangsTheRestArmAlongGravity) {
+  const fs::path dir = fresh_dir("upright");
+  const Output o = hapsyn_cli("scene " + problem("haptic6r-evaluate.json") +
+                              " --set scene.options.lattice_step=0.2 --set scene.options.orientations=20 "
+                              "--set scene.options.joint3_steps=5 --set scene.options.cache_directory=" +
+                              (dir / "cache").string() + " --csv " + (dir / "samples.csv").string());
+  ASSERT_EQ(o.code, 0) << o.out;
+  std::ifstream csv((dir / "samples.csv").string());
+  std::string line;
+  std::getline(csv, line);
+  std::vector<std::string> header;
+  for (std::istringstream h(line); std::getline(h, line, ',');) header.push_back(line);
+  const auto column = [&](const std::string& name) {
+    return static_cast<std::size_t>(std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  const std::size_t shoulder = column("shoulder_pose[0]");
+  ASSERT_LT(shoulder, header.size());
+  std::vector<Eigen::Vector3d> in_base, in_shoulder;
+  while (std::getline(csv, line)) {
+    std::vector<double> v;
+    for (std::istringstream r(line); std::getline(r, line, ',');) v.push_back(std::stod(line));
+    in_base.emplace_back(v[0], v[1], v[2]);
+    in_shoulder.emplace_back(v[shoulder], v[shoulder + 1], v[shoulder + 2]);
+  }
+  ASSERT_GT(in_base.size(), 100u);
+  Eigen::Vector3d mean_b = Eigen::Vector3d::Zero(), mean_s = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < in_base.size(); ++i) {
+    mean_b += in_base[i] / static_cast<double>(in_base.size());
+    mean_s += in_shoulder[i] / static_cast<double>(in_base.size());
+  }
+  Eigen::Matrix3d cross = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < in_base.size(); ++i) cross += (in_base[i] - mean_b) * (in_shoulder[i] - mean_s).transpose();
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cross, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d fit = svd.matrixU() * svd.matrixV().transpose();
+  ASSERT_GT(fit.determinant(), 0.0);
+  const std::string arm = std::string(HAPSYN_SOURCE_DIR) + "/share/human_arm/fennel2022_right_arm.json";
+  const Eigen::Vector3d rest = (fit * arm_file_palm(arm, {0, 0, 0, 0, 0, 0, 0})).normalized();
+  const Eigen::Vector3d abducted = (fit * arm_file_palm(arm, {90, 0, 0, 0, 0, 0, 0})).normalized();
+  const Eigen::Vector3d flexed = (fit * arm_file_palm(arm, {0, 90, 0, 0, 0, 0, 0})).normalized();
+  EXPECT_GT(rest.dot(Eigen::Vector3d(0, 0, -1)), 1.0 - 1e-9) << rest.transpose();
+  EXPECT_NEAR(abducted.z(), 0.0, 1e-9) << abducted.transpose();
+  EXPECT_NEAR(flexed.z(), 0.0, 1e-9) << flexed.transpose();
+  EXPECT_GT(flexed.x(), 1.0 - 1e-9) << "the user faces +x_B: " << flexed.transpose();
+  EXPECT_GT(-abducted.y(), 1.0 - 1e-9) << "the right arm abducts to -y_B: " << abducted.transpose();
   fs::remove_all(dir);
 }
 

@@ -176,6 +176,9 @@ PositionMaps position_maps(const Problem& problem, const SampleRecords& records)
   if (is_lattice) {
     maps.lattice_per_axis = samples.lattice->per_axis;
     maps.lattice_step = samples.lattice->step;
+    maps.lattice_to_poses = samples.lattice->lattice_to_poses;
+    maps.lattice_origin = samples.lattice->origin;
+    maps.lattice_frame = samples.lattice->frame;
   }
 
   // Group samples by position, in order of first appearance (deterministic).
@@ -258,6 +261,9 @@ std::vector<std::string> plot_maps(const PositionMaps& maps, const std::string& 
       LatticeField field;
       field.per_axis = maps.lattice_per_axis;
       field.step = maps.lattice_step;
+      field.lattice_to_plot = maps.lattice_to_poses;
+      field.origin = maps.lattice_origin;
+      field.lattice_frame = maps.lattice_frame;
       const std::size_t n = static_cast<std::size_t>(maps.lattice_per_axis);
       field.values.assign(n * n * n, std::numeric_limits<double>::quiet_NaN());
       for (std::size_t g = 0; g < maps.position.size(); ++g) {

@@ -43,6 +43,11 @@ Eigen::Matrix3d rotation_option(const std::vector<std::vector<double>>& rows, co
   return c;
 }
 
+const std::vector<std::vector<double>>& upright_shoulder_to_base_rows() {
+  static const std::vector<std::vector<double>> rows{{0.0, 0.0, -1.0}, {-1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}};
+  return rows;
+}
+
 void check_lattice(const SampleSet& samples, const std::string& scene) {
   if (!samples.lattice) return;
   const SampleLattice& l = *samples.lattice;
@@ -53,6 +58,14 @@ void check_lattice(const SampleSet& samples, const std::string& scene) {
   }
   if (!(l.step > 0.0) || !std::isfinite(l.step)) {
     refuse("step = " + render_value(Json(l.step)) + ": must be finite and > 0");
+  }
+  const Eigen::Matrix3d& R = l.lattice_to_poses;
+  const double orthogonality = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (!(orthogonality <= 1e-6) || !(R.determinant() > 0.0)) {
+    std::ostringstream s;
+    s << "lattice_to_poses: must be a rotation matrix (orthonormal, det +1); max |C^T C - I| = " << orthogonality
+      << ", det = " << R.determinant();
+    refuse(s.str());
   }
   if (l.candidates_per_point < 1) {
     refuse("candidates_per_point = " + std::to_string(l.candidates_per_point) + ": must be >= 1");

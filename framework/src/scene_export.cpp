@@ -87,6 +87,9 @@ std::string plot_lattice_density(const SampleSet& set, const std::string& direct
   LatticeField density;
   density.per_axis = lattice.per_axis;
   density.step = lattice.step;
+  density.lattice_to_plot = lattice.lattice_to_poses;
+  density.origin = lattice.origin;
+  density.lattice_frame = lattice.frame;
   const double candidates = lattice.candidates_per_point;
   const std::size_t n = static_cast<std::size_t>(density.per_axis);
   density.values.assign(n * n * n, 0.0);

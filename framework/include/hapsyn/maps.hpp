@@ -56,6 +56,9 @@ struct PositionMaps {
                                           ///< metric met an unreachable sample there)
   int lattice_per_axis = 0;               ///< SampleLattice::per_axis; 0 without a lattice
   double lattice_step = 0.0;              ///< SampleLattice::step
+  Eigen::Matrix3d lattice_to_poses = Eigen::Matrix3d::Identity();  ///< SampleLattice::lattice_to_poses
+  std::string lattice_origin;             ///< SampleLattice::origin
+  std::string lattice_frame;              ///< SampleLattice::frame
 };
 
 PositionMaps position_maps(const Problem& problem, const SampleRecords& records);
@@ -63,7 +66,8 @@ PositionMaps position_maps(const Problem& problem, const SampleRecords& records)
 /// maps.csv: position, x, y, z, samples, one column per objective (empty = undefined).
 std::string maps_csv(const PositionMaps& maps);
 
-/// Writes map_<objective>.{dat,gp,png} into `directory` (height slices for lattice scenes,
+/// Writes map_<objective>.{dat,gp,png} into `directory` (slices by height above the lattice's
+/// origin, the vertical z of the poses' frame, for lattice scenes;
 /// an x-y scatter otherwise). \return the file names of the plots rendered, and in `message`
 /// why some were not (gnuplot missing or failing; the data and scripts are written regardless).
 std::vector<std::string> plot_maps(const PositionMaps& maps, const std::string& directory, std::string& message);

@@ -3,6 +3,7 @@
 /// gnuplot helpers shared by the commands that draw (scene --plot, sweep, position maps).
 /// Plots are a convenience: data and script are always written first, so a missing gnuplot
 /// costs the picture, never the numbers.
+#include <Eigen/Core>
 #include <string>
 #include <vector>
 
@@ -16,16 +17,32 @@ bool gnuplot_available();
 std::string run_gnuplot(const std::string& directory, const std::string& script);
 
 /// One scalar per point of a cubic lattice of `per_axis`^3 points, spacing `step` [m], centred on
-/// the scene origin; index = ix + n (iy + n iz). NaN marks a point without a value.
+/// the scene origin; index = ix + n (iy + n iz) in the lattice frame. NaN marks a point without a
+/// value.
 struct LatticeField {
   int per_axis = 0;
   double step = 0.0;
   std::vector<double> values;
+  /// Rotation from the lattice frame to the frame the plot is drawn in, whose z is the vertical
+  /// (human_arm: C_S^B, the base frame B with gravity along -z).
+  Eigen::Matrix3d lattice_to_plot = Eigen::Matrix3d::Identity();
+  std::string origin = "the lattice centre";  ///< for "height above <origin>"
+  std::string lattice_frame = "L";            ///< the lattice frame's name, for axis labels (human_arm: "S")
 };
 
-/// Writes `<name>.dat` and `<name>.gp` into `directory`: one heat-map panel per slice ix (x is
-/// the slice axis; for the human_arm scene x_S points down, so each slice is one height, as in
-/// Fennel 2022, Figures 3 and 5), colour range [0, colour_max], rendered to `<name>.png`.
+/// How plot_lattice_slices cuts a field: by height (z of the plot frame) when lattice_to_plot
+/// maps lattice axes onto plot axes (a signed permutation within 1e-9), else along the lattice
+/// axis closest to the vertical.
+struct LatticeSlicing {
+  bool by_height = false;      ///< slices are planes of constant z in the plot frame
+  int slice_axis = 0;          ///< without by_height: the lattice axis sliced along (0, 1, 2)
+  double tilt_degrees = 0.0;   ///< without by_height: angle between that axis and the vertical
+};
+LatticeSlicing lattice_slicing(const Eigen::Matrix3d& lattice_to_plot);
+
+/// Writes `<name>.dat` and `<name>.gp` into `directory`: one heat-map panel per slice, the highest
+/// first (Fennel 2022, Figures 3 and 5: each slice one height above the shoulder), panels drawn
+/// in the plot frame's x and y, colour range [0, colour_max], rendered to `<name>.png`.
 /// \return run_gnuplot's message (empty on success). \throws Error("output") when a file cannot
 /// be written.
 std::string plot_lattice_slices(const std::string& directory, const std::string& name, const std::string& title,

@@ -23,9 +23,9 @@ namespace hapsyn {
 ///
 /// Geometry: point (ix, iy, iz), each in [0, per_axis), has the index ix + n (iy + n iz)
 /// (n = per_axis; x varies fastest) and lies at ((ix - h) step, (iy - h) step, (iz - h) step),
-/// h = (n - 1) / 2, in the scene's own lattice frame (human_arm: the shoulder frame S, x_S
-/// pointing down, so a slice at fixed ix is one height). The plots slice along that frame's
-/// first axis; the lattice frame need not be the frame of SampleSet::poses.
+/// h = (n - 1) / 2, in the scene's own lattice frame (human_arm: the shoulder frame S), which
+/// need not be the frame of SampleSet::poses: `lattice_to_poses` rotates one into the other, and
+/// the plots slice by height along the vertical z of the poses' frame.
 ///
 /// The framework checks the declaration after Scene::build (check_lattice) and refuses a scene
 /// that breaks it.
@@ -39,6 +39,16 @@ struct SampleLattice {
   int candidates_per_point = 1;
   /// What a candidate is, for plot titles (human_arm: "orientations").
   std::string candidates = "samples";
+  /// Rotation from the lattice frame to the frame of SampleSet::poses (human_arm: C_S^B), a
+  /// rotation matrix. The maps slice the lattice along the vertical z of the poses' frame (the
+  /// heights of the base frame B, where gravity points along -z) when it maps lattice axes onto
+  /// pose axes; otherwise along the lattice axis closest to that vertical.
+  Eigen::Matrix3d lattice_to_poses = Eigen::Matrix3d::Identity();
+  /// What the lattice is centred on, for plot labels ("height above <origin>"; human_arm: "the
+  /// shoulder").
+  std::string origin = "the lattice centre";
+  /// The lattice frame's name, for axis labels (human_arm: "S").
+  std::string frame = "L";
 };
 
 /// A partition of a scene's samples into labelled groups (the recording, the subject, the
@@ -140,6 +150,15 @@ std::vector<double> orientation_option(const std::vector<double>& orientation, i
 ///         max |C^T C - I| = ..., det = ...") when max |C^T C - I| > 1e-6 or det <= 0.
 Eigen::Matrix3d rotation_option(const std::vector<std::vector<double>>& rows, const std::string& key,
                                 const std::string& scene);
+
+/// The rotation C_S^B from the human arm model's shoulder frame S to the manipulator base B
+/// (x_B = x_S^B + C_S^B x_S) that seats the user upright in front of the device: the arm model's
+/// rest pose (q = 0, hanging along -y_S) points along -z_B, the direction of gravity; the user
+/// faces +x_B (forward flexion, -z_S, goes to +x_B) and abduction of the right arm (+x_S) to -y_B.
+/// It is the transpose of the matrix Fennel et al. print as C_S^B, (0,-1,0; 0,0,1; -1,0,0), which
+/// taken as S -> B would lay the user on their side (docs/design.md section 4.3). The default of
+/// the human_arm and motion scenes' C_S_B option, as 3 rows.
+const std::vector<std::vector<double>>& upright_shoulder_to_base_rows();
 
 /// What the scene must provide, derived from the study's metrics (e.g. the human ellipsoids
 /// are built only when a metric needs them).

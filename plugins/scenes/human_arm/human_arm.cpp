@@ -511,13 +511,17 @@ SampleSet assemble_samples(const RawScene& raw, const HumanArmSceneOptions& o, c
   };
   if (wish.mv) set.attributes["M_v"] = matrix_attribute(raw.mv);
   if (wish.ma) set.attributes["M_a"] = matrix_attribute(raw.ma);
-  // The lattice declaration the framework's maps and plots use (the lattice frame is S).
+  // The lattice declaration the framework's maps and plots use (the lattice frame is S, the
+  // poses' frame B).
   SampleLattice lattice;
   lattice.per_axis = g.per_axis;
   lattice.step = o.lattice_step;
   lattice.index_of_sample.assign(raw.lattice.begin(), raw.lattice.end());
   lattice.candidates_per_point = o.orientations;
   lattice.candidates = "orientations";
+  lattice.lattice_to_poses = o.C_S_B;
+  lattice.origin = "the shoulder";
+  lattice.frame = "S";
   set.lattice = std::move(lattice);
   return set;
 }

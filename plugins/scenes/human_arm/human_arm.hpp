@@ -156,7 +156,7 @@ struct HumanArmOptions {
   int orientations{};                       ///< [1, 1000000]
   int joint3_steps{};                       ///< [1, 10000]
   std::vector<double> x_S_B;                ///< 3: shoulder position in B [m]
-  std::vector<std::vector<double>> C_S_B;   ///< 3 rows of 3: rotation S -> B
+  std::vector<std::vector<double>> C_S_B;   ///< 3 rows of 3: rotation S -> B (default: upright user)
   std::vector<std::vector<double>> C_E_P;   ///< 3 rows of 3: rotation E -> P
   std::vector<double> x_E_P;                ///< 3: end-effector position in P [m]
   bool cache{};
@@ -199,8 +199,11 @@ struct HumanArmOptions {
           "Shoulder position in the manipulator base frame B (the paper: 0.61 m below joint 1).")
         .size(3)
         .unit("m");
-    d.add(&O::C_S_B, "C_S_B", {{0.0, -1.0, 0.0}, {0.0, 0.0, 1.0}, {-1.0, 0.0, 0.0}},
-          "Rotation from the shoulder frame S to B, as 3 rows (the paper's (0,-1,0; 0,0,1; -1,0,0)).")
+    d.add(&O::C_S_B, "C_S_B", upright_shoulder_to_base_rows(),
+          "Rotation from the shoulder frame S to B, as 3 rows: x_B = x_S_B + C_S_B x_S. The default seats the user "
+          "upright facing +x_B (the rest arm hangs along -z_B, the direction of gravity; abduction goes to -y_B): it "
+          "is the transpose of the paper's printed C_S^B = (0,-1,0; 0,0,1; -1,0,0), which read as S -> B would lay the "
+          "user on their side (docs/design.md section 4.3).")
         .size(3)
         .row_size(3);
     d.add(&O::C_E_P, "C_E_P", {{0.0, 0.0, 1.0}, {0.0, -1.0, 0.0}, {1.0, 0.0, 0.0}},

@@ -795,10 +795,10 @@ TEST(HumanArm, UnreadableOrMalformedArmFilesAreRefused) {
 TEST(HumanArm, LeftArmFileIsTheRightArmMirroredInTheSagittalPlane) {
   const HumanArm left(load_human_arm(HAPSYN_SOURCE_DIR "/share/human_arm/fennel2022_left_arm.json"));
   EXPECT_EQ(left.data().side, "left");
-  // y_S is lateral (joint 1 abducts the hanging arm in the x-y plane), so the mirror is
-  // M = diag(1, -1, 1): the left arm reaches M p with orientation M R M exactly when the right
+  // x_S is lateral (the right arm abducts towards +x_S; y_S is up, z_S backwards), so the mirror
+  // is M = diag(-1, 1, 1): the left arm reaches M p with orientation M R M exactly when the right
   // arm reaches (R, p), with the same best manipulability and the negated configuration.
-  const Eigen::Matrix3d M = Eigen::Vector3d(1, -1, 1).asDiagonal();
+  const Eigen::Matrix3d M = Eigen::Vector3d(-1, 1, 1).asDiagonal();
   std::mt19937 rng(11);
   const std::vector<double> grid = left.joint3_grid(17);
   for (int trial = 0; trial < 100; ++trial) {
@@ -813,6 +813,68 @@ TEST(HumanArm, LeftArmFileIsTheRightArmMirroredInTheSagittalPlane) {
     ASSERT_TRUE(left.best(M * T.linear() * M, M * T.translation(), grid, &ql, &ml)) << q.transpose();
     EXPECT_NEAR(ml, mr, 1e-12 + 1e-9 * mr);
   }
+}
+
+// ------------------------------------------------------ the user is upright ----
+
+// Gravity in the manipulator base B, as the mechanisms pull (haptic6r, serial_chain: -z_B).
+const Eigen::Vector3d kGravityInBase(0.0, 0.0, -1.0);
+
+// The unit direction from the shoulder to the palm in B for the arm at q, placed by C_S_B.
+Eigen::Vector3d palm_direction_in_base(const HumanArm& a, const Eigen::Matrix3d& C_S_B, const Vector7d& q) {
+  return (C_S_B * a.forward(q).translation()).normalized();
+}
+
+// The physical sanity of a placement: the arm model's rest pose (q = 0, the arm straight along
+// the body) points along gravity; forward flexion (joint 2) and abduction (joint 1) by 90 deg
+// are horizontal, the flexed arm points where the user faces (+x_B) and the abducted arm to the
+// user's own side (right: -y_B, left: +y_B). A user lying on their side fails every line.
+void expect_upright(const HumanArm& a, const Eigen::Matrix3d& C_S_B, const std::string& label) {
+  const double sign = a.data().side == "left" ? -1.0 : 1.0;  // the left arm's angles are mirrored
+  const Vector7d rest = Vector7d::Zero();
+  Vector7d flexed = rest, abducted = rest;
+  flexed(1) = sign * 90.0 * kDeg;
+  abducted(0) = sign * 90.0 * kDeg;
+  const Eigen::Vector3d down = palm_direction_in_base(a, C_S_B, rest);
+  const Eigen::Vector3d forward = palm_direction_in_base(a, C_S_B, flexed);
+  const Eigen::Vector3d sideways = palm_direction_in_base(a, C_S_B, abducted);
+  EXPECT_GT(down.dot(kGravityInBase), 1.0 - 1e-12) << label << ": the rest arm points along " << down.transpose();
+  EXPECT_NEAR(forward.z(), 0.0, 1e-12) << label << ": flexion is not horizontal: " << forward.transpose();
+  EXPECT_GT(forward.x(), 1.0 - 1e-12) << label << ": flexion does not point to +x_B: " << forward.transpose();
+  EXPECT_NEAR(sideways.z(), 0.0, 1e-12) << label << ": abduction is not horizontal: " << sideways.transpose();
+  EXPECT_GT(-sign * sideways.y(), 1.0 - 1e-12) << label << ": abduction points to " << sideways.transpose();
+}
+
+TEST(HumanArm, DefaultPlacementSeatsTheUserUpright) {
+  const Eigen::Matrix3d C = resolve_human_arm_scene_options(hapsyn::default_options<HumanArmOptions>()).C_S_B;
+  expect_upright(arm(), C, "right arm");
+  const HumanArm left(load_human_arm(HAPSYN_SOURCE_DIR "/share/human_arm/fennel2022_left_arm.json"));
+  expect_upright(left, C, "left arm");
+  // The check can fail: the paper's printed matrix taken as S -> B lays the user on their side.
+  Eigen::Matrix3d lying;
+  lying << 0, -1, 0, 0, 0, 1, -1, 0, 0;
+  EXPECT_LT(palm_direction_in_base(arm(), lying, Vector7d::Zero()).dot(kGravityInBase), 0.5);
+  EXPECT_EQ(C, lying.transpose());
+}
+
+TEST(HumanArm, EveryShippedHumanStudySeatsTheUserUpright) {
+  int checked = 0;
+  for (const auto& entry : fs::directory_iterator(HAPSYN_SOURCE_DIR "/problems")) {
+    if (entry.path().extension() != ".json") continue;
+    std::ifstream in(entry.path());
+    const Json problem = Json::parse(in);
+    const std::string plugin = problem.at("scene").at("plugin");
+    if (plugin != "human_arm" && plugin != "motion") continue;
+    const Json given = problem.at("scene").value("options", Json::object());
+    const Json options = hapsyn::validate_and_fill(hapsyn::test::registry().find(plugin).schema, given, "scene.options");
+    const Eigen::Matrix3d C = hapsyn::rotation_option(options.at("C_S_B").get<std::vector<std::vector<double>>>(),
+                                                      "C_S_B", plugin);
+    // A motion study's recordings are of the arm the right arm file models (RightArm, RightHand).
+    const std::string arm_file = plugin == "human_arm" ? resolve_arm_file(options.at("arm_file").get<std::string>()) : kArmFile;
+    expect_upright(HumanArm(load_human_arm(arm_file)), C, entry.path().filename().string());
+    ++checked;
+  }
+  EXPECT_GE(checked, 7) << "the shipped human-arm and motion studies";
 }
 
 TEST(HumanArm, OptionErrorsNameTheOptionTheValueAndTheRule) {
@@ -860,7 +922,7 @@ TEST(HumanArm, DeclaredSchemaIsValidAndItsDefaultsAreThePapers) {
   EXPECT_EQ(defaults.joint3_steps, 17);
   EXPECT_EQ(defaults.x_S_B, Eigen::Vector3d(0, 0, -0.61));
   Eigen::Matrix3d C_S_B, C_E_P;
-  C_S_B << 0, -1, 0, 0, 0, 1, -1, 0, 0;
+  C_S_B << 0, 0, -1, -1, 0, 0, 0, 1, 0;  // the transpose of the paper's printed C_S^B: an upright user
   C_E_P << 0, 0, 1, 0, -1, 0, 1, 0, 0;
   EXPECT_EQ(defaults.C_S_B, C_S_B);
   EXPECT_EQ(defaults.C_E_P, C_E_P);

@@ -82,8 +82,10 @@ void MotionOptions::declare(OptionDeclarations<MotionOptions>& d) {
         "Shoulder position in the manipulator base frame B (as the human_arm scene; the paper: 0.61 m below joint 1).")
       .size(3)
       .unit("m");
-  d.add(&O::C_S_B, "C_S_B", {{0.0, -1.0, 0.0}, {0.0, 0.0, 1.0}, {-1.0, 0.0, 0.0}},
-        "Rotation from the shoulder frame S to B, as 3 rows (as the human_arm scene).")
+  d.add(&O::C_S_B, "C_S_B", upright_shoulder_to_base_rows(),
+        "Rotation from the shoulder frame S to B, as 3 rows: x_B = x_S_B + C_S_B x_S, as the human_arm scene. The "
+        "default seats the user upright facing +x_B (the rest arm hangs along -z_B, gravity), the transpose of the "
+        "paper's printed C_S^B (docs/design.md section 4.3).")
       .size(3)
       .row_size(3);
   d.add(&O::C_E_P, "C_E_P", {{0.0, 0.0, 1.0}, {0.0, -1.0, 0.0}, {1.0, 0.0, 0.0}},

@@ -183,6 +183,51 @@ TEST_F(MotionScenes, PlacementMapsPoseAndTwistIntoTheBase) {
   }
 }
 
+// The shipped recordings as every shipped motion study places them: the user is upright, so
+// every seated activity starts and ends with the hand resting on the table, which lies below the
+// shoulder in B and in front of the user (+x_B), and no seated motion takes the hand far above
+// the shoulder. A user lying on their side (the paper's printed C_S^B taken as S -> B) would
+// have the table beside the shoulder, at its height.
+TEST_F(MotionScenes, SeatedActivitiesStartAndEndOnATableBelowTheShoulder) {
+  int studies = 0;
+  for (const auto& entry : fs::directory_iterator(HAPSYN_SOURCE_DIR "/problems")) {
+    if (entry.path().extension() != ".json") continue;
+    std::ifstream in(entry.path().string());
+    const Json problem = Json::parse(in);
+    if (problem.at("scene").at("plugin") != "motion") continue;
+    const std::string label = entry.path().filename().string();
+    const Json options = problem.at("scene").value("options", Json::object());
+    const SampleSet s = build(options);
+    const double shoulder_z = hapsyn::make_options<MotionOptions>(options, "scene.options").x_S_B[2];
+    const hapsyn::SampleGrouping& activity = s.groups[1];
+    const hapsyn::SampleGrouping& trajectory = s.groups[2];
+    ASSERT_EQ(activity.name, "activity") << label;
+    ASSERT_EQ(trajectory.name, "trajectory") << label;
+    const auto seated = [&](int i) {
+      return activity.labels[static_cast<std::size_t>(activity.of_sample[static_cast<std::size_t>(i)])] != "side_reach";
+    };
+    const auto on_the_table = [&](int i, const char* when) {
+      const std::string& name =
+          trajectory.labels[static_cast<std::size_t>(trajectory.of_sample[static_cast<std::size_t>(i)])];
+      EXPECT_LT(s.poses(i, 2), shoulder_z - 0.15) << label << " " << name << " " << when << ": not below the shoulder";
+      EXPECT_GT(s.poses(i, 0), 0.1) << label << " " << name << " " << when << ": not in front of the user";
+    };
+    int trajectories = 0;
+    for (int i = 0; i < s.size(); ++i) {
+      if (!seated(i)) continue;
+      EXPECT_LT(s.poses(i, 2), shoulder_z + 0.15) << label << " sample " << i << " far above the shoulder";
+      const bool first = i == 0 || trajectory.of_sample[static_cast<std::size_t>(i - 1)] != trajectory.of_sample[static_cast<std::size_t>(i)];
+      const bool last = i + 1 == s.size() ||
+                        trajectory.of_sample[static_cast<std::size_t>(i + 1)] != trajectory.of_sample[static_cast<std::size_t>(i)];
+      if (first) ++trajectories, on_the_table(i, "start");
+      if (last) on_the_table(i, "end");
+    }
+    EXPECT_EQ(trajectories, 24) << label << ": 6 subjects x 4 seated activities";
+    ++studies;
+  }
+  EXPECT_GE(studies, 2) << "the shipped motion studies";
+}
+
 TEST_F(MotionScenes, FolderGivesSubjectsActivitiesAndTrajectories) {
   const Analytic m;
   write("S01/reaching.csv", csv_of(m, 100.0, 1.0));

@@ -44,11 +44,13 @@ const std::vector<SyntheticTrajectory>& trajectories() {
     o.subjects = 2;
     o.position_noise_m = 0.0;
     o.orientation_noise_deg = 0.0;
-    // The seated activities: inside the capability of the design below (side_reach leaves its
-    // workspace on purpose).
+    // The activities at the table: inside the capability of the design below. side_reach leaves
+    // its workspace on purpose; drinking takes the upright user's hand to the mouth, where the
+    // design's SCARA is nearly stretched (q2 within a few degrees of 0) and its joint 4 holds the
+    // arm against gravity at its torque limit, so no speed makes every sample feasible.
     std::vector<SyntheticTrajectory> all = hapsyn::plugins::motion::make_synthetic_motion(arm, o), seated;
     for (SyntheticTrajectory& trajectory : all) {
-      if (trajectory.activity != "side_reach") seated.push_back(std::move(trajectory));
+      if (trajectory.activity != "side_reach" && trajectory.activity != "drinking") seated.push_back(std::move(trajectory));
     }
     return seated;
   }();
@@ -98,16 +100,16 @@ class MotionValidation : public ::testing::Test {
 };
 
 // The exact twist of the generator, mapped into B as the scene maps poses (the defaults:
-// C_S_B of the paper, E at the palm, C_E_P of the paper).
+// C_S_B of an upright user, E at the palm, C_E_P of the paper).
 TEST_F(MotionValidation, EstimatedTwistIsTheGeneratorsExactTwist) {
   const hapsyn::Study s = study(data(1.0), true);
   const hapsyn::SampleSet& scene = s.problem->samples();
   Eigen::Matrix3d C_S_B;
-  C_S_B << 0, -1, 0, 0, 0, 1, -1, 0, 0;
+  C_S_B << 0, 0, -1, -1, 0, 0, 0, 1, 0;
   const auto& twist = scene.attributes.at(hapsyn::kTwistAttribute);
   const auto& rate = scene.attributes.at(hapsyn::kTwistRateAttribute);
   double peak_v = 0, err_v = 0, peak_w = 0, err_w = 0, peak_a = 0, err_a = 0, square_a = 0;
-  // The scene orders recordings by path (S01/drinking.csv first): find each one's first row.
+  // The scene orders recordings by path (S01/lifting.csv first): find each one's first row.
   const hapsyn::SampleGrouping& trajectory = scene.groups[2];
   ASSERT_EQ(trajectory.name, "trajectory");
   Eigen::Index compared = 0;
@@ -160,7 +162,7 @@ TEST_F(MotionValidation, MotionInsideTheCapabilityIsFullyFeasibleAndSpeedUpFails
   const hapsyn::Needs needs = hapsyn::kNeedJointVelocity | hapsyn::kNeedJointAcceleration |
                               hapsyn::kNeedVelocityTorque | hapsyn::kNeedInertia | hapsyn::kNeedGravity |
                               hapsyn::kNeedActuatorLimits;
-  const double k = 6.0;
+  const double k = 10.0;
   const hapsyn::Study fast = study(data(base * k), false);
   const hapsyn::Problem& pk = *fast.problem;
   ASSERT_EQ(pk.samples().size(), p1.samples().size());
@@ -237,8 +239,8 @@ TEST_F(MotionValidation, ASceneWithoutMotionIsRefusedWithTheWayOut) {
 
 TEST_F(MotionValidation, ABadRecordingStopsTheRunBeforeAnythingIsWritten) {
   const std::string folder = data(1.0);
-  // One NaN row in the second subject's drinking recording.
-  const fs::path bad = fs::path(folder) / "S02" / "drinking.csv";
+  // One NaN row in the second subject's lifting recording.
+  const fs::path bad = fs::path(folder) / "S02" / "lifting.csv";
   std::ofstream(bad.string(), std::ios::app) << "99,nan,0,0,1,0,0,0\n";
   Json doc = {{"name", "bad-recording"},
               {"mechanism", {{"plugin", "haptic6r"}}},

@@ -1,0 +1,93 @@
+#!/usr/bin/env python3
+"""The human-arm figures the docs quote equal what the shipped problems print now.
+
+Runs each shipped study named below with the build tree's hapsyn into a scratch directory,
+formats its result as the docs quote it, and checks that every quoting file holds that exact
+text. A figure that changed (a model, a default, a convention) fails here with the old and the
+new text, instead of living on in the README.
+
+    python3 tests/docs/check_figures.py --hapsyn build/bin/hapsyn [--slow]
+
+--slow adds the studies that take minutes (the quick GA, the URDF evaluation, the UR5-like GA).
+"""
+import argparse
+import json
+import pathlib
+import subprocess
+import sys
+import tempfile
+
+SOURCE = pathlib.Path(__file__).resolve().parents[2]
+
+
+def run(hapsyn, problem, scratch):
+    out = scratch / problem.replace(".json", "")
+    command = [hapsyn, "run", str(SOURCE / "problems" / problem), "--force", "--threads", "2",
+               "--set", f"output.directory={out}", "--set", "output.plots=false"]
+    if json.loads((SOURCE / "problems" / problem).read_text())["scene"]["plugin"] == "human_arm":
+        command += ["--set", f"scene.options.cache_directory={scratch / 'cache'}"]
+    p = subprocess.run(command, cwd=SOURCE, capture_output=True, text=True, timeout=1800)
+    if p.returncode != 0:
+        sys.exit(f"check_figures: {' '.join(command)} failed ({p.returncode}):\n{p.stderr}")
+    return json.loads((out / "result.json").read_text())
+
+
+def objectives(result):
+    return result["best"]["objectives"]
+
+
+def coverage_line(result):
+    o = objectives(result)
+    return (f"J_x {o['J_x']:.3f}, J_v {o['J_v']:.3f}, J_a {o['J_a']:.3f}, J_f {o['J_f']:.3f}, "
+            f"J {o['J_x'] + o['J_v'] + o['J_a'] + o['J_f']:.3f}")
+
+
+def shares_row(label, result):
+    table = result["groups"]["subject"]
+    names = table["objectives"]
+    cells = []
+    for share in ("reachable", "velocity", "acceleration"):
+        k = names.index(share)
+        cells.append(f"{100 * table['mean'][k]:.1f} % ({100 * table['std'][k]:.1f})")
+    return f"| {label} | " + " | ".join(cells) + " |"
+
+
+def ga_line(result):
+    o = objectives(result)
+    return f"J = {result['best']['score']:.4f} (J_x {o['J_x']:.3f}, J_v {o['J_v']:.3f}, J_a {o['J_a']:.3f}, J_f {o['J_f']:.3f})"
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--hapsyn", required=True)
+    parser.add_argument("--slow", action="store_true")
+    args = parser.parse_args()
+    quotes = []  # (what, text, files that must hold it)
+    with tempfile.TemporaryDirectory(prefix="hapsyn-figures-") as tmp:
+        scratch = pathlib.Path(tmp)
+        evaluate = run(args.hapsyn, "haptic6r-evaluate.json", scratch)
+        quotes.append(("haptic6r-evaluate.json", coverage_line(evaluate), ["README.md"]))
+        for problem, label in (("haptic6r-motion-validation.json", "`haptic6r-evaluate.json`"),
+                               ("haptic6r-motion-validation-ga.json", "the GA's choice")):
+            row = shares_row(label, run(args.hapsyn, problem, scratch))
+            quotes.append((problem, row, ["README.md", "docs/design.md"]))
+        if args.slow:
+            urdf = run(args.hapsyn, "haptic6r-urdf-evaluate.json", scratch)
+            quotes.append(("haptic6r-urdf-evaluate.json", coverage_line(urdf), ["README.md"]))
+            quick = run(args.hapsyn, "haptic6r-ga-quick.json", scratch)
+            quotes.append(("haptic6r-ga-quick.json", ga_line(quick), ["README.md"]))
+            ur5 = run(args.hapsyn, "ur5like-coverage-ga.json", scratch)
+            quotes.append(("ur5like-coverage-ga.json", coverage_line(ur5), ["README.md"]))
+    failures = 0
+    for what, text, files in quotes:
+        for name in files:
+            if text not in (SOURCE / name).read_text():
+                print(f"{name}: does not quote what {what} prints now:\n    {text}")
+                failures += 1
+    checked = sum(len(files) for _, _, files in quotes)
+    print(f"{checked - failures} passed, {failures} failed")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
