@@ -992,6 +992,25 @@ TEST(ChainTemplate, UrdfClosedLoopIsRefused) {
   std::remove(path.c_str());
 }
 
+// Issue 53, cause 2: a joint axis is a direction of any finite length. (0 1e200 0) once became
+// the zero axis (its squared norm overflowed) and 1e-200 or 5e-324 were refused as zero.
+TEST(ChainTemplate, UrdfAxisOfAnyFiniteLengthIsItsDirection) {
+  const auto one_joint = [](const std::string& axis) {
+    return robot(urdf_link("base") + urdf_joint("j", "revolute", "base", "tip", "0.1 0 0", "0 0 0", axis) +
+                 urdf_link("tip", "0.2 0 0", "0 0 0", 1.0, "0.01 0 0 0.01 0 0.01"));
+  };
+  const Chain unit = nominal_chain(ChainTemplate::from_urdf(write_file("unit.urdf", one_joint("0 1 0")), "base", "tip"));
+  const State expected = state_at(unit, {0.3});
+  for (const char* axis : {"0 1e200 0", "0 1e-200 0", "0 5e-324 0", "0 2 0"}) {
+    const Chain c = nominal_chain(ChainTemplate::from_urdf(write_file("scaled.urdf", one_joint(axis)), "base", "tip"));
+    const State s = state_at(c, {0.3});
+    EXPECT_LT((s.jacobian - expected.jacobian).norm(), 1e-15) << axis;
+    EXPECT_LT((s.inertia - expected.inertia).norm(), 1e-15) << axis;
+  }
+  expect_error([&] { ChainTemplate::from_urdf(write_file("zero.urdf", one_joint("0 0 0")), "base", "tip"); },
+               {"joint \"j\"", "axis = (0 0 0): must be a finite, non-zero direction"});
+}
+
 TEST(ChainTemplate, UrdfErrorsNameTheFileAndTheProblem) {
   expect_error([] { ChainTemplate::from_urdf("/nonexistent/arm.urdf", "a", "b"); },
                {"serial_chain: cannot read URDF file /nonexistent/arm.urdf: No such file or directory"});

@@ -236,11 +236,15 @@ UrdfStep step_of(const std::string& path, const urdf::Joint& j) {
   }
   step.moving = true;
   const Eigen::Vector3d axis(j.axis.x, j.axis.y, j.axis.z);
-  if (!(axis.norm() > 0.0) || !axis.allFinite()) {
+  // Scaled by its largest entry before the norm: any finite non-zero vector is a direction,
+  // (0 1e200 0) as much as (0 5e-324 0), and neither the square of the one overflows nor that of
+  // the other underflows.
+  const double largest = axis.cwiseAbs().maxCoeff();
+  if (!(largest > 0.0) || !axis.allFinite()) {
     throw Error(kSerialChainName, at + " axis = (" + show_number(axis.x()) + " " + show_number(axis.y()) + " " +
-                                      show_number(axis.z()) + "): must be a non-zero direction");
+                                      show_number(axis.z()) + "): must be a finite, non-zero direction");
   }
-  step.joint.axis = axis.normalized();
+  step.joint.axis = (axis / largest).normalized();
   if (j.limits) {
     if (j.type != urdf::Joint::CONTINUOUS) {
       step.joint.lower = j.limits->lower;

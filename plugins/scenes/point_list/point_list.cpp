@@ -231,9 +231,11 @@ class Reader {
       if (!std::isfinite(values_[c])) fail(shown + ": must be finite");
     }
     const auto at = [&](int i) { return values_[static_cast<std::size_t>(i)]; };
-    poses_.push_back(at(layout_.x) * scale_);
-    poses_.push_back(at(layout_.y) * scale_);
-    if (layout_.z >= 0) poses_.push_back(at(layout_.z) * scale_);
+    // Positions stay in the file's unit until the whole file is read: the units line may stand
+    // anywhere, and it applies to every row (samples() scales them).
+    poses_.push_back(at(layout_.x));
+    poses_.push_back(at(layout_.y));
+    if (layout_.z >= 0) poses_.push_back(at(layout_.z));
     if (!layout_.quaternion.empty()) quaternion();
     if (!layout_.matrix.empty()) matrix();
     if (layout_.weight >= 0) {
@@ -289,6 +291,7 @@ class Reader {
     set.unit = "m";
     const Eigen::Index n = static_cast<Eigen::Index>(rows_), columns = layout_.pose_columns();
     set.poses = Eigen::Map<const SampleSet::RowMatrix>(poses_.data(), n, columns);
+    set.poses.leftCols(layout_.z >= 0 ? 3 : 2) *= scale_;
     set.weights = std::move(weights_);
     std::vector<std::string> names;
     for (std::size_t a = 0; a < layout_.attributes.size(); ++a) {

@@ -103,6 +103,21 @@ TEST_F(PointListFiles, UnitsLineConvertsPositionsToMetres) {
   EXPECT_EQ(mm.unit, "m");
 }
 
+// Issue 53, cause 3: a units line after data rows, or at the end, applies to every row (rows
+// read before it were once taken in metres, mixing metres and millimetres in one scene).
+TEST_F(PointListFiles, UnitsLineAnywhereAppliesToEveryRow) {
+  const SampleSet first = read_point_list(write("first.csv", "# units: length=mm\nx,y,z\n100,200,300\n400,500,600\n"));
+  const SampleSet middle = read_point_list(write("middle.csv", "x,y,z\n100,200,300\n# units: length=mm\n400,500,600\n"));
+  const SampleSet last = read_point_list(write("last.csv", "x,y,z\n100,200,300\n400,500,600\n# units: length=mm\n"));
+  ASSERT_EQ(first.size(), 2);
+  for (const SampleSet* s : {&middle, &last}) {
+    ASSERT_EQ(s->size(), 2);
+    EXPECT_TRUE(s->poses == first.poses) << s->poses;
+  }
+  EXPECT_DOUBLE_EQ(last.pose(0)[0], 0.1);
+  EXPECT_DOUBLE_EQ(last.pose(1)[2], 0.6);
+}
+
 TEST_F(PointListFiles, QuaternionColumnsGiveNormalizedFullPoses) {
   const SampleSet set = read_point_list(write("q.csv", "qx,x,y,z,qw,qy,qz\n0,1,2,3,1.0000005,0,0\n0.5,0,0,0,0.5,0.5,-0.5\n"));
   EXPECT_EQ(set.coordinates, (std::vector<std::string>{"x", "y", "z", "qw", "qx", "qy", "qz"}));
