@@ -369,6 +369,43 @@ TEST(Cli, ExportedSceneOfTheEvaluateStudyHangsTheRestArmAlongGravity) {
   fs::remove_all(dir);
 }
 
+// Issue 53, cause 4: a merge never writes over one of its shares, with or without --force.
+TEST(Cli, MergeRefusesAnOutputThatIsOneOfItsShares) {
+  const fs::path dir = fresh_dir("merge-over-share");
+  std::vector<std::string> shares;
+  for (int i = 1; i <= 3; ++i) {
+    const fs::path share = dir / ("s" + std::to_string(i));
+    const Output o = hapsyn_cli("run " + problem("fivebar-gii-coarse.json") + " --quiet --shard " + std::to_string(i) +
+                                "/3 --out " + share.string());
+    ASSERT_EQ(o.code, 0) << o.out;
+    shares.push_back(share.string());
+  }
+  std::ifstream before_in((dir / "s1" / "result.json").string());
+  const std::string before((std::istreambuf_iterator<char>(before_in)), std::istreambuf_iterator<char>());
+  const std::string all = shares[0] + " " + shares[1] + " " + shares[2];
+  for (const std::string& force : {std::string(""), std::string(" --force")}) {
+    const Output same = hapsyn_cli("merge " + all + " --out " + shares[0] + force);
+    EXPECT_EQ(same.code, 1) << same.out;
+    EXPECT_NE(same.out.find("merge: --out " + shares[0] + " is the share " + shares[0] +
+                            " given as input: the merged study would be written over it; choose another directory"),
+              std::string::npos)
+        << same.out;
+    const Output inside = hapsyn_cli("merge " + all + " --out " + shares[1] + "/merged" + force);
+    EXPECT_EQ(inside.code, 1) << inside.out;
+    EXPECT_NE(inside.out.find("lies inside the share " + shares[1]), std::string::npos) << inside.out;
+  }
+  // Another spelling of the same directory is the same directory.
+  const Output dotted = hapsyn_cli("merge " + all + " --out " + (dir / "s2" / ".." / "s1").string());
+  EXPECT_EQ(dotted.code, 1) << dotted.out;
+  std::ifstream after_in((dir / "s1" / "result.json").string());
+  const std::string after((std::istreambuf_iterator<char>(after_in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(after, before) << "a refused merge changed a share";
+  EXPECT_FALSE(fs::exists(dir / "s2" / "merged"));
+  const Output merged = hapsyn_cli("merge " + all + " --out " + (dir / "merged").string());
+  EXPECT_EQ(merged.code, 0) << merged.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, ScenePlotsReachabilityDensitySlices) {
   const fs::path dir = fresh_dir("scene-plot");
   const Output o = hapsyn_cli("scene " + human_arm_scene_args(dir / "cache") + " --plot " + (dir / "plot").string());

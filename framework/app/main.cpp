@@ -567,6 +567,7 @@ int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& r
 }
 
 int merge_command(const Arguments& a, const hapsyn::Registry& registry) {
+  hapsyn::check_merge_output(a.out_dir, a.merge_dirs);
   // A sweep's or a comparison's shares (their cases), else a study's.
   if (hapsyn::is_sweep_output(a.merge_dirs.front())) {
     const Json summary = hapsyn::merge_sweep_shards(a.merge_dirs, a.out_dir, registry, a.threads);

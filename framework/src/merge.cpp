@@ -9,6 +9,7 @@
 
 #include <boost/filesystem.hpp>
 
+#include <algorithm>
 #include <map>
 
 namespace hapsyn {
@@ -102,9 +103,27 @@ void check_shares_belong_together(const std::vector<Share>& shares) {
 
 }  // namespace
 
+void check_merge_output(const std::string& out, const std::vector<std::string>& inputs) {
+  const fs::path target = fs::weakly_canonical(fs::absolute(out)).lexically_normal();
+  for (const std::string& dir : inputs) {
+    const fs::path share = fs::weakly_canonical(fs::absolute(dir)).lexically_normal();
+    if (target == share) {
+      throw Error("merge", "--out " + out + " is the share " + dir +
+                               " given as input: the merged study would be written over it; choose another directory");
+    }
+    // Inside the share when the share's path is a prefix of the target's, component by component.
+    const auto mismatch = std::mismatch(share.begin(), share.end(), target.begin(), target.end());
+    if (mismatch.first == share.end()) {
+      throw Error("merge", "--out " + out + " lies inside the share " + dir +
+                               " given as input: the merged study would be written into it; choose another directory");
+    }
+  }
+}
+
 Json merge_shard_directories(const std::vector<std::string>& dirs, const Registry& registry, const RunOptions& options) {
   if (dirs.empty()) throw Error("merge", "no shard directories given");
   if (options.output_directory.empty()) throw Error("merge", "--out is required (where the merged study is written)");
+  check_merge_output(options.output_directory, dirs);
   std::vector<Share> shares;
   for (const std::string& d : dirs) shares.push_back(read_share(d));
   check_shares_belong_together(shares);

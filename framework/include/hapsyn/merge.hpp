@@ -30,4 +30,11 @@ namespace hapsyn {
 ///         Solver::merge_shards. Errors of the final run as run_study.
 Json merge_shard_directories(const std::vector<std::string>& dirs, const Registry& registry, const RunOptions& options);
 
+/// Refuses a merge whose output would be written over one of its inputs: `out` is one of the
+/// share directories `inputs` or lies inside one (compared as absolute, normalised paths, symbolic
+/// links resolved where they exist). --force does not lift it: a share is never replaced.
+/// \throws Error("merge", "--out <out> is the share <dir> given as input: ...") or "... lies inside
+///         the share <dir> ...".
+void check_merge_output(const std::string& out, const std::vector<std::string>& inputs);
+
 }  // namespace hapsyn
