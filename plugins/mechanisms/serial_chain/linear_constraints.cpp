@@ -187,6 +187,19 @@ std::vector<LinearConstraint> parse_linear_constraints(const std::vector<std::st
         g.coefficient.push_back(s * a);
       }
       g.constant = s * (cmp.rhs.constant - cmp.lhs.constant);
+      // Finite numbers can add up past the largest double: such a constraint would hold for no
+      // design (or every one), so it is refused here rather than left to make a study infeasible.
+      const std::string shown = where + " = \"" + texts[k] + "\": '" + cmp.written + "': ";
+      if (!std::isfinite(g.constant)) {
+        throw Error(component, shown + "its constant terms add up to " + std::to_string(g.constant) +
+                                   ": they must sum to a finite number");
+      }
+      for (std::size_t t = 0; t < g.index.size(); ++t) {
+        if (!std::isfinite(g.coefficient[t])) {
+          throw Error(component, shown + "the coefficients of '" + components[static_cast<std::size_t>(g.index[t])] +
+                                     "' add up to " + std::to_string(g.coefficient[t]) + ": they must sum to a finite number");
+        }
+      }
       if (g.index.empty()) {
         throw Error(component, where + " = \"" + texts[k] + "\": '" + cmp.written +
                                    "' has no design variable left (the terms cancel): it constrains nothing");

@@ -49,6 +49,13 @@ TEST(LinearConstraints, ErrorsNameTheConstraintTheValueAndTheRule) {
   EXPECT_NE(parse("l1 - l1 <= 1").find("has no design variable left"), std::string::npos);
   EXPECT_NE(parse("l1 * 2 <= 1").find("expected '<=', '>='"), std::string::npos);
   EXPECT_NE(parse("l1 <= 1e999").find("numbers must be finite"), std::string::npos);
+  // Issue 53, cause 7: finite numbers whose sum overflows (every design would be infeasible).
+  EXPECT_EQ(parse("l1 - 1e308 <= 1e308"),
+            "serial_chain: options.constraints[0] = \"l1 - 1e308 <= 1e308\": 'l1 - 1e308 <= 1e308': its constant terms "
+            "add up to inf: they must sum to a finite number");
+  EXPECT_EQ(parse("1e308*l2 + 1e308*l2 <= 1"),
+            "serial_chain: options.constraints[0] = \"1e308*l2 + 1e308*l2 <= 1\": '1e308*l2 + 1e308*l2 <= 1': the "
+            "coefficients of 'l2' add up to inf: they must sum to a finite number");
 }
 
 TEST(SerialChain, DesignVariablesAreTheChainParametersFixedAtTheirValues) {
