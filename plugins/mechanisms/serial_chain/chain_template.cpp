@@ -2,6 +2,8 @@
 // the readers are urdf_chain.cpp and dh_chain.cpp, the mass model fennel_mass_model.cpp.
 #include "chain_template_impl.hpp"
 
+#include <Eigen/Eigenvalues>
+
 #include <hapsyn/data_file.hpp>
 
 #include <algorithm>
@@ -38,6 +40,22 @@ std::string resolve_serial_chain_file(const std::string& option_name, const std:
 }
 
 namespace serial_chain_detail {
+
+std::string inertia_implausibility(const Eigen::Matrix3d& inertia) {
+  if (!inertia.allFinite()) return "its entries must be finite";
+  const Eigen::Vector3d moments = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(inertia, Eigen::EigenvaluesOnly).eigenvalues();
+  const double tolerance = 1e-6 * moments.cwiseAbs().sum();
+  // Six digits: eigenvalues carry rounding the file's numbers do not have.
+  char shown_moments[96];
+  std::snprintf(shown_moments, sizeof shown_moments, "(%.6g, %.6g, %.6g)", moments(0), moments(1), moments(2));
+  const std::string shown = std::string("its principal moments ") + shown_moments;
+  if (moments(0) < -tolerance) return shown + " must be >= 0 (positive semi-definite)";
+  // Sorted ascending: the largest is the only one that can exceed the sum of the others.
+  if (moments(2) > moments(0) + moments(1) + tolerance) {
+    return shown + " break the triangle inequality: the largest may not exceed the sum of the other two";
+  }
+  return "";
+}
 
 Eigen::Matrix3d rpy_rotation(double roll, double pitch, double yaw) {
   return (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *

@@ -50,6 +50,12 @@ void apply_fennel_mass_model(const FennelMassModel& model, const double* motor_m
 ChainParameter mass_scale_parameter();
 
 std::string did_you_mean(const std::string& name, const std::vector<std::string>& candidates);
+
+/// Why `inertia` (a body's, about its centre of mass, kg m^2) is no rigid body's, or "" when it
+/// is one: not finite, a principal moment below 0, or one larger than the sum of the other two
+/// (the triangle inequality every mass distribution meets), within 1e-6 of their sum so that
+/// files rounded to a few digits pass.
+std::string inertia_implausibility(const Eigen::Matrix3d& inertia);
 /// A number as the messages print it (shortest round trip, e.g. 0.45, 1e-09, inf).
 std::string show_number(double x);
 

@@ -1011,6 +1011,24 @@ TEST(ChainTemplate, UrdfAxisOfAnyFiniteLengthIsItsDirection) {
                {"joint \"j\"", "axis = (0 0 0): must be a finite, non-zero direction"});
 }
 
+// Issue 53, cause 7: a URDF inertia no rigid body has is refused with the link and its values;
+// a thin rod's (one principal moment 0, the triangle inequality met with equality) is one.
+TEST(ChainTemplate, UrdfInertiaNoRigidBodyHasIsRefused) {
+  const auto one_joint = [](const std::string& inertia) {
+    return robot(urdf_link("base") + urdf_joint("j", "revolute", "base", "tip", "0.1 0 0", "0 0 0", "0 0 1") +
+                 urdf_link("tip", "0.2 0 0", "0 0 0", 1.0, inertia));
+  };
+  EXPECT_NO_THROW(ChainTemplate::from_urdf(write_file("rod.urdf", one_joint("0 0 0 0.5 0 0.5")), "base", "tip"));
+  EXPECT_NO_THROW(ChainTemplate::from_urdf(write_file("point.urdf", one_joint("0 0 0 0 0 0")), "base", "tip"));
+  const std::string triangle = write_file("triangle.urdf", one_joint("0.1 0 0 0.1 0 0.3"));
+  expect_error([&] { ChainTemplate::from_urdf(triangle, "base", "tip"); },
+               {triangle + ": link \"tip\" <inertial> <inertia ixx=\"0.1\" ixy=\"0\" ixz=\"0\" iyy=\"0.1\" iyz=\"0\" "
+                           "izz=\"0.3\">: its principal moments (0.1, 0.1, 0.3) break the triangle inequality"});
+  const std::string indefinite = write_file("indefinite.urdf", one_joint("0.1 0.2 0 0.1 0 0.1"));
+  expect_error([&] { ChainTemplate::from_urdf(indefinite, "base", "tip"); },
+               {"link \"tip\"", "must be >= 0 (positive semi-definite): no rigid body has this inertia"});
+}
+
 TEST(ChainTemplate, UrdfErrorsNameTheFileAndTheProblem) {
   expect_error([] { ChainTemplate::from_urdf("/nonexistent/arm.urdf", "a", "b"); },
                {"serial_chain: cannot read URDF file /nonexistent/arm.urdf: No such file or directory"});
@@ -1137,6 +1155,15 @@ TEST(ChainTemplate, DhErrorsNameTheFileThePathTheValueAndTheRule) {
   d = small_table();
   d["parameters"]["l1"] = -0.3;
   expect_dh_error("negative", d, {"parameters.l1 = -0.3: must be >= 0"});
+  // Issue 53, cause 7: inertias no rigid body has (they changed GDI silently).
+  d = small_table();
+  d["joints"][0]["body"]["inertia"] = {1, 0, 0, 1, 0, 3};
+  expect_dh_error("triangle", d, {"joints[0].body.inertia = [1,0,0,1,0,3]: its principal moments (1, 1, 3) break the "
+                                  "triangle inequality: the largest may not exceed the sum of the other two: no rigid "
+                                  "body has this inertia"});
+  d = small_table();
+  d["joints"][0]["body"]["inertia"] = {1, 2, 0, 1, 0, 1};
+  expect_dh_error("not_definite", d, {"joints[0].body.inertia = [1,2,0,1,0,1]: its principal moments (-1, 1, 3) must be >= 0"});
   d = small_table();
   d["joints"][0]["type"] = "spherical";
   expect_dh_error("type", d, {"joints[0].type = \"spherical\": must be \"revolute\" or \"prismatic\""});

@@ -244,6 +244,9 @@ ChainBody read_body(const DhReader& r, const OrderedJson& v, const std::string& 
   for (int k = 0; k < 3; ++k) {
     if (b.inertia(k, k) < 0.0) r.fail(at + ".inertia", v["inertia"], "the moments ixx, iyy, izz must be >= 0");
   }
+  if (const std::string why = inertia_implausibility(b.inertia); !why.empty()) {
+    r.fail(at + ".inertia", v["inertia"], why + ": no rigid body has this inertia");
+  }
   return b;
 }
 

@@ -260,7 +260,7 @@ UrdfStep step_of(const std::string& path, const urdf::Joint& j) {
   return step;
 }
 
-std::optional<UrdfInertial> inertial_of(const urdf::Link& link) {
+std::optional<UrdfInertial> inertial_of(const std::string& path, const urdf::Link& link) {
   if (!link.inertial) return std::nullopt;
   const urdf::Inertial& in = *link.inertial;
   UrdfInertial u;
@@ -270,6 +270,13 @@ std::optional<UrdfInertial> inertial_of(const urdf::Link& link) {
   u.frame.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
   u.frame.linear() = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z).normalized().toRotationMatrix();
   u.inertia << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
+  if (const std::string why = inertia_implausibility(u.inertia); !why.empty()) {
+    throw Error(kSerialChainName, path + ": link \"" + link.name + "\" <inertial> <inertia ixx=\"" +
+                                      show_number(in.ixx) + "\" ixy=\"" + show_number(in.ixy) + "\" ixz=\"" +
+                                      show_number(in.ixz) + "\" iyy=\"" + show_number(in.iyy) + "\" iyz=\"" +
+                                      show_number(in.iyz) + "\" izz=\"" + show_number(in.izz) + "\">: " + why +
+                                      ": no rigid body has this inertia");
+  }
   return u;
 }
 
@@ -314,7 +321,7 @@ UrdfPath read_path(const std::string& path, const std::string& base_link, const 
     assert(origin != origins.end());  // urdfdom read the same joints
     add_origin_parameters(*j, origin == origins.end() ? Origin{} : origin->second, parameters);
     if (step.moving) ++p.dof;
-    step.child = inertial_of(*model.getLink(j->child_link_name));
+    step.child = inertial_of(path, *model.getLink(j->child_link_name));
     // A link before the first moving joint rides on the base: it has no dynamics, no parameter.
     if (step.child && p.dof > 0 && step.child->mass > 0.0) {
       step.child->mass_parameter = static_cast<int>(parameters.size());
