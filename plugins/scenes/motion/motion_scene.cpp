@@ -17,7 +17,8 @@ namespace hapsyn::plugins {
 
 namespace {
 constexpr const char* kName = "motion";
-constexpr double kMaxSamplesPerRecording = 5e7;  // 2.8 GB of pose and derivative data
+// Default of the max_samples option: the paper's 9 hours at 120 Hz are 3.9 million samples.
+constexpr long long kMotionMaxSamples = 10000000;
 using RowMatrix = SampleSet::RowMatrix;
 
 const std::vector<std::vector<double>> kIdentityRows = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
@@ -78,6 +79,12 @@ void MotionOptions::declare(OptionDeclarations<MotionOptions>& d) {
       .unit("s");
   d.add(&O::stride, "stride", 1, "Keep every stride-th sample after processing (a cheaper, coarser validation).")
       .range(1, 1000000);
+  d.add(&O::max_samples, "max_samples", kMotionMaxSamples,
+        "Largest number of samples all recordings together may give after resampling (10 million: 23 hours at "
+        "120 Hz). Each recording's count is computed from its duration and rate before it is resampled or "
+        "filtered, and a scene that would exceed it is refused before the work (a rate typo, or time stamps with a "
+        "tiny step, would ask for billions). Raise it deliberately for more data.")
+      .minimum(1);
   d.add(&O::x_S_B, "x_S_B", {0.0, 0.0, -0.61},
         "Shoulder position in the manipulator base frame B (as the human_arm scene; the paper: 0.61 m below joint 1).")
       .size(3)
@@ -121,8 +128,9 @@ void to_shoulder_frame(motion::Recording& r, const Eigen::Matrix3d& c, const Eig
 }
 
 // Steps 2-4 for one recording.
+// `before`: the samples of the recordings processed before this one (the max_samples budget).
 Processed process(const motion::Recording& r, const MotionOptions& o, const Eigen::Matrix3d& c,
-                  const Eigen::Matrix3d& h) {
+                  const Eigen::Matrix3d& h, long long before) {
   motion::Recording s = r;
   to_shoulder_frame(s, c, h);
   const bool uniform = motion::is_uniform(s.time);
@@ -130,16 +138,24 @@ Processed process(const motion::Recording& r, const MotionOptions& o, const Eige
   // rounding: 4e-5 at 6 decimals and 120 Hz, scaling every derivative by as much).
   const double own_rate = uniform ? 1.0 / motion::mean_step(s.time) : motion::median_rate(s.time);
   const double rate = o.rate > 0.0 ? o.rate : own_rate;
-  // A resampled recording must stay a size a study can hold (a typo in `rate` would ask for
-  // billions of samples).
-  const double resampled = (s.time(s.time.size() - 1) - s.time(0)) * rate + 1.0;
-  if (!uniform || o.rate > 0.0) {
-    if (!(resampled <= kMaxSamplesPerRecording)) {
-      std::ostringstream m;
-      m << r.file << ": resampling " << (s.time(s.time.size() - 1) - s.time(0)) << " s at " << rate << " Hz gives "
-        << resampled << " samples: at most " << kMaxSamplesPerRecording << " per recording (lower options.rate)";
-      throw Error(kName, m.str());
+  // The samples this recording gives, decided before any of them is made: a rate typo or time
+  // stamps with a tiny step would ask for billions of samples (and memory to match).
+  const double duration = s.time(s.time.size() - 1) - s.time(0);
+  const bool resampling = !uniform || o.rate > 0.0;
+  const double samples = resampling ? duration * rate + 1.0 : static_cast<double>(s.time.size());
+  if (!(samples + static_cast<double>(before) <= static_cast<double>(o.max_samples))) {
+    std::ostringstream m;
+    m << r.file << ": ";
+    if (resampling) {
+      m << "resampling " << duration << " s at " << rate << " Hz" << (o.rate > 0.0 ? " (options.rate)" : " (its median rate)")
+        << " gives " << samples << " samples";
+    } else {
+      m << samples << " samples";
     }
+    if (before > 0) m << ", with the " << before << " of the recordings before it";
+    m << ": more than options.max_samples = " << o.max_samples << " ("
+      << (o.rate > 0.0 ? "lower options.rate" : "check the time stamps") << ", or raise max_samples deliberately)";
+    throw Error(kName, m.str());
   }
   Eigen::VectorXd time = uniform ? Eigen::VectorXd::LinSpaced(s.time.size(), s.time(0), s.time(s.time.size() - 1))
                                  : s.time;
@@ -219,7 +235,7 @@ SampleSet MotionScene::build(const SceneRequest& request) const {
   std::vector<Processed> processed;
   Eigen::Index total = 0;
   for (const motion::Recording& r : recordings) {
-    processed.push_back(process(r, options_, recording_rotation_, hand_rotation_));
+    processed.push_back(process(r, options_, recording_rotation_, hand_rotation_, static_cast<long long>(total)));
     total += processed.back().time.size();
   }
 

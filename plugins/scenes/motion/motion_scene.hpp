@@ -42,6 +42,7 @@ struct MotionOptions {
   std::vector<std::vector<double>> recording_rotation, hand_rotation;
   double rate{}, cutoff{}, trim{};
   int filter_order{}, stride{};
+  long long max_samples{};  ///< >= 1: samples of all recordings together, after resampling
   bool filter{};
   std::vector<double> x_S_B;
   std::vector<std::vector<double>> C_S_B, C_E_P;

@@ -13,6 +13,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -298,7 +299,31 @@ TEST_F(MotionScenes, BadOptionsAreRefusedWithTheRule) {
   EXPECT_THAT(error_of([&] { build({{"path", file}, {"rate", 1e300}}); }), HasSubstr("scene.options.rate"));
   const std::string long_file = write("long.csv", "time,x,y,z,qw,qx,qy,qz\n0,0,0,0,1,0,0,0\n1000,0,0,0,1,0,0,0\n");
   EXPECT_THAT(error_of([&] { build({{"path", long_file}, {"rate", 100000}}); }),
-              HasSubstr(long_file + ": resampling 1000 s at 100000 Hz gives 1e+08 samples: at most 5e+07"));
+              HasSubstr(long_file + ": resampling 1000 s at 100000 Hz (options.rate) gives 1e+08 samples: more than "
+                                    "options.max_samples = 10000000 (lower options.rate, or raise max_samples deliberately)"));
+}
+
+// Issue 53, cause 1: a small recording whose time stamps have a tiny step (its median rate
+// 1 MHz) and one long gap would be resampled to 5e7 samples (the process then died of memory);
+// the count is decided from the duration and rate before any sample is made, for the whole scene.
+TEST_F(MotionScenes, SampleCountIsBoundedBeforeAnyWork) {
+  std::ostringstream tiny;
+  tiny << "# hapsyn-motion 1\ntime,x,y,z,qw,qx,qy,qz\n" << std::setprecision(17);
+  for (int i = 0; i < 40; ++i) tiny << i * 1e-6 << ",0,0,0,1,0,0,0\n";
+  tiny << "50,0,0,0,1,0,0,0\n";
+  const std::string file = write("tiny/S01/tiny.csv", tiny.str());
+  const auto started = std::chrono::steady_clock::now();
+  EXPECT_THAT(error_of([&] { build({{"path", file}}); }),
+              HasSubstr(file + ": resampling 50 s at 1e+06 Hz (its median rate) gives 5e+07 samples: more than "
+                               "options.max_samples = 10000000 (check the time stamps, or raise max_samples deliberately)"));
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(), 5.0);
+  // The budget is the whole scene's: the second recording is refused with the first one's count.
+  const Analytic m;
+  write("two/S01/a.csv", csv_of(m, 120.0, 2.0));
+  write("two/S01/b.csv", csv_of(m, 120.0, 2.0));
+  EXPECT_THAT(error_of([&] { build({{"path", (dir_ / "two").string()}, {"max_samples", 300}}); }),
+              HasSubstr("b.csv: 241 samples, with the 241 of the recordings before it: more than options.max_samples = 300"));
+  EXPECT_EQ(build({{"path", (dir_ / "two").string()}, {"max_samples", 482}}).size(), 482);
 }
 
 TEST_F(MotionScenes, UnknownAttributeIsRefused) {
