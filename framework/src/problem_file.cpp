@@ -241,59 +241,10 @@ std::string problem_of(const TextChecker& f) {
   }
 }
 
-// The offset of the first byte of `s` that is not part of valid UTF-8 (overlong forms,
-// surrogates and code points above U+10FFFF are invalid), or npos.
-std::size_t invalid_utf8_at(const std::string& s) {
-  std::size_t i = 0;
-  while (i < s.size()) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    std::size_t n = 0;
-    unsigned lo = 0x80, hi = 0xBF;  // the allowed range of the second byte
-    if (c < 0x80) {
-      ++i;
-      continue;
-    } else if (c >= 0xC2 && c <= 0xDF) {
-      n = 1;
-    } else if (c >= 0xE0 && c <= 0xEF) {
-      n = 2;
-      if (c == 0xE0) lo = 0xA0;
-      if (c == 0xED) hi = 0x9F;
-    } else if (c >= 0xF0 && c <= 0xF4) {
-      n = 3;
-      if (c == 0xF0) lo = 0x90;
-      if (c == 0xF4) hi = 0x8F;
-    } else {
-      return i;
-    }
-    if (i + n >= s.size()) return i;  // truncated sequence
-    for (std::size_t k = 1; k <= n; ++k) {
-      const auto d = static_cast<unsigned char>(s[i + k]);
-      if (d < (k == 1 ? lo : 0x80) || d > (k == 1 ? hi : 0xBF)) return i;
-    }
-    i += n + 1;
-  }
-  return std::string::npos;
-}
-
-// `s` shown in a message whatever its bytes: invalid ones as \xHH.
-std::string shown_string(const std::string& s) {
-  std::string out = "\"";
-  static const char* const kHex = "0123456789abcdef";
-  for (std::size_t i = 0; i < s.size() && i < 80; ++i) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    if (c >= 0x20 && c < 0x7F && c != '"' && c != '\\') {
-      out += static_cast<char>(c);
-    } else {
-      out += std::string("\\x") + kHex[c >> 4] + kHex[c & 15];
-    }
-  }
-  return out + (s.size() > 80 ? "...\"" : "\"");
-}
-
 void refuse_invalid_utf8(const std::string& s, const std::string& path, const char* what) {
   const std::size_t bad = invalid_utf8_at(s);
   if (bad == std::string::npos) return;
-  throw Error("problem", (path.empty() ? std::string("(top level)") : path) + " " + what + " " + shown_string(s) +
+  throw Error("problem", (path.empty() ? std::string("(top level)") : path) + " " + what + " " + shown_bytes(s) +
                              ": invalid UTF-8 at byte " + std::to_string(bad) + " (text must be UTF-8)");
 }
 
@@ -423,7 +374,7 @@ void check_json_text_rules(const Json& value, const std::string& path) { check_s
 void apply_override(Json& problem, const std::string& assignment) {
   // Before anything echoes it: a message must itself be valid UTF-8.
   if (const std::size_t bad = invalid_utf8_at(assignment); bad != std::string::npos) {
-    throw Error("set", shown_string(assignment) + ": invalid UTF-8 at byte " + std::to_string(bad) +
+    throw Error("set", shown_bytes(assignment) + ": invalid UTF-8 at byte " + std::to_string(bad) +
                            " (paths and values must be UTF-8)");
   }
   const auto equals = assignment.find('=');

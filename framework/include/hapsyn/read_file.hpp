@@ -3,6 +3,7 @@
 /// Reading a whole input file safely: only regular files (a FIFO, a device such as /dev/zero or
 /// a directory is refused before it is opened for reading, so nothing blocks or fills memory),
 /// and only up to a stated size.
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
@@ -22,5 +23,15 @@ std::string read_regular_file(const std::string& path, const std::string& compon
 /// True when `path` exists and is not a regular file (after following symbolic links): a FIFO,
 /// a socket, a device or a directory. Cheap; for callers that want to refuse before opening.
 bool exists_but_not_regular(const std::string& path);
+
+/// The offset of the first byte of `text` that is not part of valid UTF-8 (overlong forms,
+/// surrogates and code points above U+10FFFF are invalid), or std::string::npos. Readers check
+/// the names they take from a file with it: a name that is not UTF-8 cannot be written into
+/// result.json, so it is refused where it is read, naming the file and line.
+std::size_t invalid_utf8_at(const std::string& text);
+
+/// `text` as a message shows it whatever its bytes: in double quotes, printable ASCII as is,
+/// every other byte as \xHH, at most 80 bytes ("..." after them).
+std::string shown_bytes(const std::string& text);
 
 }  // namespace hapsyn

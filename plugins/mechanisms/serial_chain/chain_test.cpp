@@ -1029,6 +1029,21 @@ TEST(ChainTemplate, UrdfInertiaNoRigidBodyHasIsRefused) {
                {"link \"tip\"", "must be >= 0 (positive semi-definite): no rigid body has this inertia"});
 }
 
+// Issue 53, cause 6: joint and link names that are not UTF-8 are refused at load (they once
+// failed the run only when result.json was written).
+TEST(ChainTemplate, UrdfNamesThatAreNotUtf8AreRefusedAtLoad) {
+  const std::string bad_joint = write_file("bad_joint.urdf",
+      robot(urdf_link("base") + urdf_joint("j\xff" "1", "revolute", "base", "tip", "0.1 0 0", "0 0 0", "0 0 1") +
+            urdf_link("tip", "0.2 0 0", "0 0 0", 1.0, "0.01 0 0 0.01 0 0.01")));
+  expect_error([&] { ChainTemplate::from_urdf(bad_joint, "base", "tip"); },
+               {bad_joint + ": joint name \"j\\xff1\": invalid UTF-8 at byte 1 (names become design variables"});
+  const std::string bad_link = write_file("bad_link.urdf",
+      robot(urdf_link("base") + urdf_joint("j", "revolute", "base", "t\xff", "0.1 0 0", "0 0 0", "0 0 1") +
+            urdf_link("t\xff", "0.2 0 0", "0 0 0", 1.0, "0.01 0 0 0.01 0 0.01")));
+  expect_error([&] { ChainTemplate::from_urdf(bad_link, "base", "t\xff"); },
+               {bad_link + ": link name \"t\\xff\": invalid UTF-8 at byte 1"});
+}
+
 TEST(ChainTemplate, UrdfErrorsNameTheFileAndTheProblem) {
   expect_error([] { ChainTemplate::from_urdf("/nonexistent/arm.urdf", "a", "b"); },
                {"serial_chain: cannot read URDF file /nonexistent/arm.urdf: No such file or directory"});

@@ -315,6 +315,15 @@ UrdfPath read_path(const std::string& path, const std::string& base_link, const 
                    const std::map<std::string, Origin>& origins, std::vector<ChainParameter>& parameters) {
   UrdfPath p;
   for (const urdf::JointConstSharedPtr& j : joints) {
+    // The names become design variables ("<joint>:x", "<link>:mass") written into result.json.
+    for (const auto& [what, name] : {std::pair<const char*, const std::string&>{"joint", j->name},
+                                     {"link", j->child_link_name}}) {
+      if (const std::size_t bad = invalid_utf8_at(name); bad != std::string::npos) {
+        throw Error(kSerialChainName, path + ": " + what + " name " + shown_bytes(name) + ": invalid UTF-8 at byte " +
+                                          std::to_string(bad) + " (names become design variables written into "
+                                          "result.json: they must be UTF-8)");
+      }
+    }
     UrdfStep step = step_of(path, *j);
     step.origin_parameter = static_cast<int>(parameters.size());
     const auto origin = origins.find(j->name);

@@ -3,6 +3,7 @@
 #include "motion_recording.hpp"
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/read_file.hpp>
 
 #include <Eigen/Geometry>
 
@@ -121,6 +122,10 @@ class CsvReader {
       file_.fail("unknown header key " + detail::quoted(key) + ": the known keys are " + join(kKeys));
     }
     if (value.empty()) file_.fail("header key " + key + " has an empty value: give a value or leave the line out");
+    if (const std::size_t bad = invalid_utf8_at(value); bad != std::string::npos) {
+      file_.fail("header key " + key + " = " + shown_bytes(value) + ": invalid UTF-8 at byte " + std::to_string(bad) +
+                 " (labels are written into result.json: they must be UTF-8)");
+    }
     const auto [it, fresh] = keys_.emplace(key, std::make_pair(value, file_.line()));
     if (!fresh) {
       file_.fail("header key " + key + " given again (first on line " + std::to_string(it->second.second) +
@@ -379,7 +384,7 @@ Recording read_motion_csv(const std::string& path, const std::string& subject) {
   return CsvReader(path, subject).read();
 }
 
-Recording read_file(const std::string& path, const BvhOptions& bvh, const std::string& subject) {
+static Recording read_any(const std::string& path, const BvhOptions& bvh, const std::string& subject) {
   const std::string extension = lower(fs::path(path).extension().string());
   if (extension == ".csv") return read_motion_csv(path, subject);
   if (extension == ".bvh") {
@@ -389,6 +394,29 @@ Recording read_file(const std::string& path, const BvhOptions& bvh, const std::s
   }
   throw Error(kComponent, path + ": extension " + quoted(fs::path(path).extension().string()) +
                               ": must be .csv (hapsyn-motion) or .bvh (case ignored)");
+}
+
+// The labels a recording gives (its path, subject, activity) go into result.json and groups.csv:
+// they must be UTF-8, checked here where the file is named.
+static void check_labels(const std::string& path, const Recording& r) {
+  for (const auto& [what, text] : {std::pair<const char*, const std::string&>{"subject", r.subject},
+                                   {"activity", r.activity}}) {
+    if (const std::size_t bad = invalid_utf8_at(text); bad != std::string::npos) {
+      throw Error(kComponent, shown_bytes(path) + ": " + what + " " + shown_bytes(text) + ": invalid UTF-8 at byte " +
+                                  std::to_string(bad) + " (labels are written into result.json: they must be UTF-8; " +
+                                  "rename the file or folder)");
+    }
+  }
+}
+
+Recording read_file(const std::string& path, const BvhOptions& bvh, const std::string& subject) {
+  if (const std::size_t bad = invalid_utf8_at(path); bad != std::string::npos) {
+    throw Error(kComponent, shown_bytes(path) + ": the file's path is not valid UTF-8 (at byte " + std::to_string(bad) +
+                                "): it is written into result.json; rename the file or folder");
+  }
+  Recording r = read_any(path, bvh, subject);
+  check_labels(path, r);
+  return r;
 }
 
 }  // namespace detail

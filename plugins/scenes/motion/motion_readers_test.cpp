@@ -196,6 +196,23 @@ TEST(MotionCsv, LabelsFromHeaderElseStem) {
   EXPECT_EQ(all[1].activity, "take4");
 }
 
+// Issue 53, cause 6: labels that are not UTF-8 (a header value, a subject folder, a file name)
+// are refused where they are read, naming the file: they once passed `validate` and failed the
+// run only when result.json was written.
+TEST(MotionCsv, LabelsThatAreNotUtf8AreRefusedWhereTheyAreRead) {
+  TempDir dir;
+  const std::string rows = std::string(kQuaternionHeader) + "0,0,0,0,1,0,0,0\n1,0,0,0,1,0,0,0\n";
+  EXPECT_EQ(csv_error(dir, "# subject: S\xff" "1\n" + rows),
+            "motion: " + dir.path("m.csv") + ":1: header key subject = \"S\\xff1\": invalid UTF-8 at byte 1 (labels are "
+            "written into result.json: they must be UTF-8)");
+  TempDir folder;
+  folder.write("S\xfe/reach.csv", rows);
+  EXPECT_NE(error_of([&] { read_recordings(folder.path(), BvhOptions{}); })
+                .find("the file's path is not valid UTF-8 (at byte " + std::to_string(folder.path().size() + 2) + ")"),
+            std::string::npos)
+      << error_of([&] { read_recordings(folder.path(), BvhOptions{}); });
+}
+
 TEST(MotionCsv, RefusesTimeThatIsNotStrictlyIncreasing) {
   TempDir dir;
   const std::string header = kQuaternionHeader;

@@ -2,6 +2,7 @@
 
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
+#include <hapsyn/read_file.hpp>
 
 #include <Eigen/Geometry>
 #include <boost/filesystem.hpp>
@@ -21,7 +22,11 @@ constexpr const char* kName = "point_list";
 const std::vector<std::string> kQuaternion = {"qw", "qx", "qy", "qz"};
 const std::vector<std::string> kMatrix = {"r11", "r12", "r13", "r21", "r22", "r23", "r31", "r32", "r33"};
 
-std::string in_quotes(const std::string& text) { return Json(text).dump(); }
+// Quoted as JSON would quote it; text that is not UTF-8 (which JSON cannot hold) shows its
+// bytes as \xHH.
+std::string in_quotes(const std::string& text) {
+  return invalid_utf8_at(text) == std::string::npos ? Json(text).dump() : shown_bytes(text);
+}
 std::string number(double value) { return render_value(Json(value)); }
 
 std::string trim(const std::string& text) {
@@ -165,6 +170,10 @@ class Reader {
     std::map<std::string, int> index;
     for (std::size_t i = 0; i < names.size(); ++i) {
       if (names[i].empty()) fail("header: field " + std::to_string(i + 1) + " has an empty column name");
+      if (const std::size_t bad = invalid_utf8_at(names[i]); bad != std::string::npos) {
+        fail("header: column " + in_quotes(names[i]) + ": invalid UTF-8 at byte " + std::to_string(bad) +
+             " (column names become attribute names written into result.json: they must be UTF-8)");
+      }
       const auto [it, fresh] = index.emplace(names[i], static_cast<int>(i));
       if (!fresh) {
         fail("header: column " + in_quotes(names[i]) + " appears twice (fields " + std::to_string(it->second + 1) +

@@ -118,6 +118,15 @@ TEST_F(PointListFiles, UnitsLineAnywhereAppliesToEveryRow) {
   EXPECT_DOUBLE_EQ(last.pose(1)[2], 0.6);
 }
 
+// Issue 53, cause 6: bytes that are not UTF-8 in a column name or a field are refused by the
+// reader with the file, line and bytes (they once reached a JSON library exception).
+TEST_F(PointListFiles, BytesThatAreNotUtf8AreRefusedWithTheFileAndLine) {
+  EXPECT_EQ(error_of("x,y,s\xff\n0.1,0.2,3\n"),
+            "point_list: F:1: header: column \"s\\xff\": invalid UTF-8 at byte 1 (column names become attribute names "
+            "written into result.json: they must be UTF-8)");
+  EXPECT_EQ(error_of("x,y\n0.1,0.2\xff\n"), "point_list: F:2: column \"y\" = \"0.2\\xff\": must be a number");
+}
+
 TEST_F(PointListFiles, QuaternionColumnsGiveNormalizedFullPoses) {
   const SampleSet set = read_point_list(write("q.csv", "qx,x,y,z,qw,qy,qz\n0,1,2,3,1.0000005,0,0\n0.5,0,0,0,0.5,0.5,-0.5\n"));
   EXPECT_EQ(set.coordinates, (std::vector<std::string>{"x", "y", "z", "qw", "qx", "qy", "qz"}));
