@@ -1,5 +1,5 @@
 // Running a loaded study: output-directory guards and lock, seed, run log, the solver call, and
-// the result files (staged, then committed with result.json last), each a named step of run_study.
+// the result files (staged, then committed with result.json first), each a named step of run_study.
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/groups.hpp>
@@ -466,7 +466,7 @@ std::string without_component(const std::exception& e) {
 }
 
 // The staged outputs of one run: files are written into <out>/.staging-<pid> and moved into
-// <out> by commit(), result.json last, so that the directory never mixes two runs' files.
+// <out> by commit(), result.json first, so that the directory never mixes two runs' files.
 class StagedOutputs {
  public:
   explicit StagedOutputs(const RunSetup& run) : run_(run) {
@@ -485,8 +485,12 @@ class StagedOutputs {
   void write_result(const Json& doc) const {
     write_file_atomically((run_.staging / "result.json").string(), doc.dump(2) + "\n");
   }
-  // Moves every staged file into the output directory, result.json last; a file that cannot be
-  // moved is reported in `errors` and dropped from doc["files"] before result.json is rewritten.
+  // Moves result.json into the output directory, then every other staged file. result.json goes
+  // first because the earlier study's files are gone (remove_previous_outputs): from that move on
+  // the directory holds this study and only its files, so no moment shows this run's files
+  // without the result.json that claims them (the window "result.json last" had, which a kill can
+  // hit). A file that cannot be moved is reported in `errors`, dropped from doc["files"], and
+  // result.json is rewritten in place.
   void commit(Json& doc, std::vector<std::string>& errors) const {
     std::vector<fs::path> staged;
     boost::system::error_code ec;
@@ -494,11 +498,10 @@ class StagedOutputs {
       if (it->path().filename() != "result.json") staged.push_back(it->path());
     }
     if (ec) throw Error("output", "cannot list " + run_.staging.string() + ": " + ec.message());
-    std::vector<fs::path> moved;
+    move_file((run_.staging / "result.json").string(), run_.result_file.string());
     for (const fs::path& file : staged) {
       try {
         move_file(file.string(), (fs::path(run_.out_dir) / file.filename()).string());
-        moved.push_back(fs::path(run_.out_dir) / file.filename());
       } catch (const Error& e) {
         errors.push_back(without_component(e));
         drop_file(doc, file.filename().string());
@@ -506,15 +509,7 @@ class StagedOutputs {
     }
     if (!errors.empty()) {
       doc["output_errors"] = errors;
-      write_result(doc);
-    }
-    try {
-      move_file((run_.staging / "result.json").string(), run_.result_file.string());
-    } catch (const Error&) {
-      // Without result.json the files just moved would be outputs no result claims: take them back.
-      boost::system::error_code ignored;
-      for (const fs::path& file : moved) fs::remove(file, ignored);
-      throw;
+      write_file_atomically(run_.result_file.string(), doc.dump(2) + "\n");
     }
     sync_directory(run_.out_dir);
   }

@@ -8,10 +8,11 @@
 /// - result.json is the commit point. It exists only when a run has ended (any status), and
 ///   every other output file beside it (samples.csv, maps.csv, groups.csv, front.csv, map_*,
 ///   timeline.*) is from that same run: a run writes them into `<out>/.staging-<pid>` and moves
-///   them into place once complete, result.json last. A run that starts removes the previous
+///   them into place once complete, result.json first. A run that starts removes the previous
 ///   result.json first, then the previous run's output files (it only starts when that is
 ///   allowed: see check_output_directory). A killed run thus leaves the old study untouched
-///   (it never started) or no result.json.
+///   (it never started), no result.json, or its own result.json with the files moved so far
+///   (one it names may be missing; never one of another run).
 /// - run.log and checkpoint.json live in the directory itself: the checkpoint must survive a
 ///   stop or a kill, and the log shows how far a failed run got (its error is its last line).
 /// - `<out>/.lock` is flock'ed for the whole run: a second run into the directory fails at once.
