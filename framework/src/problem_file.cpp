@@ -1,8 +1,10 @@
+#include <algorithm>
 #include <cerrno>
 #include <cstddef>
 #include <cstdio>
 #include <cstring>
 #include <hapsyn/error.hpp>
+#include <hapsyn/json_text.hpp>
 #include <hapsyn/problem_file.hpp>
 #include <hapsyn/read_file.hpp>
 #include <iterator>
@@ -277,7 +279,8 @@ struct Segment {
 };
 
 [[noreturn]] void refuse_override(const std::string& assignment, const std::string& rule) {
-  throw Error("set", "'" + assignment + "': " + rule);
+  const std::string shown = assignment.size() > 200 ? assignment.substr(0, 200) + "..." : assignment;
+  throw Error("set", "'" + shown + "': " + rule);
 }
 
 std::optional<std::size_t> parse_index(const std::string& digits) {
@@ -349,19 +352,28 @@ Json read_problem_file(const std::string& path) {
   return parse_problem_text(read_regular_file(path, "problem", "problem file", kMaxProblemFileBytes), path);
 }
 
-Json parse_problem_text(const std::string& text, const std::string& source) {
+void check_json_text(const std::string& text, const std::string& source, const char* component) {
   // nlohmann's lexer takes a NUL byte for the end of the input: whatever follows one would be
   // ignored without a word.
   if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {
-    throw Error("problem", source + ":" + line_and_column(text, nul) + ": a NUL byte: JSON text may not contain one (" +
+    throw Error(component, source + ":" + line_and_column(text, nul) + ": a NUL byte: JSON text may not contain one (" +
                                "is this a binary file?)");
   }
   const TextChecker finder = check_text(text);
   if (finder.failed != TextChecker::Failure::kNone) {
-    throw Error("problem", source + ":" + line_and_column(text, error_offset(text, finder)) + ": " + problem_of(finder));
+    throw Error(component, source + ":" + line_and_column(text, error_offset(text, finder)) + ": " + problem_of(finder));
   }
+}
+
+Json parse_json_text(const std::string& text, const std::string& source, const char* component) {
+  check_json_text(text, source, component);
   Json document = Json::parse(text, nullptr, false);
-  if (document.is_discarded()) throw Error("problem", source + ": malformed JSON");
+  if (document.is_discarded()) throw Error(component, source + ": malformed JSON");
+  return document;
+}
+
+Json parse_problem_text(const std::string& text, const std::string& source) {
+  Json document = parse_json_text(text, source, "problem");
   if (!document.is_object()) {
     throw Error("problem", source + ": top level = " + render_value(document) +
                                ": must be an object, not " + type_name_of(document));
@@ -388,12 +400,19 @@ void apply_override(Json& problem, const std::string& assignment) {
   // Text that is JSON but must not be (too deep, a duplicate key) is refused, not taken as a string.
   const TextChecker checked = check_text(text);
   if (checked.failed == TextChecker::Failure::kDepth || checked.failed == TextChecker::Failure::kDuplicateKey) {
-    refuse_override(assignment.size() > 200 ? assignment.substr(0, 200) + "..." : assignment,
+    refuse_override(assignment,
                     "value at " + line_and_column(text, error_offset(text, checked)) + ": " + problem_of(checked));
   }
   Json value = checked.failed == TextChecker::Failure::kNone ? Json::parse(text, nullptr, false) : Json(text);
   if (value.is_discarded()) value = text;
 
+  // Each segment is one level of the document: a longer path could only be refused later, after
+  // work quadratic in its length (the name of every prefix is built for messages).
+  const std::size_t separators = std::count(path.begin(), path.end(), '.') + std::count(path.begin(), path.end(), '[');
+  if (separators >= kMaxJsonDepth) {
+    refuse_override(assignment, "path of more than " + std::to_string(kMaxJsonDepth) +
+                                    " segments: a problem file nests at most that deep");
+  }
   const std::vector<Segment> segments = split_path(path, assignment);
   // Work on a copy: a refused override must not leave objects half created on its path.
   Json updated = problem.is_null() ? Json::object() : problem;

@@ -1,5 +1,6 @@
 // Running a loaded study: output-directory guards and lock, seed, run log, the solver call, and
 // the result files (staged, then committed with result.json first), each a named step of run_study.
+#include <hapsyn/json_text.hpp>
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/groups.hpp>
@@ -76,7 +77,8 @@ int file_threads(const Json& resolved) {
 bool finished_study(const fs::path& result_file, bool& stopped) {
   stopped = false;
   try {
-    const Json doc = Json::parse(read_regular_file(result_file.string(), "output", "result", kMaxResultBytes));
+    const Json doc = parse_json_text(read_regular_file(result_file.string(), "output", "result", kMaxResultBytes),
+                                     result_file.string(), "output");
     stopped = doc.is_object() && doc.value("status", "") == "stopped";
   } catch (const std::exception&) {
   }

@@ -1,3 +1,4 @@
+#include <hapsyn/json_text.hpp>
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/output_files.hpp>
@@ -62,9 +63,9 @@ std::vector<std::string> split_top_level(const std::string& text, char separator
 
 Json as_value(const std::string& text) {
   try {
-    return Json::parse(text);
-  } catch (const Json::parse_error&) {
-    return Json(text);
+    return parse_json_text(text, "value", "sweep");
+  } catch (const Error&) {
+    return Json(text);  // not JSON (or too deep to be a value): the text itself
   }
 }
 
@@ -262,7 +263,7 @@ std::optional<Json> reusable_result(const std::string& directory, const Json& re
   const std::string remedy = "; delete it, or choose another --out";
   Json stored;
   try {
-    stored = Json::parse(read_regular_file(file.string(), component, "result", kMaxResultBytes));
+    stored = parse_json_text(read_regular_file(file.string(), component, "result", kMaxResultBytes), file.string(), component.c_str());
   } catch (const std::exception& e) {
     throw Error(component, file.string() + ": not a readable result (" + e.what() + ")" + remedy);
   }
@@ -625,7 +626,7 @@ std::vector<Json> gather_shards(const std::vector<std::string>& dirs, const std:
     const std::string file = (fs::path(dir) / summary_file).string();
     Json s;
     try {
-      s = Json::parse(read_regular_file(file, "merge", what + " summary", kMaxResultBytes));
+      s = parse_json_text(read_regular_file(file, "merge", what + " summary", kMaxResultBytes), file, "merge");
     } catch (const std::exception& e) {
       throw Error("merge", file + ": not a readable " + what + " summary (" + e.what() + ")");
     }

@@ -2,6 +2,7 @@
 // checked with messages naming the file, the JSON path, the value and the rule.
 #include "haptic6r.hpp"
 
+#include <hapsyn/json_text.hpp>
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/read_file.hpp>
@@ -26,11 +27,7 @@ constexpr std::uint64_t kMaxDataFileBytes = 64u << 20;
 
 Json read_json_file(const std::string& path) {
   const std::string text = read_regular_file(path, kName, "data file", kMaxDataFileBytes);
-  try {
-    return Json::parse(text);
-  } catch (const std::exception& e) {
-    throw Error(kName, path + ": not valid JSON (" + e.what() + ")");
-  }
+  return parse_json_text(text, path, kName);
 }
 
 double number_at(const Json& doc, const std::string& file, const std::string& path, const Json& v,

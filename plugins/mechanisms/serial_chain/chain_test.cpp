@@ -1011,6 +1011,44 @@ TEST(ChainTemplate, UrdfAxisOfAnyFiniteLengthIsItsDirection) {
                {"joint \"j\"", "axis = (0 0 0): must be a finite, non-zero direction"});
 }
 
+// Issue 53, cause 5: TinyXML and urdfdom recurse once per nesting level and once per link, so a
+// deep or very long file once overflowed the stack inside them. Its shape is refused before it is
+// parsed, naming the line; a chain of 9,000 links (within the limits) still reads, and markup that
+// holds no elements (comments, CDATA, a '>' in a quoted value) does not count.
+TEST(ChainTemplate, UrdfNestingAndSizeAreBoundedBeforeParsing) {
+  const std::string one_joint = urdf_link("base") + urdf_joint("j", "revolute", "base", "tip", "0.1 0 0", "0 0 0") +
+                                urdf_link("tip", "0.2 0 0", "0 0 0", 1.0, "0.01 0 0 0.01 0 0.01");
+  std::string nested;
+  for (int k = 0; k < 100000; ++k) nested += "<x>";
+  for (int k = 0; k < 100000; ++k) nested += "</x>";
+  const std::string deep = write_file("deep.urdf", robot(one_joint + nested));
+  expect_error([&] { ChainTemplate::from_urdf(deep, "base", "tip"); },
+               {deep + ": line 6: <x> is nested 65 elements deep: at most 64 levels are read"});
+
+  std::string fixed = urdf_link("f0");
+  for (int k = 0; k < 150000; ++k) {
+    fixed += urdf_joint("fj" + std::to_string(k), "fixed", "f" + std::to_string(k), "f" + std::to_string(k + 1),
+                        "0 0 0", "0 0 0") + urdf_link("f" + std::to_string(k + 1));
+  }
+  const std::string long_chain = write_file("long.urdf", robot(fixed));
+  expect_error([&] { ChainTemplate::from_urdf(long_chain, "f0", "f1"); },
+               {long_chain + ": line ", ": more than 20000 <link> and <joint> elements: at most that many are read"});
+
+  std::string within = urdf_link("base") + "<!-- <a><b><c> --><![CDATA[<d><e>]]>";
+  std::string parent = "base";
+  for (int k = 0; k < 4500; ++k) {
+    const std::string child = "l" + std::to_string(k);
+    within += urdf_joint("w" + std::to_string(k), "fixed", parent, child, "0.001 0 0", "0 0 0") +
+              "<link name=\"" + child + "\"><visual name=\"a>b\"><geometry><box size=\"1 1 1\"/></geometry></visual></link>\n";
+    parent = child;
+  }
+  within += urdf_joint("j", "revolute", parent, "tip", "0.1 0 0", "0 0 0") +
+            urdf_link("tip", "0.2 0 0", "0 0 0", 1.0, "0.01 0 0 0.01 0 0.01");
+  const Chain c = nominal_chain(ChainTemplate::from_urdf(write_file("within.urdf", robot(within)), "base", "tip"));
+  // 4,500 fixed joints of 1 mm fold into the one moving joint's origin: 4.5 m + 0.1 m along x.
+  EXPECT_NEAR(state_at(c, {0.0}).frames.tip.translation().x(), 4.6, 1e-9);
+}
+
 // Issue 53, cause 7: a URDF inertia no rigid body has is refused with the link and its values;
 // a thin rod's (one principal moment 0, the triangle inequality met with equality) is one.
 TEST(ChainTemplate, UrdfInertiaNoRigidBodyHasIsRefused) {
@@ -1126,7 +1164,12 @@ TEST(ChainTemplate, DhErrorsNameTheFileThePathTheValueAndTheRule) {
   expect_error([] { ChainTemplate::from_dh_file("/dev/zero"); },
                {"serial_chain: DH file /dev/zero is not a regular file (a device or socket)"});
   const std::string not_json = write_file("not_json.json", "{\"format\": ");
-  expect_error([&] { ChainTemplate::from_dh_file(not_json); }, {not_json, "not valid JSON"});
+  expect_error([&] { ChainTemplate::from_dh_file(not_json); }, {not_json + ":1:12: malformed JSON"});
+  // Issue 53, cause 5: a deeply nested value once overflowed the stack (parsing it, then dumping it
+  // into the message); it is refused before a document is built.
+  const std::string deep = write_file("deep.json", "{\"format\": " + std::string(200000, '[') + std::string(200000, ']') + "}");
+  expect_error([&] { ChainTemplate::from_dh_file(deep); },
+               {"serial_chain: " + deep + ":1:267: nesting deeper than 256 levels (arrays and objects inside each other)"});
 
   Json d = small_table();
   d["format"] = "hapsyn-haptic6r-dh";
@@ -1201,7 +1244,7 @@ TEST(ChainTemplate, DhErrorsNameTheFileThePathTheValueAndTheRule) {
   const std::string huge = write_file("huge.json", "{\"format\": \"hapsyn-dh\", \"format_version\": 1, \"convention\": \"dh\", "
                                                    "\"units\": {\"length\": \"m\", \"angle\": \"deg\"}, \"joints\": [{\"joint\": "
                                                    "\"j\", \"theta\": 0, \"d\": 1e999, \"a\": 0, \"alpha\": 0}]}");
-  expect_error([&] { ChainTemplate::from_dh_file(huge); }, {huge, "not valid JSON", "number overflow parsing '1e999'"});
+  expect_error([&] { ChainTemplate::from_dh_file(huge); }, {huge + ":1:151: malformed JSON: number 1e999 is out of range"});
 }
 
 TEST(ChainTemplate, ChainFilesResolveInTheShareDirectory) {

@@ -10,6 +10,7 @@
 // frame i IS DH frame i (bodies as given) and T_tip = "tip". A prismatic joint's q adds to d.
 #include "chain_template_impl.hpp"
 
+#include <hapsyn/json_text.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/read_file.hpp>
 
@@ -134,6 +135,7 @@ constexpr std::uint64_t kMaxDhFileBytes = 64u << 20;
 
 OrderedJson read_json(const std::string& path) {
   const std::string text = read_regular_file(path, kSerialChainName, "DH file", kMaxDhFileBytes);
+  check_json_text(text, path, kSerialChainName);  // nesting and duplicate keys, before a document is built
   try {
     return OrderedJson::parse(text);
   } catch (const std::exception& e) {

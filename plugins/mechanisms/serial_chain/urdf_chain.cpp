@@ -3,6 +3,7 @@
 // path's fixed joints fold into the next moving joint's origin (after the last one: into T_tip)
 // and their child links' inertials into the body before them.
 #include "chain_template_impl.hpp"
+#include "xml_shape.hpp"
 
 #include <hapsyn/error.hpp>
 #include <hapsyn/read_file.hpp>
@@ -388,6 +389,7 @@ void build_chain(const UrdfPath& p, const double* values, Chain& out) {
 
 ChainTemplate ChainTemplate::from_urdf(const std::string& path, const std::string& base_link, const std::string& tip_link) {
   const std::string text = read_text(path);
+  check_xml_shape(text, path, kSerialChainName);
   const std::map<std::string, Origin> origins = read_xml_origins(path, text);
   const urdf::ModelInterfaceSharedPtr model = parse_urdf(path, text);
   const urdf::LinkConstSharedPtr base = find_link(*model, path, "base_link", base_link);

@@ -3,6 +3,7 @@
 // options, the position lattice, the disk cache and build().
 #include "human_arm.hpp"
 
+#include <hapsyn/json_text.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/read_file.hpp>
 
@@ -211,12 +212,7 @@ HumanArmData parse_human_arm(const Json& doc, const std::string& label) {
 HumanArmData load_human_arm(const std::string& path) {
   // A FIFO, a device or a huge file is refused before it is read (an arm file is a few kB).
   const std::string text = read_regular_file(path, kName, "arm file", kHumanArmMaxArmFileBytes);
-  Json doc;
-  try {
-    doc = Json::parse(text);
-  } catch (const Json::parse_error& e) {
-    throw Error(kName, path + ": not valid JSON (" + std::string(e.what()) + ")");
-  }
+  const Json doc = parse_json_text(text, path, kName);
   HumanArmData arm = parse_human_arm(doc, path);
   arm.file = path;
   return arm;

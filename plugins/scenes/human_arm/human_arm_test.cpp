@@ -780,8 +780,13 @@ TEST(HumanArm, UnreadableOrMalformedArmFilesAreRefused) {
             "human_arm: cannot read arm file " + missing + ": No such file or directory");
   const fs::path broken = dir / "broken.json";
   std::ofstream(broken) << "{ \"dh\": [ }";
-  EXPECT_EQ(error_of([&] { load_human_arm(broken.string()); }).rfind("human_arm: " + broken.string() + ": not valid JSON (", 0),
-            0u);
+  EXPECT_EQ(error_of([&] { load_human_arm(broken.string()); }),
+            "human_arm: " + broken.string() + ":1:11: malformed JSON: unexpected '}'; expected '[', '{', or a literal");
+  // Issue 53, cause 5: nesting that would overflow the stack of the parser is refused before it.
+  const fs::path deep = dir / "deep.json";
+  std::ofstream(deep) << "{\"dh\": " << std::string(200000, '[') << std::string(200000, ']') << "}";
+  EXPECT_EQ(error_of([&] { load_human_arm(deep.string()); }).rfind("human_arm: " + deep.string() +
+                                                                   ":1:263: nesting deeper than 256 levels", 0), 0u);
   EXPECT_EQ(error_of([&] { HumanArmScene(options_of(Json{{"arm_file", missing}})); }),
             "human_arm: options.arm_file = \"" + missing + "\": no such file");
   const std::string relative_error = error_of([&] { HumanArmScene(options_of(Json{{"arm_file", "nowhere/arm.json"}})); });
