@@ -406,6 +406,61 @@ TEST(Cli, MergeRefusesAnOutputThatIsOneOfItsShares) {
   fs::remove_all(dir);
 }
 
+// Issue 53, cause 7: a share's result.json with a field of the wrong type once ended merge with
+// exit 3 (nlohmann's type_error); every field merge reads is checked and named.
+TEST(Cli, MergeNamesAShareFieldOfTheWrongType) {
+  const fs::path dir = fresh_dir("merge-wrong-type");
+  std::vector<std::string> shares;
+  for (int i = 1; i <= 2; ++i) {
+    const fs::path share = dir / ("s" + std::to_string(i));
+    const Output o = hapsyn_cli("run " + problem("fivebar-gii-coarse.json") + " --quiet --shard " + std::to_string(i) +
+                                "/2 --out " + share.string());
+    ASSERT_EQ(o.code, 0) << o.out;
+    shares.push_back(share.string());
+  }
+  const fs::path result = dir / "s2" / "result.json";
+  const Json pristine = read_json(result);
+  struct Tamper {
+    std::string pointer;
+    Json value;
+    std::string expected;
+  };
+  const std::vector<Tamper> cases = {
+      {"/shard/index", "2", "shard.index = \"2\": must be an integer from 1 to shard.count"},
+      {"/shard/count", 2.5, "shard.count = 2.5: must be an integer >= 1"},
+      {"/shard/index", 7, ": index must lie in 1..count"},
+      {"/shard/complete", "yes", "shard.complete = \"yes\": must be true or false"},
+      {"/shard/problem_file", Json::array(), "shard.problem_file = []: must be a string"},
+      {"/shard/problem_document", 1, "shard.problem_document = 1: must be an object"},
+      {"/seed", -1, "seed = -1: must be an integer >= 0"},
+      {"/hapsyn", "0.1", "hapsyn = \"0.1\": must be an object"},
+      {"/hapsyn/version", 1, "hapsyn.version = 1: must be a string"},
+      {"/problem", Json::array(), "problem = []: must be an object"},
+  };
+  for (const Tamper& t : cases) {
+    Json edited = pristine;
+    edited[Json::json_pointer(t.pointer)] = t.value;
+    std::ofstream(result.string()) << edited.dump();
+    const Output o = hapsyn_cli("merge " + shares[0] + " " + shares[1] + " --out " + (dir / "merged").string());
+    EXPECT_EQ(o.code, 1) << t.pointer << ": " << o.out;
+    EXPECT_NE(o.out.find("hapsyn: error: merge: " + result.string() + ": "), std::string::npos)
+        << t.pointer << ": " << o.out;
+    EXPECT_NE(o.out.find(t.expected), std::string::npos) << t.pointer << ": " << o.out;
+    EXPECT_FALSE(fs::exists(dir / "merged" / "result.json")) << t.pointer;
+  }
+  Json removed = pristine;
+  removed["shard"].erase("complete");
+  std::ofstream(result.string()) << removed.dump();
+  const Output missing = hapsyn_cli("merge " + shares[0] + " " + shares[1] + " --out " + (dir / "merged").string());
+  EXPECT_EQ(missing.code, 1) << missing.out;
+  EXPECT_NE(missing.out.find(result.string() + ": no shard.complete (true or false; was the file edited?)"), std::string::npos)
+      << missing.out;
+  std::ofstream(result.string()) << pristine.dump();
+  const Output merged = hapsyn_cli("merge " + shares[0] + " " + shares[1] + " --out " + (dir / "merged").string());
+  EXPECT_EQ(merged.code, 0) << merged.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, ScenePlotsReachabilityDensitySlices) {
   const fs::path dir = fresh_dir("scene-plot");
   const Output o = hapsyn_cli("scene " + human_arm_scene_args(dir / "cache") + " --plot " + (dir / "plot").string());

@@ -3,6 +3,7 @@
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
+#include <hapsyn/json_text.hpp>
 #include <hapsyn/merge.hpp>
 #include <hapsyn/read_file.hpp>
 #include <hapsyn/study.hpp>
@@ -30,6 +31,20 @@ struct Share {
 
 std::string share_name(const Share& s) { return std::to_string(s.index) + "/" + std::to_string(s.count); }
 
+// A member of a share's result.json that merge reads, checked for its type: the file may have
+// been edited or damaged, and a wrong type must be named, not reach nlohmann's type_error.
+using JsonTest = bool (Json::*)() const noexcept;
+const Json& member(const Json& object, const char* key, JsonTest is, const char* rule, const std::string& file,
+                   const std::string& path) {
+  const auto it = object.find(key);
+  const std::string name = path.empty() ? key : path + "." + key;
+  if (it == object.end()) throw Error("merge", file + ": no " + name + " (" + rule + "; was the file edited?)");
+  if (!((*it).*is)()) {
+    throw Error("merge", file + ": " + name + " = " + render_value(*it) + ": must be " + rule + " (was the file edited?)");
+  }
+  return *it;
+}
+
 Share read_share(const std::string& dir) {
   Share s;
   s.dir = dir;
@@ -39,19 +54,33 @@ Share read_share(const std::string& dir) {
     throw Error("merge", dir + ": no result.json (not a finished share: run `hapsyn run FILE --shard i/N --out " + dir +
                              "` first, or resume it if it was stopped)");
   }
-  s.result = Json::parse(read_regular_file(result_file, "merge", "result", kMaxResultBytes), nullptr, false);
-  if (s.result.is_discarded() || !s.result.is_object()) throw Error("merge", result_file + ": not valid JSON");
-  const Json shard = s.result.value("shard", Json());
-  if (!shard.is_object() || !shard.contains("index") || !shard.contains("count")) {
+  s.result = parse_json_text(read_regular_file(result_file, "merge", "result", kMaxResultBytes), result_file, "merge");
+  if (!s.result.is_object()) throw Error("merge", result_file + ": not a hapsyn result (not a JSON object)");
+  const auto shard = s.result.find("shard");
+  if (shard == s.result.end() || !shard->is_object()) {
     throw Error("merge", result_file + ": not a share's result (no \"shard\"; shares are run with --shard i/N)");
   }
-  s.index = shard["index"].get<int>();
-  s.count = shard["count"].get<int>();
-  if (!shard.value("complete", false)) {
+  const Json& count = member(*shard, "count", &Json::is_number_integer, "an integer >= 1", result_file, "shard");
+  const Json& index = member(*shard, "index", &Json::is_number_integer, "an integer from 1 to shard.count", result_file, "shard");
+  if (count.get<long long>() < 1 || count.get<long long>() > 1000000 || index.get<long long>() < 1 ||
+      index.get<long long>() > count.get<long long>()) {
+    throw Error("merge", result_file + ": shard = " + render_value(*shard) + ": index must lie in 1..count");
+  }
+  s.index = index.get<int>();
+  s.count = count.get<int>();
+  if (!member(*shard, "complete", &Json::is_boolean, "true or false", result_file, "shard").get<bool>()) {
     throw Error("merge", dir + ": shard " + share_name(s) + " was stopped before it finished its share: resume it with "
                              "`hapsyn run FILE --shard " + share_name(s) + " --out " + dir + " --resume`");
   }
-  s.checkpoint = read_checkpoint_document((fs::path(dir) / "checkpoint.json").string(), "merge");
+  member(*shard, "problem_file", &Json::is_string, "a string", result_file, "shard");
+  member(*shard, "problem_document", &Json::is_object, "an object", result_file, "shard");
+  member(s.result, "seed", &Json::is_number_unsigned, "an integer >= 0", result_file, "");
+  member(s.result, "problem", &Json::is_object, "an object", result_file, "");
+  member(member(s.result, "hapsyn", &Json::is_object, "an object", result_file, ""), "version", &Json::is_string,
+         "a string", result_file, "hapsyn");
+  const std::string checkpoint_file = (fs::path(dir) / "checkpoint.json").string();
+  s.checkpoint = read_checkpoint_document(checkpoint_file, "merge");
+  member(s.checkpoint, "fingerprint", &Json::is_string, "a string", checkpoint_file, "");
   return s;
 }
 
