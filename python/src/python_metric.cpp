@@ -19,6 +19,44 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+// The studies whose metrics' callbacks the calling thread is inside, innermost last.
+thread_local std::vector<const void*> t_callback_studies;
+
+// Marks the calling thread as inside a callback of `study`'s metric while it lives.
+class CallbackScope {
+ public:
+  explicit CallbackScope(const void* study) { t_callback_studies.push_back(study); }
+  ~CallbackScope() { t_callback_studies.pop_back(); }
+  CallbackScope(const CallbackScope&) = delete;
+  CallbackScope& operator=(const CallbackScope&) = delete;
+};
+
+// A Python value as a message shows it: its repr (at most 80 characters) and its type.
+std::string shown(py::handle value) {
+  std::string r = py::cast<std::string>(py::repr(value));
+  if (r.size() > 80) r = r.substr(0, 77) + "...";
+  return r + " (" + py::cast<std::string>(py::type::handle_of(value).attr("__name__")) + ")";
+}
+
+// py::cast<T>, with a pybind11 cast error ("Unable to cast Python instance ...") turned into
+// ours, naming what was read and what it must be.
+template <class T>
+T cast_as(py::handle value, const std::string& component, const std::string& what, const char* rule) {
+  try {
+    return py::cast<T>(value);
+  } catch (const py::cast_error&) {
+    throw Error(component, what + " = " + shown(value) + ": must be " + rule);
+  }
+}
+
+// The items of an iterable declaration, or our error naming it.
+py::iterator items_of(const py::object& value, const std::string& component, const std::string& what, const char* rule) {
+  if (!py::isinstance<py::iterable>(value) || py::isinstance<py::str>(value)) {
+    throw Error(component, what + " = " + shown(value) + ": must be " + rule);
+  }
+  return py::iter(value);
+}
+
 struct QuantityName {
   const char* name;
   Needs need;
@@ -143,8 +181,8 @@ py::dict quantities_dict(const SampleQuantities* const* q, int count, Needs need
   return d;
 }
 
-PythonMetric::PythonMetric(py::object object, std::string name, const std::string& json_path)
-    : object_(std::move(object)), name_(std::move(name)) {
+PythonMetric::PythonMetric(py::object object, std::string name, const std::string& json_path, const void* study)
+    : object_(std::move(object)), name_(std::move(name)), study_(study) {
   const std::string where = json_path.empty() ? name_ : json_path;
   auto require = [&](const char* attribute) {
     if (!py::hasattr(object_, attribute)) {
@@ -154,24 +192,39 @@ PythonMetric::PythonMetric(py::object object, std::string name, const std::strin
   };
   const py::object locals = require("locals");
   local_batch_ = require("local_batch");
+  if (!PyCallable_Check(local_batch_.ptr())) {
+    throw Error("problem", where + ".local_batch = " + shown(local_batch_) + ": must be a method");
+  }
   int i = 0;
-  for (const py::handle item : locals) {
+  for (const py::handle item : items_of(locals, "problem", where + ".locals", "a list of (name, reduction[, unit])")) {
     const std::string at = where + ".locals[" + std::to_string(i++) + "]";
-    const py::tuple t = py::cast<py::tuple>(item);
+    if (!py::isinstance<py::tuple>(item) && !py::isinstance<py::list>(item)) {
+      throw Error("problem", at + " = " + shown(item) + ": must be a tuple (name, reduction[, unit])");
+    }
+    const py::tuple t = py::tuple(py::reinterpret_borrow<py::object>(item));
     if (t.size() < 2 || t.size() > 3) throw Error("problem", at + ": must be (name, reduction[, unit])");
-    locals_.push_back(LocalValue{py::cast<std::string>(t[0]), reduction_of(py::cast<std::string>(t[1]), at + ".reduction"),
-                                 t.size() == 3 ? py::cast<std::string>(t[2]) : std::string()});
+    const char* text = "a string";
+    locals_.push_back(LocalValue{cast_as<std::string>(t[0], "problem", at + ".name", text),
+                                 reduction_of(cast_as<std::string>(t[1], "problem", at + ".reduction", text), at + ".reduction"),
+                                 t.size() == 3 ? cast_as<std::string>(t[2], "problem", at + ".unit", text) : std::string()});
   }
   if (locals_.empty()) throw Error("problem", where + ".locals: the Python metric '" + name_ + "' declares no local values");
   if (py::hasattr(object_, "needs")) {
     int k = 0;
-    for (const py::handle n : object_.attr("needs")) {
-      needs_ |= need_of(py::cast<std::string>(n), "problem", where + ".needs[" + std::to_string(k++) + "]");
+    for (const py::handle n : items_of(object_.attr("needs"), "problem", where + ".needs", "a list of quantity names")) {
+      const std::string at = where + ".needs[" + std::to_string(k++) + "]";
+      needs_ |= need_of(cast_as<std::string>(n, "problem", at, "a quantity name (a string)"), "problem", at);
     }
   }
-  if (py::hasattr(object_, "scene_attributes")) attributes_ = py::cast<std::vector<std::string>>(object_.attr("scene_attributes"));
+  if (py::hasattr(object_, "scene_attributes")) {
+    const py::object a = object_.attr("scene_attributes");
+    items_of(a, "problem", where + ".scene_attributes", "a list of attribute names");
+    attributes_ = cast_as<std::vector<std::string>>(a, "problem", where + ".scene_attributes", "a list of strings");
+  }
   if (py::hasattr(object_, "batch_size")) {
-    batch_ = py::cast<int>(object_.attr("batch_size"));
+    const py::object b = object_.attr("batch_size");
+    if (py::isinstance<py::bool_>(b)) throw Error("problem", where + ".batch_size = " + shown(b) + ": must be an integer >= 1");
+    batch_ = cast_as<int>(b, "problem", where + ".batch_size", "an integer >= 1");
     if (batch_ < 1) throw Error("problem", where + ".batch_size = " + std::to_string(batch_) + ": must be >= 1");
   }
   combine_ = py::hasattr(object_, "combine") ? py::object(object_.attr("combine")) : py::object(py::none());
@@ -194,14 +247,19 @@ void PythonMetric::local_batch(const SampleQuantities* const* q, int count, doub
   // A Python exception travels as py::error_already_set up to the caller of the evaluation,
   // where pybind11 raises it again as itself.
   py::gil_scoped_acquire gil;
-  const py::object value = local_batch_(quantities_dict(q, count, needs_, attributes_));
+  py::object value;
+  {
+    const CallbackScope scope(study_);
+    value = local_batch_(quantities_dict(q, count, needs_, attributes_));
+  }
   const auto values = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(value);
   const std::size_t k = locals_.size();
   const bool shape_ok = values && ((values.ndim() == 2 && values.shape(0) == count && values.shape(1) == static_cast<py::ssize_t>(k)) ||
                                    (values.ndim() == 1 && k == 1 && values.shape(0) == count));
   if (!shape_ok) {
-    std::string shape = "not an array of numbers";
-    if (values) {
+    std::string shape = shown(value) + ", not an array of numbers,";
+    const bool array_like = py::isinstance<py::array>(value) || py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value);
+    if (values && array_like) {
       shape = "shape (";
       for (py::ssize_t d = 0; d < values.ndim(); ++d) shape += (d ? ", " : "") + std::to_string(values.shape(d));
       shape += ")";
@@ -217,7 +275,21 @@ double PythonMetric::combine(const double* reduced, int samples) const {
   py::gil_scoped_acquire gil;
   py::array_t<double> r(static_cast<py::ssize_t>(locals_.size()));
   std::copy(reduced, reduced + locals_.size(), r.mutable_data());
-  return py::cast<double>(combine_(r, samples));
+  py::object value;
+  {
+    const CallbackScope scope(study_);
+    value = combine_(r, samples);
+  }
+  // A NumPy array has __float__ but converts only at size 1: accept exactly what float() accepts
+  // of a scalar, and name the rest.
+  const bool scalar = !py::isinstance<py::bool_>(value) && py::hasattr(value, "__float__") &&
+                      (!py::hasattr(value, "ndim") || py::cast<int>(value.attr("ndim")) == 0);
+  if (!scalar) throw Error(name_, "combine returned " + shown(value) + ": must be a number");
+  return py::cast<double>(py::float_(value));
+}
+
+bool inside_callback_of(const void* study) {
+  return std::find(t_callback_studies.begin(), t_callback_studies.end(), study) != t_callback_studies.end();
 }
 
 }  // namespace hapsyn::python

@@ -24,8 +24,10 @@ class PythonMetric final : public Metric {
   /// reduction, unit)), `needs` (names), optional `scene_attributes`, optional `batch_size`
   /// (default 4096), optional `combine`.
   /// \param name the metric's name in the study (for messages)
-  /// \throws Error("<json_path>: ...") for a missing or malformed declaration.
-  PythonMetric(pybind11::object object, std::string name, const std::string& json_path);
+  /// \param study identifies the study that owns the metric (see inside_callback_of)
+  /// \throws Error("<json_path>: ...") for a missing or malformed declaration (a declaration of
+  ///         the wrong type is named with its value, never a bare pybind11 cast error).
+  PythonMetric(pybind11::object object, std::string name, const std::string& json_path, const void* study);
   ~PythonMetric() override;
 
   void local(const SampleQuantities& q, double* out) const override;
@@ -40,11 +42,17 @@ class PythonMetric final : public Metric {
   pybind11::object object_;
   pybind11::object local_batch_, combine_;  // bound methods (combine_ may be None)
   std::string name_;
+  const void* study_;
   std::vector<LocalValue> locals_;
   std::vector<std::string> attributes_;
   Needs needs_ = 0;
   int batch_ = 4096;
 };
+
+/// True while the calling thread runs a Python callback of a metric owned by `study` (at any
+/// depth of nested calls). A callback that evaluates its own study again would wait forever for
+/// the evaluation it is part of; the study's entry points refuse it with this.
+bool inside_callback_of(const void* study);
 
 /// The Need flag of a quantity name ("jacobian", "inertia", "effective_mass", "gravity",
 /// "max_velocity", "max_torque", "joint_velocity", "joint_acceleration", "velocity_torque";

@@ -114,10 +114,10 @@ StudyHandle::StudyHandle(const std::string& document, bool is_file, const std::v
     m.thread_safety = ThreadSafety::kSerialized;
     const py::object factory = py::reinterpret_borrow<py::object>(item.second);
     const std::string name = m.name;
-    m.create = [factory, name](const Json& options, const std::string& json_path) -> std::shared_ptr<Metric> {
+    m.create = [factory, name, this](const Json& options, const std::string& json_path) -> std::shared_ptr<Metric> {
       py::gil_scoped_acquire gil;
       const py::object instance = factory(options.dump(), json_path);
-      return std::make_shared<PythonMetric>(instance, name, json_path);
+      return std::make_shared<PythonMetric>(instance, name, json_path, this);
     };
     in_process.push_back(std::move(m));
   }
@@ -139,6 +139,14 @@ StudyHandle::~StudyHandle() {
   py::gil_scoped_release release;
   scratch_.reset();
   study_.reset();
+}
+
+void StudyHandle::refuse_reentry(const char* call) const {
+  if (!inside_callback_of(this)) return;
+  throw Error("python", std::string("Study.") + call +
+                            "() called from inside a callback of one of this study's own Python metrics: the callback is "
+                            "part of the evaluation it would wait for (it would never return); load a second Study for "
+                            "a nested evaluation");
 }
 
 std::vector<std::string> StudyHandle::free_names() const {
@@ -189,6 +197,7 @@ std::vector<double> StudyHandle::free_from_json(const std::string& design_json) 
 
 std::string StudyHandle::run(std::optional<int> threads, std::optional<std::uint64_t> seed, const std::string& out,
                              bool force, bool write_samples, const py::object& progress) {
+  refuse_reentry("run");
   RunOptions options;
   options.output_directory = out;
   options.threads = threads.value_or(0);
@@ -255,6 +264,7 @@ std::string StudyHandle::run(std::optional<int> threads, std::optional<std::uint
 
 py::dict StudyHandle::evaluate(const py::array_t<double, py::array::c_style | py::array::forcecast>& designs,
                                int threads) {
+  refuse_reentry("evaluate");
   const Problem& problem = *study_->problem;
   const py::ssize_t dimension = static_cast<py::ssize_t>(problem.dimension());
   if (designs.ndim() != 2 || designs.shape(1) != dimension) {
@@ -302,6 +312,7 @@ py::dict StudyHandle::evaluate(const py::array_t<double, py::array::c_style | py
 
 py::dict StudyHandle::evaluate_samples(const py::array_t<double, py::array::c_style | py::array::forcecast>& design,
                                        const std::vector<std::string>& quantities) {
+  refuse_reentry("evaluate_samples");
   const Problem& problem = *study_->problem;
   if (design.ndim() != 1 || design.shape(0) != static_cast<py::ssize_t>(problem.dimension())) {
     throw Error("python", "design: samples=True needs one design (" + std::to_string(problem.dimension()) + " free values)");
@@ -367,6 +378,7 @@ py::dict StudyHandle::evaluate_samples(const py::array_t<double, py::array::c_st
 
 double StudyHandle::time_evaluate(const py::array_t<double, py::array::c_style | py::array::forcecast>& design,
                                   int repeats) {
+  refuse_reentry("time_evaluate");
   if (design.ndim() != 1 || design.shape(0) != static_cast<py::ssize_t>(study_->problem->dimension()) || repeats < 1) {
     throw Error("python", "time_evaluate: one design and repeats >= 1");
   }

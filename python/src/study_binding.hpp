@@ -58,6 +58,9 @@ class StudyHandle {
   pybind11::dict scene(pybind11::object self) const;
 
  private:
+  // Throws when the calling thread is inside a callback of this study's own Python metric.
+  void refuse_reentry(const char* call) const;
+
   // Declared first so that it is destroyed last: the plugins' code lives in its libraries.
   std::shared_ptr<Registry> registry_;
   std::unique_ptr<Study> study_;

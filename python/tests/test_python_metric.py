@@ -132,3 +132,72 @@ def test_python_metric_errors():
     problem["objectives"][0].pop("options")
     with pytest.raises(hapsyn.Error, match=r"problem: metric 'py' returned nan for local value 0 at sample"):
         hapsyn.load(problem, metrics={"py": NaNs}).evaluate([])
+
+
+def test_a_metric_that_re_enters_its_own_study_is_refused_not_deadlocked(plugin_dir):
+    # Issue 53, cause 7: the callback is part of the evaluation it would wait for.
+    problem = _example_study()
+    problem["objectives"] = [{"metric": "py"}]
+    studies = []
+
+    class ReEnters(PyMeanIsotropy):
+        def local_batch(self, q):
+            studies[0].evaluate([])
+            return super().local_batch(q)
+
+    study = hapsyn.load(problem, metrics={"py": ReEnters})
+    studies.append(study)
+    refused = r"^python: Study.evaluate\(\) called from inside a callback of one of this study's own Python metrics"
+    for threads in (1, 3):
+        with pytest.raises(hapsyn.Error, match=refused):
+            study.evaluate([], threads=threads)
+    with pytest.raises(hapsyn.Error, match=refused):
+        study.run(threads=2)
+
+    # Another study may be evaluated from inside a callback: it is not waiting for this one.
+    other = hapsyn.load(_example_study(), plugin_path=plugin_dir)
+    expected = other.evaluate([])["score"]
+    seen = []
+
+    class EvaluatesAnother(PyMeanIsotropy):
+        def local_batch(self, q):
+            seen.append(other.evaluate([])["score"])
+            return super().local_batch(q)
+
+    hapsyn.load(problem, metrics={"py": EvaluatesAnother}).evaluate([])
+    assert seen and all(s == expected for s in seen)
+
+
+def test_declarations_and_returns_of_the_wrong_type_are_named():
+    # Issue 53, cause 7: these once raised pybind11's bare "Unable to cast Python instance".
+    problem = _example_study()
+    problem["objectives"] = [{"metric": "py"}]
+
+    def declared(**attributes):
+        return type("Declared", (PyMeanIsotropy,), attributes)
+
+    cases = [
+        (declared(locals=[("isotropy", 3, "")]), r"^problem: objectives\[0\].locals\[0\].reduction = 3 \(int\): must be a string$"),
+        (declared(locals=["isotropy"]), r"^problem: objectives\[0\].locals\[0\] = 'isotropy' \(str\): must be a tuple"),
+        (declared(locals=5), r"^problem: objectives\[0\].locals = 5 \(int\): must be a list of \(name, reduction\[, unit\]\)$"),
+        (declared(needs="jacobian"), r"^problem: objectives\[0\].needs = 'jacobian' \(str\): must be a list of quantity names$"),
+        (declared(needs=[1]), r"^problem: objectives\[0\].needs\[0\] = 1 \(int\): must be a quantity name \(a string\)$"),
+        (declared(batch_size="8"), r"^problem: objectives\[0\].batch_size = '8' \(str\): must be an integer >= 1$"),
+        (declared(batch_size=True), r"^problem: objectives\[0\].batch_size = True \(bool\): must be an integer >= 1$"),
+        (declared(scene_attributes=[1]), r"^problem: objectives\[0\].scene_attributes = \[1\] \(list\): must be a list of strings$"),
+        (declared(local_batch=3), r"^problem: objectives\[0\].local_batch = 3 \(int\): must be a method$"),
+    ]
+    for cls, message in cases:
+        with pytest.raises(hapsyn.Error, match=message):
+            hapsyn.load(problem, metrics={"py": cls})
+
+    returns = [
+        (declared(local_batch=lambda self, q: "abc"), r"^py: local_batch returned 'abc' \(str\), not an array of numbers, for 121"),
+        (declared(local_batch=lambda self, q: None), r"^py: local_batch returned None \(NoneType\), not an array of numbers, for 121"),
+        (declared(combine=lambda self, r, n: "x"), r"^py: combine returned 'x' \(str\): must be a number$"),
+        (declared(combine=lambda self, r, n: None), r"^py: combine returned None \(NoneType\): must be a number$"),
+        (declared(combine=lambda self, r, n: np.array([0.5, 0.5])), r"^py: combine returned array\(\[0.5, 0.5\]\) \(ndarray\): must be"),
+    ]
+    for cls, message in returns:
+        with pytest.raises(hapsyn.Error, match=message):
+            hapsyn.load(problem, metrics={"py": cls}).evaluate([])
