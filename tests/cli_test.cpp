@@ -461,6 +461,32 @@ TEST(Cli, MergeNamesAShareFieldOfTheWrongType) {
   fs::remove_all(dir);
 }
 
+// A share that holds every task (a grid of one 64-design chunk split three ways) converges on
+// its own; its checkpoint is still what merge combines, and the merge is the plain run.
+TEST(Cli, AShareHoldingEveryTaskStillMergesToThePlainRun) {
+  const fs::path dir = fresh_dir("merge-one-chunk");
+  const std::string small = problem("fivebar-gii-coarse.json") + " --quiet --set design.l0.upper=0.01 --set "
+                            "design.l1.lower=0.28 --set design.l2.lower=0.28 --set design.r.lower=0.41 --set design.r.upper=0.43";
+  const Output plain = hapsyn_cli("run " + small + " --out " + (dir / "plain").string());
+  ASSERT_EQ(plain.code, 0) << plain.out;
+  std::string all;
+  for (int i = 1; i <= 3; ++i) {
+    const fs::path share = dir / ("s" + std::to_string(i));
+    const Output o = hapsyn_cli("run " + small + " --shard " + std::to_string(i) + "/3 --out " + share.string());
+    ASSERT_EQ(o.code, 0) << o.out;
+    EXPECT_TRUE(fs::exists(share / "checkpoint.json")) << share;
+    all += " " + share.string();
+  }
+  const Output merged = hapsyn_cli("merge" + all + " --quiet --out " + (dir / "merged").string());
+  ASSERT_EQ(merged.code, 0) << merged.out;
+  const Json a = read_json(dir / "plain" / "result.json");
+  const Json b = read_json(dir / "merged" / "result.json");
+  EXPECT_EQ(b["status"], "converged");
+  EXPECT_EQ(b["best"], a["best"]);
+  EXPECT_FALSE(fs::exists(dir / "merged" / "checkpoint.json"));
+  fs::remove_all(dir);
+}
+
 TEST(Cli, ScenePlotsReachabilityDensitySlices) {
   const fs::path dir = fresh_dir("scene-plot");
   const Output o = hapsyn_cli("scene " + human_arm_scene_args(dir / "cache") + " --plot " + (dir / "plot").string());

@@ -577,9 +577,11 @@ void write_outputs(const Study& study, const SolverResult& result, const RunOpti
   }
 }
 
-// "stopped": the checkpoint stays for --resume; any other outcome: it has served.
+// "stopped": the checkpoint stays for --resume; a share's stays whatever its status, since it is
+// what merge combines (one share may hold every task: a grid of one chunk converges in it); any
+// other outcome: it has served.
 void finish_checkpoint(const RunSetup& run, const Json& doc) {
-  if (doc["status"] == "stopped") return;
+  if (doc["status"] == "stopped" || doc.contains("shard")) return;
   boost::system::error_code ignored;
   fs::remove(run.checkpoint_file, ignored);
 }
