@@ -1065,6 +1065,21 @@ TEST(ChainTemplate, UrdfInertiaNoRigidBodyHasIsRefused) {
   const std::string indefinite = write_file("indefinite.urdf", one_joint("0.1 0.2 0 0.1 0 0.1"));
   expect_error([&] { ChainTemplate::from_urdf(indefinite, "base", "tip"); },
                {"link \"tip\"", "must be >= 0 (positive semi-definite): no rigid body has this inertia"});
+  // Each of these masses once changed GDI without a word: urdfdom logs "not a float" for nan and
+  // inf and goes on with a mass of 0; a negative mass it reads as written.
+  const auto with_mass = [&](double mass) {
+    return write_file("mass.urdf", robot(urdf_link("base") + urdf_joint("j", "revolute", "base", "tip", "0.1 0 0", "0 0 0") +
+                                         urdf_link("tip", "0.2 0 0", "0 0 0", mass, "0.01 0 0 0.01 0 0.01")));
+  };
+  for (const auto& [mass, shown] : {std::pair{std::nan(""), "nan"}, std::pair{HUGE_VAL, "inf"}}) {
+    const std::string file = with_mass(mass);
+    expect_error([&] { ChainTemplate::from_urdf(file, "base", "tip"); },
+                 {file + ": not a valid URDF: Inertial: mass [" + shown + "] is not a float; Could not parse inertial "
+                         "element for Link [tip]"});
+  }
+  const std::string negative = with_mass(-0.5);
+  expect_error([&] { ChainTemplate::from_urdf(negative, "base", "tip"); },
+               {negative + ": link \"tip\" <inertial> <mass value=\"-0.5\">: must be a finite mass >= 0 kg"});
 }
 
 // Issue 53, cause 6: joint and link names that are not UTF-8 are refused at load (they once

@@ -139,8 +139,10 @@ class CapturedLog : public console_bridge::OutputHandler {
  public:
   void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
     if (level >= console_bridge::CONSOLE_BRIDGE_LOG_WARN) messages.push_back(text);
+    errors += level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR;
   }
   std::vector<std::string> messages;
+  int errors = 0;
 };
 
 urdf::ModelInterfaceSharedPtr parse_urdf(const std::string& path, const std::string& text) {
@@ -156,7 +158,9 @@ urdf::ModelInterfaceSharedPtr parse_urdf(const std::string& path, const std::str
     log.messages.push_back(e.what());
   }
   console_bridge::restorePreviousOutputHandler();
-  if (!model) {
+  // urdfdom logs an error and goes on for some elements it cannot read (a mass of "nan" leaves
+  // an inertial of mass 0): a file it logged an error for is refused, never read in part.
+  if (!model || log.errors > 0) {
     std::string why;
     for (const std::string& m : log.messages) why += (why.empty() ? "" : "; ") + m;
     throw Error(kSerialChainName, path + ": not a valid URDF: " + (why.empty() ? "urdfdom refused it" : why));
@@ -267,7 +271,17 @@ std::optional<UrdfInertial> inertial_of(const std::string& path, const urdf::Lin
   UrdfInertial u;
   u.link = link.name;
   u.mass = in.mass;
+  // urdfdom reads "nan", "inf" and negative masses as they are; each would change every dynamic
+  // quantity without a word.
+  if (!(std::isfinite(in.mass) && in.mass >= 0.0)) {
+    throw Error(kSerialChainName, path + ": link \"" + link.name + "\" <inertial> <mass value=\"" + show_number(in.mass) +
+                                      "\">: must be a finite mass >= 0 kg");
+  }
   const urdf::Pose& p = in.origin;
+  const double pose[] = {p.position.x, p.position.y, p.position.z, p.rotation.x, p.rotation.y, p.rotation.z, p.rotation.w};
+  if (!std::all_of(std::begin(pose), std::end(pose), [](double x) { return std::isfinite(x); })) {
+    throw Error(kSerialChainName, path + ": link \"" + link.name + "\" <inertial> <origin>: must be finite numbers");
+  }
   u.frame.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
   u.frame.linear() = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z).normalized().toRotationMatrix();
   u.inertia << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
