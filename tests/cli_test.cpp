@@ -672,6 +672,21 @@ TEST(Cli, TooManyThreadsAreCappedWithAWarning) {
   fs::remove_all(out);
 }
 
+// "--csv export.csv" (no directory part) once failed with "cannot create : No such file or
+// directory": the error code of the directory test was reported (found by the csv attack class).
+TEST(Cli, SceneCsvWritesToABareRelativeFileName) {
+  const fs::path dir = fresh_dir("csv-relative");
+  fs::create_directories(dir);
+  const std::string hapsyn = std::string(HAPSYN_BINARY_DIR) + "/bin/hapsyn";
+  for (const std::string name : {"export.csv", "./dot.csv", "new/dir/nested.csv"}) {
+    const std::string command = "cd " + dir.string() + " && " + hapsyn + " scene " + problem("fivebar-gii-coarse.json") +
+                                " --csv " + name + " >/dev/null 2>&1";
+    EXPECT_EQ(std::system(command.c_str()), 0) << name;
+    EXPECT_EQ(count_lines((dir / name).string()), 442) << name;  // a header and the 441 samples
+  }
+  fs::remove_all(dir);
+}
+
 TEST(Cli, PathsTheFileSystemRefusesAreClearErrors) {
   const fs::path dir = fresh_dir("paths");
   fs::create_directories(dir);

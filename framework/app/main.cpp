@@ -303,13 +303,18 @@ int scene_command(const std::string& file, const std::vector<std::string>& sets,
   }
   if (!csv.empty()) {
     const boost::filesystem::path path(csv);
-    boost::system::error_code ec;
-    if (boost::filesystem::is_directory(path, ec) || csv.back() == '/') {
+    boost::system::error_code ignored;  // a file that does not exist yet is no directory
+    if (boost::filesystem::is_directory(path, ignored) || csv.back() == '/') {
       throw hapsyn::Error("scene", "--csv " + csv + " is a directory; give a file name, e.g. " +
                                        (path / "samples.csv").lexically_normal().string());
     }
-    if (path.has_parent_path()) boost::filesystem::create_directories(path.parent_path(), ec);
-    if (ec) throw hapsyn::Error("output", "--csv " + csv + ": cannot create " + path.parent_path().string() + ": " + ec.message());
+    // Only a missing parent is created ("x.csv" has none; "./x.csv" has one that exists).
+    const boost::filesystem::path parent = path.parent_path();
+    if (!parent.empty() && !boost::filesystem::is_directory(parent, ignored)) {
+      boost::system::error_code ec;
+      boost::filesystem::create_directories(parent, ec);
+      if (ec) throw hapsyn::Error("output", "--csv " + csv + ": cannot create " + parent.string() + ": " + ec.message());
+    }
     hapsyn::write_file_atomically(csv, hapsyn::scene_csv(set));
     std::cout << "csv: " << csv << " (" << set.size() << " rows)\n";
   }
