@@ -17,6 +17,10 @@ namespace hapsyn::plugins {
 
 namespace {
 constexpr const char* kName = "motion";
+// The lowest cut-off, as a fraction of the Nyquist frequency, the Butterworth low-pass is
+// designed and run at (see the check in process()).
+constexpr double kMinCutoffOfNyquist = 1e-4;
+
 // Default of the max_samples option: the paper's 9 hours at 120 Hz are 3.9 million samples.
 constexpr long long kMotionMaxSamples = 10000000;
 using RowMatrix = SampleSet::RowMatrix;
@@ -170,6 +174,18 @@ Processed process(const motion::Recording& r, const MotionOptions& o, const Eige
     std::ostringstream m;
     m << "options.cutoff = " << o.cutoff << " Hz: must be below half the sampling rate of " << r.file << " ("
       << rate << " Hz)";
+    throw Error(kName, m.str());
+  }
+  // A cut-off far below the Nyquist frequency puts the filter's poles within ~1e-4 of 1, where
+  // the design and the filtering lose their accuracy in double precision: the output looks
+  // smooth and is wrong (time stamps in ns read as s gave a 1 GHz "recording" and velocities
+  // off by 10^3). Such a rate is far from any motion capture's anyway.
+  if (o.filter && o.cutoff < kMinCutoffOfNyquist * rate / 2.0) {
+    std::ostringstream m;
+    m << "options.cutoff = " << o.cutoff << " Hz is " << o.cutoff / (rate / 2.0) << " of the Nyquist frequency of "
+      << r.file << " (sampled at " << rate << " Hz" << (o.rate > 0.0 ? ", options.rate" : "")
+      << "): the low-pass is accurate down to " << kMinCutoffOfNyquist
+      << " of it; check the time stamps (in seconds, or as its time_unit line says), lower options.rate or raise options.cutoff";
     throw Error(kName, m.str());
   }
   const std::vector<motion::SecondOrderSection> sos =

@@ -326,6 +326,22 @@ TEST_F(MotionScenes, SampleCountIsBoundedBeforeAnyWork) {
   EXPECT_EQ(build({{"path", (dir_ / "two").string()}, {"max_samples", 482}}).size(), 482);
 }
 
+// A recording whose time stamps step by 1e-9 s (nanoseconds read as seconds) once gave 50
+// samples at 1 GHz whose filtered velocities were off by 10^3: a cut-off at 1e-8 of the Nyquist
+// frequency is beyond what the low-pass computes accurately, and is refused with the file.
+TEST_F(MotionScenes, ACutOffFarBelowTheNyquistFrequencyIsRefused) {
+  std::ostringstream ns;
+  ns << "# hapsyn-motion 1\ntime,x,y,z,qw,qx,qy,qz\n" << std::setprecision(17);
+  for (int i = 0; i < 50; ++i) ns << i * 1e-9 << "," << 0.3 + 3.5e-12 * i << ",0,0,1,0,0,0\n";
+  const std::string file = write("ns/S01/ns.csv", ns.str());
+  EXPECT_THAT(error_of([&] { build({{"path", file}}); }),
+              HasSubstr("motion: options.cutoff = 5 Hz is 1e-08 of the Nyquist frequency of " + file +
+                        " (sampled at 1e+09 Hz): the low-pass is accurate down to 0.0001 of it; check the time stamps"));
+  // Without the filter the derivatives are differences of the data as given: 3.5 mm/s.
+  const hapsyn::SampleSet unfiltered = build({{"path", file}, {"filter", false}});
+  EXPECT_NEAR(unfiltered.attributes.at("twist").row(25).tail<3>().norm(), 3.5e-3, 1e-8);  // (omega, v)
+}
+
 TEST_F(MotionScenes, UnknownAttributeIsRefused) {
   const Analytic m;
   const std::string file = write("a.csv", csv_of(m, 120.0, 1.0));
