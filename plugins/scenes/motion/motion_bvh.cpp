@@ -20,6 +20,11 @@
 namespace hapsyn::plugins::motion {
 namespace {
 
+// Joints a skeleton may have: every frame walks them all, and a file of 100,000 nested JOINT
+// blocks once took 15 s to read (bounded before the work, like the motion scene's sample count).
+constexpr std::size_t kMaxBvhJoints = 1000;
+
+
 constexpr const char* kComponent = "motion";
 const std::array<const char*, 6> kChannelNames = {"Xposition", "Yposition", "Zposition",
                                                    "Xrotation", "Yrotation", "Zrotation"};
@@ -175,11 +180,15 @@ class BvhReader {
       file_.fail_at(line, std::string(keyword) + " without a name: the name follows on the same line");
     }
     if (expect_token("\"{\" after " + name) != "{") file_.fail("expected \"{\" after " + std::string(keyword) + " " + name);
-    for (const Joint& j : joints_) {
-      if (j.name == name) {
-        file_.fail_at(line, "joint name " + detail::quoted(name) + " used again (first on line " + std::to_string(j.line) +
-                                "): joint names must be unique");
-      }
+    if (joints_.size() >= kMaxBvhJoints) {
+      file_.fail_at(line, std::string(keyword) + " " + name + ": more than " + std::to_string(kMaxBvhJoints) +
+                              " joints (a motion-capture skeleton has a few hundred at most; see docs/limits.md)");
+    }
+    const auto [first, fresh] = joint_index_.emplace(name, static_cast<int>(joints_.size()));
+    if (!fresh) {
+      file_.fail_at(line, "joint name " + detail::quoted(name) + " used again (first on line " +
+                              std::to_string(joints_[static_cast<std::size_t>(first->second)].line) +
+                              "): joint names must be unique");
     }
     Joint joint;
     joint.name = name;
@@ -396,6 +405,7 @@ class BvhReader {
   std::vector<std::string> tokens_;  // of line_text_
   std::size_t next_token_ = 0;
   std::vector<Joint> joints_;
+  std::map<std::string, int> joint_index_;  // name -> index in joints_
   bool end_site_offset_ = false;  // of the End Site being read
   std::size_t total_values_ = 0;
   std::vector<int> chain_;
