@@ -54,6 +54,13 @@ TEST(Registry, SharedLibraryThatIsNotAPluginIsRefused) {
   expect_error([] { broken().find("notaplugin"); }, {"hapsyn-notaplugin.so", "not a hapsyn plugin"});
 }
 
+// Issue 53, cause 8: the entry points exported as data once crashed `hapsyn plugins` when called.
+TEST(Registry, EntryPointsThatAreNotCodeAreRefusedBeforeTheCall) {
+  expect_error([] { broken().find("datasymbols"); },
+               {"hapsyn-datasymbols.so: not a hapsyn plugin: hapsyn_plugin_info does not point to a function in "
+                "executable code (plugins export their entry points with HAPSYN_*_PLUGIN)"});
+}
+
 TEST(Registry, FactoryThatThrowsIsReportedWithItsMessage) {
   expect_error([] { broken().create_metric("throwing", Json::object(), "objectives[0]"); },
                {"plugin 'throwing'", "hapsyn-throwing.so", "deliberate failure in the factory"});

@@ -10,6 +10,7 @@
 #include <boost/dll/shared_library.hpp>
 #include <boost/filesystem.hpp>
 
+#include <dlfcn.h>
 #include <elf.h>
 #include <fcntl.h>
 #include <link.h>
@@ -18,6 +19,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <functional>
@@ -146,6 +148,46 @@ std::string library_file_problem(const std::string& path) {
   return "";
 }
 
+// True when `address` lies in a loaded segment mapped executable (PF_X): a symbol exported as
+// data would be called as a function otherwise, a jump into non-executable memory.
+bool in_executable_segment(const void* address) {
+  struct Search {
+    std::uintptr_t address;
+    bool executable = false;
+  } search{reinterpret_cast<std::uintptr_t>(address)};
+  dl_iterate_phdr(
+      [](dl_phdr_info* info, std::size_t, void* data) {
+        auto* s = static_cast<Search*>(data);
+        for (int i = 0; i < info->dlpi_phnum; ++i) {
+          const ElfW(Phdr)& ph = info->dlpi_phdr[i];
+          if (ph.p_type != PT_LOAD) continue;
+          const std::uintptr_t begin = info->dlpi_addr + ph.p_vaddr;
+          if (s->address >= begin && s->address < begin + ph.p_memsz) {
+            s->executable = (ph.p_flags & PF_X) != 0;
+            return 1;
+          }
+        }
+        return 0;
+      },
+      &search);
+  return search.executable;
+}
+
+// The entry points are Boost.DLL aliases: data symbols holding a pointer to the function, read
+// and called by get_alias. True when `symbol` is such a pointer (an object symbol at least a
+// pointer wide) whose value lies in executable code; a symbol of any other shape, called, would
+// jump to wherever its bytes point.
+bool points_to_code(const void* symbol) {
+  Dl_info info{};
+  void* found = nullptr;  // the symbol's ElfW(Sym) entry
+  if (dladdr1(symbol, &info, &found, RTLD_DL_SYMENT) == 0 || found == nullptr) return false;
+  const auto* entry = static_cast<const ElfW(Sym)*>(found);
+  if (info.dli_saddr != symbol || entry->st_size < sizeof(void*)) return false;
+  const void* target = nullptr;
+  std::memcpy(&target, symbol, sizeof target);
+  return in_executable_segment(target);
+}
+
 void check_plugin_name(const std::string& name) {
   if (is_plugin_name(name)) return;
   throw Error("registry", "plugin name " + Json(name).dump(-1, ' ', false, Json::error_handler_t::replace) +
@@ -211,6 +253,13 @@ const Registry::Loaded& Registry::load(const std::string& path_in) const {
                                 ": not a hapsyn plugin (the symbols hapsyn_plugin_info and hapsyn_plugin_create "
                                 "are missing; register the class with HAPSYN_*_PLUGIN and build it with "
                                 "hapsyn_add_plugin)");
+  }
+  for (const char* symbol : {"hapsyn_plugin_info", "hapsyn_plugin_create"}) {
+    if (!points_to_code(&loaded->library.get<const char>(symbol))) {
+      throw Error("registry", path + ": not a hapsyn plugin: " + symbol +
+                                  " does not point to a function in executable code (plugins export their entry "
+                                  "points with HAPSYN_*_PLUGIN)");
+    }
   }
   // The info function's signature is the same for every API version: that makes the version
   // check itself safe before anything else of the plugin is trusted.
