@@ -1557,6 +1557,12 @@ def gen_signal(seed: int, n: int) -> list:
 GENERATORS = {"json": gen_json, "set": gen_set, "cli": gen_cli, "output": gen_output, "checkpoint": gen_checkpoint,
               "cache": gen_cache, "plugins": gen_plugins, "signal": gen_signal}
 
+# The file surfaces and the Python module (surfaces.py): it takes this module's helpers as an argument.
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import surfaces  # noqa: E402
+CLASSES[-1:-1] = surfaces.CLASSES
+GENERATORS.update(surfaces.generators(sys.modules[__name__]))
+
 
 # ------------------------------------------------------------------------------------------------
 # The campaign.
