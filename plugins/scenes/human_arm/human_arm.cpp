@@ -477,6 +477,65 @@ RawScene solve_lattice(const HumanArm& arm, const HumanArmSceneOptions& o, const
   return raw;
 }
 
+// Lattice points a loaded cache is checked at: re-solved and compared with its samples there.
+constexpr int kCacheSpotChecks = 8;
+
+// The spot check of a loaded cache: a checksum only proves the file is what some writer wrote,
+// and a file edited by hand with the checksums recomputed was once trusted (J 1.437 instead of
+// 2.647). kCacheSpotChecks lattice points within reach (chosen from the file's own checksum, so
+// that every cache is checked at other points) and as many holding samples are solved again with
+// the builder's own code; their samples must be the cache's. Returns "" or "corrupt: ...".
+std::string spot_check(const RawScene& cached, const HumanArm& arm, const HumanArmSceneOptions& o,
+                       const LatticeGeometry& g, bool ellipsoids, std::uint64_t seed) {
+  if (!std::is_sorted(cached.lattice.begin(), cached.lattice.end())) return "corrupt: samples out of lattice order";
+  std::vector<int> within_reach;
+  for (int i = 0; i < g.points; ++i) {
+    if (g.point(i).norm() <= arm.reach() * (1.0 + 1e-9)) within_reach.push_back(i);
+  }
+  if (within_reach.empty()) return "";
+  std::uint64_t state = seed;
+  const auto draw = [&](std::size_t n) {  // splitmix64
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return static_cast<std::size_t>((z ^ (z >> 31)) % n);
+  };
+  std::vector<int> points;
+  for (int k = 0; k < kCacheSpotChecks; ++k) {
+    points.push_back(within_reach[draw(within_reach.size())]);
+    if (cached.size() > 0) points.push_back(cached.lattice[draw(cached.size())]);
+  }
+  const std::vector<double> grid = arm.joint3_grid(o.joint3_steps);
+  std::vector<Eigen::Matrix3d> matrices(g.rotations.size());
+  for (std::size_t i = 0; i < g.rotations.size(); ++i) matrices[i] = g.rotations[i].toRotationMatrix();
+  for (const int point : points) {
+    RawScene fresh;
+    solve_lattice_point(arm, o, matrices, grid, ellipsoids, point, g.point(point), fresh);
+    const auto [begin, end] = std::equal_range(cached.lattice.begin(), cached.lattice.end(), point);
+    const std::size_t first = static_cast<std::size_t>(begin - cached.lattice.begin());
+    const std::size_t count = static_cast<std::size_t>(end - begin);
+    // Within 1e-9: another build of the same code may round differently in the last bits.
+    const auto same = [](const double* a, const double* b, std::size_t n) {
+      for (std::size_t i = 0; i < n; ++i) {
+        if (!(std::abs(a[i] - b[i]) <= 1e-9 * (1.0 + std::abs(b[i])))) return false;
+      }
+      return true;
+    };
+    const std::size_t m = ellipsoids ? 36 : 0;
+    const bool agrees =
+        fresh.size() == count &&
+        std::equal(fresh.orientation.begin(), fresh.orientation.end(), cached.orientation.begin() + first) &&
+        same(fresh.q.data(), cached.q.data() + 7 * first, 7 * count) &&
+        same(fresh.manipulability.data(), cached.manipulability.data() + first, count) &&
+        same(fresh.mv.data(), cached.mv.data() + m * first, m * count) &&
+        same(fresh.ma.data(), cached.ma.data() + m * first, m * count);
+    if (!agrees) {
+      return "corrupt: its samples at lattice point " + std::to_string(point) + " differ from a fresh solve (spot check)";
+    }
+  }
+  return "";
+}
+
 // The samples (end-effector poses in B) and their attributes from the solved lattice.
 SampleSet assemble_samples(const RawScene& raw, const HumanArmSceneOptions& o, const LatticeGeometry& g,
                            const AttributeWish& wish) {
@@ -546,7 +605,8 @@ SampleSet HumanArmScene::build(const SceneRequest& request) const {
   std::string cache_status = o.cache ? (file.empty() ? "off: no cache directory ($XDG_CACHE_HOME and $HOME unset)" : "")
                                      : "off";
   if (!file.empty()) {
-    const std::string why = read_cache(file, key, ellipsoids, g.points, o.orientations, size_.candidate_poses, &raw);
+    std::string why = read_cache(file, key, ellipsoids, g.points, o.orientations, size_.candidate_poses, &raw);
+    if (why.empty()) why = spot_check(raw, arm_, o, g, ellipsoids, fnv1a64(raw.q.data(), raw.q.size() * sizeof(double)));
     if (why.empty()) {
       from_cache = true;
       cache_status = "hit";

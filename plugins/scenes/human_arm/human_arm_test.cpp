@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <cstring>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -660,6 +661,60 @@ TEST(HumanArm, CorruptCacheIsDetectedAndRebuilt) {
     f.write("XXXX", 4);
   }
   expect_rebuilt(scene, reference, "corrupt: not a human_arm cache file");
+  fs::remove_all(dir);
+}
+
+// Issue 53, cause 8: a cache edited by hand with its checksums recomputed was trusted (J 1.437
+// instead of 2.647). A few lattice points are solved again on load and must agree.
+TEST(HumanArm, ForgedCacheWithValidChecksumsIsCaughtBySpotChecks) {
+  const fs::path dir = temp_dir("forged");
+  const HumanArmScene scene(options_of(small_scene(dir)));
+  const SampleSet reference = scene.build({});
+  const std::string file = reference.info["cache_file"];
+  std::string pristine;
+  {
+    std::ifstream in(file, std::ios::binary);
+    pristine.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  // magic 8, version 4, flags 4, key size 8, key, n 8, payload size 8, payload sum 8, header sum 8.
+  std::uint64_t key_size = 0, n = 0;
+  std::memcpy(&key_size, pristine.data() + 16, 8);
+  const std::size_t counts = 24 + key_size;
+  std::memcpy(&n, pristine.data() + counts, 8);
+  const std::size_t header = counts + 32;
+  ASSERT_GT(n, 10u);
+  const auto forge = [&](std::uint64_t samples, const std::string& payload) {
+    std::string bytes = pristine.substr(0, header);
+    const std::uint64_t size = payload.size(), sum = hapsyn::plugins::fnv1a64(payload.data(), payload.size());
+    std::memcpy(&bytes[counts], &samples, 8);
+    std::memcpy(&bytes[counts + 8], &size, 8);
+    std::memcpy(&bytes[counts + 16], &sum, 8);
+    const std::uint64_t header_sum = hapsyn::plugins::fnv1a64(bytes.data(), counts + 24);
+    std::memcpy(&bytes[counts + 24], &header_sum, 8);
+    std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes << payload;
+  };
+  // Every manipulability halved: the payload is lattice, orientation (int32 each), q (7 doubles),
+  // manipulability (1 double) per sample.
+  std::string payload = pristine.substr(header);
+  for (std::uint64_t i = 0; i < n; ++i) {
+    double m = 0;
+    const std::size_t at = n * 8 + n * 56 + i * 8;
+    std::memcpy(&m, &payload[at], 8);
+    m *= 0.5;
+    std::memcpy(&payload[at], &m, 8);
+  }
+  forge(n, payload);
+  const SampleSet halved = scene.build({});
+  EXPECT_EQ(halved.info["from_cache"], false);
+  EXPECT_EQ(halved.info["cache_status"].get<std::string>().rfind("rebuilt (corrupt: its samples at lattice point ", 0), 0u)
+      << halved.info["cache_status"];
+  EXPECT_TRUE(same_samples(reference, halved));
+  // No samples at all: the points within reach that have some are missing.
+  forge(0, "");
+  const SampleSet emptied = scene.build({});
+  EXPECT_EQ(emptied.info["from_cache"], false) << emptied.info["cache_status"];
+  EXPECT_TRUE(same_samples(reference, emptied));
+  EXPECT_EQ(scene.build({}).info["cache_status"], "hit");
   fs::remove_all(dir);
 }
 
