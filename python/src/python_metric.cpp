@@ -285,7 +285,11 @@ double PythonMetric::combine(const double* reduced, int samples) const {
   const bool scalar = !py::isinstance<py::bool_>(value) && py::hasattr(value, "__float__") &&
                       (!py::hasattr(value, "ndim") || py::cast<int>(value.attr("ndim")) == 0);
   if (!scalar) throw Error(name_, "combine returned " + shown(value) + ": must be a number");
-  return py::cast<double>(py::float_(value));
+  try {
+    return py::cast<double>(py::float_(value));
+  } catch (const py::error_already_set& e) {  // an int beyond a double's range: OverflowError
+    throw Error(name_, "combine returned " + shown(value) + ": must be a number a double can hold (" + e.what() + ")");
+  }
 }
 
 bool inside_callback_of(const void* study) {

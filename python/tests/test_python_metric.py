@@ -196,6 +196,7 @@ def test_declarations_and_returns_of_the_wrong_type_are_named():
         (declared(local_batch=lambda self, q: None), r"^py: local_batch returned None \(NoneType\), not an array of numbers, for 121"),
         (declared(combine=lambda self, r, n: "x"), r"^py: combine returned 'x' \(str\): must be a number$"),
         (declared(combine=lambda self, r, n: None), r"^py: combine returned None \(NoneType\): must be a number$"),
+        (declared(combine=lambda self, r, n: 10 ** 400), r"^py: combine returned 1000.* \(int\): must be a number a double can hold"),
         (declared(combine=lambda self, r, n: np.array([0.5, 0.5])), r"^py: combine returned array\(\[0.5, 0.5\]\) \(ndarray\): must be"),
     ]
     for cls, message in returns:
