@@ -687,6 +687,27 @@ TEST(Cli, SceneCsvWritesToABareRelativeFileName) {
   fs::remove_all(dir);
 }
 
+// Issue 53, cause 7: a box centred at the edge of the doubles once exported samples at inf with
+// exit 0; a scene's samples are checked for finite values before anything uses or writes them.
+TEST(Cli, SceneSamplesBeyondTheDoublesAreRefusedBeforeTheyAreWritten) {
+  const fs::path dir = fresh_dir("scene-inf");
+  fs::create_directories(dir);
+  const fs::path problem_file = dir / "inf.json";
+  std::ofstream(problem_file.string()) << R"({"scene": {"plugin": "box", "options": {"dimension": 2,
+      "center": [1.7e308, 0], "size": [1e308, 1e308], "step": 1e307}}})";
+  const Output scene = hapsyn_cli("scene " + problem_file.string() + " --csv " + (dir / "inf.csv").string());
+  EXPECT_EQ(scene.code, 1) << scene.out;
+  EXPECT_NE(scene.out.find("hapsyn: error: box: sample 6: x = inf: every pose coordinate must be finite"), std::string::npos)
+      << scene.out;
+  EXPECT_FALSE(fs::exists(dir / "inf.csv"));
+  const Output validate = hapsyn_cli("validate " + problem("fivebar-gii-coarse.json") +
+                                     " --set 'scene={\"plugin\": \"box\", \"options\": {\"dimension\": 2, \"center\": "
+                                     "[1.7e308, 0], \"size\": [1e308, 1e308], \"step\": 1e307}}'");
+  EXPECT_EQ(validate.code, 1) << validate.out;
+  EXPECT_NE(validate.out.find("box: sample 6: x = inf"), std::string::npos) << validate.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, PathsTheFileSystemRefusesAreClearErrors) {
   const fs::path dir = fresh_dir("paths");
   fs::create_directories(dir);

@@ -1,5 +1,6 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/scene.hpp>
+#include "sample_checks.hpp"
 
 #include <Eigen/LU>
 
@@ -109,6 +110,28 @@ void check_groups(const SampleSet& samples, const std::string& scene) {
       if (g.of_sample[i] < 0 || g.of_sample[i] >= static_cast<int>(g.labels.size())) {
         refuse(".of_sample[" + std::to_string(i) + "] = " + std::to_string(g.of_sample[i]) + ": must be in [0, " +
                std::to_string(g.labels.size()) + ")");
+      }
+    }
+  }
+}
+
+void check_finite_samples(const SampleSet& samples, const std::string& scene) {
+  const auto refuse = [&](Eigen::Index row, const std::string& column, double value, const char* what) {
+    throw Error(scene, "sample " + std::to_string(row) + ": " + column + " = " + render_value(Json(value)) +
+                           ": every " + what + " must be finite (are the scene's options beyond the range of doubles?)");
+  };
+  for (Eigen::Index i = 0; i < samples.poses.rows(); ++i) {
+    for (Eigen::Index c = 0; c < samples.poses.cols(); ++c) {
+      if (std::isfinite(samples.poses(i, c))) continue;
+      const std::size_t k = static_cast<std::size_t>(c);
+      refuse(i, k < samples.coordinates.size() ? samples.coordinates[k] : "column " + std::to_string(c),
+             samples.poses(i, c), "pose coordinate");
+    }
+  }
+  for (const auto& [name, values] : samples.attributes) {
+    for (Eigen::Index i = 0; i < values.rows(); ++i) {
+      for (Eigen::Index c = 0; c < values.cols(); ++c) {
+        if (!std::isfinite(values(i, c))) refuse(i, name + "[" + std::to_string(c) + "]", values(i, c), "attribute value");
       }
     }
   }

@@ -1,4 +1,5 @@
 #include <hapsyn/error.hpp>
+#include "sample_checks.hpp"
 #include <hapsyn/plot.hpp>
 #include <hapsyn/scene_export.hpp>
 
@@ -56,6 +57,7 @@ BuiltScene build_scene_alone(const Json& problem, const Registry& registry, std:
   check_lattice(built.samples, built.plugin);
   check_groups(built.samples, built.plugin);
   check_weights(built.samples, built.plugin);
+  check_finite_samples(built.samples, built.plugin);
   return built;
 }
 

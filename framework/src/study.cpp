@@ -3,6 +3,7 @@
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/design_space.hpp>
 #include <hapsyn/error.hpp>
+#include "sample_checks.hpp"
 #include <hapsyn/problem_file.hpp>
 #include <hapsyn/schema.hpp>
 #include <hapsyn/study.hpp>
@@ -222,6 +223,7 @@ std::shared_ptr<SampleSet> build_samples(Json& resolved, const Registry& registr
   }
   check_lattice(*samples, scene_name);
   check_groups(*samples, scene_name);
+  check_finite_samples(*samples, scene_name);
   check_timeline_option(resolved, *samples);
   if (samples->size() > 0) samples->cache_bounds();
   return samples;
