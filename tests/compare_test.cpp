@@ -62,6 +62,48 @@ TEST(Compare, RunsStudiesInOrderAndTabulatesTheirFronts) {
   fs::remove_all(dir);
 }
 
+// Issue 51: the README's `hapsyn compare ... --out DIR` showed "-" for GD, IGD and the gap: the
+// reference study was written under DIR while the others read its default directory. A
+// reference_front naming another study's default output is read where the comparison writes it;
+// one that is missing is a warning in the table.
+TEST(Compare, AReferenceStudyOfTheComparisonIsReadWhereTheComparisonWritesIt) {
+  const fs::path dir = fs::temp_directory_path() / fs::unique_path("hapsyn-compare-ref-%%%%%%");
+  fs::create_directories(dir);
+  Json base = hapsyn::test::fivebar_study("grid");
+  base["objectives"] = Json::array({{{"metric", "gii"}}, {{"metric", "gdi"}}});
+  Json reference = base;
+  reference["solver"]["options"] = {{"pareto", true}};
+  reference["output"] = {{"directory", (dir / "default" / "ref").string()}};
+  Json weighted = base;
+  weighted["solver"] = {{"plugin", "weighted_sum"}, {"options", {{"count", 3}, {"sub_solver", {{"plugin", "grid"}}}}}};
+  weighted["indicators"] = {{"reference_front", (dir / "default" / "ref" / "result.json").string()}};
+  hapsyn::CompareOptions options;
+  options.files = {write_problem(dir, "ref", reference), write_problem(dir, "ws", weighted)};
+  options.output_directory = (dir / "out").string();
+  options.threads = 2;
+  const Json summary = hapsyn::run_compare(options, hapsyn::test::registry());
+  const Json& ws = summary["rows"][1];
+  EXPECT_EQ(ws["reference"], "ref");
+  EXPECT_TRUE(ws["reference_front_missing"].is_null()) << ws;
+  EXPECT_NEAR(ws["generational_distance"].get<double>(), 0.0, 1e-12);
+  EXPECT_GT(ws["inverted_generational_distance"].get<double>(), 0.0);
+  EXPECT_FALSE(fs::exists(dir / "default"));  // nothing read or written at the default place
+
+  // Alone, the weighted sum's reference does not exist: said in the row and on the console.
+  options.files = {options.files[1]};
+  options.output_directory = (dir / "alone").string();
+  const Json alone = hapsyn::run_compare(options, hapsyn::test::registry());
+  EXPECT_TRUE(alone["rows"][0]["generational_distance"].is_null());
+  ASSERT_TRUE(alone["rows"][0]["reference_front_missing"].is_string()) << alone["rows"][0];
+  std::ostringstream table;
+  hapsyn::print_compare(alone, table);
+  EXPECT_NE(table.str().find("warning: ws: GD, IGD and the domination gap are not computed (\"-\"): " +
+                             (dir / "default" / "ref" / "result.json").string() + " does not exist"),
+            std::string::npos)
+      << table.str();
+  fs::remove_all(dir);
+}
+
 TEST(Compare, RefusesNoFilesAndDuplicateStudyNames) {
   hapsyn::test::expect_error([] { hapsyn::run_compare({}, hapsyn::test::registry()); },
                              {"compare: at least one problem file is required"});

@@ -203,7 +203,44 @@ struct CompareCase {
   std::string file;
   Json doc;
   std::string name;
+  std::string reference;  // the study of this comparison whose front it is measured against, if any
 };
+
+// A study's default output directory, absolute (where `hapsyn run` would write it: relative
+// to the working directory).
+fs::path default_output_of(const CompareCase& k) {
+  const Json& output = k.doc.value("output", Json::object());
+  const std::string dir = output.is_object() && output.contains("directory") && output["directory"].is_string()
+                              ? output["directory"].get<std::string>()
+                              : "results/" + k.name;
+  return fs::absolute(dir).lexically_normal();
+}
+
+// A study whose indicators.reference_front names the result.json another study of this
+// comparison writes by default reads it where the comparison writes it, DIR/<name>/: the
+// comparison's own reference study (once, the later studies read the stale or missing file at
+// its default place, and GD, IGD and the gaps were "-" without a word).
+void point_references_into_the_comparison(std::vector<CompareCase>& cases, const std::string& out) {
+  for (CompareCase& k : cases) {
+    const Json& indicators = k.doc.value("indicators", Json::object());
+    if (!indicators.is_object() || !indicators.contains("reference_front") || !indicators["reference_front"].is_string()) {
+      continue;
+    }
+    const fs::path named = indicators["reference_front"].get<std::string>();
+    // As resolve_problem_path reads it: beside the problem file first, else the working directory.
+    const std::vector<fs::path> readings = {
+        fs::absolute(named, fs::absolute(fs::path(k.file).parent_path())).lexically_normal(),
+        fs::absolute(named).lexically_normal()};
+    for (const CompareCase& reference : cases) {
+      if (&reference == &k) continue;
+      const fs::path written = default_output_of(reference) / "result.json";
+      if (std::find(readings.begin(), readings.end(), written) == readings.end()) continue;
+      k.doc["indicators"]["reference_front"] = (fs::absolute(fs::path(out) / reference.name) / "result.json").string();
+      k.reference = reference.name;
+      break;
+    }
+  }
+}
 
 Study load_case(const CompareCase& k, const CompareOptions& options, const Registry& registry) {
   try {
@@ -247,6 +284,8 @@ Json tabulate(const std::vector<CompareCase>& cases, const std::vector<std::opti
                 {"max_domination_gap", indicator(result, "max_domination_gap")},
                 {"best_dominated", indicator(result, "best_dominated")},
                 {"best_domination_gap", indicator(result, "best_domination_gap")},
+                {"reference", cases[i].reference.empty() ? Json(nullptr) : Json(cases[i].reference)},
+                {"reference_front_missing", indicator(result, "reference_front_missing")},
                 {"designs", result["evaluations"]["designs"]},
                 {"samples", result["evaluations"]["samples"]},
                 {"wall_time_s", result["wall_time_s"]},
@@ -329,8 +368,9 @@ Json run_compare_cases(const CompareOptions& options, const Registry& registry, 
       if (!names.insert(name).second) {
         throw Error("compare", file + ": a study named '" + name + "' is already in this comparison (give each a distinct \"name\")");
       }
-      cases.push_back({file, std::move(doc), name});
+      cases.push_back({file, std::move(doc), name, ""});
     }
+    point_references_into_the_comparison(cases, options.output_directory);
   } catch (const std::exception& e) {
     if (cluster.size() == 1) throw;
     read_error = error_record(e);
@@ -511,6 +551,12 @@ void print_compare(const Json& summary, std::ostream& out) {
     if (r["best_dominated"].is_boolean()) {
       out << r["study"].get<std::string>() << ": its design is " << (r["best_dominated"].get<bool>() ? "" : "not ")
           << "dominated by the reference front; largest gains at no loss: " << r["best_domination_gap"].dump() << "\n";
+    }
+  }
+  for (const Json& r : summary["rows"]) {
+    if (r.value("reference_front_missing", Json()).is_string()) {
+      out << "warning: " << r["study"].get<std::string>() << ": GD, IGD and the domination gap are not computed (\"-\"): "
+          << r["reference_front_missing"].get<std::string>() << "\n";
     }
   }
   for (auto it = summary["plots"].begin(); it != summary["plots"].end(); ++it) {
