@@ -708,6 +708,26 @@ TEST(Cli, SceneSamplesBeyondTheDoublesAreRefusedBeforeTheyAreWritten) {
   fs::remove_all(dir);
 }
 
+// Issue 51: designs printed as "0.30000000000000004 m"; the console shows ten significant digits,
+// result.json keeps every one.
+TEST(Cli, ConsoleShowsDesignValuesAtTenDigitsAndResultJsonKeepsThemAll) {
+  const fs::path dir = fresh_dir("design-digits");
+  const Output o = hapsyn_cli("run " + problem("fivebar-table2-best-gii.json") +
+                              " --set design.l2.value=0.29000000000000004 --out " + dir.string());
+  ASSERT_EQ(o.code, 0) << o.out;
+  EXPECT_NE(o.out.find("l2 = 0.29 m"), std::string::npos) << o.out;
+  EXPECT_EQ(o.out.find("0.29000000000000004"), std::string::npos) << o.out;
+  EXPECT_EQ(read_json(dir / "result.json")["best"]["design"]["l2"].get<double>(), 0.29000000000000004);
+  // A refusal that turns on the last digit shows it: 0.30000000000000004 is beyond 0.3.
+  const Output beyond = hapsyn_cli("validate " + problem("fivebar-table2-best-gii.json") +
+                                   " --set design.l2.value=0.30000000000000004");
+  EXPECT_EQ(beyond.code, 1) << beyond.out;
+  EXPECT_NE(beyond.out.find("design.l2.value = 0.30000000000000004: must lie within the bounds [0.01, 0.3]"),
+            std::string::npos)
+      << beyond.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, PathsTheFileSystemRefusesAreClearErrors) {
   const fs::path dir = fresh_dir("paths");
   fs::create_directories(dir);

@@ -112,6 +112,20 @@ std::string format_number(double v) {
   return s.str();
 }
 
+// A design value as the console shows it: ten significant digits, so that a grid value reads
+// 0.29 and not 0.29000000000000004 (result.json and the CSVs keep every digit).
+std::string format_design_value(const Json& v) {
+  if (v.is_number_float()) {
+    std::ostringstream s;
+    s << std::setprecision(10) << v.get<double>();
+    return s.str();
+  }
+  if (!v.is_array()) return v.dump();
+  std::string out = "[";
+  for (std::size_t i = 0; i < v.size(); ++i) out += (i ? ", " : "") + format_design_value(v[i]);
+  return out + "]";
+}
+
 void print_summary(const Json& result, std::ostream& out) {
   const Json& problem = result["problem"];
   out << "hapsyn " << result["hapsyn"]["version"].get<std::string>() << " | " << problem["name"].get<std::string>()
@@ -134,7 +148,7 @@ void print_summary(const Json& result, std::ostream& out) {
     for (auto it = point["design"].begin(); it != point["design"].end(); ++it) {
       if (skip_fixed && is_fixed(it.key())) continue;
       const std::string unit = problem["design"][it.key()].value("unit", "");
-      out << " " << it.key() << " = " << it.value().dump() << (unit.empty() ? "" : " " + unit);
+      out << " " << it.key() << " = " << format_design_value(it.value()) << (unit.empty() ? "" : " " + unit);
     }
     if (skip_fixed && fixed > 0) out << " (and " << fixed << " fixed: result.json)";
     out << "\n" << indent << "objectives:";

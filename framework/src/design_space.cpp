@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
 #include <string>
 
@@ -110,6 +111,17 @@ std::string number(double v) {
   s.precision(12);
   s << v;
   return s.str();
+}
+
+// A value as it is, in as few digits as name it exactly: a value of 0.30000000000000004 refused
+// against a bound of 0.3 must not read "0.3" (number() rounds, for suggestions a user types).
+std::string exact_number(double v) {
+  for (int digits = 12;; ++digits) {
+    std::ostringstream s;
+    s.precision(digits);
+    s << v;
+    if (digits == 17 || !std::isfinite(v) || std::strtod(s.str().c_str(), nullptr) == v) return s.str();
+  }
 }
 
 // Reads a per-component number of a design entry: a number (broadcast) or an array of `size`.
@@ -274,7 +286,7 @@ DesignComponent resolve_component(const VariableDecl& d, const Json& entry, cons
   if (e.has_value) {
     const double v = pick(e.value, ui);
     if (v < c.lower || v > c.upper) {
-      throw Error("problem", path + ".value" + suffix + " = " + number(v) + ": must lie within the bounds [" +
+      throw Error("problem", path + ".value" + suffix + " = " + exact_number(v) + ": must lie within the bounds [" +
                                  number(c.lower) + ", " + number(c.upper) + "]" +
                                  (entry.contains("lower") || entry.contains("upper")
                                       ? ""
