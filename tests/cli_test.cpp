@@ -728,6 +728,29 @@ TEST(Cli, ConsoleShowsDesignValuesAtTenDigitsAndResultJsonKeepsThemAll) {
   fs::remove_all(dir);
 }
 
+// Issue 51: fixing a URDF parameter to a new value was refused unless bounds were given too (its
+// default bounds are [nominal, nominal]); the value now moves it, as widened bounds do.
+TEST(Cli, AFixedValueMovesAFileParameter) {
+  const fs::path dir = fresh_dir("fixed-value");
+  const auto gii = [&](const std::string& design, const std::string& name) {
+    const Output o = hapsyn_cli("run " + problem("phantom3r-gii-box.json") + " --quiet --set solver.plugin=evaluate " +
+                                "--set 'design=" + design + "' --out " + (dir / name).string());
+    EXPECT_EQ(o.code, 0) << o.out;
+    return read_json(dir / name / "result.json")["best"]["objectives"]["gii"].get<double>();
+  };
+  const double nominal = gii("{}", "nominal");
+  const double moved = gii(R"({"elbow_joint:x": {"value": 0.2}})", "moved");
+  const double widened = gii(R"({"elbow_joint:x": {"value": 0.2, "lower": 0.0, "upper": 1.0}})", "widened");
+  EXPECT_EQ(moved, widened);
+  EXPECT_NE(moved, nominal);
+  const Output result = hapsyn_cli("validate " + problem("phantom3r-gii-box.json") +
+                                   " --set 'design={\"mass_scale\": {\"value\": -1}}'");
+  EXPECT_EQ(result.code, 1) << result.out;
+  EXPECT_NE(result.out.find("design.mass_scale.value = -1: must lie within the mechanism's limits ["), std::string::npos)
+      << result.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, PathsTheFileSystemRefusesAreClearErrors) {
   const fs::path dir = fresh_dir("paths");
   fs::create_directories(dir);

@@ -285,6 +285,17 @@ DesignComponent resolve_component(const VariableDecl& d, const Json& entry, cons
   }
   if (e.has_value) {
     const double v = pick(e.value, ui);
+    // A component fixed by default (a URDF's or DH table's parameter: bounds [nominal, nominal])
+    // is moved by a value anywhere within the mechanism's limits; a value of a component with a
+    // default range must lie in it, unless lower/upper widen it.
+    const bool moves_a_fixed_default = !entry.contains("lower") && !entry.contains("upper") && c.lower == c.upper;
+    if (moves_a_fixed_default) {
+      if (!(v >= hard_lower && v <= hard_upper)) {
+        throw Error("problem", path + ".value" + suffix + " = " + exact_number(v) + ": must lie within the mechanism's "
+                                   "limits [" + number(hard_lower) + ", " + number(hard_upper) + "] for " + d.name);
+      }
+      c.lower = c.upper = v;
+    }
     if (v < c.lower || v > c.upper) {
       throw Error("problem", path + ".value" + suffix + " = " + exact_number(v) + ": must lie within the bounds [" +
                                  number(c.lower) + ", " + number(c.upper) + "]" +
