@@ -751,6 +751,20 @@ TEST(Cli, AFixedValueMovesAFileParameter) {
   fs::remove_all(dir);
 }
 
+// Issue 51: coverage on a point_list scene failed with "per-sample attribute 'M_v' requested" and
+// no word of who requested it; the objective and where to read what it needs are named.
+TEST(Cli, ASceneAttributeAMetricNeedsNamesTheObjective) {
+  const Output o = hapsyn_cli("validate " + problem("haptic6r-evaluate.json") +
+                              " --set 'scene={\"plugin\": \"point_list\", \"options\": {\"file\": "
+                              "\"point_list/example_planar.csv\"}}'");
+  EXPECT_EQ(o.code, 1) << o.out;
+  EXPECT_NE(o.out.find("point_list: per-sample attribute 'M_v' requested"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("; 'M_v' is needed by objectives[1], objectives[4] (metric 'coverage': `hapsyn describe "
+                       "coverage` names the scene it needs)"),
+            std::string::npos)
+      << o.out;
+}
+
 TEST(Cli, PathsTheFileSystemRefusesAreClearErrors) {
   const fs::path dir = fresh_dir("paths");
   fs::create_directories(dir);

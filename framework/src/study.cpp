@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <set>
 
 namespace hapsyn {
@@ -140,8 +141,11 @@ std::shared_ptr<Metric> create_in_process(const InProcessMetric& m, const Json& 
   return metric;
 }
 
+// `requested_by`: for each scene attribute requested, per metric, the objectives that need it (for
+// messages).
 void load_objectives(Json& objs, const Registry& registry, const std::vector<InProcessMetric>& in_process, Study& study,
-                     std::vector<MetricEntry>& metrics, std::vector<Objective>& objectives, SceneRequest& request) {
+                     std::vector<MetricEntry>& metrics, std::vector<Objective>& objectives, SceneRequest& request,
+                     std::map<std::string, std::map<std::string, std::string>>& requested_by) {
   std::set<std::string> objective_names;
   for (std::size_t i = 0; i < objs.size(); ++i) {
     const std::string path = "objectives[" + std::to_string(i) + "]";
@@ -171,7 +175,11 @@ void load_objectives(Json& objs, const Registry& registry, const std::vector<InP
     if (!std::isfinite(o["weight"].get<double>())) {
       throw Error("problem", path + ".weight = " + render_value(o["weight"]) + ": must be finite");
     }
-    for (const std::string& a : metric->scene_attributes()) request.attributes.push_back(a);
+    for (const std::string& a : metric->scene_attributes()) {
+      request.attributes.push_back(a);
+      std::string& paths = requested_by[a][metric_name];
+      paths += (paths.empty() ? "" : ", ") + path;
+    }
     // The demanded motion (twist, twist_rate) that joint rates need is not requested here: a
     // scene of motion always carries it, and the Problem names the way out when a scene lacks it.
     Objective objective;
@@ -204,7 +212,8 @@ void check_timeline_option(const Json& resolved, const SampleSet& samples) {
 }
 
 std::shared_ptr<SampleSet> build_samples(Json& resolved, const Registry& registry, Study& study,
-                                         const SceneRequest& request) {
+                                         const SceneRequest& request,
+                                         const std::map<std::string, std::map<std::string, std::string>>& requested_by) {
   const std::string scene_name = resolved["scene"]["plugin"];
   find_plugin(registry, "scene.plugin", scene_name);
   std::shared_ptr<Scene> scene =
@@ -214,7 +223,16 @@ std::shared_ptr<SampleSet> build_samples(Json& resolved, const Registry& registr
   try {
     samples = std::make_shared<SampleSet>(scene->build(request));
   } catch (const Error& e) {
-    throw Error("problem", std::string("scene.options: ") + e.what());
+    // A scene refusing an attribute it lacks names the attribute; the study adds who needs it.
+    std::string needed;
+    for (const auto& [attribute, by_metric] : requested_by) {
+      if (std::string(e.what()).find("'" + attribute + "'") == std::string::npos) continue;
+      for (const auto& [metric, paths] : by_metric) {
+        needed += "; '" + attribute + "' is needed by " + paths + " (metric '" + metric + "': `hapsyn describe " + metric +
+                  "` names the scene it needs)";
+      }
+    }
+    throw Error("problem", std::string("scene.options: ") + e.what() + needed);
   }
   if (samples->size() > kMaxSceneSamples) {
     throw Error("problem", "scene.plugin = \"" + scene_name + "\": the scene has " + std::to_string(samples->size()) +
@@ -313,7 +331,8 @@ Study load_study(const Json& input, const Registry& registry, const std::vector<
   SceneRequest request;
   request.threads = settings.threads > 0 ? settings.threads : resolved.value("threads", 0);
   request.progress = settings.progress;
-  load_objectives(resolved["objectives"], registry, in_process, study, metrics, objectives, request);
+  std::map<std::string, std::map<std::string, std::string>> requested_by;  // attribute -> metric -> objectives
+  load_objectives(resolved["objectives"], registry, in_process, study, metrics, objectives, request, requested_by);
 
   // Solver (created before the scene is built: its options are checked before any work).
   study.solver_plugin = resolved["solver"]["plugin"];
@@ -325,7 +344,7 @@ Study load_study(const Json& input, const Registry& registry, const std::vector<
   if (!study.solver->pareto()) check_weights_not_all_zero(resolved["objectives"]);
 
   // Scene.
-  std::shared_ptr<SampleSet> samples = build_samples(resolved, registry, study, request);
+  std::shared_ptr<SampleSet> samples = build_samples(resolved, registry, study, request, requested_by);
   study.problem = std::make_shared<Problem>(mechanism_name, mechanism, samples, std::move(metrics),
                                             std::move(objectives), std::move(space));
   try {
