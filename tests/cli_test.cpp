@@ -765,6 +765,18 @@ TEST(Cli, ASceneAttributeAMetricNeedsNamesTheObjective) {
       << o.out;
 }
 
+// An objective named with a comma or a quote once wrote a maps.csv whose header had one column
+// more than its rows (a red-team finding).
+TEST(Cli, ObjectiveNamesThatWouldBreakCsvColumnsAreRefused) {
+  for (const std::string name : {"g,ii", "g\\\"ii"}) {
+    const Output o = hapsyn_cli("validate " + problem("fivebar-gii-coarse.json") + " --set 'objectives[0].name=\"" + name + "\"'");
+    EXPECT_EQ(o.code, 1) << o.out;
+    EXPECT_NE(o.out.find(": may not contain a comma, a double quote or a line break (it names CSV columns)"),
+              std::string::npos)
+        << o.out;
+  }
+}
+
 TEST(Cli, PathsTheFileSystemRefusesAreClearErrors) {
   const fs::path dir = fresh_dir("paths");
   fs::create_directories(dir);

@@ -156,6 +156,13 @@ void load_objectives(Json& objs, const Registry& registry, const std::vector<InP
                                   [&](const InProcessMetric& m) { return m.name == metric_name; });
     std::shared_ptr<Metric> metric;
     if (own != in_process.end()) {
+      // A metric given in-process (Python) under a plugin's name would replace that plugin for
+      // this study without a word.
+      const std::vector<std::string> plugins = registry.known_names();
+      if (std::find(plugins.begin(), plugins.end(), metric_name) != plugins.end()) {
+        throw Error("problem", path + ".metric = \"" + metric_name + "\": a metric given in Python (" + own->origin +
+                                   ") has the name of the plugin " + metric_name + "; register it under another name");
+      }
       metric = create_in_process(*own, o["options"], path, study);
     } else {
       const PluginRecord& record = find_plugin(registry, path + ".metric", metric_name);
@@ -168,6 +175,12 @@ void load_objectives(Json& objs, const Registry& registry, const std::vector<InP
     }
     if (!o.contains("name")) o["name"] = metric_name;
     const std::string name = o["name"];
+    // An objective's name heads columns of the CSV files: a comma, a quote or a line break would
+    // split or shift them.
+    if (name.find_first_of(",\"\r\n") != std::string::npos) {
+      throw Error("problem", path + ".name = " + render_value(o["name"]) +
+                                 ": may not contain a comma, a double quote or a line break (it names CSV columns)");
+    }
     if (!objective_names.insert(name).second) {
       throw Error("problem", path + ".name = \"" + name +
                                  "\": duplicate objective name (give each objective a distinct \"name\")");

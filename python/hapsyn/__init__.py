@@ -28,6 +28,9 @@ import numpy as _np
 from . import _hapsyn
 from ._hapsyn import Error
 
+# Worker threads a run or an evaluation may ask for (the program's limit, docs/limits.md).
+_MAX_THREADS = 1024
+
 __all__ = [
     "Error",
     "Result",
@@ -63,6 +66,21 @@ def _paths(plugin_path: Union[None, _PathLike, Sequence[_PathLike]]) -> List[str
     if isinstance(plugin_path, (str, _os.PathLike)):
         return [_os.fspath(plugin_path)]
     return [_os.fspath(p) for p in plugin_path]
+
+
+def _is_numeric(value: Any) -> bool:
+    """True for a number or a (nested) list or array of numbers."""
+    try:
+        return _np.asarray(value).dtype.kind in "iuf"
+    except (TypeError, ValueError):
+        return False
+
+
+def _whole_number(value: Any, name: str, lowest: int, highest: int) -> int:
+    """``value`` as an int within [lowest, highest], else :class:`Error` naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, _np.integer)) or not lowest <= value <= highest:
+        raise Error(f"python: {name} = {value!r}: must be an integer from {lowest} to {highest}")
+    return int(value)
 
 
 def _to_json(value: Any) -> str:
@@ -337,6 +355,10 @@ class Study:
         ``"stopped"``. Raises :class:`Error` for an unusable output directory; an exception
         raised by ``progress`` or by a Python metric stops the run and is raised again.
         """
+        if threads is not None:
+            threads = _whole_number(threads, "threads", 0, _MAX_THREADS)
+        if seed is not None:
+            seed = _whole_number(seed, "seed", 0, 2**64 - 1)
         temporary = out is None
         directory = _tempfile.mkdtemp(prefix="hapsyn-run-") if temporary else _os.fspath(out)
         if write_samples is None:
@@ -351,6 +373,10 @@ class Study:
 
     def _free(self, design: Any) -> _np.ndarray:
         if isinstance(design, Mapping):
+            for name, value in design.items():
+                numbers = _np.asarray(value, dtype=float) if _is_numeric(value) else None
+                if numbers is not None and not _np.all(_np.isfinite(numbers)):
+                    raise Error(f"python: design.{name} = {value!r}: must be finite")
             return _np.asarray(self._handle.free_from_json(_to_json(dict(design))), dtype=float)
         return _np.asarray(design, dtype=float)
 
@@ -379,11 +405,14 @@ class Study:
 
         Raises :class:`Error` for a design of the wrong size, outside its bounds or not finite.
         """
+        threads = _whole_number(threads, "threads", 1, _MAX_THREADS)
         free = self._free(design)
         single = free.ndim == 1
         rows = free.reshape(1, -1) if single else free
         if rows.ndim != 2:
             raise Error(f"python: design: an array with {free.ndim} dimensions is neither one design nor a batch")
+        if isinstance(quantities, str):
+            raise Error(f"python: quantities = {quantities!r}: must be a list of names, e.g. [{quantities!r}]")
         want_samples = samples or quantities is not None
         if want_samples and not single:
             raise Error("python: design: samples=True and quantities need one design, not a batch")

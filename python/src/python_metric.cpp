@@ -204,7 +204,12 @@ PythonMetric::PythonMetric(py::object object, std::string name, const std::strin
     const py::tuple t = py::tuple(py::reinterpret_borrow<py::object>(item));
     if (t.size() < 2 || t.size() > 3) throw Error("problem", at + ": must be (name, reduction[, unit])");
     const char* text = "a string";
-    locals_.push_back(LocalValue{cast_as<std::string>(t[0], "problem", at + ".name", text),
+    const std::string local_name = cast_as<std::string>(t[0], "problem", at + ".name", text);
+    if (local_name.empty() || local_name.find_first_of(",\"\r\n") != std::string::npos) {
+      throw Error("problem", at + ".name = " + shown(t[0]) +
+                                 ": must be non-empty, without a comma, a double quote or a line break (it names CSV columns)");
+    }
+    locals_.push_back(LocalValue{local_name,
                                  reduction_of(cast_as<std::string>(t[1], "problem", at + ".reduction", text), at + ".reduction"),
                                  t.size() == 3 ? cast_as<std::string>(t[2], "problem", at + ".unit", text) : std::string()});
   }

@@ -181,6 +181,18 @@ std::vector<double> StudyHandle::free_from_json(const std::string& design_json) 
                                 (near.empty() ? "" : " (did you mean '" + near + "'?)"));
     }
   }
+  // A fixed variable may be given (a whole design from a result.json), but only with its value:
+  // another one would be dropped without a word.
+  for (const DesignComponent& c : space.components()) {
+    if (!c.fixed || !design.contains(c.variable)) continue;
+    const Json& v = design[c.variable];
+    const Json& value = c.name == c.variable ? v : (v.is_array() && static_cast<int>(v.size()) > c.index ? v[static_cast<std::size_t>(c.index)] : Json());
+    if (!value.is_number() || value.get<double>() != c.lower) {
+      throw Error("python", "design." + c.name + " = " + render_value(value) + ": this study fixes it at " +
+                                render_value(Json(c.lower)) + " (give it that value or leave it out; free it in the "
+                                "problem's design section to vary it)");
+    }
+  }
   std::vector<double> free;
   for (int i : space.free_indices()) {
     const DesignComponent& c = space.components()[static_cast<std::size_t>(i)];

@@ -61,6 +61,35 @@ def test_bad_designs_raise_hapsyn_errors(study):
         study.evaluate({"l0": 0, "l1": 0.2, "l2": 0.2, "r": 0.3, "l3": 1})
     with pytest.raises(hapsyn.Error, match="python: design.r: missing"):
         study.evaluate({"l0": 0, "l1": 0.2, "l2": 0.2})
+    # A NaN in a dict once surfaced as the json module's "Out of range float values".
+    with pytest.raises(hapsyn.Error, match=r"^python: design.l1 = nan: must be finite$"):
+        study.evaluate({"l0": 0, "l1": float("nan"), "l2": 0.2, "r": 0.3})
+    # Arguments out of range once surfaced as pybind11's "incompatible function arguments".
+    for threads in (2**40, 0, -1, 2.5, True):
+        with pytest.raises(hapsyn.Error, match=r"^python: threads = .*: must be an integer from 1 to 1024$"):
+            study.evaluate(DESIGN, threads=threads)
+    with pytest.raises(hapsyn.Error, match=r"^python: quantities = 'jacobian': must be a list of names"):
+        study.evaluate(DESIGN, quantities="jacobian")
+
+
+def test_a_fixed_variable_in_a_dict_is_checked_not_dropped():
+    # Its value was silently dropped (a red-team finding): a study fixing r at 0.42 evaluated
+    # {"r": 0.3} at 0.42. Its own value is accepted, so a whole design from a result.json works.
+    fixed = hapsyn.load(GRID, set=["scene.options.step=0.002", "design.r={\"value\": 0.42}"])
+    assert fixed.free_names == ["l0", "l1", "l2"]
+    same = fixed.evaluate({"l0": 0.0, "l1": 0.3, "l2": 0.3, "r": 0.42})
+    assert same["objectives"] == fixed.evaluate({"l0": 0.0, "l1": 0.3, "l2": 0.3})["objectives"]
+    with pytest.raises(hapsyn.Error, match=r"^python: design.r = 0.3: this study fixes it at 0.42 \(give it that value "
+                                           r"or leave it out; free it in the problem's design section to vary it\)$"):
+        fixed.evaluate({"l0": 0.0, "l1": 0.3, "l2": 0.3, "r": 0.3})
+
+
+def test_run_arguments_out_of_range_are_named(study):
+    for seed in (-1, 2**70, 1.5):
+        with pytest.raises(hapsyn.Error, match=r"^python: seed = .*: must be an integer from 0 to 18446744073709551615$"):
+            study.run(seed=seed)
+    with pytest.raises(hapsyn.Error, match=r"^python: threads = 8589934592: must be an integer from 0 to 1024$"):
+        study.run(threads=2**33)
 
 
 def test_per_sample_records_equal_the_programs_samples_csv(tmp_path):

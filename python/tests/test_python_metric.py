@@ -202,3 +202,23 @@ def test_declarations_and_returns_of_the_wrong_type_are_named():
     for cls, message in returns:
         with pytest.raises(hapsyn.Error, match=message):
             hapsyn.load(problem, metrics={"py": cls}).evaluate([])
+
+
+def test_a_python_metric_may_not_take_a_plugins_name(plugin_dir):
+    # It replaced the built-in gii without a word (a red-team finding).
+    problem = _example_study()
+    problem["objectives"] = [{"metric": "mean_isotropy"}]
+    with pytest.raises(hapsyn.Error, match=r"^problem: objectives\[0\].metric = \"mean_isotropy\": a metric given in "
+                                           r"Python \(python:.*\) has the name of the plugin mean_isotropy; register it "
+                                           r"under another name$"):
+        hapsyn.load(problem, plugin_path=plugin_dir, metrics={"mean_isotropy": PyMeanIsotropy})
+
+
+def test_local_names_that_would_break_csv_columns_are_refused():
+    problem = _example_study()
+    problem["objectives"] = [{"metric": "py"}]
+    for bad in ["a,b", 'a"b', "a\nb", ""]:
+        cls = type("Named", (PyMeanIsotropy,), {"locals": [(bad, "sum", ""), ("reachable", "sum", "")]})
+        with pytest.raises(hapsyn.Error, match=r"^problem: objectives\[0\].locals\[0\].name = .*: must be non-empty, "
+                                               r"without a comma, a double quote or a line break"):
+            hapsyn.load(problem, metrics={"py": cls})

@@ -1049,6 +1049,20 @@ TEST(ChainTemplate, UrdfNestingAndSizeAreBoundedBeforeParsing) {
   EXPECT_NEAR(state_at(c, {0.0}).frames.tip.translation().x(), 4.6, 1e-9);
 }
 
+// What TinyXML reads wrongly without a word is refused before it: a second root element (a second
+// <robot> was ignored) and a DOCTYPE declaring entities (urdfdom then "could not find the robot").
+TEST(ChainTemplate, UrdfWithTwoRootsOrEntityDeclarationsIsRefused) {
+  const std::string one = urdf_link("base") + urdf_joint("j", "revolute", "base", "tip", "0.1 0 0", "0 0 0") +
+                          urdf_link("tip", "0.2 0 0", "0 0 0", 1.0, "0.01 0 0 0.01 0 0.01");
+  const std::string two = write_file("two.urdf", robot(one) + "<robot name=\"x\"><link name=\"a\"/></robot>\n");
+  expect_error([&] { ChainTemplate::from_urdf(two, "base", "tip"); },
+               {two + ": line 7: <robot> after the root element has ended: a file holds one XML document (one <robot>)"});
+  const std::string entities = write_file("entities.urdf", "<!DOCTYPE robot [<!ENTITY L \"0.1\">]>\n" + robot(one));
+  expect_error([&] { ChainTemplate::from_urdf(entities, "base", "tip"); },
+               {entities + ": line 1: a DOCTYPE with declarations (entities): they are not read"});
+  EXPECT_NO_THROW(ChainTemplate::from_urdf(write_file("doctype.urdf", "<!DOCTYPE robot>\n" + robot(one)), "base", "tip"));
+}
+
 // Issue 53, cause 7: a URDF inertia no rigid body has is refused with the link and its values;
 // a thin rod's (one principal moment 0, the triangle inequality met with equality) is one.
 TEST(ChainTemplate, UrdfInertiaNoRigidBodyHasIsRefused) {

@@ -54,8 +54,11 @@ std::string name_at(const std::string& text, std::size_t at) {
 }
 
 [[noreturn]] void refuse(const std::string& path, const char* component, std::size_t line, const std::string& what) {
-  throw Error(component, path + ": line " + std::to_string(line) + ": " + what +
-                             " (refused before it is parsed; the limits are in docs/limits.md)");
+  throw Error(component, path + ": line " + std::to_string(line) + ": " + what);
+}
+
+[[noreturn]] void refuse_limit(const std::string& path, const char* component, std::size_t line, const std::string& what) {
+  refuse(path, component, line, what + " (refused before it is parsed; the limits are in docs/limits.md)");
 }
 
 }  // namespace
@@ -66,6 +69,7 @@ void check_xml_shape(const std::string& text, const std::string& path, const cha
   int depth = 0;
   std::size_t elements = 0;
   std::size_t robot_children = 0;
+  std::size_t roots = 0;  // elements at the top level
   std::size_t counted = 0;  // lines are counted up to here
   std::size_t i;
   while ((i = text.find('<', counted)) != std::string::npos) {
@@ -77,6 +81,15 @@ void check_xml_shape(const std::string& text, const std::string& path, const cha
       next = scan.skip_past(i + 9, "]]>");
     } else if (starts(text, i, "<?")) {
       next = scan.skip_past(i + 2, "?>");
+    } else if (starts(text, i, "<!DOCTYPE") || starts(text, i, "<!ENTITY")) {
+      // TinyXML skips a DTD, so urdfdom then misses the robot or reads "&L;" for a number: an
+      // internal subset (entity declarations) is refused with what it is.
+      const std::size_t end = scan.tag_end(i + 2);
+      if (starts(text, i, "<!ENTITY") || text.find('[', i) < end) {
+        refuse(path, component, scan.line, "a DOCTYPE with declarations (entities): they are not read; write the values "
+                                           "in place and remove the DOCTYPE");
+      }
+      next = end == std::string::npos ? end : end + 1;
     } else if (starts(text, i, "<!") || starts(text, i, "</")) {
       const std::size_t end = scan.tag_end(i + 2);
       if (text[i + 1] == '/') --depth;
@@ -84,19 +97,23 @@ void check_xml_shape(const std::string& text, const std::string& path, const cha
     } else {
       const std::size_t line = scan.line;
       const std::string name = name_at(text, i);
+      if (depth == 0 && ++roots > 1) {
+        refuse(path, component, line, "<" + name + "> after the root element has ended: a file holds one XML document "
+                                      "(one <robot>)");
+      }
       const std::size_t end = scan.tag_end(i + 1);
       if (end == std::string::npos) return;
       const bool empty = text[end - 1] == '/';
       if (++elements > limits.max_elements) {
-        refuse(path, component, line,
+        refuse_limit(path, component, line,
                "more than " + std::to_string(limits.max_elements) + " XML elements: at most that many are read");
       }
       if (depth == 1 && (name == "link" || name == "joint") && ++robot_children > limits.max_robot_children) {
-        refuse(path, component, line,
+        refuse_limit(path, component, line,
                "more than " + std::to_string(limits.max_robot_children) + " <link> and <joint> elements: at most that many are read");
       }
       if (!empty && ++depth > limits.max_depth) {
-        refuse(path, component, line,
+        refuse_limit(path, component, line,
                "<" + name + "> is nested " + std::to_string(depth) + " elements deep: at most " +
                    std::to_string(limits.max_depth) + " levels are read");
       }

@@ -15,8 +15,10 @@ struct XmlShapeLimits {
   std::size_t max_robot_children = 20000;  // <link> and <joint> elements, each counted (children of the root)
 };
 
-// Throws hapsyn::Error (component `component`) naming `path`, the line, the limit and how far
-// the file goes beyond it, when `text` exceeds a limit. Malformed XML is left to the parser.
+// Throws hapsyn::Error (component `component`) naming `path`, the line and the limit when `text`
+// exceeds a limit; and for what TinyXML would read wrongly without a word: a second root element
+// after the first (a second <robot>), and a DOCTYPE with declarations (entities it does not
+// expand). Other malformed XML is left to the parser.
 void check_xml_shape(const std::string& text, const std::string& path, const char* component,
                      const XmlShapeLimits& limits = {});
 

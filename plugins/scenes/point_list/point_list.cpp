@@ -8,6 +8,8 @@
 #include <boost/filesystem.hpp>
 
 #include <algorithm>
+#include <cctype>
+#include <numeric>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -132,10 +134,20 @@ class Reader {
     if (bytes > kPointListMaxBytes) fail_file(std::to_string(bytes) + " bytes: larger than the " + cap());
   }
 
-  // "# units: length=mm" sets the length unit; every other comment is ignored.
+  // "# units: length=mm" sets the length unit; every other comment is ignored, except one that
+  // reads like a units line in another spelling ("# Units:", "# unit: mm", "# units : mm"): read
+  // as a comment it would leave millimetres as metres without a word.
   void comment(const std::string& text) {
     const std::string body = trim(text.substr(1));
-    if (body.compare(0, 6, "units:") != 0) return;
+    if (body.compare(0, 6, "units:") != 0) {
+      std::string word = body.substr(0, body.find(':'));
+      std::transform(word.begin(), word.end(), word.begin(), [](unsigned char c) { return std::tolower(c); });
+      if (body.find(':') != std::string::npos && (trim(word) == "units" || trim(word) == "unit")) {
+        fail("comment " + in_quotes(text) + " reads like a units line: write it '# units: length=mm' (lower case, "
+             "\"units:\" with the colon right after it), or reword the comment");
+      }
+      return;
+    }
     const std::string shown = "units line " + in_quotes(text);
     if (units_line_ > 0) {
       fail(shown + ": the units were already given on line " + std::to_string(units_line_) + "; give them once");
@@ -151,6 +163,8 @@ class Reader {
       const std::size_t equals = item.find('=');
       const std::string key = item.substr(0, equals), value = equals == std::string::npos ? "" : item.substr(equals + 1);
       if (key != "length") fail(shown + ": unknown quantity " + in_quotes(key) + " (only length=m|cm|mm)");
+      if (seen_length_) fail(shown + ": length is given twice; give it once");
+      seen_length_ = true;
       if (value == "m") {
         scale_ = 1.0;
       } else if (value == "cm") {
@@ -292,6 +306,11 @@ class Reader {
     if (!weights_.empty() && std::all_of(weights_.begin(), weights_.end(), [](double w) { return w == 0.0; })) {
       fail_file("column \"weight\": every weight is 0: at least one must be > 0");
     }
+    // Weighted means divide by the sum: finite weights may still overflow it.
+    if (!weights_.empty() && !std::isfinite(std::accumulate(weights_.begin(), weights_.end(), 0.0))) {
+      fail_file("column \"weight\": the weights sum beyond the range of doubles (to inf): scale them down (only "
+                "their ratios matter)");
+    }
     SampleSet set;
     set.coordinates = {"x", "y"};
     if (layout_.z >= 0) set.coordinates.push_back("z");
@@ -318,6 +337,7 @@ class Reader {
 
   std::string path_;
   long long line_ = 0, header_line_ = 0, units_line_ = 0, rows_ = 0;
+  bool seen_length_ = false;  // the units line named the length
   double scale_ = 1.0;
   std::string unit_ = "m";
   std::vector<std::string> columns_;

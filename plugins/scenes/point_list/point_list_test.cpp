@@ -118,6 +118,28 @@ TEST_F(PointListFiles, UnitsLineAnywhereAppliesToEveryRow) {
   EXPECT_DOUBLE_EQ(last.pose(1)[2], 0.6);
 }
 
+// A units line in another spelling was read as a plain comment (millimetres as metres), and a
+// length given twice in one line was resolved by the last; both are refused, other comments pass.
+TEST_F(PointListFiles, UnitsLinesInAnotherSpellingOrWithALengthTwiceAreRefused) {
+  EXPECT_EQ(error_of("# Units: length=mm\nx,y\n180,0\n"),
+            "point_list: F:1: comment \"# Units: length=mm\" reads like a units line: write it '# units: length=mm' "
+            "(lower case, \"units:\" with the colon right after it), or reword the comment");
+  EXPECT_NE(error_of("x,y\n180,0\n# unit: mm\n").find("F:3: comment \"# unit: mm\" reads like a units line"), std::string::npos);
+  EXPECT_NE(error_of("# units : mm\nx,y\n180,0\n").find("F:1: comment \"# units : mm\" reads like a units line"),
+            std::string::npos);
+  EXPECT_EQ(error_of("# units: length=mm, length=cm\nx,y\n180,0\n"),
+            "point_list: F:1: units line \"# units: length=mm, length=cm\": length is given twice; give it once");
+  const SampleSet commented = read_point_list(write("commented.csv", "# unit conversions: none\n# units are metres\nx,y\n1,2\n"));
+  EXPECT_DOUBLE_EQ(commented.pose(0)[0], 1.0);
+}
+
+// Finite weights whose sum overflows were refused by the framework without the file or column.
+TEST_F(PointListFiles, WeightsWhoseSumOverflowsAreRefusedWithTheColumn) {
+  EXPECT_EQ(error_of("x,y,weight\n0.18,0,1e308\n0.2,0.03,1e308\n"),
+            "point_list: F: column \"weight\": the weights sum beyond the range of doubles (to inf): scale them down "
+            "(only their ratios matter)");
+}
+
 // Issue 53, cause 6: bytes that are not UTF-8 in a column name or a field are refused by the
 // reader with the file, line and bytes (they once reached a JSON library exception).
 TEST_F(PointListFiles, BytesThatAreNotUtf8AreRefusedWithTheFileAndLine) {
