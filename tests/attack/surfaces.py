@@ -285,6 +285,9 @@ def urdf_mutate(rng: random.Random, kind: str, t: str):
         d = rng.choice(['<!DOCTYPE robot SYSTEM "/dev/zero">', '<!DOCTYPE robot SYSTEM "http://127.0.0.1:9/x.dtd">',
                         '<!DOCTYPE robot [<!ELEMENT robot ANY>]>'])
         return t.replace('<?xml version="1.0"?>', '<?xml version="1.0"?>\n' + d), f"a DOCTYPE: {d}", "any", opts, mode
+    if kind == "two-roots":
+        return (t + '<robot name="second"><link name="a"/></robot>\n', "a second <robot> after the first", "refuse",
+                opts, mode)
     if kind == "comments-cdata":
         t = t.replace("<link name=\"turret\">", "<!-- a <joint name=\"x\"/> comment -->\n<link name=\"turret\">"
                       "<![CDATA[ <joint name=\"elbow_joint\"> ]]>")
@@ -320,7 +323,7 @@ def urdf_mutate(rng: random.Random, kind: str, t: str):
 URDF_FIXED = ["axis-huge", "axis-zero", "deep-xml-1000", "fixed-300k", "inertia-triangle", "badutf8-name", "axis-tiny",
               "deep-xml-100000", "control", "mass-bad", "inertia-negative", "loop", "base-tip", "truncate", "huge-attr",
               "entities", "doctype", "comments-cdata", "joint-duplicate", "link-missing", "limits-reversed", "origin-bad",
-              "joint-missing", "long-name", "link-duplicate", "axis-bad", "deep-xml-unclosed", "bom-crlf"]
+              "joint-missing", "long-name", "link-duplicate", "axis-bad", "deep-xml-unclosed", "bom-crlf", "two-roots"]
 URDF_RANDOM = [k for k in URDF_FIXED if k not in ("control", "deep-xml-1000", "deep-xml-100000", "fixed-300k",
                                                   "axis-huge", "axis-tiny")] + ["axis-scale", "deep-xml", "fixed-chain"]
 URDF_CAUSE = {"deep-xml-1000": "urdf: deep XML nesting (stack overflow)", "deep-xml-100000": "urdf: deep XML nesting (stack overflow)",
@@ -613,6 +616,14 @@ def csv_mutate(rng: random.Random, kind: str):
         u = lines.index("# units: length=mm")
         lines[u] = rng.choice(["# units: length=inch", "# units: angle=deg", "# units: length=", "# units: length=mm; x"])
         return fk, enc(lines), f"units line {lines[u]!r}", "refuse"
+    if k == "units-spelling":
+        u = lines.index("# units: length=mm")
+        lines[u] = rng.choice(["# Units: length=mm", "# unit: mm", "# units : length=mm", "# UNITS: length=mm",
+                               "# units: length=mm, length=cm"])
+        return fk, enc(lines), f"units line {lines[u]!r} (another spelling, or the length twice)", "refuse"
+    if k == "weights-overflow":
+        ls = [ln.rsplit(",", 1)[0] + ",1e308" if i > hdr else ln for i, ln in enumerate(lines)]  # PL_BASE's weight column
+        return fk, enc(ls), "finite weights whose sum overflows", "refuse"
     if k == "export-relative":
         return fk, enc(lines), "scene --csv into a bare relative file name", "accept"
     if k == "header-key":
@@ -631,9 +642,10 @@ CSV_FIXED = ["pl-units-at-end", "pl-huge-rows", "mo-tiny-steps", "mo-non-increas
              "mo-crlf", "pl-empty", "mo-tiny-steps-gap", "pl-header-only", "mo-badutf8-column", "pl-wrong-width",
              "pl-nan", "mo-header-only", "pl-crlf", "pl-export-relative", "mo-bom", "mo-wrong-width",
              "mo-non-number", "pl-non-number", "pl-units-twice", "mo-huge-rows", "mo-empty", "mo-quaternion",
-             "pl-units-bad", "mo-header-key", "mo-control"]
+             "pl-units-bad", "mo-header-key", "mo-control", "pl-units-spelling", "pl-weights-overflow"]
 CSV_RANDOM = ["pl-wrong-width", "pl-non-number", "pl-nan", "mo-wrong-width", "mo-non-number", "mo-nan",
-              "mo-non-increasing", "mo-quaternion", "mo-header-key", "pl-units-bad", "pl-units-twice"]
+              "mo-non-increasing", "mo-quaternion", "mo-header-key", "pl-units-bad", "pl-units-twice",
+              "pl-units-spelling", "pl-weights-overflow"]
 
 
 def csv_control(ctx, fk: str) -> bytes:
