@@ -3,11 +3,15 @@
 The same studies as the ``hapsyn`` program (a JSON problem file wiring a mechanism, a scene,
 metrics and a solver, each a plugin), from Python::
 
-    import hapsyn
-    study = hapsyn.load("problems/fivebar-table2-best-gii.json", set=["threads=1"])
-    result = study.run()                      # the solver, as `hapsyn run`
-    result.best_objectives                    # {'GII': 0.459...}
-    study.evaluate(result.best_design)        # one design: {'status': 'feasible', ...}
+    >>> import hapsyn
+    >>> study = hapsyn.load("problems/fivebar-table2-best-gii.json", set=["threads=1"])
+    >>> result = study.run()                  # the solver, as `hapsyn run`
+    >>> result.best_objectives                # doctest: +ELLIPSIS
+    {'gdi': 0.6218..., 'gii': 0.7827...}
+    >>> study.evaluate(result.best_design)["status"]
+    'feasible'
+
+(The example runs in the tests, from the source directory.)
 
 Errors in the input raise :class:`hapsyn.Error` (a ``ValueError``) with exactly the message
 the command-line program prints after ``hapsyn: error:``.
@@ -46,6 +50,11 @@ __all__ = [
 ]
 
 __version__ = _hapsyn.version()
+
+
+def __dir__() -> List[str]:
+    """hapsyn's own names only (not the typing helpers this module imports)."""
+    return sorted(__all__ + ["__version__"])
 
 Error.__doc__ = (
     "Bad input (problem files, overrides, options, designs): a ValueError whose message is "
@@ -337,7 +346,7 @@ class Study:
 
     def run(self, threads: Optional[int] = None, seed: Optional[int] = None,
             progress: Optional[Callable[[str], Any]] = None, out: Optional[_PathLike] = None,
-            force: bool = False, write_samples: Optional[bool] = None) -> Result:
+            force: bool = False, write_samples: Optional[bool] = None, resume: bool = False) -> Result:
         """Runs the study's solver, as ``hapsyn run`` does, and returns its :class:`Result`.
 
         Args:
@@ -349,6 +358,8 @@ class Study:
                 temporary directory, removed after the run.
             force: overwrite a finished study in ``out``.
             write_samples: write samples.csv / maps.csv (default: only when ``out`` is given).
+            resume: continue a stopped run from the checkpoint in ``out`` (as ``hapsyn run
+                --resume``; a stopped run's message says when).
 
         The solver runs on a worker thread with the GIL released. Ctrl-C (KeyboardInterrupt)
         during the run asks the solver to stop: run() returns the best found so far with status
@@ -364,7 +375,9 @@ class Study:
         if write_samples is None:
             write_samples = not temporary
         try:
-            text = self._handle.run(threads, seed, directory, force, write_samples, progress)
+            if resume and temporary:
+                raise Error("python: resume=True needs out= (the directory holding the stopped run's checkpoint)")
+            text = self._handle.run(threads, seed, directory, force, write_samples, progress, resume)
         finally:
             if temporary:
                 _shutil.rmtree(directory, ignore_errors=True)

@@ -63,6 +63,7 @@ class Study:
         out: Optional[_PathLike] = ...,
         force: bool = ...,
         write_samples: Optional[bool] = ...,
+        resume: bool = ...,
     ) -> Result: ...
     def evaluate(
         self,

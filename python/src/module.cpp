@@ -58,7 +58,7 @@ PYBIND11_MODULE(_hapsyn, m) {
       .def("free_from_json", &StudyHandle::free_from_json, py::arg("design_json"),
            "Free design vector from a JSON object of design variables.")
       .def("run", &StudyHandle::run, py::arg("threads"), py::arg("seed"), py::arg("out"), py::arg("force"),
-           py::arg("write_samples"), py::arg("progress"), "Runs the solver; returns result.json's text.")
+           py::arg("write_samples"), py::arg("progress"), py::arg("resume"), "Runs the solver; returns result.json's text.")
       .def("evaluate", &StudyHandle::evaluate, py::arg("designs"), py::arg("threads"),
            "Evaluates rows of free design values.")
       .def("time_evaluate", &StudyHandle::time_evaluate, py::arg("design"), py::arg("repeats"),

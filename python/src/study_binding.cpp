@@ -208,13 +208,14 @@ std::vector<double> StudyHandle::free_from_json(const std::string& design_json) 
 }
 
 std::string StudyHandle::run(std::optional<int> threads, std::optional<std::uint64_t> seed, const std::string& out,
-                             bool force, bool write_samples, const py::object& progress) {
+                             bool force, bool write_samples, const py::object& progress, bool resume) {
   refuse_reentry("run");
   RunOptions options;
   options.output_directory = out;
   options.threads = threads.value_or(0);
   options.seed = seed;
   options.force = force;
+  options.resume = resume;
   options.write_samples = write_samples;
   options.quiet = progress.is_none();
   LineQueue queue;

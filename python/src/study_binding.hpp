@@ -39,7 +39,7 @@ class StudyHandle {
 
   /// Runs the solver on a worker thread (see hapsyn.Study.run). Returns result.json's text.
   std::string run(std::optional<int> threads, std::optional<std::uint64_t> seed, const std::string& out,
-                  bool force, bool write_samples, const pybind11::object& progress);
+                  bool force, bool write_samples, const pybind11::object& progress, bool resume);
 
   /// Evaluates designs: `designs` is free-variable rows (n x dimension). See hapsyn.Study.evaluate.
   pybind11::dict evaluate(const pybind11::array_t<double, pybind11::array::c_style | pybind11::array::forcecast>& designs,

@@ -34,3 +34,24 @@ def test_readme_example_runs_as_written(tmp_path):
             next(printed)
         elif code.startswith("    print(error)"):
             pass
+
+
+def test_module_docstring_example_runs_as_written():
+    # It once promised {'GII': 0.459...} for a study returning gdi 0.62 and gii 0.78.
+    import doctest
+
+    import hapsyn
+    here = os.getcwd()
+    os.chdir(SOURCE_DIR)
+    try:
+        failures, tried = doctest.testmod(hapsyn, optionflags=doctest.ELLIPSIS, verbose=False)
+    finally:
+        os.chdir(here)
+    assert tried >= 5 and failures == 0
+
+
+def test_dir_lists_hapsyns_own_names_only():
+    import hapsyn
+    names = [n for n in dir(hapsyn) if not n.startswith("_")]
+    assert names == sorted(hapsyn.__all__)
+    assert "Optional" not in dir(hapsyn) and "load" in dir(hapsyn)
