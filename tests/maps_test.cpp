@@ -8,6 +8,7 @@
 #include <boost/filesystem.hpp>
 
 #include <cmath>
+#include <fstream>
 #include <sstream>
 
 using hapsyn::Json;
@@ -146,6 +147,65 @@ TEST(Maps, RunStudyWritesMapsAndPlotsWhenAsked) {
     EXPECT_GT(fs::file_size(dir / "map_J_v.png"), 10000u);
   } else {
     EXPECT_TRUE(result.contains("plot_message"));
+  }
+  fs::remove_all(dir);
+}
+
+// Issue 51: the map of a 3-D box or point list drew every position in one x-y plot, its layers
+// overprinted. Each z layer is a panel (highest first); many layers are banded, every position
+// in exactly one band.
+TEST(Maps, ScatteredThreeDimensionalMapsArePlottedPerHeight) {
+  namespace fs = boost::filesystem;
+  const auto maps_with = [](const std::vector<double>& zs) {
+    hapsyn::PositionMaps maps;
+    maps.objectives = {"gii"};
+    for (double z : zs) {
+      for (double x : {0.0, 0.1}) maps.position.emplace_back(x, 0.2, z);
+    }
+    maps.samples.assign(maps.position.size(), 1);
+    maps.lattice_index.assign(maps.position.size(), -1);
+    maps.values = Eigen::MatrixXd::Constant(static_cast<Eigen::Index>(maps.position.size()), 1, 0.5);
+    return maps;
+  };
+  const fs::path dir = fs::temp_directory_path() / fs::unique_path("hapsyn-maps3d-%%%%%%");
+  fs::create_directories(dir);
+  const auto read = [&](const std::string& file) {
+    std::ifstream in((dir / file).string());
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const auto count = [](const std::string& text, const std::string& what) {
+    std::size_t n = 0;
+    for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+    return n;
+  };
+  const auto data_lines = [](const std::string& text) {
+    std::size_t n = 0;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) n += !line.empty() && line[0] != '#';
+    return n;
+  };
+  std::string message;
+  hapsyn::plot_maps(maps_with({-0.04, 0.0, 0.04}), dir.string(), message);
+  std::string script = read("map_gii.gp"), data = read("map_gii.dat");
+  EXPECT_EQ(count(script, "plot 'map_gii.dat' index "), 3u) << script;
+  EXPECT_NE(script.find("set multiplot layout 2,2"), std::string::npos) << script;
+  EXPECT_LT(script.find("set title 'z = 0.04'"), script.find("set title 'z = -0.04'")) << "highest first: " << script;
+  EXPECT_EQ(data_lines(data), 6u) << data;
+
+  std::vector<double> many;
+  for (int k = 0; k < 30; ++k) many.push_back(0.01 * k);
+  hapsyn::plot_maps(maps_with(many), dir.string(), message);
+  script = read("map_gii.gp");
+  data = read("map_gii.dat");
+  EXPECT_EQ(count(script, "plot 'map_gii.dat' index "), 12u) << script;
+  EXPECT_EQ(data_lines(data), 60u) << "every position in exactly one band: " << data;
+
+  hapsyn::plot_maps(maps_with({0.0}), dir.string(), message);  // planar: one plot, no panels
+  script = read("map_gii.gp");
+  EXPECT_EQ(script.find("multiplot"), std::string::npos) << script;
+  EXPECT_EQ(count(script, "plot 'map_gii.dat' index 0"), 1u) << script;
+  if (hapsyn::gnuplot_available()) {
+    EXPECT_TRUE(fs::exists(dir / "map_gii.png"));
   }
   fs::remove_all(dir);
 }

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 #include <tuple>
 
@@ -244,6 +245,88 @@ std::string file_safe(const std::string& name) {
 }
 }  // namespace
 
+namespace {
+
+// The z layers of scattered positions, highest first: each distinct z (a box or a point list
+// in layers) when there are at most kMaxLayerPanels, else kMaxLayerPanels equal bands. One
+// layer (a planar scene) is the whole map.
+constexpr std::size_t kMaxLayerPanels = 12;
+
+struct Layer {
+  double low, high;  // z within [low, high]
+  std::string title;
+};
+
+std::vector<Layer> z_layers(const std::vector<Eigen::Vector3d>& positions) {
+  std::set<double> zs;
+  for (const Eigen::Vector3d& p : positions) zs.insert(p.z());
+  std::vector<Layer> layers;
+  const auto shown = [](double z) {
+    std::ostringstream s;
+    s.precision(4);
+    s << z;
+    return s.str();
+  };
+  if (zs.size() <= kMaxLayerPanels) {
+    for (auto it = zs.rbegin(); it != zs.rend(); ++it) layers.push_back({*it, *it, "z = " + shown(*it)});
+    return layers;
+  }
+  const double lo = *zs.begin(), hi = *zs.rbegin(), width = (hi - lo) / static_cast<double>(kMaxLayerPanels);
+  for (std::size_t k = kMaxLayerPanels; k-- > 0;) {
+    const double a = lo + width * static_cast<double>(k), b = k + 1 == kMaxLayerPanels ? hi : a + width;
+    layers.push_back({a, b, "z in [" + shown(a) + ", " + shown(b) + (k + 1 == kMaxLayerPanels ? "]" : ")")});
+  }
+  return layers;
+}
+
+// map_<objective> of a scene without a lattice: an x-y scatter per z layer (a 3-D box or point
+// list once overprinted its layers in one x-y plot, the z ignored).
+std::string plot_scattered_slices(const PositionMaps& maps, Eigen::Index o, const std::string& directory,
+                                  const std::string& name, double colour_max) {
+  namespace fs = boost::filesystem;
+  const std::string& objective = maps.objectives[static_cast<std::size_t>(o)];
+  const std::vector<Layer> layers = z_layers(maps.position);
+  std::ostringstream data, script;
+  data << "# x y " << objective << ", one block per z layer (highest first; gnuplot index)\n";
+  for (std::size_t l = 0; l < layers.size(); ++l) {
+    const bool last_band = l == 0;  // bands are half-open except the highest
+    data << (l ? "\n\n" : "") << "# " << layers[l].title << "\n";
+    for (std::size_t g = 0; g < maps.position.size(); ++g) {
+      const double z = maps.position[g].z();
+      if (z < layers[l].low || z > layers[l].high || (!last_band && z == layers[l].high && layers[l].low != layers[l].high)) {
+        continue;
+      }
+      const double v = maps.values(static_cast<Eigen::Index>(g), o);
+      data << maps.position[g][0] << " " << maps.position[g][1] << " ";
+      if (std::isfinite(v)) {
+        data << v << "\n";
+      } else {
+        data << "?\n";
+      }
+    }
+  }
+  const std::size_t panels = layers.size();
+  const std::size_t columns = static_cast<std::size_t>(std::ceil(std::sqrt(static_cast<double>(panels))));
+  const std::size_t rows = (panels + columns - 1) / columns;
+  script << "set terminal pngcairo size " << 420 * columns + 120 << "," << 380 * rows + 60 << " font ',10'\n"
+         << "set output '" << name << ".png'\nset datafile missing '?'\nset termoption noenhanced\nset size ratio -1\n"
+         << "set palette rgbformulae 33,13,10\nset cbrange [0:" << colour_max << "]\nset xlabel 'x'\nset ylabel 'y'\n"
+         << "unset key\nset offsets graph 0.05, graph 0.05, graph 0.05, graph 0.05\nset xtics rotate by 45 right\n";
+  if (panels > 1) {
+    script << "set multiplot layout " << rows << "," << columns << " title '" << objective << " per position, by height z'\n";
+  }
+  for (std::size_t l = 0; l < panels; ++l) {
+    script << "set title '" << (panels > 1 ? layers[l].title : objective + " per position") << "'\n"
+           << "plot '" << name << ".dat' index " << l << " using 1:2:3 with points pt 5 ps 0.6 palette\n";
+  }
+  if (panels > 1) script << "unset multiplot\n";
+  write_file_atomically((fs::path(directory) / (name + ".dat")).string(), data.str());
+  write_file_atomically((fs::path(directory) / (name + ".gp")).string(), script.str());
+  return run_gnuplot(directory, name + ".gp");
+}
+
+}  // namespace
+
 std::vector<std::string> plot_maps(const PositionMaps& maps, const std::string& directory, std::string& message) {
   namespace fs = boost::filesystem;
   std::vector<std::string> plotted;
@@ -273,25 +356,7 @@ std::vector<std::string> plot_maps(const PositionMaps& maps, const std::string& 
       why = plot_lattice_slices(directory, name, objective + " per position (positions without human poses blank)",
                                 field, colour_max);
     } else {
-      std::ostringstream data, script;
-      data << "# x y " << objective << "\n";
-      for (std::size_t g = 0; g < maps.position.size(); ++g) {
-        const double v = maps.values(static_cast<Eigen::Index>(g), o);
-        data << maps.position[g][0] << " " << maps.position[g][1] << " ";
-        if (std::isfinite(v)) {
-          data << v << "\n";
-        } else {
-          data << "?\n";
-        }
-      }
-      script << "set terminal pngcairo size 640,560 font ',10'\nset output '" << name << ".png'\n"
-             << "set datafile missing '?'\nset termoption noenhanced\nset size ratio -1\nset palette rgbformulae 33,13,10\n"
-             << "set cbrange [0:" << colour_max << "]\nset xlabel 'x'\nset ylabel 'y'\nunset key\n"
-             << "set title '" << objective << " per position'\n"
-             << "plot '" << name << ".dat' using 1:2:3 with points pt 5 ps 0.6 palette\n";
-      write_file_atomically((fs::path(directory) / (name + ".dat")).string(), data.str());
-      write_file_atomically((fs::path(directory) / (name + ".gp")).string(), script.str());
-      why = run_gnuplot(directory, name + ".gp");
+      why = plot_scattered_slices(maps, o, directory, name, colour_max);
     }
     if (why.empty()) {
       plotted.push_back(name + ".png");

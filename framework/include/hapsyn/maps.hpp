@@ -68,7 +68,7 @@ std::string maps_csv(const PositionMaps& maps);
 
 /// Writes map_<objective>.{dat,gp,png} into `directory` (slices by height above the lattice's
 /// origin, the vertical z of the poses' frame, for lattice scenes;
-/// an x-y scatter otherwise). \return the file names of the plots rendered, and in `message`
+/// otherwise an x-y scatter per z layer, highest first: each distinct z up to 12, else 12 equal bands). \return the file names of the plots rendered, and in `message`
 /// why some were not (gnuplot missing or failing; the data and scripts are written regardless).
 std::vector<std::string> plot_maps(const PositionMaps& maps, const std::string& directory, std::string& message);
 
