@@ -777,6 +777,25 @@ TEST(Cli, ObjectiveNamesThatWouldBreakCsvColumnsAreRefused) {
   }
 }
 
+// Issue 51: `run` of a Pareto study with plots: true wrote only front.csv; it draws the front.
+TEST(Cli, AParetoRunWithPlotsDrawsItsFront) {
+  const fs::path dir = fresh_dir("front-plot");
+  const Output o = hapsyn_cli("run " + problem("fivebar-pareto-nbi.json") + " --quiet --set output.plots=true --out " +
+                              dir.string());
+  ASSERT_EQ(o.code, 0) << o.out;
+  const Json result = read_json(dir / "result.json");
+  EXPECT_EQ(count_lines((dir / "front.dat").string()), static_cast<long>(result["front"].size()) + 1);
+  std::ifstream script_in((dir / "front.gp").string());
+  const std::string script((std::istreambuf_iterator<char>(script_in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(script.find("set xlabel 'gii (maximize)'"), std::string::npos) << script;
+  EXPECT_NE(script.find("set ylabel 'gdi (maximize)'"), std::string::npos) << script;
+  if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
+    EXPECT_EQ(result["files"]["front_plot"], "front.png, front.svg");
+    EXPECT_GT(fs::file_size(dir / "front.png"), 1000u);
+  }
+  fs::remove_all(dir);
+}
+
 TEST(Cli, PathsTheFileSystemRefusesAreClearErrors) {
   const fs::path dir = fresh_dir("paths");
   fs::create_directories(dir);

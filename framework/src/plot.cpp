@@ -167,4 +167,46 @@ std::string plot_lattice_slices(const std::string& directory, const std::string&
   return run_gnuplot(directory, name + ".gp");
 }
 
+std::string plot_front(const std::string& directory, const std::vector<std::string>& objectives,
+                       const std::vector<std::string>& senses, const std::vector<std::vector<double>>& points) {
+  const std::size_t m = objectives.size();
+  if (m < 2) return "";
+  std::ostringstream data;
+  data.precision(12);
+  data << "#";
+  for (const std::string& o : objectives) data << " " << o;
+  data << "\n";
+  for (const std::vector<double>& p : points) {
+    for (std::size_t k = 0; k < m; ++k) data << (k ? " " : "") << p[k];
+    data << "\n";
+  }
+  // Pairs of objectives drawn: the one plane of two, else the three planes of the first three.
+  std::vector<std::pair<std::size_t, std::size_t>> pairs = {{0, 1}};
+  if (m >= 3) pairs = {{0, 1}, {0, 2}, {1, 2}};
+  const auto label = [&](std::size_t k) {
+    std::string text = objectives[k] + (k < senses.size() ? " (" + senses[k] + ")" : "");
+    std::string quoted;
+    for (char c : text) quoted += c == '\'' ? std::string("''") : std::string(1, c);
+    return "'" + quoted + "'";
+  };
+  std::ostringstream body;
+  body << "set grid\nunset key\nset termoption noenhanced\n";
+  if (pairs.size() > 1) body << "set multiplot layout 1," << pairs.size() << " title 'Pareto front: " << points.size() << " points'\n";
+  for (const auto& [a, b] : pairs) {
+    body << "set xlabel " << label(a) << "\nset ylabel " << label(b) << "\n"
+         << (pairs.size() > 1 ? "set title ''\n" : "set title 'Pareto front: " + std::to_string(points.size()) + " points'\n")
+         << "plot 'front.dat' using " << a + 1 << ":" << b + 1 << " with points pt 7 ps 0.8 lc rgb '#1f5fa8'\n";
+  }
+  if (pairs.size() > 1) body << "unset multiplot\n";
+  const std::string size = pairs.size() > 1 ? "1500,520" : "760,600";
+  std::ostringstream script;
+  for (const char* ext : {"png", "svg"}) {
+    script << "set terminal " << (std::string(ext) == "png" ? "pngcairo" : "svg") << " size " << size << " font ',11'\n"
+           << "set output 'front." << ext << "'\n" << body.str();
+  }
+  write_file_atomically((boost::filesystem::path(directory) / "front.dat").string(), data.str());
+  write_file_atomically((boost::filesystem::path(directory) / "front.gp").string(), script.str());
+  return run_gnuplot(directory, "front.gp");
+}
+
 }  // namespace hapsyn

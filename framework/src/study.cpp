@@ -48,7 +48,7 @@ const char* const kProblemSchema = R"json({
         "directory": {"type": "string", "description": "Output directory (default results/<name>)"},
         "samples_csv": {"type": "boolean", "description": "Write samples.csv for the best design", "default": true},
         "maps": {"type": "boolean", "description": "Write maps.csv: every objective per workspace position for the best design", "default": true},
-        "plots": {"type": "boolean", "description": "Render the position maps with gnuplot (map_<objective>.png), and timeline.png for scenes of recorded motion", "default": false},
+        "plots": {"type": "boolean", "description": "Render the position maps with gnuplot (map_<objective>.png: slices by height for 3-D scenes), timeline.png for scenes of recorded motion, and front.png/.svg for a Pareto front", "default": false},
         "groups": {"type": "boolean", "description": "For scenes that group their samples (subject, activity, trajectory): every objective per group with the mean and standard deviation across groups, in result.json and groups.csv", "default": true},
         "timeline": {"type": "string", "description": "With plots: the trajectory drawn in timeline.png (every objective on each sample along time); default the scene's first trajectory"}}},
     "indicators": {"type": "object", "description": "Front-quality indicators written into result.json", "properties": {

@@ -3,6 +3,7 @@
 #include <hapsyn/json_text.hpp>
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/error.hpp>
+#include <hapsyn/plot.hpp>
 #include <hapsyn/groups.hpp>
 #include <hapsyn/maps.hpp>
 #include <hapsyn/output_files.hpp>
@@ -239,7 +240,7 @@ void remove_previous_outputs(const std::string& out_dir) {
   std::vector<fs::path> stale;
   for (fs::directory_iterator it(out_dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string name = it->path().filename().string();
-    const bool output = name == "samples.csv" || name == "maps.csv" || name == "groups.csv" || name == "front.csv" ||
+    const bool output = name == "samples.csv" || name == "maps.csv" || name == "groups.csv" || name.rfind("front.", 0) == 0 ||
                         name.rfind("map_", 0) == 0 || name.rfind("timeline.", 0) == 0;
     boost::system::error_code ignored;
     if (name.rfind(".staging-", 0) == 0 || (output && fs::is_regular_file(it->symlink_status(ignored)))) {
@@ -541,6 +542,24 @@ void name_output_directory_in_plot_message(const std::string& staging, const std
   doc["plot_message"] = message;
 }
 
+// front.png/.svg of a Pareto study with plots: true (its first two or three objectives).
+void plot_front_of(const Study& study, const SolverResult& result, const std::string& dir, Json& doc) {
+  std::vector<std::string> names, senses;
+  for (const Objective& o : study.problem->objectives()) {
+    names.push_back(o.name);
+    senses.push_back(o.sense == Sense::kMinimize ? "minimize" : "maximize");
+  }
+  std::vector<std::vector<double>> points;
+  for (const SolutionPoint& p : result.front) points.emplace_back(p.objectives.begin(), p.objectives.end());
+  const std::string why = plot_front(dir, names, senses, points);
+  if (names.size() < 2) return;
+  if (why.empty()) {
+    doc["files"]["front_plot"] = "front.png, front.svg";
+  } else {
+    doc["plot_message"] = why;
+  }
+}
+
 // Every output of a finished solve, staged then committed. A failure after result.json is
 // staged keeps the solve: result.json is committed with "output_errors" and the error thrown after.
 void write_outputs(const Study& study, const SolverResult& result, const RunOptions& options, const RunSetup& run,
@@ -561,6 +580,7 @@ void write_outputs(const Study& study, const SolverResult& result, const RunOpti
     if (!result.front.empty()) {
       write_file_atomically((fs::path(staged.dir()) / "front.csv").string(), front_csv(*study.problem, result.front));
       doc["files"]["front"] = "front.csv";
+      if (study.resolved["output"].value("plots", false)) plot_front_of(study, result, staged.dir(), doc);
     }
     write_best_design_files(study, result, options, staged.dir(), note, doc);
   } catch (const std::exception& e) {

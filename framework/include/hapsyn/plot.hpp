@@ -48,4 +48,12 @@ LatticeSlicing lattice_slicing(const Eigen::Matrix3d& lattice_to_plot);
 std::string plot_lattice_slices(const std::string& directory, const std::string& name, const std::string& title,
                                 const LatticeField& field, double colour_max);
 
+/// A Pareto front as `front.{dat,gp,png,svg}` in `directory`: the points in the plane of two
+/// objectives, or one panel per pair of the first three, each axis named by its objective and
+/// its sense ("gii (maximize)"). `points`: one row of objective values per front point.
+/// \return run_gnuplot's message (empty on success); "" without writing for fewer than two
+/// objectives. \throws Error("output") when a file cannot be written.
+std::string plot_front(const std::string& directory, const std::vector<std::string>& objectives,
+                       const std::vector<std::string>& senses, const std::vector<std::vector<double>>& points);
+
 }  // namespace hapsyn
