@@ -31,12 +31,20 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // SQP seed and polish: the shared min-max SQP (plugins/solvers/shared) on the study's score.
+// `phase` ("seed", "polish") heads its progress lines, at the study's progress interval.
 SqpOutcome run_sqp(const Problem& problem, const std::vector<double>& x, const std::vector<double>& lower,
-                   const std::vector<double>& upper, const CullingOptions& options, double xtol) {
+                   const std::vector<double>& upper, const CullingOptions& options, double xtol,
+                   const SolverContext& context, const char* phase) {
   SqpSettings settings;
   settings.xtol = xtol;
   settings.ftol = options.sqp_ftol;
   settings.max_evaluations = options.sqp_max_evaluations;
+  settings.report_interval = options.progress_interval;
+  if (context.progress) {
+    settings.report = [&context, phase](const std::string& line) {
+      *context.progress << "culling: SQP " << phase << ", " << line << "\n" << std::flush;
+    };
+  }
   return run_minmax_sqp(problem, x, lower, upper, settings, score_goal(problem));
 }
 
@@ -261,7 +269,7 @@ Seed seed_reference(const Problem& problem, const Grid& grid, const Bounds& boun
   if (!start.empty() && !context.stop_requested()) {
     std::vector<double> continuous = start;
     if (!bounds.any_integer) {
-      const SqpOutcome sqp = run_sqp(problem, start, bounds.lower, bounds.upper, options, options.seed_xtol);
+      const SqpOutcome sqp = run_sqp(problem, start, bounds.lower, bounds.upper, options, options.seed_xtol, context, "seed");
       seed.designs += sqp.evaluations;
       seed.samples += sqp.samples;
       seed.statistics["sqp"] = {{"status", sqp.status}, {"evaluations", sqp.evaluations}, {"score", sqp.merit},
@@ -698,7 +706,7 @@ Json sweep_statistics(const Grid& grid, const SweepCounts& sum, const Reference&
 // Replaces `point` (the grid optimum x) by the polished design when that is better; returns
 // the polish statistics.
 Json polish_cell(const Problem& problem, const std::vector<double>& x, const CullingOptions& options,
-                 Problem::EvalScratch& ws, SolutionPoint& point, SolverResult& result) {
+                 Problem::EvalScratch& ws, SolutionPoint& point, SolverResult& result, const SolverContext& context) {
   const DesignSpace& space = problem.design_space();
   const std::size_t n = x.size();
   std::vector<double> lo(n), hi(n);
@@ -707,7 +715,7 @@ Json polish_cell(const Problem& problem, const std::vector<double>& x, const Cul
     lo[k] = std::max(c.lower, x[k] - c.step);
     hi[k] = std::min(c.upper, x[k] + c.step);
   }
-  const SqpOutcome sqp = run_sqp(problem, x, lo, hi, options, options.sqp_xtol);
+  const SqpOutcome sqp = run_sqp(problem, x, lo, hi, options, options.sqp_xtol, context, "polish");
   result.design_evaluations += sqp.evaluations;
   result.sample_evaluations += sqp.samples;
   Json polish = {{"status", sqp.status}, {"evaluations", sqp.evaluations}, {"rounds", sqp.rounds},
@@ -1013,7 +1021,7 @@ SolverResult CullingSolver::solve(const Problem& problem, const SolverContext& c
     result.message = stopped_message(grid, reference, context, stopped, best.str());
     return result;
   }
-  if (options_.polish && !bounds.any_integer) stats["polish"] = polish_cell(problem, x, options_, *ws, point, result);
+  if (options_.polish && !bounds.any_integer) stats["polish"] = polish_cell(problem, x, options_, *ws, point, result, context);
   result.best = point;
   stats["seconds"] = seconds_before + seconds_since(t_start);
   result.statistics = stats;

@@ -107,6 +107,31 @@ TEST(Culling, PolishingKeepsTheCellAndNeverLosesValue) {
   EXPECT_TRUE(result.statistics["polish"].contains("status"));
 }
 
+// Issue 51: culling's SQP seed and polish printed nothing for minutes at a time; they report at
+// the progress interval like the sweep, each line naming its phase and stage.
+TEST(Culling, SeedAndPolishReportProgressAtTheInterval) {
+  const hapsyn::Study study = hapsyn::load_study(hapsyn::test::fivebar_study("culling"), hapsyn::test::registry());
+  Json options = culling_options(true, true);
+  options["progress_interval"] = 1e-9;  // every evaluation
+  const hapsyn::plugins::CullingSolver culling(hapsyn::make_options<hapsyn::plugins::CullingOptions>(options));
+  std::ostringstream progress;
+  hapsyn::SolverContext context;
+  context.threads = 2;
+  context.progress = &progress;
+  ASSERT_TRUE(culling.solve(*study.problem, context).best);
+  const std::string text = progress.str();
+  EXPECT_NE(text.find("culling: SQP seed, plain stage: 2 evaluations"), std::string::npos) << text;
+  EXPECT_NE(text.find("culling: SQP polish, plain stage: "), std::string::npos) << text;
+  EXPECT_NE(text.find(", best score 0."), std::string::npos) << text;
+  // At the default interval a quick study's SQP says nothing.
+  std::ostringstream quiet;
+  context.progress = &quiet;
+  options["progress_interval"] = 1e9;
+  ASSERT_TRUE(hapsyn::plugins::CullingSolver(hapsyn::make_options<hapsyn::plugins::CullingOptions>(options))
+                  .solve(*study.problem, context).best);
+  EXPECT_EQ(quiet.str().find("SQP"), std::string::npos) << quiet.str();
+}
+
 // The seed only needs a grid cell near the optimum: its SLSQP stops at seed_xtol, while the
 // polish keeps sqp_xtol, so a loose seed changes neither the grid optimum nor the polished one.
 TEST(Culling, SeedStopsAtItsOwnToleranceAndThePolishAtSqpXtol) {

@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <sstream>
+#include <iomanip>
 #include <set>
 
 namespace hapsyn::plugins {
@@ -14,6 +16,24 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Progress lines of a run at most every settings.report_interval seconds (SqpSettings::report).
+struct Reporter {
+  const SqpSettings* settings = nullptr;
+  Clock::time_point start = Clock::now(), last = Clock::now();
+
+  void tick(const char* stage, long long evaluations, double best) {
+    if (!settings || !settings->report) return;
+    const auto now = Clock::now();
+    if (std::chrono::duration<double>(now - last).count() < settings->report_interval) return;
+    last = now;
+    std::ostringstream line;
+    line << stage << ": " << evaluations << " evaluations";
+    if (best > -kInf) line << ", best score " << std::setprecision(6) << best;
+    line << " (" << std::fixed << std::setprecision(1) << std::chrono::duration<double>(now - start).count() << " s)";
+    settings->report(line.str());
+  }
+};
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
@@ -100,6 +120,8 @@ struct Epigraph {
   // a stop (round-off, budget) may violate them.
   std::vector<double> best_y;
   double best_objective = -kInf;
+  Reporter* reporter = nullptr;
+  double best_merit = -kInf;  // of the fully evaluated candidates so far (for reports)
 
   std::size_t zsize() const { return locals.size(); }
 
@@ -119,6 +141,7 @@ struct Epigraph {
     const Evaluation& e = problem->evaluate(p, *eval_scratch, o);
     ++evaluations;
     samples += e.samples_evaluated;
+    if (reporter) reporter->tick("epigraph stage", evaluations, best_merit);
     return e.status == EvalStatus::kFeasible;
   }
 };
@@ -338,7 +361,9 @@ SqpOutcome run_epigraph(const Problem& problem, std::vector<double> x, const std
                         const std::vector<double>& upper, const SqpSettings& settings, const MinMaxGoal& goal) {
   const auto t0 = Clock::now();
   auto eval_scratch = problem.make_eval_scratch();
+  Reporter reporter{&settings};
   Epigraph g;
+  g.reporter = &reporter;
   g.problem = &problem;
   g.goal = &goal;
   g.eval_scratch = eval_scratch.get();
@@ -358,6 +383,7 @@ SqpOutcome run_epigraph(const Problem& problem, std::vector<double> x, const std
   }
   out.x = x;
   out.merit = goal.merit(start);
+  g.best_merit = out.merit;
   std::set<int> active;
   for (int s : near_critical(problem, g.locals, x.data(), *eval_scratch, 0.02, 8, out.samples)) active.insert(s);
   std::vector<double> current = x;
@@ -371,7 +397,9 @@ SqpOutcome run_epigraph(const Problem& problem, std::vector<double> x, const std
     out.status = run_epigraph_slsqp(g, goal, settings, y);
     ++out.rounds;
     bool grew = false;
-    if (!adopt_best_candidate(g, goal, y, *eval_scratch, active, current, grew, out)) break;
+    const bool adopted = adopt_best_candidate(g, goal, y, *eval_scratch, active, current, grew, out);
+    g.best_merit = out.merit;
+    if (!adopted) break;
     if (!grew) break;  // the full workspace agrees with the active set: converged
     for (int s : near_critical(problem, g.locals, current.data(), *eval_scratch, 0.02, 8, out.samples)) active.insert(s);
   }
@@ -393,11 +421,13 @@ struct PlainRun {
   double lowest_feasible = 0.0;
   std::vector<double> best_x;
   double best_merit = -kInf;
+  Reporter* reporter = nullptr;
 
   double merit(const double* x) {
     const Evaluation& e = problem->evaluate(x, *eval_scratch);
     ++evaluations;
     samples += e.samples_evaluated;
+    if (reporter) reporter->tick("plain stage", evaluations, best_merit);
     if (e.status != EvalStatus::kFeasible) return lowest_feasible - 1.0;
     const double m = goal->merit(e);
     lowest_feasible = std::min(lowest_feasible, m);
@@ -433,7 +463,9 @@ SqpOutcome run_plain(const Problem& problem, std::vector<double> x, const std::v
                      const std::vector<double>& upper, const SqpSettings& settings, const MinMaxGoal& goal) {
   const auto t0 = Clock::now();
   auto eval_scratch = problem.make_eval_scratch();
+  Reporter reporter{&settings};
   PlainRun run;
+  run.reporter = &reporter;
   run.problem = &problem;
   run.goal = &goal;
   run.eval_scratch = eval_scratch.get();

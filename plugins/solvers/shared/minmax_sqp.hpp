@@ -48,6 +48,11 @@ struct SqpSettings {
   bool plain = true;                    ///< run the plain stage first
   bool epigraph = true;                 ///< run the epigraph stage (worst-case problems only)
   bool design_constraints = false;      ///< pass the mechanism's design constraints to SLSQP
+  /// Optional progress: called at most every `report_interval` seconds with a line such as
+  /// "plain stage: 120 evaluations, best score 0.781 (12.3 s)" (an SQP over a large workspace
+  /// may run for minutes).
+  std::function<void(const std::string&)> report;
+  double report_interval = 2.0;         ///< seconds between report lines
 };
 
 /// What the run maximizes. `objective`/`constraint` see the epigraph variables; `merit` judges a
