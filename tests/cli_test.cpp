@@ -647,6 +647,27 @@ TEST(Cli, AParetoRunWritesItsFrontAsCsv) {
   fs::remove_all(out);
 }
 
+// Issue 51: front.csv of a URDF study listed all 42 file parameters before the 2 freed ones;
+// it lists the free components, and result.json the fixed ones once.
+TEST(Cli, FrontCsvListsTheFreeComponentsAndResultJsonTheFixedOnesOnce) {
+  const fs::path out = fresh_dir("front-fixed");
+  const Output o = hapsyn_cli("run " + problem("fivebar-pareto-weighted-sum.json") + " --quiet --out " + out.string() +
+                              " --set solver.options.count=3 --set 'design.l0={\"value\": 0.0}' --set design.l1.step=0.05"
+                              " --set design.l2.step=0.05 --set design.r.step=0.05 --set design.l1.lower=0.05"
+                              " --set design.l2.lower=0.05 --set indicators={}");
+  ASSERT_EQ(o.code, 0) << o.out;
+  const Json result = read_json(out / "result.json");
+  std::ifstream csv((out / "front.csv").string());
+  std::string header, row;
+  std::getline(csv, header);
+  EXPECT_EQ(header, "design.l1,design.l2,design.r,gii,gdi");
+  std::getline(csv, row);
+  EXPECT_EQ(std::count(row.begin(), row.end(), ','), 4) << row;
+  EXPECT_EQ(result["design_fixed"], (Json{{"l0", 0.0}}));
+  EXPECT_EQ(result["front"][0]["design"]["l0"], 0.0);  // each point keeps its whole design
+  fs::remove_all(out);
+}
+
 TEST(Cli, SeedsMustBeWholeNumbers) {
   for (const std::string& command : {"run " + quick_study() + " --seed", "sweep " + quick_study() + " --vary threads=1 --seed",
                                      "compare " + problem("fivebar-gii-coarse.json") + " --seed"}) {

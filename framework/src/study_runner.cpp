@@ -379,19 +379,35 @@ void write_best_design_files(const Study& study, const SolverResult& result, con
 }
 
 // front.csv: one row per front point, the design components (design.<name>), then the objectives.
+// The free components only: the fixed ones are the same in every row (a URDF study has dozens,
+// once listed before the two that vary); result.json's "design_fixed" holds them once.
 std::string front_csv(const Problem& problem, const std::vector<SolutionPoint>& front) {
   std::ostringstream csv;
   csv.precision(12);
   const std::vector<DesignComponent>& components = problem.design_space().components();
-  for (std::size_t c = 0; c < components.size(); ++c) csv << (c ? "," : "") << "design." << components[c].name;
-  for (const Objective& o : problem.objectives()) csv << "," << o.name;
+  const std::vector<int>& free = problem.design_space().free_indices();
+  for (std::size_t k = 0; k < free.size(); ++k) {
+    csv << (k ? "," : "") << "design." << components[static_cast<std::size_t>(free[k])].name;
+  }
+  for (std::size_t o = 0; o < problem.objectives().size(); ++o) {
+    csv << (o || !free.empty() ? "," : "") << problem.objectives()[o].name;
+  }
   csv << "\n";
   for (const SolutionPoint& p : front) {
-    for (Eigen::Index c = 0; c < p.design.size(); ++c) csv << (c ? "," : "") << p.design[c];
-    for (double v : p.objectives) csv << "," << v;
+    for (std::size_t k = 0; k < free.size(); ++k) csv << (k ? "," : "") << p.design[free[k]];
+    for (std::size_t o = 0; o < p.objectives.size(); ++o) csv << (o || !free.empty() ? "," : "") << p.objectives[o];
     csv << "\n";
   }
   return csv.str();
+}
+
+// The fixed design components, once: {name: value}.
+Json fixed_design(const Problem& problem) {
+  Json fixed = Json::object();
+  for (const DesignComponent& c : problem.design_space().components()) {
+    if (c.fixed) fixed[c.name] = c.lower;
+  }
+  return fixed;
 }
 
 std::string format_value(double v) {
@@ -580,6 +596,7 @@ void write_outputs(const Study& study, const SolverResult& result, const RunOpti
     if (!result.front.empty()) {
       write_file_atomically((fs::path(staged.dir()) / "front.csv").string(), front_csv(*study.problem, result.front));
       doc["files"]["front"] = "front.csv";
+      doc["design_fixed"] = fixed_design(*study.problem);
       if (study.resolved["output"].value("plots", false)) plot_front_of(study, result, staged.dir(), doc);
     }
     write_best_design_files(study, result, options, staged.dir(), note, doc);
