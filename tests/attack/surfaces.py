@@ -48,6 +48,17 @@ def generators(attack_module) -> dict:
 # ------------------------------------------------------------------------------------------------
 # Shared helpers.
 
+def generated(cls: str, seed: int, n: int, fixed: list, random_kinds: list, run, cause) -> list:
+    """The cases of a class: the fixed kinds first, then kinds drawn from (seed, class)."""
+    rng = random.Random(f"{seed}:{cls}")
+    cases = []
+    for i in range(n):
+        kind = fixed[i] if i < len(fixed) else rng.choice(random_kinds)
+        cases.append(A.Case(cls, i, kind, cause(kind), run, {"rng": f"{seed}:{cls}:{i}"}))
+    return cases
+
+
+
 def write_problem(sb, doc: dict, name="problem.json") -> Path:
     f = sb.cwd / name
     f.write_text(json.dumps(doc, indent=1))
@@ -364,12 +375,7 @@ def case_urdf(ctx, case, sb):
 
 
 def gen_urdf(seed: int, n: int) -> list:
-    rng = random.Random(f"{seed}:urdf")
-    cases = []
-    for i in range(n):
-        kind = URDF_FIXED[i] if i < len(URDF_FIXED) else rng.choice(URDF_RANDOM)
-        cases.append(A.Case("urdf", i, kind, URDF_CAUSE.get(kind, f"urdf: {kind}"), case_urdf, {"rng": f"{seed}:urdf:{i}"}))
-    return cases
+    return generated("urdf", seed, n, URDF_FIXED, URDF_RANDOM, case_urdf, lambda k: URDF_CAUSE.get(k, f"urdf: {k}"))
 
 
 # ------------------------------------------------------------------------------------------------
@@ -491,13 +497,8 @@ def case_dh(ctx, case, sb):
 
 
 def gen_dh(seed: int, n: int) -> list:
-    rng = random.Random(f"{seed}:dh")
-    cases = []
-    for i in range(n):
-        kind = DH_FIXED[i] if i < len(DH_FIXED) else rng.choice(DH_RANDOM)
-        cause = "dh: deep JSON nesting (stack overflow)" if kind.startswith("deep") else f"dh: {kind}"
-        cases.append(A.Case("dh", i, kind, cause, case_dh, {"rng": f"{seed}:dh:{i}"}))
-    return cases
+    return generated("dh", seed, n, DH_FIXED, DH_RANDOM, case_dh,
+                     lambda k: "dh: deep JSON nesting (stack overflow)" if k.startswith("deep") else f"dh: {k}")
 
 
 # ------------------------------------------------------------------------------------------------
@@ -699,13 +700,8 @@ def case_csv(ctx, case, sb):
 
 
 def gen_csv(seed: int, n: int) -> list:
-    rng = random.Random(f"{seed}:csv")
-    cases = []
-    for i in range(n):
-        kind = CSV_FIXED[i] if i < len(CSV_FIXED) else rng.choice(CSV_RANDOM)
-        scene = "point_list" if kind.startswith("pl") else "motion"
-        cases.append(A.Case("csv", i, kind, f"{scene}: {kind.split('-', 1)[1]}", case_csv, {"rng": f"{seed}:csv:{i}"}))
-    return cases
+    return generated("csv", seed, n, CSV_FIXED, CSV_RANDOM, case_csv,
+                     lambda k: ("point_list" if k.startswith("pl") else "motion") + ": " + k.split("-", 1)[1])
 
 
 # ------------------------------------------------------------------------------------------------
@@ -826,12 +822,7 @@ def case_bvh(ctx, case, sb):
 
 
 def gen_bvh(seed: int, n: int) -> list:
-    rng = random.Random(f"{seed}:bvh")
-    cases = []
-    for i in range(n):
-        kind = BVH_FIXED[i] if i < len(BVH_FIXED) else rng.choice(BVH_RANDOM)
-        cases.append(A.Case("bvh", i, kind, f"bvh: {kind}", case_bvh, {"rng": f"{seed}:bvh:{i}"}))
-    return cases
+    return generated("bvh", seed, n, BVH_FIXED, BVH_RANDOM, case_bvh, lambda k: f"bvh: {k}")
 
 
 # ------------------------------------------------------------------------------------------------
