@@ -1131,7 +1131,7 @@ def tamper(rng: random.Random, kind: str, dirs: list, other) -> tuple:
         cp = d / "checkpoint.json"
         doc = json.loads(cp.read_text())
         key = rng.choice(["fingerprint", "solver", "state", "seed", "version"])
-        v = rng.choice([1, [], {}, None, "x"])
+        v = rng.choice([x for x in [1, [], {}, None, "x"] if x != doc.get(key)])  # a change, never the value itself
         doc[key] = v
         cp.write_text(json.dumps(doc))
         return dirs, [], f"{d.name}: checkpoint.json {key} = {json.dumps(v)}", "refuse"

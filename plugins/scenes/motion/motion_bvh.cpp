@@ -11,6 +11,7 @@
 #include <array>
 #include <cctype>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -61,11 +62,13 @@ void tokenize(const std::string& text, std::vector<std::string>& tokens) {
   }
 }
 
-// The whole token must be the number (strtod alone accepts "1.5abc" as 1.5) and finite.
+// The whole token must be the number (strtod alone accepts "1.5abc" as 1.5) and finite: a decimal
+// number as BVH writers print them ("-12.5", "1e-3", "+0.5"). std::from_chars, unlike strtod,
+// takes neither hexadecimal floats ("0x1p3") nor the locale's decimal separator.
 bool finite_number(const char* begin, const char* end, double& value) {
-  char* stop = nullptr;
-  value = std::strtod(begin, &stop);
-  return stop == end && std::isfinite(value);
+  if (begin != end && *begin == '+' && begin + 1 != end && begin[1] != '-') ++begin;
+  const auto [stop, error] = std::from_chars(begin, end, value);
+  return error == std::errc() && stop == end && std::isfinite(value);
 }
 
 

@@ -574,6 +574,9 @@ TEST(MotionBvh, RefusesBadFrames) {
                                                               "be a finite number"));
   EXPECT_THAT(bvh_error(dir, skeleton() + motion + good + "0 0 0 0 0 0 0 0 0 0 0 0 0 1e400 0 0 0\n"),
               HasSubstr(": value 14 (RightHand Yrotation) = \"1e400\""));
+  // strtod read hexadecimal floats; no BVH writer prints them (found by the bvh attack class).
+  EXPECT_THAT(bvh_error(dir, skeleton() + motion + good + "0 0 0 0 0 0 0 0 0 0 0 0 0 0x1p3 0 0 0\n"),
+              HasSubstr(": value 14 (RightHand Yrotation) = \"0x1p3\": every value must be a finite number"));
   EXPECT_THAT(bvh_error(dir, skeleton() + "MOTION\nFrames: 2\nFrame Time: 0\n" + good + good),
               HasSubstr(f + ":" + std::to_string(kSkeletonLines + 3) + ": Frame Time: \"0\": must be a finite number > 0"));
   EXPECT_THAT(bvh_error(dir, skeleton() + "MOTION\nFrames: 1\nFrame Time: 0.01\n" + good),
