@@ -92,6 +92,19 @@ def reference(ctx, key: str, make):
     return ctx.once(key, wrapped)
 
 
+def run_checked(ctx, sb, prob: Path, out: Path, expect: str, checks: list, extra=()):
+    """`hapsyn run` of prob into out, single-threaded: its outcome and the output directory's
+    consistency appended to checks. Returns the run."""
+    r = A.run(ctx, sb, ["run", str(prob), "--threads", "1", "--out", str(out), "--quiet"] + list(extra))
+    c, d = A.classify(r, "accept" if expect == "same" else expect)
+    checks.append((c, ("run: " + d) if d else ""))
+    if r.rc is not None and r.rc >= 0 and not r.timed_out:
+        probs = A.out_dir_problems(out, True)
+        if probs:
+            checks.append(("mixed", "; ".join(probs)))
+    return r
+
+
 def validate_and_run(ctx, sb, prob: Path, expect: str, mode: str, extra=()):
     """Runs `hapsyn validate` and (mode "both") `hapsyn run --threads 1 --out out`: the checks and
     the last Res. expect: refuse / accept / any."""
@@ -101,13 +114,8 @@ def validate_and_run(ctx, sb, prob: Path, expect: str, mode: str, extra=()):
     checks.append((c, ("validate: " + d) if d else ""))
     out = sb.cwd / "out"
     if mode == "both" and not r.timed_out and (r.rc is None or r.rc >= 0):
-        r = A.run(ctx, sb, ["run", str(prob), "--threads", "1", "--out", str(out), "--quiet"] + list(extra))
-        c, d = A.classify(r, "accept" if expect == "same" else expect)
-        checks.append((c, ("run: " + d) if d else ""))
+        r = run_checked(ctx, sb, prob, out, expect, checks, extra)
         if r.rc is not None and r.rc >= 0 and not r.timed_out:
-            probs = A.out_dir_problems(out, True)
-            if probs:
-                checks.append(("mixed", "; ".join(probs)))
             if r.rc == 0 and A.result_of(out) is None:
                 checks.append(("wrong", "exit 0 without a readable result.json"))
     return checks, r, out
@@ -686,13 +694,7 @@ def case_csv(ctx, case, sb):
     if fk == "pl" and not huge and not r.timed_out and (r.rc is None or r.rc >= 0):
         prob = write_problem(sb, pl_run_doc(f))
         out = sb.cwd / "out"
-        r = A.run(ctx, sb, ["run", str(prob), "--threads", "1", "--out", str(out), "--quiet"])
-        c, d = A.classify(r, "accept" if expect == "same" else expect)
-        checks.append((c, ("run: " + d) if d else ""))
-        if r.rc is not None and r.rc >= 0 and not r.timed_out:
-            probs = A.out_dir_problems(out, True)
-            if probs:
-                checks.append(("mixed", "; ".join(probs)))
+        run_checked(ctx, sb, prob, out, expect, checks)
     cat, det = A.worst(*checks)
     if checks[0][0] != "ok" or (len(checks) > 1 and checks[1][0] != "ok" and checks[1][1].startswith("the ")):
         r = r_scene  # the failure is the scene step's: show its command
