@@ -23,6 +23,7 @@
 #include <hapsyn/sweep.hpp>
 
 #include "ranks.hpp"
+#include "reference.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -278,10 +279,15 @@ int describe(const std::string& name, bool json, const std::string& options, con
 int list_plugins(const hapsyn::Registry& registry) {
   std::vector<std::string> errors;
   const auto records = registry.list(&errors);
-  std::cout << std::left << std::setw(16) << "NAME" << std::setw(11) << "KIND" << std::setw(10) << "VERSION" << "FILE\n";
+  // The name column fits the longest name (motion_feasibility ran into KIND at a fixed width).
+  std::size_t width = 4;
+  for (const auto& r : records) width = std::max(width, r.name.size());
+  const int name_width = static_cast<int>(width) + 2;
+  std::cout << std::left << std::setw(name_width) << "NAME" << std::setw(11) << "KIND" << std::setw(10) << "VERSION"
+            << "FILE\n";
   for (const auto& r : records) {
-    std::cout << std::left << std::setw(16) << r.name << std::setw(11) << r.kind << std::setw(10) << r.version << r.file
-              << "\n";
+    std::cout << std::left << std::setw(name_width) << r.name << std::setw(11) << r.kind << std::setw(10) << r.version
+              << r.file << "\n";
   }
   if (records.empty()) {
     std::cout << "(no plugins found; search path:";
@@ -412,6 +418,7 @@ struct Commands {
   CLI::App* sweep = nullptr;
   CLI::App* compare = nullptr;
   CLI::App* merge = nullptr;
+  CLI::App* reference = nullptr;
 };
 
 // --seed: a whole number that fits 64 bits. Checked on the text, before CLI11 converts it: a
@@ -442,7 +449,8 @@ void define_study_commands(CLI::App& app, Arguments& a, Commands& c) {
                     "task: --shard $((SLURM_ARRAY_TASK_ID+1))/$SLURM_ARRAY_TASK_COUNT); combine with hapsyn merge");
   c.run->add_option("--rank-timeout", a.rank_timeout,
                     "Under mpirun: seconds a rank may stay silent inside a task farm before the job ends naming it")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
 
   c.merge = app.add_subcommand("merge", "Combine the shares of a --shard run (one output directory each) into one result");
   c.merge->add_option("dirs", a.merge_dirs, "The shares' output directories")->required();
@@ -479,6 +487,14 @@ void define_study_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.scene->add_option("--attribute", a.scene_attributes, "Request a per-sample attribute (e.g. M_v, M_a); repeatable");
 }
 
+// `hapsyn reference`: the JSON the documentation's reference pages are generated from
+// (scripts/gen-reference.py). In no help group: it serves the docs build.
+void define_reference_command(CLI::App& app, Commands& c) {
+  c.reference = app.add_subcommand("reference", "Print the CLI, the problem schema, result.json's fields and every "
+                                                "plugin's declarations as JSON (for the docs' reference pages)");
+  c.reference->group("");
+}
+
 void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.sweep = app.add_subcommand("sweep",
                                "Run a study across values of some keys; error against a reference run versus time");
@@ -488,9 +504,10 @@ void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.sweep->add_option("--reference", a.reference,
                       "path=value overrides of the reference run (repeatable; default: the last combination)");
   c.sweep->add_option("--set", a.sets, "Override a key in every run: path=value");
-  c.sweep->add_option("--out", a.sweep_out, "Output directory (sweep.csv, sweep.json, sweep.png/svg, one folder per run)");
+  c.sweep->add_option("--out", a.sweep_out, "Output directory (sweep.csv, sweep.json, sweep.png/svg, one folder per run)")
+      ->capture_default_str();
   c.sweep->add_option("--threads", a.threads, "Worker threads per run (default: all cores)")->check(CLI::NonNegativeNumber);
-  c.sweep->add_option("--seed", a.sweep_seed, "Random seed of every run")->check(kSeed);
+  c.sweep->add_option("--seed", a.sweep_seed, "Random seed of every run")->check(kSeed)->capture_default_str();
   c.sweep->add_flag("--progress", a.sweep_progress, "Show each run's progress");
   c.sweep->add_flag("--force", a.force,
                     "Run every case again (default: a folder's finished result of the same problem and seed is reused)");
@@ -499,13 +516,15 @@ void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
                       "combine the shares with hapsyn merge");
   c.sweep->add_option("--rank-timeout", a.rank_timeout,
                       "Under mpirun: seconds a rank may stay silent inside the farm of runs before the job ends naming it")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
 
   c.compare = app.add_subcommand(
       "compare", "Run several studies on this machine: one table (front quality, evaluations, time) and plots");
   c.compare->add_option("files", a.compare.files, "Problem files (JSON), run in this order")->required();
   c.compare->add_option("--set", a.compare.overrides, "Override a key in every study: path=value");
-  c.compare->add_option("--out", a.compare.output_directory, "Output directory (one folder per study)");
+  c.compare->add_option("--out", a.compare.output_directory, "Output directory (one folder per study)")
+      ->capture_default_str();
   c.compare->add_option("--threads", a.compare.threads, "Worker threads per study")->check(CLI::NonNegativeNumber);
   c.compare->add_option("--seed", a.seed, "Random seed of every study")->check(kSeed);
   c.compare->add_flag("--force", a.compare.force,
@@ -516,7 +535,8 @@ void define_batch_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.compare->add_option("--rank-timeout", a.rank_timeout,
                         "Under mpirun: seconds a rank may stay silent inside the farm of studies before the job ends "
                         "naming it")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
 }
 
 // The processes of this run (see ranks.hpp); kept for main()'s error report.
@@ -678,6 +698,10 @@ int dispatch(const Commands& c, Arguments& a, const hapsyn::Registry& registry) 
   if (*c.validate) return validate_command(a, registry);
   if (*c.plugins) return list_plugins(registry);
   if (*c.describe) return describe(a.plugin_name, a.describe_json, a.describe_options, registry);
+  if (*c.reference) {
+    std::cout << hapsyn_cli::reference_document(*c.reference->get_parent(), registry).dump(2) << "\n";
+    return 0;
+  }
   if (*c.sweep) return sweep_command(a, registry);
   if (*c.compare) {
     // As sweep_command: the studies shared out over mpirun's ranks, or this --shard's share.
@@ -713,6 +737,7 @@ int main(int argc, char** argv) {
   Commands commands;
   define_study_commands(app, arguments, commands);
   define_batch_commands(app, arguments, commands);
+  define_reference_command(app, commands);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

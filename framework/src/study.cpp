@@ -5,6 +5,7 @@
 #include <hapsyn/error.hpp>
 #include "sample_checks.hpp"
 #include <hapsyn/problem_file.hpp>
+#include <hapsyn/reference.hpp>
 #include <hapsyn/schema.hpp>
 #include <hapsyn/study.hpp>
 
@@ -54,6 +55,7 @@ const char* const kProblemSchema = R"json({
     "indicators": {"type": "object", "description": "Front-quality indicators written into result.json", "properties": {
         "reference_front": {"type": "string", "description": "result.json of a study whose front is the reference (IGD, GD, domination gaps)"},
         "reference_point": {"type": "array", "items": {"type": "number"}, "description": "Hypervolume reference point, one value per objective (natural units), worse than every front point"}}},
+    "design": {"type": "object", "description": "The mechanism's design variables by name (hapsyn describe MECHANISM lists them), each an object with \"lower\" and \"upper\" (bounds of the search, within the variable's hard limits), \"step\" (grid spacing for grid solvers) or \"value\" (fixes it); a vector variable takes lists. A variable not named keeps its declared default bounds. Checked against the mechanism's declarations, not by this schema"},
     "seed": {"type": "integer", "minimum": 0, "maximum": 18446744073709551615, "description": "Random seed, an unsigned 64-bit integer (default: drawn and recorded)"},
     "threads": {"type": "integer", "minimum": 0, "maximum": 1024, "description": "Worker threads (0 = all cores)"}
   },
@@ -311,13 +313,19 @@ void load_indicators(Json& resolved, const Problem& problem, Study& study) {
 
 }  // namespace
 
+// Parsed once: every load validates against the same document.
+const Json& problem_file_schema() {
+  static const Json schema = Json::parse(kProblemSchema);
+  return schema;
+}
+
 Study load_study(const Json& input, const Registry& registry, const std::vector<InProcessMetric>& in_process,
                  const LoadSettings& settings) {
   if (!input.is_object()) throw Error("problem", "the problem must be a JSON object");
   check_json_text_rules(input);
   Json without_design = input;
   without_design.erase("design");
-  Json resolved = validate_and_fill(Json::parse(kProblemSchema), without_design, "");
+  Json resolved = validate_and_fill(problem_file_schema(), without_design, "");
   const Json design = input.contains("design") ? input.at("design") : Json::object();
   if (!design.is_object()) {
     throw Error("problem", "design = " + render_value(design) + ": must be an object of design variables");

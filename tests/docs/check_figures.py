@@ -60,6 +60,8 @@ GUIDE = ["the guide"]
 
 
 def read_quoting(name: str) -> str:
+    if name == "the design notes":  # docs/design.md and its pages, one per section
+        return "\n".join(p.read_text() for p in [SOURCE / "docs" / "design.md"] + sorted((SOURCE / "docs" / "design").glob("*.md")))
     if name != "the guide":
         return (SOURCE / name).read_text()
     pages = [SOURCE / "README.md"] + sorted(p for p in (SOURCE / "docs").glob("*.md") if p.name != "design.md")
@@ -79,7 +81,7 @@ def main():
         for problem, label in (("haptic6r-motion-validation.json", "`haptic6r-evaluate.json`"),
                                ("haptic6r-motion-validation-ga.json", "the GA's choice")):
             row = shares_row(label, run(args.hapsyn, problem, scratch))
-            quotes.append((problem, row, GUIDE + ["docs/design.md"]))
+            quotes.append((problem, row, GUIDE + ["the design notes"]))
         quick = run(args.hapsyn, "haptic6r-ga-quick.json", scratch)
         quotes.append(("haptic6r-ga-quick.json", ga_line(quick), GUIDE))
         if args.slow:
