@@ -196,6 +196,50 @@ TEST(Cli, DescribeListsTheDesignVariablesOfGivenOptions) {
   EXPECT_NE(bad.out.find("options.base_link = \"\": a URDF chain needs base_link and tip_link"), std::string::npos) << bad.out;
 }
 
+// Issue 51: a wrong tip_link gave a 3x4 Jacobian with a zero column, unnoticed. The run header,
+// result.json and describe now say which joints the chain has, from base to tip.
+TEST(Cli, RunHeaderListsAChainsMovingJoints) {
+  const fs::path dir = fresh_dir("chain-header");
+  const Output o = hapsyn_cli("run " + problem("phantom3r-gii-box.json") + " --set solver.plugin=evaluate --set 'design={}' --out " +
+                              (dir / "whole").string());
+  ASSERT_EQ(o.code, 0) << o.out;
+  const std::string joints = "3 moving joints world -> stylus_tip: yaw_joint (revolute), shoulder_joint (revolute), "
+                             "elbow_joint (revolute); task position; IK selection closest_to_home";
+  EXPECT_NE(o.out.find("mechanism serial_chain: " + joints), std::string::npos) << o.out;
+  EXPECT_EQ(read_json(dir / "whole" / "result.json")["mechanism_summary"], joints);
+  // A tip two links short: a 2-joint chain cannot serve a 3-row position task, and the refusal
+  // points at the links rather than at the task it already has.
+  const Output short_tip = hapsyn_cli("run " + problem("phantom3r-gii-box.json") +
+                                      " --set solver.plugin=evaluate --set 'design={}' --set mechanism.options.tip_link=upper_arm "
+                                      "--out " + (dir / "short").string());
+  EXPECT_EQ(short_tip.code, 1) << short_tip.out;
+  EXPECT_NE(short_tip.out.find("options.task = \"position\": matches 3 task rows, but the chain has only 2 joints (a "
+                               "non-redundant task needs at least as many joints as rows; check base_link and tip_link: "
+                               "the chain between them has 2 moving joints)"),
+            std::string::npos)
+      << short_tip.out;
+  // A 6R read one link short for a position task: the header shows the joints it got.
+  const Output forearm = hapsyn_cli(
+      "describe serial_chain --options '{\"urdf\": \"serial_chain/ur5_like.urdf\", \"base_link\": \"base_link\", "
+      "\"tip_link\": \"forearm_link\", \"task\": \"position\"}'");
+  EXPECT_NE(forearm.out.find("built: 3 moving joints base_link -> forearm_link: shoulder_pan_joint (revolute), "
+                             "shoulder_lift_joint (revolute), elbow_joint (revolute); task position"),
+            std::string::npos)
+      << forearm.out;
+  const Output described = hapsyn_cli(
+      "describe serial_chain --options '{\"urdf\": \"serial_chain/ur5_like.urdf\", \"base_link\": \"base_link\", "
+      "\"tip_link\": \"tool0\"}'");
+  EXPECT_NE(described.out.find("built: 6 moving joints base_link -> tool0: shoulder_pan_joint (revolute), "
+                               "shoulder_lift_joint (revolute), elbow_joint (revolute), wrist_1_joint (revolute), "
+                               "wrist_2_joint (revolute), wrist_3_joint (revolute); task pose"),
+            std::string::npos)
+      << described.out;
+  // The five-bar has nothing to add: no line.
+  const Output fivebar = hapsyn_cli("run " + problem("fivebar-table2-best-gii.json") + " --out " + (dir / "fb").string());
+  EXPECT_EQ(fivebar.out.find("mechanism fivebar"), std::string::npos) << fivebar.out;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, UnwritableOutputDirectoryIsRefusedBeforeAnyWork) {
   const Output o = hapsyn_cli("run " + problem("fivebar-table2-best-gii.json") + " --out /proc/hapsyn-cannot-write");
   EXPECT_EQ(o.code, 1);

@@ -113,6 +113,13 @@ std::string format_number(double v) {
   return s.str();
 }
 
+// A duration as the console shows it: three significant digits (result.json keeps every digit).
+std::string format_seconds(double v) {
+  std::ostringstream s;
+  s << std::setprecision(3) << v;
+  return s.str();
+}
+
 // A design value as the console shows it: ten significant digits, so that a grid value reads
 // 0.29 and not 0.29000000000000004 (result.json and the CSVs keep every digit).
 std::string format_design_value(const Json& v) {
@@ -132,6 +139,10 @@ void print_summary(const Json& result, std::ostream& out) {
   out << "hapsyn " << result["hapsyn"]["version"].get<std::string>() << " | " << problem["name"].get<std::string>()
       << " | solver " << problem["solver"]["plugin"].get<std::string>() << ", " << result["threads"] << " threads, seed "
       << result["seed"] << "\n";
+  if (result.contains("mechanism_summary")) {
+    out << "mechanism " << problem["mechanism"]["plugin"].get<std::string>() << ": "
+        << result["mechanism_summary"].get<std::string>() << "\n";
+  }
   out << "status: " << result["status"].get<std::string>();
   if (!result["message"].get<std::string>().empty()) out << " (" << result["message"].get<std::string>() << ")";
   out << "\n";
@@ -173,11 +184,12 @@ void print_summary(const Json& result, std::ostream& out) {
   // Objectives per subject, activity, ... (scenes of recorded motion).
   if (result.contains("groups")) out << "per group of samples (best design):\n" << hapsyn::groups_text(result["groups"]);
   out << "evaluations: " << result["evaluations"]["designs"] << " designs, " << result["evaluations"]["samples"]
-      << " sample solves; wall time " << format_number(result["wall_time_s"].get<double>()) << " s";
+      << " sample solves; wall time " << format_seconds(result["wall_time_s"].get<double>()) << " s";
   if (result.contains("phases")) {
     const Json& p = result["phases"];
-    out << " (scene " << format_number(p["scene_s"].get<double>()) << " s, solve " << format_number(p["solve_s"].get<double>())
-        << " s, outputs " << format_number(p["outputs_s"].get<double>()) << " s)";
+    out << " (scene " << format_seconds(p["scene_s"].get<double>()) << " s, solve "
+        << format_seconds(p["solve_s"].get<double>()) << " s, outputs " << format_seconds(p["outputs_s"].get<double>())
+        << " s)";
   }
   out << "\n";
   for (const Json& w : result.value("warnings", Json::array())) out << "warning: " << w.get<std::string>() << "\n";
@@ -236,6 +248,7 @@ void describe_design(const std::string& name, const std::string& options, const 
               << "); list them with: hapsyn describe " << name << " --options '{...}'\n";
     return;
   }
+  if (const std::string summary = mechanism->summary(); !summary.empty()) std::cout << "built: " << summary << "\n";
   std::cout << "design variables (default bounds; hard limits):\n";
   for (const hapsyn::VariableDecl& v : mechanism->variables()) {
     auto list = [](const std::vector<double>& x) {

@@ -2,6 +2,7 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/json.hpp>
 
+#include <boost/dll/runtime_symbol_info.hpp>
 #include <boost/filesystem.hpp>
 
 #include <mutex>
@@ -28,12 +29,14 @@ bool usable(const fs::path& p, bool directory_too) {
 }
 
 // Where a relative path is looked for, in order: the problem file's folder (when loading one),
-// the current directory, the source tree's share/ (serves the build tree), the installed copy.
+// the current directory, share/hapsyn beside this library's lib/ (an install moved elsewhere, a
+// pip-installed wheel), the source tree's share/ (serves the build tree), the installed copy.
 std::vector<fs::path> candidates_for(const fs::path& p) {
   std::vector<fs::path> candidates;
   const std::string problem = problem_directory();
   if (!problem.empty()) candidates.push_back(fs::path(problem) / p);
   candidates.push_back(fs::current_path() / p);
+  candidates.push_back(boost::dll::this_line_location().parent_path().parent_path() / "share" / "hapsyn" / p);
   candidates.push_back(fs::path(HAPSYN_SHARE_DIR) / p);
   candidates.push_back(fs::path(HAPSYN_INSTALL_SHARE_DIR) / p);
   return candidates;

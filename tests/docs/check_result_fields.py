@@ -130,6 +130,7 @@ def main() -> int:
                 "--set", "solver.options.count=4"),
             "ga": run(args.hapsyn, source, work, "fivebar-gii-ga-coarse.json", "ga", "--set", plots),
             "grouped motion": run(args.hapsyn, source, work, "haptic6r-motion-validation.json", "motion"),
+            "serial chain": run(args.hapsyn, source, work, "phantom3r-gii-box.json", "chain"),
         }
         docs["nsga2 against a reference"] = run(
             args.hapsyn, source, work, "fivebar-pareto-nsga2.json", "nsga2", "--set", plots,

@@ -9,6 +9,7 @@
 #include <hapsyn/scene.hpp>
 
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace hapsyn {
@@ -137,6 +138,11 @@ class Mechanism {
                              MechanismScratch& scratch, QuantityBlock& out) const {
     return false;
   }
+  /// Optional: one line saying what the options made of this mechanism (e.g. a chain's moving
+  /// joints from base to tip, and its task), shown in the run header, in result.json
+  /// ("mechanism_summary") and by `hapsyn describe NAME --options`, so that a wrong reading of a
+  /// file is seen before a study runs. Default: "" (nothing shown).
+  virtual std::string summary() const { return {}; }
   /// Per-thread scratch for MechanismModel::solve (called once per worker thread).
   virtual std::unique_ptr<MechanismScratch> make_scratch() const {
     return std::make_unique<MechanismScratch>();

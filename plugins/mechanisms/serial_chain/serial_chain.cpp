@@ -136,9 +136,14 @@ std::shared_ptr<SerialChainSetup> make_setup(const SerialChainOptions& o) {
   check_codes(o.actuator_gear, n, 6, "actuator_gear");
   s->task = task_of(o);
   if (n < s->task.rows()) {
+    // "position" needs the fewest rows: suggest it only when it would fit.
+    const std::string hint = o.task != "position" && n >= 3
+                                 ? "try task \"position\""
+                                 : "check base_link and tip_link: the chain between them has " + std::to_string(n) +
+                                       " moving joint" + (n == 1 ? "" : "s");
     throw Error(kName, "options.task = \"" + o.task + "\": matches " + std::to_string(s->task.rows()) +
                            " task rows, but the chain has only " + std::to_string(n) +
-                           " joints (a non-redundant task needs at least as many joints as rows; try task \"position\")");
+                           " joints (a non-redundant task needs at least as many joints as rows; " + hint + ")");
   }
   s->ik.position_tolerance = o.ik.position_tolerance;
   s->ik.orientation_tolerance = o.ik.orientation_tolerance;
@@ -242,6 +247,21 @@ Needs SerialChain::provides() const {
     if (!(j.max_velocity > 0.0) || !(j.max_effort > 0.0)) return n;
   }
   return n | kNeedActuatorLimits;
+}
+
+// The joints as read from the file at its own values: a wrong tip_link (a chain one joint short,
+// a Jacobian with a zero column) shows here, in the run header, before any result does.
+std::string SerialChain::summary() const {
+  Chain nominal;
+  setup_->chain_template.instantiate(nominal_values(setup_->chain_template).data(), nullptr, nominal);
+  const SerialChainOptions& o = setup_->options;
+  std::string joints;
+  for (const ChainJoint& j : nominal.joints) {
+    joints += (joints.empty() ? "" : ", ") + j.name + (j.type == ChainJointType::kPrismatic ? " (prismatic)" : " (revolute)");
+  }
+  const std::string path = o.urdf.empty() ? "from " + o.dh_file : o.base_link + " -> " + o.tip_link;
+  return std::to_string(nominal.joints.size()) + " moving joint" + (nominal.joints.size() == 1 ? "" : "s") + " " +
+         path + ": " + joints + "; task " + o.task + "; IK selection " + o.ik.selection;
 }
 
 }  // namespace hapsyn::plugins

@@ -139,6 +139,8 @@ class SerialChain final : public Mechanism {
   /// torque; actuator limits when a table is given or the file gives every joint's velocity and
   /// effort limits.
   Needs provides() const override;
+  /// "N moving joints base -> tip: name (revolute), ...; task T; IK selection S".
+  std::string summary() const override;
 
   const SerialChainSetup& setup() const { return *setup_; }
 
