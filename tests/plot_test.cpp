@@ -7,8 +7,10 @@
 #include <boost/filesystem.hpp>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -129,3 +131,112 @@ TEST(Plot, TiltedLatticeIsCutAlongItsAxisNearestTheVertical) {
 }
 
 }  // namespace
+
+namespace {
+
+std::string read_text(const fs::path& file) {
+  std::ifstream in(file.string(), std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// Every figure helper leaves `<name>.png` (a PNG) and `<name>.svg` (an SVG) side by side.
+void expect_png_and_svg(const fs::path& dir, const std::string& name) {
+  const std::string png = read_text(dir / (name + ".png")), svg = read_text(dir / (name + ".svg"));
+  EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << name;
+  EXPECT_NE(svg.find("<svg"), std::string::npos) << name;
+}
+
+hapsyn::ConvergenceFigure two_panel_figure() {
+  hapsyn::ConvergenceFigure figure;
+  figure.title = "convergence of run_1";
+  figure.panels = {"best_score", "hypervolume"};
+  figure.curves.push_back({"run_1", 0, 0, false, {10, 20, 30}, {0.1, std::nan(""), 0.3}});
+  figure.curves.push_back({"", 1, 1, true, {10, 20, 30}, {1, 2, 3}});
+  return figure;
+}
+
+}  // namespace
+
+TEST(Plot, NamesWithUnderscoresArePrintedAsWritten) {
+  EXPECT_EQ(hapsyn::gnuplot_quote("it's a_b"), "'it''s a_b'");
+  const std::string script = hapsyn::figure_script("map_J_x", "J_x per position", hapsyn::FigureStyle{}, "plot x\n");
+  EXPECT_NE(script.find("set terminal pngcairo noenhanced"), std::string::npos) << script;
+  EXPECT_NE(script.find("set terminal svg noenhanced"), std::string::npos) << script;
+  EXPECT_NE(script.find("set termoption noenhanced"), std::string::npos) << script;
+  EXPECT_NE(script.find("set output 'map_J_x.'.format"), std::string::npos) << script;
+  EXPECT_NE(script.find("unset key"), std::string::npos) << "one series, no key: " << script;
+  hapsyn::FigureStyle keyed;
+  keyed.key = true;
+  EXPECT_NE(hapsyn::figure_script("f", "f", keyed, "").find("set key outside right top"), std::string::npos);
+}
+
+TEST(Plot, EveryFigureHasAnSvgTwin) {
+  const fs::path dir = fresh_dir("twins");
+  const std::vector<std::string> messages = {
+      hapsyn::plot_lattice_slices(dir.string(), "lattice_slices", "height_above", coordinate_field(upright(), 2), 1.0),
+      hapsyn::plot_front(dir.string(), {"g_ii", "g_di"}, {"maximize", "minimize"}, {{0.1, 0.2}, {0.2, 0.3}}),
+      hapsyn::plot_convergence(dir.string(), two_panel_figure())};
+  const std::string convergence = read_text(dir / "convergence.gp");
+  EXPECT_NE(convergence.find("title 'run_1'"), std::string::npos) << convergence;
+  EXPECT_NE(convergence.find("set ylabel 'best_score'"), std::string::npos) << convergence;
+  EXPECT_NE(convergence.find("set key outside right top"), std::string::npos) << convergence;
+  EXPECT_NE(read_text(dir / "front.gp").find("set xlabel 'g_ii (maximize)'"), std::string::npos);
+  EXPECT_NE(read_text(dir / "lattice_slices.gp").find("set termoption noenhanced"), std::string::npos);
+  if (!hapsyn::gnuplot_available()) GTEST_SKIP() << "gnuplot is not installed";
+  for (const std::string& m : messages) EXPECT_EQ(m, "");
+  std::size_t pngs = 0;
+  for (const fs::directory_entry& f : fs::directory_iterator(dir)) {
+    if (f.path().extension() != ".png") continue;
+    ++pngs;
+    expect_png_and_svg(dir, f.path().stem().string());
+  }
+  EXPECT_EQ(pngs, 3u);
+  fs::remove_all(dir);
+}
+
+TEST(Plot, HistoryKeepsEveryKthGenerationAndTheLatest) {
+  hapsyn::ConvergenceHistory history(100);
+  for (int g = 0; g <= 4999; ++g) history.add(g, {{"best", g * 0.5}, {"ideal", {{"a_b", -g}}}});
+  const hapsyn::Json& h = history.json();
+  const long long stride = h["stride"];
+  EXPECT_GT(stride, 1);
+  EXPECT_LE(history.size(), 101u);
+  EXPECT_GE(history.size(), 50u);
+  EXPECT_EQ(h["generation"].back(), 4999);
+  EXPECT_EQ(h["ideal"]["a_b"].size(), history.size());
+  for (std::size_t i = 0; i < history.size(); ++i) {
+    const long long g = h["generation"][i];
+    if (i + 1 < history.size()) {
+      EXPECT_EQ(g % stride, 0) << g;
+    }
+    EXPECT_EQ(h["best"][i], g * 0.5);
+    EXPECT_EQ(h["ideal"]["a_b"][i], -g);
+  }
+}
+
+TEST(Plot, HistoryContinuedFromItsJsonKeepsWhatAnUninterruptedOneKeeps) {
+  hapsyn::ConvergenceHistory whole(64), first(64);
+  for (int g = 0; g < 1000; ++g) whole.add(g, {{"v", g}});
+  for (int g = 0; g < 437; ++g) first.add(g, {{"v", g}});
+  hapsyn::ConvergenceHistory resumed = hapsyn::ConvergenceHistory::from_json(first.json(), 64);
+  for (int g = 437; g < 1000; ++g) resumed.add(g, {{"v", g}});
+  EXPECT_EQ(resumed.json(), whole.json());
+  hapsyn::ConvergenceHistory again = resumed;
+  again.add(999, {{"v", -1}});  // a second entry of the last generation (a final ranking)
+  const hapsyn::Json& g = again.json()["generation"];
+  ASSERT_GE(g.size(), 2u);
+  EXPECT_EQ(g[g.size() - 2], 999);
+  EXPECT_EQ(g.back(), 999);
+  EXPECT_EQ(again.json()["v"].back(), -1);
+  EXPECT_THROW(again.add(998, {{"v", 0}}), std::invalid_argument);
+  EXPECT_THROW(again.add(1000, {{"w", 0}}), std::invalid_argument);
+  hapsyn::Json bad = whole.json();
+  bad["v"].erase(0);
+  EXPECT_THROW(hapsyn::ConvergenceHistory::from_json(bad), std::invalid_argument);
+  bad = whole.json();
+  bad["stride"] = 0;
+  EXPECT_THROW(hapsyn::ConvergenceHistory::from_json(bad), std::invalid_argument);
+  bad = whole.json();
+  std::swap(bad["generation"][0], bad["generation"][1]);
+  EXPECT_THROW(hapsyn::ConvergenceHistory::from_json(bad), std::invalid_argument);
+}

@@ -4,6 +4,7 @@
 #include "test_support.hpp"
 
 #include <hapsyn/maps.hpp>
+#include <hapsyn/plot.hpp>
 #include <hapsyn/study_runner.hpp>
 
 #include <boost/filesystem.hpp>
@@ -167,4 +168,47 @@ TEST(RunOutputs, AnOutputDirectoryThatIsNotUtf8IsRefused) {
             0u);
   EXPECT_NE(error_of([&] { hapsyn::check_output_directory(out, hapsyn::RunOptions()); }).find("invalid UTF-8"),
             std::string::npos);
+}
+
+// Every figure a run with plots: true writes (the map of a grid study's best design, the front
+// of a two-objective one) is a PNG with an SVG of the same name beside it, drawn with names as
+// written.
+TEST(RunOutputs, EveryPngFigureHasAnSvgTwin) {
+  for (const bool pareto : {false, true}) {
+    Json doc = hapsyn::test::fivebar_study("grid");
+    doc["objectives"] = Json::parse(R"([{"metric": "gii", "name": "g_ii"}, {"metric": "gdi", "name": "g_di"}])");
+    if (pareto) {
+      doc["solver"]["options"] = {{"pareto", true}};
+    } else {
+      doc["objectives"].erase(1);
+    }
+    hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+    study.resolved["output"]["plots"] = true;
+    const fs::path dir = fresh_dir(pareto ? "svg-twins-front" : "svg-twins-map");
+    hapsyn::RunOptions options;
+    options.output_directory = dir.string();
+    options.quiet = true;
+    (void)hapsyn::run_study(study, options);
+    std::size_t scripts = 0;
+    for (const fs::directory_entry& f : fs::directory_iterator(dir)) {
+      if (f.path().extension() != ".gp") continue;
+      ++scripts;
+      std::ifstream in(f.path().string());
+      const std::string script((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      EXPECT_NE(script.find("noenhanced"), std::string::npos) << f.path();
+    }
+    EXPECT_TRUE(fs::exists(dir / (pareto ? "front.gp" : "map_g_ii.gp")));
+    if (!hapsyn::gnuplot_available()) GTEST_SKIP() << "gnuplot is not installed";
+    std::size_t pngs = 0;
+    for (const fs::directory_entry& f : fs::directory_iterator(dir)) {
+      if (f.path().extension() != ".png") continue;
+      ++pngs;
+      fs::path svg = f.path();
+      svg.replace_extension(".svg");
+      ASSERT_TRUE(fs::exists(svg)) << f.path();
+      EXPECT_GT(fs::file_size(svg), 1000u) << svg;
+    }
+    EXPECT_EQ(pngs, scripts) << "a picture per script";
+    fs::remove_all(dir);
+  }
 }

@@ -60,20 +60,19 @@ std::string points_csv(const Json& result, const std::vector<std::string>& names
   return csv.str();
 }
 
-std::string gnuplot_quote(const std::string& s) {
-  std::string out;
-  for (char c : s) out += c == '\'' ? std::string("''") : std::string(1, c);
-  return "'" + out + "'";
-}
-
 // Fronts overlaid (two objectives): the reference front as a line, each Pareto study's points,
 // each single-design study as a large star (Unal's Figures 3 and 7).
 std::string plot_fronts(const fs::path& out, const std::vector<Json>& results, const Json& rows) {
   const std::vector<std::string> names = objective_names(results.front());
   if (names.size() != 2) return "fronts plot: only for two objectives";
+  // Objectives carry no unit of their own: each axis names its objective and sense.
+  const auto axis = [&](std::size_t k) {
+    const Json& o = results.front()["problem"]["objectives"][k];
+    return gnuplot_quote(names[k] + (o.contains("sense") ? " (" + o["sense"].get<std::string>() + ")" : ""));
+  };
   std::ostringstream script;
-  script << "set datafile separator ','\nset grid\nset key outside right top\n"
-         << "set xlabel " << gnuplot_quote(names[0]) << "\nset ylabel " << gnuplot_quote(names[1]) << "\n";
+  script << "set datafile separator ','\nset grid\nset title 'Pareto fronts compared'\n"
+         << "set xlabel " << axis(0) << "\nset ylabel " << axis(1) << "\n";
   std::string reference_file;
   for (const Json& r : results) {
     const Json& section = r["problem"].contains("indicators") ? r["problem"]["indicators"] : Json::object();
@@ -110,12 +109,12 @@ std::string plot_fronts(const fs::path& out, const std::vector<Json>& results, c
     first = false;
     if (!single && !dense) ++style;
   }
-  for (const char* term : {"pngcairo noenhanced size 1000,650", "svg noenhanced size 1000,650"}) {
-    const std::string ext = std::string(term).rfind("svg", 0) == 0 ? "svg" : "png";
-    script << "set terminal " << term << "\nset output 'fronts." << ext << "'\n" << plot.str() << "\n";
-  }
-  std::ofstream(out / "fronts.gp") << script.str();
-  return run_gnuplot(out.string(), "fronts.gp");
+  script << plot.str() << "\n";
+  FigureStyle figure;
+  figure.width = 1000;
+  figure.height = 650;
+  figure.key = true;
+  return render_figure(out.string(), "fronts", "Pareto fronts compared", figure, script.str());
 }
 
 // Local values over the workspace for a study with one design (its samples.csv): one heat map
@@ -132,21 +131,22 @@ std::string plot_samples(const fs::path& dir) {
     if (columns[i].find('.') != std::string::npos) locals.push_back(i);
   }
   if (columns.size() < 3 || locals.empty()) return "samples.csv has no local values";
+  // The scenes' x, y, z are positions in metres; other coordinates are named as they are.
+  const auto axis = [](const std::string& c) { return gnuplot_quote(c == "x" || c == "y" || c == "z" ? c + " [m]" : c); };
+  const std::string title = "local values of the design over the workspace (samples.csv)";
   std::ostringstream script;
-  script << "set datafile separator ','\nset size ratio -1\nset palette rgbformulae 33,13,10\nunset key\n"
-         << "set xlabel " << gnuplot_quote(columns[1]) << "\nset ylabel " << gnuplot_quote(columns[2]) << "\n";
-  for (const char* term : {"pngcairo noenhanced size 1200,420", "svg noenhanced size 1200,420"}) {
-    const std::string ext = std::string(term).rfind("svg", 0) == 0 ? "svg" : "png";
-    script << "set terminal " << term << "\nset output 'local_values." << ext << "'\n"
-           << "set multiplot layout 1," << locals.size() << "\n";
-    for (std::size_t k : locals) {
-      script << "set title " << gnuplot_quote(columns[k]) << "\n"
-             << "plot 'samples.csv' every ::1 using 2:3:" << (k + 1) << " with points pt 5 ps 0.6 palette\n";
-    }
-    script << "unset multiplot\n";
+  script << "set datafile separator ','\nset size ratio -1\nset palette rgbformulae 33,13,10\n"
+         << "set xlabel " << axis(columns[1]) << "\nset ylabel " << axis(columns[2]) << "\n"
+         << "set multiplot layout 1," << locals.size() << " title " << gnuplot_quote(title) << "\n";
+  for (std::size_t k : locals) {
+    script << "set title " << gnuplot_quote(columns[k]) << "\n"
+           << "plot 'samples.csv' every ::1 using 2:3:" << (k + 1) << " with points pt 5 ps 0.6 palette\n";
   }
-  std::ofstream((dir / "local_values.gp").string()) << script.str();
-  return run_gnuplot(dir.string(), "local_values.gp");
+  script << "unset multiplot\n";
+  FigureStyle style;
+  style.width = 1200;
+  style.height = 420;
+  return render_figure(dir.string(), "local_values", title, style, script.str());
 }
 
 std::string cell(const Json& v, int precision = 4) {

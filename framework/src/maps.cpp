@@ -308,21 +308,23 @@ std::string plot_scattered_slices(const PositionMaps& maps, Eigen::Index o, cons
   const std::size_t panels = layers.size();
   const std::size_t columns = static_cast<std::size_t>(std::ceil(std::sqrt(static_cast<double>(panels))));
   const std::size_t rows = (panels + columns - 1) / columns;
-  script << "set terminal pngcairo size " << 420 * columns + 120 << "," << 380 * rows + 60 << " font ',10'\n"
-         << "set output '" << name << ".png'\nset datafile missing '?'\nset termoption noenhanced\nset size ratio -1\n"
-         << "set palette rgbformulae 33,13,10\nset cbrange [0:" << colour_max << "]\nset xlabel 'x'\nset ylabel 'y'\n"
-         << "unset key\nset offsets graph 0.05, graph 0.05, graph 0.05, graph 0.05\nset xtics rotate by 45 right\n";
-  if (panels > 1) {
-    script << "set multiplot layout " << rows << "," << columns << " title '" << objective << " per position, by height z'\n";
-  }
+  const std::string title = objective + (panels > 1 ? " per position, by height z" : " per position");
+  script << "set datafile missing '?'\nset size ratio -1\n"
+         << "set palette rgbformulae 33,13,10\nset cbrange [0:" << colour_max << "]\n"
+         << "set xlabel 'x [m]'\nset ylabel 'y [m]'\nset cblabel " << gnuplot_quote(objective) << "\n"
+         << "set offsets graph 0.05, graph 0.05, graph 0.05, graph 0.05\nset xtics rotate by 45 right\n";
+  if (panels > 1) script << "set multiplot layout " << rows << "," << columns << " title " << gnuplot_quote(title) << "\n";
   for (std::size_t l = 0; l < panels; ++l) {
-    script << "set title '" << (panels > 1 ? layers[l].title : objective + " per position") << "'\n"
-           << "plot '" << name << ".dat' index " << l << " using 1:2:3 with points pt 5 ps 0.6 palette\n";
+    script << "set title " << gnuplot_quote(panels > 1 ? layers[l].title : title) << "\n"
+           << "plot " << gnuplot_quote(name + ".dat") << " index " << l << " using 1:2:3 with points pt 5 ps 0.6 palette\n";
   }
   if (panels > 1) script << "unset multiplot\n";
   write_file_atomically((fs::path(directory) / (name + ".dat")).string(), data.str());
-  write_file_atomically((fs::path(directory) / (name + ".gp")).string(), script.str());
-  return run_gnuplot(directory, name + ".gp");
+  FigureStyle style;
+  style.width = static_cast<int>(420 * columns + 120);
+  style.height = static_cast<int>(380 * rows + 60);
+  style.font_size = 10;
+  return render_figure(directory, name, title, style, script.str());
 }
 
 }  // namespace
@@ -353,6 +355,7 @@ std::vector<std::string> plot_maps(const PositionMaps& maps, const std::string& 
         const std::size_t index = static_cast<std::size_t>(maps.lattice_index[g]);
         if (index < field.values.size()) field.values[index] = maps.values(static_cast<Eigen::Index>(g), o);
       }
+      field.value_label = objective;
       why = plot_lattice_slices(directory, name, objective + " per position (positions without human poses blank)",
                                 field, colour_max);
     } else {

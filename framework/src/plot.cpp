@@ -4,10 +4,12 @@
 
 #include <boost/filesystem.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <cstdlib>
 #include <sstream>
+#include <stdexcept>
 
 namespace hapsyn {
 
@@ -19,6 +21,42 @@ std::string run_gnuplot(const std::string& directory, const std::string& script)
   const int status = std::system(command.c_str());
   if (status != 0) return "gnuplot failed on " + directory + "/" + script + " (status " + std::to_string(status) + ")";
   return "";
+}
+
+std::string gnuplot_quote(const std::string& text) {
+  std::string quoted;
+  for (char c : text) quoted += c == '\'' ? std::string("''") : std::string(1, c);
+  return "'" + quoted + "'";
+}
+
+// One loop over the two formats: the body appears once, so the PNG and the SVG cannot differ.
+std::string figure_script(const std::string& name, const std::string& title, const FigureStyle& style,
+                          const std::string& body) {
+  std::ostringstream size;
+  size << " noenhanced size " << style.width << "," << style.height << " font '," << style.font_size << "'";
+  std::ostringstream script;
+  script << "# hapsyn: " << title << "\n"
+         << "set encoding utf8\n"
+         << "do for [format in \"png svg\"] {\n"
+         << "if (format eq \"png\") {\n"
+         << "set terminal pngcairo" << size.str() << "\n"
+         << "} else {\n"
+         << "set terminal svg" << size.str() << " background '#ffffff'\n"
+         << "}\n"
+         << "set output " << gnuplot_quote(name + ".") << ".format\n"
+         << "set termoption noenhanced\n"
+         << (style.key ? "set key outside right top\n" : "unset key\n")
+         << body << (body.empty() || body.back() == '\n' ? "" : "\n")
+         << "unset output\n"
+         << "}\n";
+  return script.str();
+}
+
+std::string render_figure(const std::string& directory, const std::string& name, const std::string& title,
+                          const FigureStyle& style, const std::string& body) {
+  write_file_atomically((boost::filesystem::path(directory) / (name + ".gp")).string(),
+                        figure_script(name, title, style, body));
+  return run_gnuplot(directory, name + ".gp");
 }
 
 LatticeSlicing lattice_slicing(const Eigen::Matrix3d& lattice_to_plot) {
@@ -145,26 +183,26 @@ std::string plot_lattice_slices(const std::string& directory, const std::string&
   }
   const int columns = static_cast<int>(std::ceil(std::sqrt(n)));
   const int rows = (n + columns - 1) / columns;
-  std::ostringstream script;
-  script << "# hapsyn: " << title << "\n"
-         << "set terminal pngcairo size " << 320 * columns << "," << 300 * rows << " font ',9'\n"
-         << "set output '" << name << ".png'\n"
-         << "set termoption noenhanced\n"
-         << "set multiplot layout " << rows << "," << columns << " title '" << title << "'\n"
-         << "set cbrange [0:" << (colour_max > 0.0 ? colour_max : 1.0) << "]\n"
-         << "set palette rgbformulae 33,13,10\nset size ratio -1\n"
-         << "set xlabel '" << panels.x_label << "'\nset ylabel '" << panels.y_label << "'\nunset key\n"
-         // Fixed ranges: a slice without any value must still draw (as an empty panel).
-         << "set xrange [" << -(half + 0.5) * step << ":" << (half + 0.5) * step << "]\n"
-         << "set yrange [" << -(half + 0.5) * step << ":" << (half + 0.5) * step << "]\n";
+  std::ostringstream body;
+  body << "set multiplot layout " << rows << "," << columns << " title " << gnuplot_quote(title) << "\n"
+       << "set cbrange [0:" << (colour_max > 0.0 ? colour_max : 1.0) << "]\n"
+       << "set palette rgbformulae 33,13,10\nset size ratio -1\n"
+       << "set xlabel " << gnuplot_quote(panels.x_label) << "\nset ylabel " << gnuplot_quote(panels.y_label) << "\n"
+       << "set cblabel " << gnuplot_quote(field.value_label) << "\n"
+       // Fixed ranges: a slice without any value must still draw (as an empty panel).
+       << "set xrange [" << -(half + 0.5) * step << ":" << (half + 0.5) * step << "]\n"
+       << "set yrange [" << -(half + 0.5) * step << ":" << (half + 0.5) * step << "]\n";
   for (std::size_t s = 0; s < panels.titles.size(); ++s) {
-    script << "set title '" << panels.titles[s] << "'\n"
-           << "plot '" << name << ".dat' index " << s << " using 1:2:3 with image\n";
+    body << "set title " << gnuplot_quote(panels.titles[s]) << "\n"
+         << "plot " << gnuplot_quote(name + ".dat") << " index " << s << " using 1:2:3 with image\n";
   }
-  script << "unset multiplot\n";
+  body << "unset multiplot\n";
   write_file_atomically((fs::path(directory) / (name + ".dat")).string(), data.str());
-  write_file_atomically((fs::path(directory) / (name + ".gp")).string(), script.str());
-  return run_gnuplot(directory, name + ".gp");
+  FigureStyle style;
+  style.width = 320 * columns;
+  style.height = 300 * rows;
+  style.font_size = 9;
+  return render_figure(directory, name, title, style, body.str());
 }
 
 std::string plot_front(const std::string& directory, const std::vector<std::string>& objectives,
@@ -183,30 +221,183 @@ std::string plot_front(const std::string& directory, const std::vector<std::stri
   // Pairs of objectives drawn: the one plane of two, else the three planes of the first three.
   std::vector<std::pair<std::size_t, std::size_t>> pairs = {{0, 1}};
   if (m >= 3) pairs = {{0, 1}, {0, 2}, {1, 2}};
+  // Objectives carry no unit of their own here: each axis names its objective and sense.
   const auto label = [&](std::size_t k) {
-    std::string text = objectives[k] + (k < senses.size() ? " (" + senses[k] + ")" : "");
-    std::string quoted;
-    for (char c : text) quoted += c == '\'' ? std::string("''") : std::string(1, c);
-    return "'" + quoted + "'";
+    return gnuplot_quote(objectives[k] + (k < senses.size() ? " (" + senses[k] + ")" : ""));
   };
+  const std::string title = gnuplot_quote("Pareto front: " + std::to_string(points.size()) + " points");
   std::ostringstream body;
-  body << "set grid\nunset key\nset termoption noenhanced\n";
-  if (pairs.size() > 1) body << "set multiplot layout 1," << pairs.size() << " title 'Pareto front: " << points.size() << " points'\n";
+  body << "set grid\n";
+  if (pairs.size() > 1) body << "set multiplot layout 1," << pairs.size() << " title " << title << "\n";
   for (const auto& [a, b] : pairs) {
     body << "set xlabel " << label(a) << "\nset ylabel " << label(b) << "\n"
-         << (pairs.size() > 1 ? "set title ''\n" : "set title 'Pareto front: " + std::to_string(points.size()) + " points'\n")
+         << "set title " << (pairs.size() > 1 ? "''" : title) << "\n"
          << "plot 'front.dat' using " << a + 1 << ":" << b + 1 << " with points pt 7 ps 0.8 lc rgb '#1f5fa8'\n";
   }
   if (pairs.size() > 1) body << "unset multiplot\n";
-  const std::string size = pairs.size() > 1 ? "1500,520" : "760,600";
-  std::ostringstream script;
-  for (const char* ext : {"png", "svg"}) {
-    script << "set terminal " << (std::string(ext) == "png" ? "pngcairo" : "svg") << " size " << size << " font ',11'\n"
-           << "set output 'front." << ext << "'\n" << body.str();
-  }
+  FigureStyle style;
+  style.width = pairs.size() > 1 ? 1500 : 760;
+  style.height = pairs.size() > 1 ? 520 : 600;
   write_file_atomically((boost::filesystem::path(directory) / "front.dat").string(), data.str());
-  write_file_atomically((boost::filesystem::path(directory) / "front.gp").string(), script.str());
-  return run_gnuplot(directory, "front.gp");
+  return render_figure(directory, "front", "Pareto front", style, body.str());
+}
+
+namespace {
+
+// Applies `f` to every column array of a history (nested columns included), "stride" skipped.
+template <class F>
+void for_each_column(Json& columns, F&& f) {
+  for (auto it = columns.begin(); it != columns.end(); ++it) {
+    if (it.key() == "stride") continue;
+    if (it->is_object()) {
+      for_each_column(*it, f);
+    } else {
+      f(*it);
+    }
+  }
+}
+
+// Appends `entry`'s values to `columns`, which must have the same keys (an empty object takes them).
+void append_entry(Json& columns, const Json& entry, bool first) {
+  for (auto it = entry.begin(); it != entry.end(); ++it) {
+    if (!first && !columns.contains(it.key())) throw std::invalid_argument("history: new column " + it.key());
+    if (it->is_object()) {
+      if (first) columns[it.key()] = Json::object();
+      append_entry(columns[it.key()], *it, first);
+    } else {
+      if (first) columns[it.key()] = Json::array();
+      columns[it.key()].push_back(*it);
+    }
+  }
+}
+
+// Checks that every column is an array of `length` entries.
+void check_columns(const Json& columns, std::size_t length) {
+  for (auto it = columns.begin(); it != columns.end(); ++it) {
+    if (it.key() == "stride") continue;
+    if (it->is_object()) {
+      check_columns(*it, length);
+    } else if (!it->is_array() || it->size() != length) {
+      throw std::invalid_argument("history." + it.key() + " is not an array of " + std::to_string(length) + " entries");
+    }
+  }
+}
+
+}  // namespace
+
+ConvergenceHistory::ConvergenceHistory(std::size_t capacity)
+    : capacity_(std::max<std::size_t>(2, capacity)), columns_({{"stride", 1}, {"generation", Json::array()}}) {}
+
+void ConvergenceHistory::add(int generation, const Json& entry) {
+  Json& generations = columns_["generation"];
+  const long long stride = columns_["stride"].get<long long>();
+  if (!generations.empty()) {
+    const int latest = generations.back().get<int>();
+    if (generation < latest) throw std::invalid_argument("history: generation " + std::to_string(generation) + " after " + std::to_string(latest));
+    // The latest entry stays only on the stride (or as the first of two entries of one generation).
+    if (latest < generation && latest % stride != 0) {
+      for_each_column(columns_, [](Json& column) { column.erase(column.size() - 1); });
+    }
+  }
+  Json row = entry;
+  row.erase("generation");
+  row.erase("stride");
+  append_entry(columns_, row, generations.empty() && columns_.size() == 2);
+  generations.push_back(generation);
+  check_columns(columns_, generations.size());  // an entry without every column
+  if (generations.size() > capacity_) keep_on_stride();
+}
+
+// Doubles the stride until at most capacity entries remain: those on it and the latest
+// generation's.
+void ConvergenceHistory::keep_on_stride() {
+  const Json& generations = columns_["generation"];
+  const long long latest = generations.back().get<long long>();
+  long long stride = columns_["stride"].get<long long>();
+  std::vector<char> keep;
+  std::size_t kept = 0;
+  do {
+    stride *= 2;
+    keep.clear();
+    kept = 0;
+    for (const Json& g : generations) {
+      const long long v = g.get<long long>();
+      keep.push_back(v % stride == 0 || v == latest);
+      kept += keep.back();
+    }
+  } while (kept > capacity_);
+  columns_["stride"] = stride;
+  for_each_column(columns_, [&keep](Json& column) {
+    Json kept_values = Json::array();
+    for (std::size_t i = 0; i < column.size(); ++i) {
+      if (keep[i]) kept_values.push_back(column[i]);
+    }
+    column = std::move(kept_values);
+  });
+}
+
+ConvergenceHistory ConvergenceHistory::from_json(const Json& json, std::size_t capacity) {
+  if (!json.is_object()) throw std::invalid_argument("history is not an object");
+  const long long stride = json.at("stride").get<long long>();
+  if (stride < 1) throw std::invalid_argument("history.stride = " + std::to_string(stride) + ": must be >= 1");
+  const Json& generations = json.at("generation");
+  if (!generations.is_array()) throw std::invalid_argument("history.generation is not an array");
+  long long previous = -1;
+  for (const Json& g : generations) {
+    const long long v = g.get<long long>();
+    if (v < previous) throw std::invalid_argument("history.generation is not in increasing order");
+    previous = v;
+  }
+  check_columns(json, generations.size());
+  ConvergenceHistory history(capacity);
+  history.columns_ = json;
+  return history;
+}
+
+std::string plot_convergence(const std::string& directory, const ConvergenceFigure& figure) {
+  if (figure.curves.empty() || figure.panels.empty()) return "";
+  std::ostringstream data;
+  data.precision(12);
+  data << "# " << figure.title << "\n# one block per curve (gnuplot index): design evaluations, value (NaN: none)\n";
+  bool key = false;
+  for (std::size_t c = 0; c < figure.curves.size(); ++c) {
+    const ConvergenceCurve& curve = figure.curves[c];
+    key = key || !curve.title.empty();
+    data << (c ? "\n\n" : "") << "# " << curve.title << "\n";
+    for (std::size_t i = 0; i < curve.evaluations.size() && i < curve.values.size(); ++i) {
+      data << curve.evaluations[i] << " ";
+      if (std::isfinite(curve.values[i])) {
+        data << curve.values[i] << "\n";
+      } else {
+        data << "NaN\n";
+      }
+    }
+  }
+  const std::size_t panels = figure.panels.size();
+  std::ostringstream body;
+  body << "set datafile missing 'NaN'\nset grid\nset xlabel 'design evaluations'\n";
+  if (panels > 1) body << "set multiplot layout " << panels << ",1 title " << gnuplot_quote(figure.title) << "\n";
+  for (std::size_t p = 0; p < panels; ++p) {
+    body << "set title " << (panels > 1 ? "''" : gnuplot_quote(figure.title)) << "\n"
+         << "set ylabel " << gnuplot_quote(figure.panels[p]) << "\nplot ";
+    bool first = true;
+    for (std::size_t c = 0; c < figure.curves.size(); ++c) {
+      const ConvergenceCurve& curve = figure.curves[c];
+      if (curve.panel != p) continue;
+      body << (first ? "" : ", ") << "'convergence.dat' index " << c << " using 1:2 with lines lw 1.5 lc "
+           << curve.colour % 8 + 1 << " dt " << (curve.dashed ? 2 : 1) << " "
+           << (curve.title.empty() ? std::string("notitle") : "title " + gnuplot_quote(curve.title));
+      first = false;
+    }
+    body << (first ? "NaN notitle" : "") << "\n";
+  }
+  if (panels > 1) body << "unset multiplot\n";
+  FigureStyle style;
+  style.width = key ? 1000 : 850;
+  style.height = static_cast<int>(std::min<std::size_t>(panels, 6)) * 280 + 120;
+  style.key = key;
+  write_file_atomically((boost::filesystem::path(directory) / "convergence.dat").string(), data.str());
+  return render_figure(directory, "convergence", figure.title, style, body.str());
 }
 
 }  // namespace hapsyn

@@ -576,6 +576,70 @@ void plot_front_of(const Study& study, const SolverResult& result, const std::st
   }
 }
 
+// A history column as numbers, null as NaN (a gap in the plot).
+std::vector<double> history_column(const Json& column) {
+  std::vector<double> values;
+  for (const Json& v : column) values.push_back(v.is_number() ? v.get<double>() : std::nan(""));
+  return values;
+}
+
+// The GA's figure: every run's best (solid) and mean (dashed) score, one colour per run, its
+// key naming the runs while they are few enough to tell apart.
+ConvergenceFigure ga_convergence(const Json& runs) {
+  ConvergenceFigure figure;
+  figure.title = "convergence: best (solid) and mean (dashed) score of each run's population";
+  figure.panels = {"score (weighted objectives, maximized)"};
+  const bool named = runs.size() > 1 && runs.size() <= 12;
+  for (const Json& run : runs) {
+    if (!run.contains("history")) continue;
+    const Json& h = run.at("history");
+    const int index = run.at("run").get<int>();
+    const std::vector<double> evaluations = history_column(h.at("evaluations"));
+    const std::string name = runs.size() > 1 ? "run " + std::to_string(index + 1) : "";
+    figure.curves.push_back({named ? name : runs.size() == 1 ? "best" : "", 0, index, false, evaluations,
+                             history_column(h.at("best"))});
+    figure.curves.push_back({runs.size() == 1 ? "mean" : "", 0, index, true, evaluations, history_column(h.at("mean"))});
+  }
+  return figure;
+}
+
+// NSGA-II's figure: each objective's ideal on the first front, one panel each, and the
+// hypervolume when the history has it.
+ConvergenceFigure front_convergence(const Study& study, const Json& history) {
+  ConvergenceFigure figure;
+  figure.title = "convergence: the ideal point of the first front";
+  const std::vector<double> evaluations = history_column(history.at("evaluations"));
+  for (const Objective& o : study.problem->objectives()) {
+    figure.panels.push_back("ideal " + o.name + (o.sense == Sense::kMinimize ? " (minimize)" : " (maximize)"));
+    figure.curves.push_back({"", figure.panels.size() - 1, 0, false, evaluations,
+                             history_column(history.at("ideal").at(o.name))});
+  }
+  if (history.contains("hypervolume")) {
+    figure.panels.push_back("hypervolume (indicators.reference_point)");
+    figure.curves.push_back({"", figure.panels.size() - 1, 0, false, evaluations, history_column(history.at("hypervolume"))});
+  }
+  return figure;
+}
+
+// convergence.png/.svg of a solver that records a history (ga: statistics.runs[i].history,
+// nsga2: statistics.history), with plots: true.
+void plot_convergence_of(const Study& study, const SolverResult& result, const std::string& dir, Json& doc) {
+  const Json& statistics = result.statistics;
+  ConvergenceFigure figure;
+  if (statistics.contains("history")) {
+    figure = front_convergence(study, statistics.at("history"));
+  } else if (statistics.contains("runs") && statistics.at("runs").is_array()) {
+    figure = ga_convergence(statistics.at("runs"));
+  }
+  if (figure.curves.empty()) return;
+  const std::string why = plot_convergence(dir, figure);
+  if (why.empty()) {
+    doc["files"]["convergence_plot"] = "convergence.png, convergence.svg";
+  } else {
+    doc["plot_message"] = why;
+  }
+}
+
 // Every output of a finished solve, staged then committed. A failure after result.json is
 // staged keeps the solve: result.json is committed with "output_errors" and the error thrown after.
 void write_outputs(const Study& study, const SolverResult& result, const RunOptions& options, const RunSetup& run,
@@ -599,6 +663,7 @@ void write_outputs(const Study& study, const SolverResult& result, const RunOpti
       doc["design_fixed"] = fixed_design(*study.problem);
       if (study.resolved["output"].value("plots", false)) plot_front_of(study, result, staged.dir(), doc);
     }
+    if (study.resolved["output"].value("plots", false)) plot_convergence_of(study, result, staged.dir(), doc);
     write_best_design_files(study, result, options, staged.dir(), note, doc);
   } catch (const std::exception& e) {
     errors.push_back(without_component(e));
@@ -678,6 +743,7 @@ Json solve_and_write(Study& study, const RunOptions& options, RunSetup& run, std
   context.log = &log;
   context.checkpoint_file = run.checkpoint_file.string();
   context.resume = options.resume && !options.force;
+  context.reference_point = study.reference_point;  // for a solver's per-generation hypervolume
   if (study.solver->distributed()) {
     context.ranks = run.cluster;
   } else if (options.signal != nullptr) {
@@ -797,6 +863,7 @@ Json follow_rank0(Study& study, const RunOptions& options, Cluster& cluster) {
     context.stop = options.stop;
     context.checkpoint_file = message["checkpoint"].get<std::string>();  // read (on resume), never written
     context.resume = options.resume && !options.force;
+    context.reference_point = study.reference_point;
     context.ranks = &cluster;
     (void)study.solver->solve(*study.problem, context);
   } catch (...) {

@@ -158,21 +158,15 @@ std::string csv_cell(const Json& v) {
 }
 
 void write_plot(const fs::path& dir, std::ostream& log) {
-  const fs::path script = dir / "sweep.gnuplot";
-  {
-    std::ofstream out(script.string());
-    out << "set datafile separator ','\nset logscale xy\nset xlabel 'run time [s]'\n"
-           "set ylabel 'max objective error vs reference'\nset grid\nset key off\n";
-    for (const char* term : {"pngcairo size 800,600", "svg size 800,600"}) {
-      const std::string ext = std::string(term).rfind("svg", 0) == 0 ? "svg" : "png";
-      out << "set terminal " << term << "\nset output 'sweep." << ext << "'\n"
-          << "plot 'sweep.csv'"
-          << " using (column('run_time_s')):(column('objective_error') > 0 ? column('objective_error') : 1/0) "
-             "with linespoints pt 7, '' using (column('run_time_s')):(column('objective_error') > 0 ? "
-             "column('objective_error') : 1/0):(column('label')) with labels offset 1,1 font ',8'\n";
-    }
-  }
-  const std::string why = run_gnuplot(dir.string(), "sweep.gnuplot");
+  // One series (the runs, labelled by their case): no key.
+  const std::string body =
+      "set datafile separator ','\nset logscale xy\nset grid\n"
+      "set title 'speed against accuracy: each run against the reference'\n"
+      "set xlabel 'run time [s]'\nset ylabel 'largest objective error vs the reference (objective units)'\n"
+      "plot 'sweep.csv' using (column('run_time_s')):(column('objective_error') > 0 ? column('objective_error') : 1/0) "
+      "with linespoints pt 7 notitle, '' using (column('run_time_s')):(column('objective_error') > 0 ? "
+      "column('objective_error') : 1/0):(column('label')) with labels offset 1,1 font ',8' notitle\n";
+  const std::string why = render_figure(dir.string(), "sweep", "speed against accuracy", FigureStyle{}, body);
   if (!why.empty()) log << "sweep: no plot written (the CSV has the data): " << why << "\n";
 }
 

@@ -1,9 +1,15 @@
 #pragma once
 /// \file
-/// gnuplot helpers shared by the commands that draw (scene --plot, sweep, position maps).
-/// Plots are a convenience: data and script are always written first, so a missing gnuplot
-/// costs the picture, never the numbers.
+/// gnuplot helpers shared by the commands that draw (scene --plot, sweep, compare, position
+/// maps, Pareto fronts, convergence). Plots are a convenience: data and script are always
+/// written first, so a missing gnuplot costs the picture, never the numbers. Every figure is
+/// drawn by one script (figure_script) into `<name>.png` and `<name>.svg` with the same look:
+/// a title, axis labels with units, names printed as written (`noenhanced`: an `_` is no
+/// subscript), the key outside the data area or none.
+#include <hapsyn/json.hpp>
+
 #include <Eigen/Core>
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -15,6 +21,31 @@ bool gnuplot_available();
 /// Runs `gnuplot SCRIPT` inside `directory` (so relative data and output names resolve there).
 /// \return an empty string on success, else why it failed (gnuplot missing, or its exit status).
 std::string run_gnuplot(const std::string& directory, const std::string& script);
+
+/// `text` as a gnuplot single-quoted string: 'it''s' (no other character is special there).
+std::string gnuplot_quote(const std::string& text);
+
+/// The size and legend of a figure; the rest of its look is shared (figure_script).
+struct FigureStyle {
+  int width = 800;     ///< [px] (the SVG has the same size)
+  int height = 600;    ///< [px]
+  int font_size = 11;  ///< [pt]
+  bool key = false;    ///< a legend outside the data area (right, top); false: none (one series)
+};
+
+/// The gnuplot script that draws `body` twice, into `<name>.png` (pngcairo) and `<name>.svg`,
+/// after the preamble every hapsyn figure shares: terminal with the style's size and font,
+/// `noenhanced` text, the key. `body` sets its own titles and labels (one `set title`, or the
+/// multiplot's title) and ends any multiplot it starts; `title` heads the script as a comment.
+std::string figure_script(const std::string& name, const std::string& title, const FigureStyle& style,
+                          const std::string& body);
+
+/// Writes `<name>.gp` (figure_script) into `directory` and runs it there; the data files the
+/// body reads must be written first.
+/// \return run_gnuplot's message (empty on success). \throws Error("output") when the script
+/// cannot be written.
+std::string render_figure(const std::string& directory, const std::string& name, const std::string& title,
+                          const FigureStyle& style, const std::string& body);
 
 /// One scalar per point of a cubic lattice of `per_axis`^3 points, spacing `step` [m], centred on
 /// the scene origin; index = ix + n (iy + n iz) in the lattice frame. NaN marks a point without a
@@ -28,6 +59,7 @@ struct LatticeField {
   Eigen::Matrix3d lattice_to_plot = Eigen::Matrix3d::Identity();
   std::string origin = "the lattice centre";  ///< for "height above <origin>"
   std::string lattice_frame = "L";            ///< the lattice frame's name, for axis labels (human_arm: "S")
+  std::string value_label;                    ///< the colour bar's label (the value's name and unit); empty: none
 };
 
 /// How plot_lattice_slices cuts a field: by height (z of the plot frame) when lattice_to_plot
@@ -42,7 +74,8 @@ LatticeSlicing lattice_slicing(const Eigen::Matrix3d& lattice_to_plot);
 
 /// Writes `<name>.dat` and `<name>.gp` into `directory`: one heat-map panel per slice, the highest
 /// first (Fennel 2022, Figures 3 and 5: each slice one height above the shoulder), panels drawn
-/// in the plot frame's x and y, colour range [0, colour_max], rendered to `<name>.png`.
+/// in the plot frame's x and y [m], colour range [0, colour_max], rendered to `<name>.png` and
+/// `<name>.svg`.
 /// \return run_gnuplot's message (empty on success). \throws Error("output") when a file cannot
 /// be written.
 std::string plot_lattice_slices(const std::string& directory, const std::string& name, const std::string& title,
@@ -55,5 +88,58 @@ std::string plot_lattice_slices(const std::string& directory, const std::string&
 /// objectives. \throws Error("output") when a file cannot be written.
 std::string plot_front(const std::string& directory, const std::vector<std::string>& objectives,
                        const std::vector<std::string>& senses, const std::vector<std::vector<double>>& points);
+
+/// A solver's per-generation record for result.json, of bounded size: columns of equal length,
+/// one entry per kept generation. Kept are the generations that are multiples of a stride, plus
+/// the latest entry; when more than `capacity` are kept the stride doubles and the entries off
+/// it go, so between capacity/2 and capacity entries (plus the latest) remain however long the
+/// run. The kept entries depend only on the generations added: a run resumed from json() keeps
+/// the ones an uninterrupted run keeps.
+class ConvergenceHistory {
+ public:
+  explicit ConvergenceHistory(std::size_t capacity = 1000);
+  /// Adds the entry of `generation` (>= the latest one's; an equal one adds a second entry of
+  /// that generation, such as a final re-ranking). `entry` maps column names to numbers,
+  /// strings or null, or to objects of those (nested columns, e.g. "ideal": {"gii": 0.7}); every
+  /// entry has the same keys. "generation" and "stride" are set here.
+  /// \throws std::invalid_argument for a generation below the latest or keys that differ.
+  void add(int generation, const Json& entry);
+  /// {"stride": k, "generation": [...], "<column>": [...] or {"<name>": [...]}, ...}
+  const Json& json() const { return columns_; }
+  /// Entries kept.
+  std::size_t size() const { return columns_.at("generation").size(); }
+  /// The history from json().
+  /// \throws std::invalid_argument when a column is not an array as long as "generation", the
+  ///         generations are not integers in increasing order, or the stride is not >= 1.
+  static ConvergenceHistory from_json(const Json& json, std::size_t capacity = 1000);
+
+ private:
+  void keep_on_stride();
+  std::size_t capacity_;
+  Json columns_;
+};
+
+/// One curve of a convergence figure.
+struct ConvergenceCurve {
+  std::string title;                ///< its key entry; empty: none
+  std::size_t panel = 0;            ///< index into ConvergenceFigure::panels
+  int colour = 0;                   ///< colour index (a run's best and mean share one)
+  bool dashed = false;
+  std::vector<double> evaluations;  ///< x: design evaluations so far
+  std::vector<double> values;       ///< y; NaN: no value (a gap)
+};
+
+/// A convergence figure: panels one under another, each its curves against design evaluations.
+struct ConvergenceFigure {
+  std::string title;
+  std::vector<std::string> panels;  ///< each panel's y-axis label
+  std::vector<ConvergenceCurve> curves;
+};
+
+/// convergence.{dat,gp,png,svg} in `directory`: the dat file one block per curve (gnuplot index,
+/// "# title" first), the key shown when a curve has a title.
+/// \return run_gnuplot's message (empty on success); "" without writing for a figure without
+/// curves. \throws Error("output") when a file cannot be written.
+std::string plot_convergence(const std::string& directory, const ConvergenceFigure& figure);
 
 }  // namespace hapsyn

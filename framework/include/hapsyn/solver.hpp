@@ -66,6 +66,10 @@ struct SolverContext {
   /// The processes of this run (MPI ranks or a shard; hapsyn/cluster.hpp); null: this process
   /// alone. Read it through cluster().
   Cluster* ranks = nullptr;
+  /// The study's hypervolume reference point (indicators.reference_point: natural units, one
+  /// value per objective); empty: none. A Pareto solver may report the hypervolume of its front
+  /// as it goes against this point (never one it makes up).
+  std::vector<double> reference_point;
 
   /// True once a stop was requested (see `stop`).
   bool stop_requested() const { return stop != nullptr && stop->load(std::memory_order_relaxed); }

@@ -76,6 +76,26 @@ long long best_feasible(const pagmo::population& population) {
   return best;
 }
 
+// Best and mean score of a population's feasible individuals at the current fidelity.
+struct PopulationFigures {
+  double best = -INFINITY;
+  double mean = 0.0;
+  int feasible = 0;
+};
+
+PopulationFigures population_figures(const pagmo::population& population) {
+  PopulationFigures figures;
+  double sum = 0.0;
+  for (const auto& f : population.get_f()) {
+    if (f[0] >= pa::kSampleFailedFitness) continue;
+    figures.best = std::max(figures.best, -f[0]);
+    sum += -f[0];
+    ++figures.feasible;
+  }
+  if (figures.feasible > 0) figures.mean = sum / figures.feasible;
+  return figures;
+}
+
 pa::EvaluationSettings evaluation_settings(const GaOptions& options, int threads) {
   pa::EvaluationSettings settings;
   settings.threads = threads;
@@ -136,6 +156,7 @@ class GaSearch {
   void finish_run(Run& run);
   void rank_on_full_scene(Run& run);
   void report_generation(const Run& run);
+  void record_generation(Run& run, bool final_ranking) const;
   Json run_record(const Run& run) const;
   void add_finished(const Json& record, double seconds);
   void run_one_after_another(const std::vector<int>& todo);
@@ -211,6 +232,7 @@ void GaSearch::resume_from_checkpoint() {
       if (run.at("seed").get<std::uint64_t>() != pa::derive_seed(context_.seed, static_cast<std::uint64_t>(index))) {
         throw std::invalid_argument("seed is not the one of run " + std::to_string(index) + " of the study seed");
       }
+      if (run.contains("history")) (void)ConvergenceHistory::from_json(run.at("history"));
       if (run.at("status").get<std::string>() == "infeasible") continue;  // no optimum to check
       x = run.at("x").get<pagmo::vector_double>();
       score = run.at("score").get<double>();
@@ -465,6 +487,7 @@ void GaSearch::start_run(Run& run) const {
     run.algorithm = make_algorithm(options_, seed);
     run.population =
         pa::random_population(run.problem, evaluator, static_cast<std::size_t>(options_.population), seed);
+    record_generation(run, false);
   }
   if (state.switched && state.generation == 0) note_best(state, run.population);
 }
@@ -488,6 +511,7 @@ bool GaSearch::evolve(Run& run) {
     if (state.switched) {
       state.stall = note_best(state, run.population) ? 0 : state.stall + 1;
     }
+    record_generation(run, false);
     if (!run.in_task) {
       ++total_generations_done_;
       report_generation(run);
@@ -548,11 +572,13 @@ void GaSearch::switch_fidelity(Run& run, bool to_full_scene) {
 // whole population re-evaluated when it never left the subset, its best candidates when it
 // ended on the refine subset.
 void GaSearch::finish_run(Run& run) {
+  const long long before = run.evaluator->design_evaluations();
   if (!run.state.switched) {
     switch_fidelity(run, true);
   } else if (run.state.refining) {
     rank_on_full_scene(run);
   }
+  if (run.evaluator->design_evaluations() > before) record_generation(run, true);
 }
 
 // The refine stage's end: the final_candidates best of the population (at the refine fidelity,
@@ -586,14 +612,7 @@ void GaSearch::rank_on_full_scene(Run& run) {
 // fidelity, speed, stall count, time.
 void GaSearch::report_generation(const Run& run) {
   const ga::RunState& state = run.state;
-  double best = -INFINITY, mean = 0.0;
-  int feasible = 0;
-  for (const auto& f : run.population.get_f()) {
-    if (f[0] >= pa::kSampleFailedFitness) continue;
-    best = std::max(best, -f[0]);
-    mean += -f[0];
-    ++feasible;
-  }
+  const PopulationFigures figures = population_figures(run.population);
   const int generations = options_.generations;
   const double elapsed = seconds_since(solve_clock_);
   const double per_generation = elapsed / std::max(1, total_generations_done_);
@@ -602,12 +621,28 @@ void GaSearch::report_generation(const Run& run) {
   const double designs_per_second = run.evaluator->design_evaluations() / std::max(1e-9, seconds_since(run.clock));
   std::ostringstream line;
   line << "ga: run " << (state.run + 1) << "/" << options_.runs << " gen " << state.generation << "/" << generations
-       << (state.switched ? (state.refining ? " (refine)" : "") : " (subset)") << " best " << with_digits(best) << " mean "
-       << (feasible ? with_digits(mean / feasible) : std::string("-")) << " feasible " << feasible << "/"
+       << (state.switched ? (state.refining ? " (refine)" : "") : " (subset)") << " best " << with_digits(figures.best)
+       << " mean " << (figures.feasible ? with_digits(figures.mean) : std::string("-")) << " feasible " << figures.feasible << "/"
        << run.population.size() << " | " << with_digits(designs_per_second, 4) << " designs/s | stall " << state.stall
        << "/" << options_.stall_generations << " | elapsed "
        << pa::format_duration(seconds_before_resume_ + seconds_since(start_)) << ", left <= " << pa::format_duration(left);
   reporter_.line(line.str());
+}
+
+// The run's history entry after a generation (or generation 0, the initial population): the
+// population's best and mean score at its fidelity. The final ranking of a multi-fidelity run
+// on the full scene adds an entry of the same generation with the run's best (its reported
+// score) and no mean (the ranked candidates are not the population).
+void GaSearch::record_generation(Run& run, bool final_ranking) const {
+  ga::RunState& state = run.state;
+  const PopulationFigures figures = population_figures(run.population);
+  const auto number = [](bool has, double v) { return has ? Json(v) : Json(nullptr); };
+  Json entry;
+  entry["evaluations"] = state.designs + run.evaluator->design_evaluations();
+  entry["best"] = final_ranking ? number(!state.best_x.empty(), state.best_score) : number(figures.feasible > 0, figures.best);
+  entry["mean"] = final_ranking ? Json(nullptr) : number(figures.feasible > 0, figures.mean);
+  if (multi_fidelity_) entry["fidelity"] = !state.switched ? "subset" : state.refining ? "refine" : "full";
+  state.history.add(state.generation, entry);
 }
 
 // The run's record (statistics.runs).
@@ -618,6 +653,7 @@ Json GaSearch::run_record(const Run& run) const {
   record["seed"] = pa::derive_seed(context_.seed, static_cast<std::uint64_t>(state.run));
   record["generations"] = state.generation;
   record["designs"] = state.designs + run.evaluator->design_evaluations();
+  record["history"] = state.history.json();
   if (state.best_x.empty()) {
     record["status"] = "infeasible";
   } else {

@@ -72,6 +72,7 @@ Json run_to_json(const RunState& state, const pagmo::algorithm& algorithm, const
   current["best_x"] = state.best_x;
   current["run_designs"] = state.designs;
   current["run_seconds"] = state.seconds_before;
+  current["history"] = state.history.json();
   current["algorithm"] = pa::save_algorithm(algorithm);
   current["population_seed"] = population.get_seed();
   current["x"] = pa::matrix_to_json(population.get_x());
@@ -97,6 +98,7 @@ void restore_run(const SolverContext& context, const Json& current, const pagmo:
     // Absent in checkpoints of earlier versions (they counted the study's designs instead).
     state.designs = current.contains("run_designs") ? current.at("run_designs").get<long long>() : 0;
     state.seconds_before = current.at("run_seconds");
+    state.history = current.contains("history") ? ConvergenceHistory::from_json(current.at("history")) : ConvergenceHistory();
     algorithm = pa::load_algorithm(current.at("algorithm").get<std::string>());
     pagmo::population restored(problem, 0u, current.at("population_seed").get<unsigned>());
     const auto xs = pa::matrix_from_json(current.at("x"));

@@ -12,6 +12,7 @@
 #include "ga_options.hpp"
 
 #include <hapsyn/json.hpp>
+#include <hapsyn/plot.hpp>
 #include <hapsyn/problem.hpp>
 #include <hapsyn/solver.hpp>
 
@@ -40,6 +41,9 @@ struct RunState {
   pagmo::vector_double best_x;   ///< best individual seen since the switch, at its fidelity (pagmo order); empty: none
   long long designs = 0;         ///< the run's design evaluations before a resume
   double seconds_before = 0.0;   ///< run time before a resume [s]
+  /// Per generation: generation, evaluations (the run's designs so far), best and mean score of
+  /// the population's feasible individuals, fidelity with a subset (statistics.runs[i].history).
+  ConvergenceHistory history;
 };
 
 /// A checkpoint's content besides the seed, the solver and the fingerprint.
@@ -68,7 +72,8 @@ Json run_to_json(const RunState& state, const pagmo::algorithm& algorithm, const
 
 /// Restores a run in progress from a checkpoint's "current" (run_to_json): fills `state`
 /// (except state.run, which the caller sets), `algorithm` and `population` (on `problem`,
-/// nothing evaluated).
+/// nothing evaluated). A checkpoint of an earlier version without "history" gives an empty one
+/// (the resumed run's history starts at the resume).
 /// \throws Error("checkpoint", "<file>: state.current...") (bad_checkpoint) when a field is
 ///         missing, of another type or of another size, or the algorithm archive is damaged.
 void restore_run(const SolverContext& context, const Json& current, const pagmo::problem& problem, RunState& state,

@@ -10,6 +10,8 @@
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/options.hpp>
+#include <hapsyn/plot.hpp>
+#include <hapsyn/study_runner.hpp>
 
 #include <hapsyn/problem.hpp>
 
@@ -143,6 +145,14 @@ fs::path fresh_dir(const std::string& name) {
 Json read_json(const fs::path& p) {
   std::ifstream in(p.string());
   return Json::parse(in);
+}
+
+// A run record without its evaluation counts ("designs" and the history's "evaluations"): a
+// resumed process starts with an empty cache, so it evaluates again what the cache held.
+Json without_counts(Json run) {
+  run.erase("designs");
+  if (run.contains("history")) run["history"].erase("evaluations");
+  return run;
 }
 
 // A five-bar GII study for the GA (continuous design, 5 mm workspace).
@@ -531,7 +541,7 @@ TEST(GaCli, KilledRunResumesFromItsCheckpointAndMatchesAnUninterruptedRun) {
   // process starts with an empty cache).
   Json runs_a = a["statistics"]["runs"], runs_b = b["statistics"]["runs"];
   for (Json* runs : {&runs_a, &runs_b}) {
-    for (Json& run : *runs) run.erase("designs");
+    for (Json& run : *runs) run = without_counts(run);
   }
   EXPECT_EQ(runs_a, runs_b);
   EXPECT_FALSE(fs::exists(checkpoint)) << "the checkpoint of a finished study is removed";
@@ -579,7 +589,7 @@ hapsyn::SolverResult solve_toy_with(const Json& overrides, const std::string& ch
 
 // Run records without the evaluation counts (a resumed process starts with an empty cache).
 Json runs_without_counts(Json runs) {
-  for (Json& run : runs) run.erase("designs");
+  for (Json& run : runs) run = without_counts(run);
   return runs;
 }
 
@@ -971,5 +981,117 @@ TEST(Ga, RunStoppedInOneProcessResumesAsRankTasks) {
   EXPECT_EQ(resumed.status, plain.status);
   EXPECT_TRUE(resumed.best->design == plain.best->design);
   EXPECT_EQ(runs_without_counts(resumed.statistics["runs"]), runs_without_counts(plain.statistics["runs"]));
+  fs::remove_all(dir);
+}
+
+namespace {
+
+// A run's history as checked by every history test: it starts at generation 0 (the initial
+// population), its generations never fall, its evaluations rise strictly and end at the run's
+// count, and its last best is the run's reported score.
+void expect_history_of_run(const Json& run) {
+  ASSERT_TRUE(run.contains("history")) << run.dump();
+  const Json& h = run["history"];
+  ASSERT_GE(h["generation"].size(), 2u);
+  EXPECT_EQ(h["generation"].front(), 0);
+  EXPECT_EQ(h["generation"].back(), run["generations"]);
+  for (std::size_t i = 1; i < h["generation"].size(); ++i) {
+    EXPECT_LE(h["generation"][i - 1].get<int>(), h["generation"][i].get<int>()) << i;
+    EXPECT_LT(h["evaluations"][i - 1].get<long long>(), h["evaluations"][i].get<long long>()) << i;
+  }
+  EXPECT_EQ(h["evaluations"].back(), run["designs"]);
+  EXPECT_EQ(h["best"].back(), run["score"]);
+}
+
+}  // namespace
+
+// sga reinserts the best of parents and offspring (pagmo's "pure elitism"), so on one fidelity
+// its population's best never falls.
+TEST(Ga, HistoryFollowsEveryRunAndSgasBestNeverFalls) {
+  const auto r = solve_toy({{"algorithm", "sga"}, {"population", 16}, {"generations", 40}, {"runs", 3},
+                            {"stall_generations", 100}});
+  ASSERT_EQ(r.statistics["runs"].size(), 3u);
+  for (const Json& run : r.statistics["runs"]) {
+    expect_history_of_run(run);
+    const Json& h = run["history"];
+    EXPECT_EQ(h["generation"].size(), run["generations"].get<std::size_t>() + 1) << "one entry per generation";
+    EXPECT_FALSE(h.contains("fidelity")) << "no subset, no fidelity column";
+    for (std::size_t i = 1; i < h["best"].size(); ++i) {
+      EXPECT_GE(h["best"][i].get<double>(), h["best"][i - 1].get<double>()) << "generation " << h["generation"][i];
+      EXPECT_LE(h["mean"][i].get<double>(), h["best"][i].get<double>());
+    }
+  }
+}
+
+TEST(Ga, HistoryOfAMultiFidelityRunNamesItsFidelityAndEndsOnTheFullScene) {
+  const Json doc = fivebar_ga_study(
+      {{"population", 16}, {"generations", 14}, {"stall_generations", 50},
+       {"fidelity", {{"subset_fraction", 0.1}, {"generations", 4}, {"refine_fraction", 0.3}, {"final_candidates", 5}}}});
+  hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  hapsyn::SolverContext context;
+  context.threads = 2;
+  context.seed = 3;
+  const auto r = study.solver->solve(*study.problem, context);
+  const Json& run = r.statistics["runs"][0];
+  expect_history_of_run(run);
+  const Json& h = run["history"];
+  EXPECT_EQ(h["fidelity"].front(), "subset");
+  EXPECT_EQ(h["fidelity"][h["fidelity"].size() - 2], "refine");
+  EXPECT_EQ(h["fidelity"].back(), "full");
+  // The final ranking is an entry of the last generation, after that generation's own.
+  EXPECT_EQ(h["generation"][h["generation"].size() - 2], h["generation"].back());
+  EXPECT_TRUE(h["mean"].back().is_null());
+}
+
+TEST(Ga, HistoryContinuesAcrossAResume) {
+  const Json options = {{"population", 16}, {"generations", 30}, {"runs", 2}, {"stall_generations", 100},
+                        {"checkpoint_every", 7}};
+  const fs::path dir = fresh_dir("history-resume");
+  fs::create_directories(dir);
+  const std::string file = (dir / "checkpoint.json").string();
+  const auto uninterrupted = solve_toy_with(options, "", false, 0);
+  EXPECT_EQ(solve_toy_with(options, file, false, 45).status, hapsyn::SolverStatus::kStopped);
+  const Json current = read_json(file)["state"]["current"];
+  ASSERT_EQ(current["run"], 1);
+  const int stopped_at = current["generation"];
+  EXPECT_EQ(current["history"]["generation"].back(), stopped_at);
+  const auto resumed = solve_toy_with(options, file, true, 0);
+  const Json& run = resumed.statistics["runs"][1];
+  expect_history_of_run(run);
+  // The generations before the stop are the checkpoint's, the later ones the resumed process's:
+  // together those of the uninterrupted run (evaluation counts aside: a resumed process starts
+  // with an empty cache).
+  EXPECT_EQ(run["history"]["generation"], uninterrupted.statistics["runs"][1]["history"]["generation"]);
+  EXPECT_EQ(run["history"]["best"], uninterrupted.statistics["runs"][1]["history"]["best"]);
+  EXPECT_EQ(run["history"]["mean"], uninterrupted.statistics["runs"][1]["history"]["mean"]);
+  for (int g = 0; g <= stopped_at; ++g) {
+    EXPECT_EQ(run["history"]["evaluations"][static_cast<std::size_t>(g)],
+              current["history"]["evaluations"][static_cast<std::size_t>(g)]);
+  }
+  fs::remove_all(dir);
+}
+
+TEST(Ga, RunWithPlotsWritesItsConvergenceFigure) {
+  // Through its text, as a problem file is read (the seed an unsigned number).
+  const Json doc = Json::parse(fivebar_ga_study({{"population", 12}, {"generations", 8}, {"runs", 3}}).dump());
+  hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  study.resolved["output"]["plots"] = true;
+  const fs::path dir = fresh_dir("convergence-plot");
+  hapsyn::RunOptions options;
+  options.output_directory = dir.string();
+  options.quiet = true;
+  const Json result = hapsyn::run_study(study, options);
+  std::ifstream dat((dir / "convergence.dat").string());
+  const std::string data((std::istreambuf_iterator<char>(dat)), std::istreambuf_iterator<char>());
+  for (int run = 1; run <= 3; ++run) {
+    EXPECT_NE(data.find("# run " + std::to_string(run) + "\n"), std::string::npos) << data;
+  }
+  if (!hapsyn::gnuplot_available()) GTEST_SKIP() << "gnuplot is not installed";
+  EXPECT_EQ(result["files"]["convergence_plot"], "convergence.png, convergence.svg") << result.dump();
+  std::ifstream png((dir / "convergence.png").string(), std::ios::binary);
+  std::string magic(8, '\0');
+  png.read(&magic[0], 8);
+  EXPECT_EQ(magic, std::string("\x89PNG\r\n\x1a\n", 8));
+  EXPECT_GT(fs::file_size(dir / "convergence.svg"), 1000u);
   fs::remove_all(dir);
 }

@@ -4,6 +4,8 @@
 
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
+#include <hapsyn/pareto.hpp>
+#include <hapsyn/plot.hpp>
 
 #include <pagmo/algorithms/nsga2.hpp>
 #include <pagmo/batch_evaluators/member_bfe.hpp>
@@ -69,6 +71,38 @@ std::vector<SolutionPoint> final_front(const Problem& problem, const pagmo::popu
   return front;
 }
 
+// The history entry of the population (statistics.history): design evaluations so far, the
+// distinct designs of the first front, each objective's ideal (best natural value on that
+// front; null without a feasible design) and, for two objectives with the study's reference
+// point, the front's hypervolume (hapsyn::hypervolume, as indicators.hypervolume).
+Json history_entry(const Problem& problem, const pagmo::population& population, pa::Evaluator& evaluator,
+                   const SolverContext& context) {
+  const std::vector<Objective>& objectives = problem.objectives();
+  std::set<std::vector<double>> designs;
+  std::vector<ObjectivePoint> points;
+  for (std::size_t i : first_front(population)) {
+    const pagmo::vector_double& x = population.get_x()[i];
+    if (!designs.insert(evaluator.encoding().decode(x)).second) continue;
+    points.push_back(evaluator.record(x).objectives);
+  }
+  Json ideal = Json::object();
+  for (std::size_t k = 0; k < objectives.size(); ++k) {
+    std::optional<double> best;
+    const bool minimize = objectives[k].sense == Sense::kMinimize;
+    for (const ObjectivePoint& p : points) {
+      if (!best || (minimize ? p[k] < *best : p[k] > *best)) best = p[k];
+    }
+    ideal[objectives[k].name] = best ? Json(*best) : Json(nullptr);
+  }
+  Json entry = {{"evaluations", evaluator.design_evaluations()}, {"front_size", points.size()}, {"ideal", ideal}};
+  if (objectives.size() == 2 && context.reference_point.size() == 2) {
+    std::vector<Sense> senses;
+    for (const Objective& o : objectives) senses.push_back(o.sense);
+    entry["hypervolume"] = hypervolume(points, context.reference_point, senses);
+  }
+  return entry;
+}
+
 // The progress line after a generation.
 // `done` generations (and `designs` evaluations) in `elapsed` seconds of this process.
 std::string generation_line(const Nsga2Options& o, int generation, int done, const pagmo::population& population,
@@ -118,6 +152,7 @@ struct RunState {
   pagmo::population population;
   long long designs = 0, samples = 0;  // evaluations before this process
   double seconds = 0.0;                // solve time before this process [s]
+  ConvergenceHistory history;          // per generation (statistics.history)
 };
 
 Json state_to_json(const RunState& run, const pa::Evaluator& evaluator, double seconds) {
@@ -127,7 +162,8 @@ Json state_to_json(const RunState& run, const pa::Evaluator& evaluator, double s
           {"x", pa::matrix_to_json(run.population.get_x())},
           {"f", pa::matrix_to_json(run.population.get_f())},
           {"evaluations", {{"designs", evaluator.design_evaluations()}, {"samples", evaluator.sample_evaluations()}}},
-          {"elapsed_seconds", seconds}};
+          {"elapsed_seconds", seconds},
+          {"history", run.history.json()}};
 }
 
 // The run from a checkpoint's state. Every individual is re-evaluated (through the evaluator,
@@ -148,6 +184,8 @@ RunState restore_state(const SolverContext& context, const Nsga2Options& o, cons
     run.designs = state.at("evaluations").at("designs").get<long long>();
     run.samples = state.at("evaluations").at("samples").get<long long>();
     run.seconds = state.at("elapsed_seconds").get<double>();
+    // Absent in checkpoints of earlier versions: the history starts at the resume.
+    if (state.contains("history")) run.history = ConvergenceHistory::from_json(state.at("history"));
     if (xs.size() != fs.size() || xs.size() != static_cast<std::size_t>(o.population)) {
       throw std::invalid_argument(std::to_string(xs.size()) + " decision and " + std::to_string(fs.size()) +
                                   " fitness vectors for a population of " + std::to_string(o.population));
@@ -232,6 +270,7 @@ SolverResult Nsga2Solver::solve(const Problem& problem, const SolverContext& con
     const std::uint64_t seed = pa::derive_seed(context.seed, 0);
     run.algorithm = make_algorithm(o, seed);
     run.population = pa::random_population(prob, *evaluator, static_cast<std::size_t>(o.population), seed);
+    run.history.add(0, history_entry(problem, run.population, *evaluator, context));
   }
   const int first_generation = run.generation;
   const long long designs_before = evaluator->design_evaluations();
@@ -248,6 +287,7 @@ SolverResult Nsga2Solver::solve(const Problem& problem, const SolverContext& con
     }
     run.population = run.algorithm.evolve(run.population);
     ++run.generation;
+    run.history.add(run.generation, history_entry(problem, run.population, *evaluator, context));
     reporter.line(generation_line(o, run.generation, run.generation - first_generation, run.population,
                                   evaluator->design_evaluations() - designs_before, seconds_since(start)));
     if (o.checkpoint_every > 0 && run.generation % o.checkpoint_every == 0 && run.generation < o.generations) save();
@@ -262,7 +302,8 @@ SolverResult Nsga2Solver::solve(const Problem& problem, const SolverContext& con
                        {"cache_hits", evaluator->cache_hits()},
                        {"repair", evaluator->encoding().describe_repair(problem)},
                        {"evaluation", {{"parallel_over", o.parallel_over}, {"sample_chunks", o.sample_chunks}}},
-                       {"solve_seconds", run.seconds + seconds_since(start)}};
+                       {"solve_seconds", run.seconds + seconds_since(start)},
+                       {"history", run.history.json()}};
   set_status_and_message(o, run.generation, stopped, context, result);
   return result;
 }

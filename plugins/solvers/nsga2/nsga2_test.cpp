@@ -6,6 +6,9 @@
 
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/cluster.hpp>
+#include <hapsyn/pareto.hpp>
+#include <hapsyn/plot.hpp>
+#include <hapsyn/study_runner.hpp>
 
 #include <atomic>
 #include <filesystem>
@@ -311,4 +314,84 @@ TEST(Nsga2, OneFeasibleDesignIsAFrontOfOnePoint) {
     EXPECT_EQ(r.front[0].objectives, (std::vector<double>{1.0, 1.0}));
   }
   EXPECT_GT(feasible_runs, 10);
+}
+
+// statistics.history: one entry per generation from the initial population, evaluations rising
+// to the reported count, and the last entry the final front's: its size, its ideal point and,
+// with the study's reference point, its hypervolume (as indicators.hypervolume computes it).
+TEST(Nsga2, HistoryEndsAtTheFinalFrontsIdealAndHypervolume) {
+  const hapsyn::Study study = hapsyn::load_study(pareto_study({{"population", 16}, {"generations", 12}}),
+                                                 hapsyn::test::registry());
+  hapsyn::SolverContext context;
+  context.threads = 2;
+  context.seed = 3;
+  context.reference_point = {0.0, 0.0};
+  const auto r = study.solver->solve(*study.problem, context);
+  ASSERT_FALSE(r.front.empty()) << r.message;
+  const Json& h = r.statistics["history"];
+  ASSERT_EQ(h["generation"].size(), 13u);
+  EXPECT_EQ(h["generation"].front(), 0);
+  for (std::size_t i = 1; i < h["evaluations"].size(); ++i) {
+    EXPECT_LT(h["evaluations"][i - 1].get<long long>(), h["evaluations"][i].get<long long>()) << i;
+  }
+  EXPECT_EQ(h["evaluations"].back(), r.design_evaluations);
+  EXPECT_EQ(h["front_size"].back(), r.front.size());
+  std::vector<hapsyn::ObjectivePoint> points;
+  std::vector<hapsyn::Sense> senses;
+  for (std::size_t k = 0; k < study.problem->objectives().size(); ++k) {
+    const hapsyn::Objective& o = study.problem->objectives()[k];
+    senses.push_back(o.sense);
+    double ideal = r.front.front().objectives[k];
+    for (const auto& p : r.front) ideal = o.sense == hapsyn::Sense::kMinimize ? std::min(ideal, p.objectives[k]) : std::max(ideal, p.objectives[k]);
+    EXPECT_EQ(h["ideal"][o.name].back(), ideal) << o.name;
+  }
+  for (const auto& p : r.front) points.push_back(p.objectives);
+  EXPECT_EQ(h["hypervolume"].back(), hapsyn::hypervolume(points, context.reference_point, senses));
+  context.reference_point.clear();  // none in the study: none made up
+  EXPECT_FALSE(study.solver->solve(*study.problem, context).statistics["history"].contains("hypervolume"));
+}
+
+TEST(Nsga2, HistoryContinuesAcrossAResume) {
+  const hapsyn::Study study = hapsyn::load_study(
+      pareto_study({{"population", 16}, {"generations", 12}, {"checkpoint_every", 4}}), hapsyn::test::registry());
+  const std::string file = fresh_checkpoint("history");
+  const auto uninterrupted = solve_with(study, "", false, 0);
+  EXPECT_EQ(solve_with(study, file, false, 6).status, hapsyn::SolverStatus::kStopped);
+  const Json saved = read_json(file)["state"]["history"];
+  EXPECT_EQ(saved["generation"].back(), 6);
+  const auto resumed = solve_with(study, file, true, 0);
+  Json a = resumed.statistics["history"], b = uninterrupted.statistics["history"];
+  // Up to the stop, the checkpoint's entries; after it, the resumed process's (which re-evaluates
+  // the population once: its counts rise by that).
+  for (std::size_t g = 0; g <= 6; ++g) EXPECT_EQ(a["evaluations"][g], saved["evaluations"][g]);
+  EXPECT_EQ(a["evaluations"].back(), resumed.design_evaluations);
+  a.erase("evaluations");
+  b.erase("evaluations");
+  EXPECT_EQ(a, b);
+  std::filesystem::remove_all(std::filesystem::path(file).parent_path());
+}
+
+TEST(Nsga2, RunWithPlotsWritesItsFrontAndConvergenceFigures) {
+  const Json doc = Json::parse(pareto_study({{"population", 16}, {"generations", 6}}).dump());
+  hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
+  study.resolved["output"]["plots"] = true;
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("hapsyn-nsga2-plots-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  hapsyn::RunOptions options;
+  options.output_directory = dir.string();
+  options.quiet = true;
+  const Json result = hapsyn::run_study(study, options);
+  EXPECT_TRUE(std::filesystem::exists(dir / "front.gp"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "convergence.gp"));
+  if (!hapsyn::gnuplot_available()) GTEST_SKIP() << "gnuplot is not installed";
+  EXPECT_EQ(result["files"]["front_plot"], "front.png, front.svg") << result.dump();
+  EXPECT_EQ(result["files"]["convergence_plot"], "convergence.png, convergence.svg") << result.dump();
+  for (const char* name : {"front", "convergence"}) {
+    std::ifstream png((dir / (std::string(name) + ".png")).string(), std::ios::binary);
+    std::string magic(8, '\0');
+    png.read(&magic[0], 8);
+    EXPECT_EQ(magic, std::string("\x89PNG\r\n\x1a\n", 8)) << name;
+    EXPECT_GT(std::filesystem::file_size(dir / (std::string(name) + ".svg")), 1000u) << name;
+  }
+  std::filesystem::remove_all(dir);
 }
