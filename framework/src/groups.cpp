@@ -200,17 +200,20 @@ std::string plot_timeline(const Problem& problem, const SampleRecords& records, 
   }
   const std::vector<Objective>& objectives = problem.objectives();
   const bool shares = ((values.array() >= 0.0 && values.array() <= 1.0) || values.array().isNaN()).all();
-  std::ostringstream gp;
-  gp << "set terminal pngcairo size 1000," << 160 + 140 * objectives.size() << "\nset output 'timeline.png'\n"
-     << "set multiplot layout " << objectives.size() << ",1 title '" << grouping << " " << label << "'\n"
-     << "set xlabel 'time [s]'\n" << (shares ? "set yrange [-0.1:1.1]\n" : "") << "set grid\n";
+  // One panel per objective under a shared title, each named on its y axis (no key: one curve).
+  std::ostringstream body;
+  body << "set multiplot layout " << objectives.size() << ",1 title " << gnuplot_quote(grouping + " " + label)
+       << "\nset xlabel 'time [s]'\n" << (shares ? "set yrange [-0.1:1.1]\n" : "") << "set grid\n";
   for (std::size_t o = 0; o < objectives.size(); ++o) {
-    gp << "plot 'timeline.dat' using 1:" << o + 2 << " with steps lw 2 title '" << objectives[o].name << "'\n";
+    body << "set ylabel " << gnuplot_quote(objectives[o].name) << "\nplot 'timeline.dat' using 1:" << o + 2
+         << " with steps lw 2 notitle\n";
   }
-  gp << "unset multiplot\n";
+  body << "unset multiplot\n";
   write_file_atomically((fs::path(directory) / "timeline.dat").string(), dat.str());
-  write_file_atomically((fs::path(directory) / "timeline.gp").string(), gp.str());
-  message = run_gnuplot(directory, "timeline.gp");
+  FigureStyle style;
+  style.width = 1000;
+  style.height = 160 + 140 * static_cast<int>(objectives.size());
+  message = render_figure(directory, "timeline", "every objective along " + grouping + " " + label, style, body.str());
   return message.empty() ? "timeline.png" : "";
 }
 

@@ -30,26 +30,26 @@ const char* const kProblemSchema = R"json({
   "properties": {
     "name": {"type": "string", "description": "Study name (used for the default output directory)", "default": "study"},
     "description": {"type": "string", "description": "Free text", "default": ""},
-    "mechanism": {"type": "object", "required": ["plugin"], "properties": {
+    "mechanism": {"type": "object", "required": ["plugin"], "description": "What is designed: a mechanism plugin and its options", "properties": {
         "plugin": {"type": "string", "description": "Mechanism plugin name"},
         "options": {"type": "object", "description": "Options of the mechanism plugin", "default": {}}}},
-    "scene": {"type": "object", "required": ["plugin"], "properties": {
+    "scene": {"type": "object", "required": ["plugin"], "description": "The task-space samples the mechanism must serve: a scene plugin and its options", "properties": {
         "plugin": {"type": "string", "description": "Scene plugin name"},
         "options": {"type": "object", "description": "Options of the scene plugin", "default": {}}}},
-    "objectives": {"type": "array", "minItems": 1, "items": {"type": "object", "required": ["metric"], "properties": {
+    "objectives": {"type": "array", "minItems": 1, "description": "What is optimized: one entry per metric (several for a Pareto study or a weighted sum)", "items": {"type": "object", "required": ["metric"], "properties": {
         "metric": {"type": "string", "description": "Metric plugin name"},
         "name": {"type": "string", "description": "Label (default: the metric name)"},
-        "sense": {"type": "string", "enum": ["maximize", "minimize"], "default": "maximize"},
+        "sense": {"type": "string", "enum": ["maximize", "minimize"], "default": "maximize", "description": "Whether larger or smaller values of the metric are better"},
         "weight": {"type": "number", "minimum": 0, "description": "Weight in a weighted-sum study (>= 0; use sense to minimize)", "default": 1.0},
         "options": {"type": "object", "description": "Options of the metric plugin", "default": {}}}}},
-    "solver": {"type": "object", "required": ["plugin"], "properties": {
+    "solver": {"type": "object", "required": ["plugin"], "description": "How the design space is searched: a solver plugin and its options", "properties": {
         "plugin": {"type": "string", "description": "Solver plugin name"},
         "options": {"type": "object", "description": "Options of the solver plugin", "default": {}}}},
-    "output": {"type": "object", "default": {}, "properties": {
+    "output": {"type": "object", "default": {}, "description": "What the run writes besides result.json", "properties": {
         "directory": {"type": "string", "description": "Output directory (default results/<name>)"},
         "samples_csv": {"type": "boolean", "description": "Write samples.csv for the best design", "default": true},
         "maps": {"type": "boolean", "description": "Write maps.csv: every objective per workspace position for the best design", "default": true},
-        "plots": {"type": "boolean", "description": "Render the position maps with gnuplot (map_<objective>.png: slices by height for 3-D scenes), timeline.png for scenes of recorded motion, and front.png/.svg for a Pareto front", "default": false},
+        "plots": {"type": "boolean", "description": "Draw figures with gnuplot, each as PNG and SVG: the position maps (map_<objective>: slices by height for 3-D scenes), a Pareto front (front), the GA's and NSGA-II's convergence (convergence) and, for scenes of recorded motion, one trajectory (timeline)", "default": false},
         "groups": {"type": "boolean", "description": "For scenes that group their samples (subject, activity, trajectory): every objective per group with the mean and standard deviation across groups, in result.json and groups.csv", "default": true},
         "timeline": {"type": "string", "description": "With plots: the trajectory drawn in timeline.png (every objective on each sample along time); default the scene's first trajectory"}}},
     "indicators": {"type": "object", "description": "Front-quality indicators written into result.json", "properties": {

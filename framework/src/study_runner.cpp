@@ -30,6 +30,7 @@
 #include <functional>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <random>
 #include <sstream>
 
@@ -260,6 +261,21 @@ Json point_to_json(const Problem& problem, const SolutionPoint& p) {
   return j;
 }
 
+// A front point as result.json lists it: the variables the study frees, the fixed ones being in
+// "design_fixed" once (a URDF study fixes dozens of file parameters, the same on every point).
+Json front_point_to_json(const Problem& problem, const SolutionPoint& p) {
+  Json j = point_to_json(problem, p);
+  std::map<std::string, bool> every_component_fixed;
+  for (const DesignComponent& c : problem.design_space().components()) {
+    auto it = every_component_fixed.emplace(c.variable, true).first;
+    it->second = it->second && c.fixed;
+  }
+  for (const auto& [variable, fixed] : every_component_fixed) {
+    if (fixed) j["design"].erase(variable);
+  }
+  return j;
+}
+
 // The body of result.json: provenance, the run, the solver's result.
 Json result_document(const Study& study, const RunSetup& run, const SolverResult& result, const std::string& started) {
   Json doc;
@@ -290,12 +306,15 @@ Json result_document(const Study& study, const RunSetup& run, const SolverResult
   doc["status"] = to_string(result.status);
   doc["message"] = result.message;
   doc["evaluations"] = {{"designs", result.design_evaluations}, {"samples", result.sample_evaluations}};
+  if (const std::string summary = study.problem->mechanism().summary(); !summary.empty()) {
+    doc["mechanism_summary"] = summary;
+  }
   doc["samples_in_scene"] = study.problem->samples().size();
   doc["scene"] = study.problem->samples().info;
   if (result.best) doc["best"] = point_to_json(*study.problem, *result.best);
   if (!result.front.empty()) {
     Json front = Json::array();
-    for (const SolutionPoint& p : result.front) front.push_back(point_to_json(*study.problem, p));
+    for (const SolutionPoint& p : result.front) front.push_back(front_point_to_json(*study.problem, p));
     doc["front"] = front;
   }
   doc["statistics"] = result.statistics;

@@ -34,6 +34,7 @@ from pathlib import Path
 
 MARKER = ".hapsyn-pip-test-source-copy"
 STUDY = "problems/fivebar-gii-coarse.json"
+CHAIN_STUDY = "problems/phantom3r-gii-box.json"  # reads share/serial_chain/phantom_3r.urdf
 
 
 def fail(message: str, log: str = "") -> None:
@@ -108,7 +109,7 @@ def in_tree_plugins(source: Path):
 CHECK = r"""
 import json, os, sys
 from pathlib import Path
-venv, expected, study_file = Path(sys.argv[1]).resolve(), set(json.loads(sys.argv[2])), sys.argv[3]
+venv, expected, study_file, chain_file = Path(sys.argv[1]).resolve(), set(json.loads(sys.argv[2])), sys.argv[3], sys.argv[4]
 for variable in ("PYTHONPATH", "HAPSYN_PLUGIN_PATH"):
     assert variable not in os.environ, variable + " is set"
 import hapsyn
@@ -135,6 +136,13 @@ gii = result.best_objectives["gii"]
 print(study_file, "->", result.status, result.best_objectives, result.best_design)
 assert result.status == "converged", result.status
 assert 0.0 < gii < 1.0, gii
+# A study that reads a data file (the URDF in share/serial_chain) finds it in the package's
+# share/hapsyn: the source tree's share/ is hidden while this runs (main() renames it).
+chain = hapsyn.load(chain_file, set=['solver={"plugin": "evaluate"}', "design={}", "threads=2"])
+chained = chain.run()
+print(chain_file, "->", chained.status, chained.best_objectives)
+assert chained.status == "converged", chained.status
+assert 0.0 < chained.best_objectives["gii"] < 1.0, chained.best_objectives
 print("ok")
 """
 
@@ -195,9 +203,17 @@ def main() -> None:
         run_dir = temp / "run"
         run_dir.mkdir()
         shutil.copy2(copy / STUDY, run_dir / Path(STUDY).name)
-        check = subprocess.run([str(python), "-c", CHECK, str(venv), json.dumps(expected), Path(STUDY).name],
-                               env=env, cwd=str(run_dir), stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                               text=True, errors="replace")
+        shutil.copy2(copy / CHAIN_STUDY, run_dir / Path(CHAIN_STUDY).name)
+        hidden = copy.parent / "share.hidden"
+        shutil.rmtree(hidden, ignore_errors=True)  # left by a run that was killed here
+        (copy / "share").rename(hidden)
+        try:
+            check = subprocess.run([str(python), "-c", CHECK, str(venv), json.dumps(expected), Path(STUDY).name,
+                                    Path(CHAIN_STUDY).name],
+                                   env=env, cwd=str(run_dir), stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                   text=True, errors="replace")
+        finally:
+            hidden.rename(copy / "share")
         print(check.stdout, end="")
         if check.returncode != 0:
             fail("the installed package failed its checks (output above); pip's output follows", pip.stdout)

@@ -66,7 +66,7 @@ PositionMaps position_maps(const Problem& problem, const SampleRecords& records)
 /// maps.csv: position, x, y, z, samples, one column per objective (empty = undefined).
 std::string maps_csv(const PositionMaps& maps);
 
-/// Writes map_<objective>.{dat,gp,png} into `directory` (slices by height above the lattice's
+/// Writes map_<objective>.{dat,gp,png,svg} into `directory` (slices by height above the lattice's
 /// origin, the vertical z of the poses' frame, for lattice scenes;
 /// otherwise an x-y scatter per z layer, highest first: each distinct z up to 12, else 12 equal bands). \return the file names of the plots rendered, and in `message`
 /// why some were not (gnuplot missing or failing; the data and scripts are written regardless).
