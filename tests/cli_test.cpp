@@ -12,6 +12,7 @@
 #include <array>
 #include <cstdio>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 #include <sys/wait.h>
 
@@ -714,6 +715,32 @@ TEST(Cli, FrontCsvListsTheFreeComponentsAndResultJsonTheFixedOnesOnce) {
     EXPECT_TRUE(point["design"].contains("l1") && point["design"].contains("l2") && point["design"].contains("r"))
         << point.dump();
   }
+  fs::remove_all(out);
+}
+
+// A front of dozens of points printed every one of them; the console shows 11 spread along it,
+// the first and the last included, and says where the rest is.
+TEST(Cli, ALongFrontIsSummarisedOnTheConsole) {
+  const fs::path out = fresh_dir("long-front");
+  const Output o = hapsyn_cli("run " + problem("fivebar-pareto-nsga2.json") + " --out " + out.string() +
+                              " --set solver.options.generations=30 --set solver.options.population=40");
+  ASSERT_EQ(o.code, 0) << o.out;
+  const Json result = read_json(out / "result.json");
+  const std::size_t n = result["front"].size();
+  ASSERT_GT(n, 11u) << o.out;
+  EXPECT_NE(o.out.find("front: " + std::to_string(n) + " non-dominated points (11 shown; all in front.csv)"),
+            std::string::npos)
+      << o.out;
+  std::size_t designs = 0;
+  for (std::size_t at = o.out.find("  design:"); at != std::string::npos; at = o.out.find("  design:", at + 1)) ++designs;
+  EXPECT_EQ(designs, 11u) << o.out;
+  const auto shown = [&](const Json& point) {
+    std::ostringstream gii;
+    gii << std::setprecision(6) << point["objectives"]["gii"].get<double>();
+    return o.out.find("gii = " + gii.str()) != std::string::npos;
+  };
+  EXPECT_TRUE(shown(result["front"][0])) << o.out;
+  EXPECT_TRUE(shown(result["front"][n - 1])) << o.out;
   fs::remove_all(out);
 }
 

@@ -174,8 +174,15 @@ void print_summary(const Json& result, std::ostream& out) {
     print_point(result["best"], "  ");
   }
   if (result.contains("front")) {
-    out << "front: " << result["front"].size() << " non-dominated points\n";
-    for (const Json& p : result["front"]) print_point(p, "  ");
+    // A long front is shown by 10 points spread along it (as stored) and the last; front.csv has all.
+    const std::size_t n = result["front"].size();
+    const std::size_t shown = std::min<std::size_t>(n, 11);
+    out << "front: " << n << " non-dominated points" << (shown < n ? " (" + std::to_string(shown) + " shown; all in front.csv)" : "")
+        << "\n";
+    for (std::size_t k = 0; k < shown; ++k) {
+      const std::size_t i = shown < n ? (k + 1 == shown ? n - 1 : k * (n - 1) / (shown - 1)) : k;
+      print_point(result["front"][i], "  ");
+    }
   }
   // A solver's own summary lines (ga: the cluster table of its runs).
   if (result["statistics"].is_object() && result["statistics"].contains("report")) {
