@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Generates the documentation's reference pages (docs/reference/) from the code.
 
-Everything comes from `hapsyn reference` (framework/app/reference.cpp): the CLI as CLI11 declares
+Everything comes from `hapsyn reference` (framework/app/reference_command.cpp): the CLI as CLI11 declares
 it, the problem file's schema and result.json's fields as the framework declares them, and every
 plugin's options as its declarations give them. Nothing here is written by hand, so the pages
 cannot drift from the program; the test Docs.ReferencePagesAreCurrent runs this script with

@@ -1,6 +1,6 @@
-// `hapsyn reference` (reference.hpp): the CLI as CLI11 holds it, the problem schema and
+// `hapsyn reference` (reference_command.hpp): the CLI as CLI11 holds it, the problem schema and
 // result.json's fields as the framework declares them, the plugins as the registry finds them.
-#include "reference.hpp"
+#include "reference_command.hpp"
 
 #include <hapsyn/error.hpp>
 #include <hapsyn/reference.hpp>
