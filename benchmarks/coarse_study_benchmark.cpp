@@ -4,9 +4,9 @@
 // same run: the same search without pruning, and on one thread.
 #include "common.hpp"
 
-#include <hapsyn/registry.hpp>
-#include <hapsyn/problem_file.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/internal/registry.hpp>
+#include <hapsyn/internal/problem_file.hpp>
+#include <hapsyn/internal/study.hpp>
 #include <solvers/grid/grid.hpp>
 
 #include <benchmark/benchmark.h>

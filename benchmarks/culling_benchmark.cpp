@@ -7,9 +7,9 @@
 //   HAPSYN_BENCH_FINE=1 build/bin/culling_benchmark      # adds the 1 mm design grid (minutes)
 #include "common.hpp"
 
-#include <hapsyn/registry.hpp>
-#include <hapsyn/problem_file.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/internal/registry.hpp>
+#include <hapsyn/internal/problem_file.hpp>
+#include <hapsyn/internal/study.hpp>
 #include <solvers/culling/culling.hpp>
 #include <solvers/grid/grid.hpp>
 

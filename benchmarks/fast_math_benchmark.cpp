@@ -1,8 +1,8 @@
-// hapsyn/fast_math.hpp against libm on the same 1200 arguments in [-4, 4] (the range of joint
+// hapsyn/accel/fast_math.hpp against libm on the same 1200 arguments in [-4, 4] (the range of joint
 // angles and IK vectors): atan2 and sin+cos per call. Read the ratios printed at the end.
 #include "common.hpp"
 
-#include <hapsyn/fast_math.hpp>
+#include <hapsyn/accel/fast_math.hpp>
 
 #include <benchmark/benchmark.h>
 

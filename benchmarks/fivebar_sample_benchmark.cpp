@@ -8,7 +8,7 @@
 //   IK + J + D + M and both metrics' local() -- one full GII + GDI design evaluation
 //   gii.local() and gdi.local() alone     -- the metrics' closed-form singular values
 //   the reach constraint                  -- once per design, O(samples)
-//   the same on the block path (hapsyn/sample_block.hpp): the Highway kernel, 8 samples per call,
+//   the same on the block path (hapsyn/accel/sample_block.hpp): the Highway kernel, 8 samples per call,
 //   and the metrics' local_block() -- "Block" rows; the ratio Block / per-sample is the speed-up
 //   of the vectorised, trigonometry-free kernel on this CPU (its instruction set is recorded as
 //   "block_target").

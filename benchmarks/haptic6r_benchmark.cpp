@@ -20,8 +20,8 @@
 #include <human_arm.hpp>
 
 #include <hapsyn/problem.hpp>
-#include <hapsyn/registry.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/internal/registry.hpp>
+#include <hapsyn/internal/study.hpp>
 
 #include <benchmark/benchmark.h>
 #include <kdl/chain.hpp>

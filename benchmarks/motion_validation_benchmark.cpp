@@ -10,10 +10,10 @@
 // Counters: samples, s_per_sample, and the three shares. Ratios against stride 1 / 2 threads of the same run.
 #include "common.hpp"
 
-#include <hapsyn/problem_file.hpp>
-#include <hapsyn/registry.hpp>
+#include <hapsyn/internal/problem_file.hpp>
+#include <hapsyn/internal/registry.hpp>
 #include <hapsyn/solver.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/internal/study.hpp>
 
 #include <motion_scene.hpp>
 

@@ -8,9 +8,9 @@
 // survive their first samples. The difference per design is the adapter's overhead.
 #include "common.hpp"
 
-#include <hapsyn/problem_file.hpp>
-#include <hapsyn/registry.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/internal/problem_file.hpp>
+#include <hapsyn/internal/registry.hpp>
+#include <hapsyn/internal/study.hpp>
 #include <shared/pagmo_adapter.hpp>
 
 #include <benchmark/benchmark.h>

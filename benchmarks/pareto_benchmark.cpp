@@ -9,9 +9,9 @@
 //   build/bin/pareto_benchmark
 #include "common.hpp"
 
-#include <hapsyn/registry.hpp>
-#include <hapsyn/problem_file.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/internal/registry.hpp>
+#include <hapsyn/internal/problem_file.hpp>
+#include <hapsyn/internal/study.hpp>
 
 #include <benchmark/benchmark.h>
 

@@ -52,7 +52,7 @@ function(hapsyn_add_test name)
       "with HAPSYN_BUILD_TESTS=ON; out of tree, use add_executable() and add_test() directly")
   endif()
   add_executable(${name} ${ARG_UNPARSED_ARGUMENTS})
-  target_link_libraries(${name} PRIVATE hapsyn GTest::gtest GTest::gtest_main ${ARG_LIBRARIES})
+  target_link_libraries(${name} PRIVATE hapsyn hapsyn_internal GTest::gtest GTest::gtest_main ${ARG_LIBRARIES})
   target_compile_options(${name} PRIVATE ${HAPSYN_WARNINGS})
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
   target_compile_definitions(${name} PRIVATE

@@ -1,4 +1,4 @@
-// The evaluator's block path (Problem::evaluate_blocks, hapsyn/sample_block.hpp) against its
+// The evaluator's block path (Problem::evaluate_blocks, hapsyn/accel/sample_block.hpp) against its
 // per-sample path. Worst case, on the five-bar: the same status, failing sample, sample count,
 // critical samples and pruning decisions for every design, threshold, subset and front, and the
 // same objectives. Averaging, on the haptic 6R with coverage (scene attributes): the same status
@@ -6,7 +6,7 @@
 #include "test_support.hpp"
 
 #include <hapsyn/problem.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/internal/study.hpp>
 
 #include <gtest/gtest.h>
 

@@ -2,8 +2,8 @@
 #include "test_support.hpp"
 
 #include <hapsyn/cluster.hpp>
-#include <hapsyn/compare.hpp>
-#include <hapsyn/plot.hpp>
+#include <hapsyn/internal/compare.hpp>
+#include <hapsyn/internal/plot.hpp>
 
 #include <boost/filesystem.hpp>
 

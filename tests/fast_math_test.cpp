@@ -1,6 +1,6 @@
-// hapsyn/fast_math.hpp against libm: random arguments over many scales and every edge case.
-#include <hapsyn/fast_math.hpp>
-#include <hapsyn/lanes.hpp>
+// hapsyn/accel/fast_math.hpp against libm: random arguments over many scales and every edge case.
+#include <hapsyn/accel/fast_math.hpp>
+#include <hapsyn/accel/lanes.hpp>
 
 #include <gtest/gtest.h>
 
@@ -83,7 +83,7 @@ TEST(FastMath, Atan2KeepsLibmsConventionsForZerosInfinitiesAndNaN) {
 }
 
 TEST(FastMath, LaneSinCosEqualsTheScalarCallLaneByLane) {
-  // The lane version (hapsyn/lanes.hpp) runs the same reduction and polynomials; compiled with
+  // The lane version (hapsyn/accel/lanes.hpp) runs the same reduction and polynomials; compiled with
   // the same flags, every lane is the scalar result bit for bit, in every quadrant, at the
   // reduction's edges and for the arguments that fall back to libm.
   std::mt19937_64 rng(9);

@@ -3,8 +3,8 @@
 // groupings a scene declares are checked centrally.
 #include "test_support.hpp"
 
-#include <hapsyn/groups.hpp>
-#include <hapsyn/maps.hpp>
+#include <hapsyn/internal/groups.hpp>
+#include <hapsyn/internal/maps.hpp>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -2,8 +2,8 @@
 // reduction over that position's samples, checked against the whole-scene evaluation.
 #include "test_support.hpp"
 
-#include <hapsyn/maps.hpp>
-#include <hapsyn/plot.hpp>
+#include <hapsyn/internal/maps.hpp>
+#include <hapsyn/internal/plot.hpp>
 
 #include <boost/filesystem.hpp>
 

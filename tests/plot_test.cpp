@@ -1,7 +1,7 @@
 // The lattice slice plots: slices are level in the plot frame (heights above the lattice's
 // origin), whatever signed permutation turns the lattice frame into it, and a lattice turned
 // by a general rotation is cut along its axis nearest the vertical.
-#include <hapsyn/plot.hpp>
+#include <hapsyn/internal/plot.hpp>
 
 #include <Eigen/Geometry>
 #include <boost/filesystem.hpp>

@@ -9,7 +9,7 @@
 #include <functional>
 #include <hapsyn/error.hpp>
 #include <hapsyn/json.hpp>
-#include <hapsyn/problem_file.hpp>
+#include <hapsyn/internal/problem_file.hpp>
 
 #include "test_support.hpp"
 #include <string>

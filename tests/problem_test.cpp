@@ -2,7 +2,7 @@
 // and the central checks of plugin input and output.
 #include "test_support.hpp"
 
-#include <hapsyn/maps.hpp>
+#include <hapsyn/internal/maps.hpp>
 
 #include <Eigen/SVD>
 #include <boost/filesystem.hpp>

@@ -3,9 +3,9 @@
 #include "analytic_problems.hpp"
 #include "test_support.hpp"
 
-#include <hapsyn/maps.hpp>
-#include <hapsyn/plot.hpp>
-#include <hapsyn/study_runner.hpp>
+#include <hapsyn/internal/maps.hpp>
+#include <hapsyn/internal/plot.hpp>
+#include <hapsyn/internal/study_runner.hpp>
 
 #include <boost/filesystem.hpp>
 

@@ -3,7 +3,7 @@
 #include "test_support.hpp"
 
 #include <hapsyn/scene.hpp>
-#include <hapsyn/scene_export.hpp>
+#include <hapsyn/internal/scene_export.hpp>
 
 #include <boost/filesystem.hpp>
 

@@ -1,7 +1,7 @@
 #include "test_support.hpp"
 
 #include <hapsyn/cluster.hpp>
-#include <hapsyn/sweep.hpp>
+#include <hapsyn/internal/sweep.hpp>
 
 #include <boost/filesystem.hpp>
 

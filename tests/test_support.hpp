@@ -2,10 +2,10 @@
 // Helpers shared by the tests: the in-tree plugin registry and error-message assertions. It also
 // brings the study API every test uses: problem files, load_study, run_study.
 #include <hapsyn/error.hpp>
-#include <hapsyn/problem_file.hpp>
-#include <hapsyn/registry.hpp>
-#include <hapsyn/study.hpp>
-#include <hapsyn/study_runner.hpp>
+#include <hapsyn/internal/problem_file.hpp>
+#include <hapsyn/internal/registry.hpp>
+#include <hapsyn/internal/study.hpp>
+#include <hapsyn/internal/study_runner.hpp>
 
 #include <gtest/gtest.h>
 

@@ -7,20 +7,20 @@
 // the checkpoint is kept and `hapsyn run FILE --resume` continues (a job script can tell this
 // from a finished run and requeue); likewise `sweep` and `compare` stopped (the same command
 // continues them, reusing the finished runs). A second signal ends the process at once with 128 + signal.
-#include <hapsyn/compare.hpp>
+#include <hapsyn/internal/compare.hpp>
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
-#include <hapsyn/groups.hpp>
-#include <hapsyn/merge.hpp>
+#include <hapsyn/internal/groups.hpp>
+#include <hapsyn/internal/merge.hpp>
 #include <hapsyn/output_files.hpp>
 #include <hapsyn/parallel.hpp>
-#include <hapsyn/plot.hpp>
-#include <hapsyn/problem_file.hpp>
-#include <hapsyn/registry.hpp>
-#include <hapsyn/scene_export.hpp>
-#include <hapsyn/study.hpp>
-#include <hapsyn/study_runner.hpp>
-#include <hapsyn/sweep.hpp>
+#include <hapsyn/internal/plot.hpp>
+#include <hapsyn/internal/problem_file.hpp>
+#include <hapsyn/internal/registry.hpp>
+#include <hapsyn/internal/scene_export.hpp>
+#include <hapsyn/internal/study.hpp>
+#include <hapsyn/internal/study_runner.hpp>
+#include <hapsyn/internal/sweep.hpp>
 
 #include "ranks.hpp"
 #include "summary.hpp"

@@ -2,7 +2,7 @@
 // The processes a command runs on: an MPI job (started by mpirun/srun with several ranks), one
 // share of a SLURM job array (--shard i/N), or this process alone; and loading a study on them.
 #include <hapsyn/cluster.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/internal/study.hpp>
 
 #include <atomic>
 #include <functional>

@@ -3,7 +3,7 @@
 #include "reference_command.hpp"
 
 #include <hapsyn/error.hpp>
-#include <hapsyn/reference.hpp>
+#include <hapsyn/internal/reference.hpp>
 #include <hapsyn/options.hpp>
 #include <hapsyn/output_files.hpp>
 

@@ -3,7 +3,7 @@
 // JSON document (scripts/gen-reference.py renders it into docs/reference/). Hidden from --help:
 // it serves the docs build, not the user.
 #include <hapsyn/json.hpp>
-#include <hapsyn/registry.hpp>
+#include <hapsyn/internal/registry.hpp>
 
 #include <CLI/CLI.hpp>
 

@@ -1,7 +1,7 @@
 // The console summary of a finished study (summary.hpp).
 #include "summary.hpp"
 
-#include <hapsyn/groups.hpp>
+#include <hapsyn/internal/groups.hpp>
 
 #include <algorithm>
 #include <iomanip>

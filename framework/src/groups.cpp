@@ -1,7 +1,7 @@
 #include <hapsyn/error.hpp>
-#include <hapsyn/groups.hpp>
+#include <hapsyn/internal/groups.hpp>
 #include <hapsyn/output_files.hpp>
-#include <hapsyn/plot.hpp>
+#include <hapsyn/internal/plot.hpp>
 
 #include <boost/filesystem.hpp>
 

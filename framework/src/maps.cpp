@@ -1,6 +1,6 @@
 #include <hapsyn/error.hpp>
-#include <hapsyn/maps.hpp>
-#include <hapsyn/plot.hpp>
+#include <hapsyn/internal/maps.hpp>
+#include <hapsyn/internal/plot.hpp>
 #include <hapsyn/output_files.hpp>
 
 #include <boost/filesystem.hpp>

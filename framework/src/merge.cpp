@@ -1,12 +1,12 @@
 // hapsyn merge: check that the shares belong together, combine their checkpoints, finish with
-// --resume (see hapsyn/merge.hpp).
+// --resume (see hapsyn/internal/merge.hpp).
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/json_text.hpp>
-#include <hapsyn/merge.hpp>
+#include <hapsyn/internal/merge.hpp>
 #include <hapsyn/read_file.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/internal/study.hpp>
 
 #include <boost/filesystem.hpp>
 

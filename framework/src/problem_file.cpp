@@ -5,7 +5,7 @@
 #include <cstring>
 #include <hapsyn/error.hpp>
 #include <hapsyn/json_text.hpp>
-#include <hapsyn/problem_file.hpp>
+#include <hapsyn/internal/problem_file.hpp>
 #include <hapsyn/read_file.hpp>
 #include <iterator>
 #include <memory>

@@ -1,6 +1,6 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/plugin.hpp>
-#include <hapsyn/registry.hpp>
+#include <hapsyn/internal/registry.hpp>
 #include <hapsyn/schema.hpp>
 
 #include "serialized_plugins.hpp"

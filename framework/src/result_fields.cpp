@@ -1,8 +1,8 @@
-// result.json's fields, declared once (hapsyn/reference.hpp). The reference page
+// result.json's fields, declared once (hapsyn/internal/reference.hpp). The reference page
 // docs/reference/result-json.md is generated from this table, and tests/docs/check_reference.py
 // checks the result.json of shipped studies against it, so a field added to the writer without
 // a line here (or a line whose field is never written) fails the docs tests.
-#include <hapsyn/reference.hpp>
+#include <hapsyn/internal/reference.hpp>
 
 namespace hapsyn {
 

@@ -1,7 +1,7 @@
 #include <hapsyn/error.hpp>
 #include "sample_checks.hpp"
-#include <hapsyn/plot.hpp>
-#include <hapsyn/scene_export.hpp>
+#include <hapsyn/internal/plot.hpp>
+#include <hapsyn/internal/scene_export.hpp>
 
 #include <boost/filesystem.hpp>
 

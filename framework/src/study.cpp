@@ -4,10 +4,10 @@
 #include <hapsyn/design_space.hpp>
 #include <hapsyn/error.hpp>
 #include "sample_checks.hpp"
-#include <hapsyn/problem_file.hpp>
-#include <hapsyn/reference.hpp>
+#include <hapsyn/internal/problem_file.hpp>
+#include <hapsyn/internal/reference.hpp>
 #include <hapsyn/schema.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/internal/study.hpp>
 
 #include "serialized_plugins.hpp"
 

@@ -3,14 +3,14 @@
 #include <hapsyn/json_text.hpp>
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/error.hpp>
-#include <hapsyn/plot.hpp>
-#include <hapsyn/groups.hpp>
-#include <hapsyn/maps.hpp>
+#include <hapsyn/internal/plot.hpp>
+#include <hapsyn/internal/groups.hpp>
+#include <hapsyn/internal/maps.hpp>
 #include <hapsyn/output_files.hpp>
 #include <hapsyn/parallel.hpp>
 #include <hapsyn/plugin.hpp>
-#include <hapsyn/problem_file.hpp>
-#include <hapsyn/study_runner.hpp>
+#include <hapsyn/internal/problem_file.hpp>
+#include <hapsyn/internal/study_runner.hpp>
 
 #include <hapsyn/read_file.hpp>
 

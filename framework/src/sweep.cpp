@@ -2,13 +2,13 @@
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/output_files.hpp>
-#include <hapsyn/plot.hpp>
-#include <hapsyn/problem_file.hpp>
+#include <hapsyn/internal/plot.hpp>
+#include <hapsyn/internal/problem_file.hpp>
 #include <hapsyn/read_file.hpp>
 #include <hapsyn/solver.hpp>
-#include <hapsyn/study.hpp>
-#include <hapsyn/study_runner.hpp>
-#include <hapsyn/sweep.hpp>
+#include <hapsyn/internal/study.hpp>
+#include <hapsyn/internal/study_runner.hpp>
+#include <hapsyn/internal/sweep.hpp>
 
 #include <boost/filesystem.hpp>
 

@@ -4,9 +4,9 @@
 
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
-#include <hapsyn/maps.hpp>
-#include <hapsyn/problem_file.hpp>
-#include <hapsyn/study_runner.hpp>
+#include <hapsyn/internal/maps.hpp>
+#include <hapsyn/internal/problem_file.hpp>
+#include <hapsyn/internal/study_runner.hpp>
 
 #include <pybind11/stl.h>
 

@@ -3,8 +3,8 @@
 /// The C++ side of hapsyn.Study: a loaded study with the registry that made it, and the calls
 /// the Python package wraps (load, run, evaluate, scene). Documents cross the boundary as JSON
 /// text (the Python side uses the json module), arrays as NumPy arrays.
-#include <hapsyn/registry.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/internal/registry.hpp>
+#include <hapsyn/internal/study.hpp>
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>

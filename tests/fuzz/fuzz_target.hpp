@@ -4,9 +4,9 @@
 // (plugins, schemas, design space, scene build). Bad input must end in hapsyn::Error; anything
 // else (another exception, a crash, a sanitizer report, a hang) is a bug.
 #include <hapsyn/error.hpp>
-#include <hapsyn/problem_file.hpp>
-#include <hapsyn/registry.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/internal/problem_file.hpp>
+#include <hapsyn/internal/registry.hpp>
+#include <hapsyn/internal/study.hpp>
 
 #include <boost/filesystem.hpp>
 

@@ -4,8 +4,8 @@
 /// requested quantities, with per-thread scratch so the per-sample loop is allocation-free.
 #include <hapsyn/design_space.hpp>
 #include <hapsyn/quantities.hpp>
-#include <hapsyn/sample_envelope.hpp>
-#include <hapsyn/sample_block.hpp>
+#include <hapsyn/accel/sample_envelope.hpp>
+#include <hapsyn/accel/sample_block.hpp>
 #include <hapsyn/scene.hpp>
 
 #include <memory>
@@ -41,7 +41,7 @@ class MechanismModel {
   /// singularity is kSingular, never a NaN: the evaluator refuses NaN/inf quantities.
   virtual void solve(const double* pose, Needs needs, MechanismScratch& scratch,
                      SampleQuantities& out) const = 0;
-  /// Optional block path (hapsyn/sample_block.hpp): classifies the `poses.count` samples of a
+  /// Optional block path (hapsyn/accel/sample_block.hpp): classifies the `poses.count` samples of a
   /// block and fills, for the reachable lanes, the quantities in `needs`, as solve() would for
   /// each (to rounding: agreement to 1e-12 relative, the same status). Called only when
   /// Mechanism::solves_blocks(needs) is true, with the same rules as solve() (concurrent, no

@@ -10,8 +10,8 @@
 /// value over any subset of samples is then an upper bound of its value over the whole scene
 /// (the per-sample bound that culling uses: GII(p) <= sigma_min(J(p,a)) / sigma_max(J(p,b))).
 #include <hapsyn/quantities.hpp>
-#include <hapsyn/sample_block.hpp>
-#include <hapsyn/sample_envelope.hpp>
+#include <hapsyn/accel/sample_block.hpp>
+#include <hapsyn/accel/sample_envelope.hpp>
 
 #include <limits>
 #include <string>
@@ -101,7 +101,7 @@ class Metric {
     for (int i = 0; i < count; ++i) local(*q[i], out + static_cast<long>(i) * k);
   }
 
-  /// Optional block path (hapsyn/sample_block.hpp): true when local_block() computes what
+  /// Optional block path (hapsyn/accel/sample_block.hpp): true when local_block() computes what
   /// local() does (read once, at load). The evaluator uses it in worst-case studies and in
   /// averaging ones (not in a study that mixes both kinds). Default: false.
   virtual bool has_local_block() const { return false; }

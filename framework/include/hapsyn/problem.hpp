@@ -149,7 +149,7 @@ class Problem {
   bool reachable_interval(const double* full_design, int component, int sample, double& lower, double& upper) const {
     return any_worst_case_ && mechanism_->reachable_interval(full_design, component, samples_->pose(sample), lower, upper);
   }
-  /// True when evaluate() solves samples in blocks (hapsyn/sample_block.hpp): the mechanism
+  /// True when evaluate() solves samples in blocks (hapsyn/accel/sample_block.hpp): the mechanism
   /// solves blocks for the study's needs, every metric is worst-case with a block local and no
   /// scene attributes, and the scene has at most kBlockMaxCoordinates coordinates and no
   /// demanded motion. Same results as the per-sample path (docs/design.md section 13).

@@ -82,7 +82,7 @@ struct SampleSet {
   /// the unweighted study. On a subset of the samples (culling, a chunk), a combine()
   /// that divides by another sum-reduced local (coverage, mean_isotropy) still gives the
   /// subset's weighted mean; one that divides by the sample count gives it scaled by the
-  /// scene's mean weight over the subset's mean weight. Position maps (hapsyn/maps.hpp) weight
+  /// scene's mean weight over the subset's mean weight. Position maps (hapsyn/internal/maps.hpp) weight
   /// each position's samples by their own weights.
   std::vector<double> weights;
   /// What the scene reports about itself (e.g. build time, cache file, counts); copied into

@@ -1,7 +1,7 @@
 #include "fivebar_envelope.hpp"
 
-#include <hapsyn/fast_math.hpp>
-#include <hapsyn/multiversion.hpp>
+#include <hapsyn/accel/fast_math.hpp>
+#include <hapsyn/accel/multiversion.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -28,7 +28,7 @@ struct Interval {
 [[gnu::always_inline]] inline Interval hull(double a, double b) { return {std::min(a, b), std::max(a, b)}; }
 
 // sin and cos over an angle interval: the ends, and 1 or -1 where an extremum lies inside. The
-// inline sin_cos of hapsyn/fast_math.hpp (absolute error below 1e-15, far inside the margins):
+// inline sin_cos of hapsyn/accel/fast_math.hpp (absolute error below 1e-15, far inside the margins):
 // libm's calls were most of an envelope's cost.
 [[gnu::always_inline]] inline void sin_cos_of(Interval a, Interval& sine_of, Interval& cosine_of) {
   if (a.hi - a.lo >= 2.0 * kPi) {

@@ -17,7 +17,7 @@
 /// prove failure (unreachable, singular or outside the paper's G) for every design of the run.
 /// Each angle interval is widened by 1e-9 rad and each final bound by 1e-9 relative, far above
 /// the rounding of the model and of these formulas.
-#include <hapsyn/sample_envelope.hpp>
+#include <hapsyn/accel/sample_envelope.hpp>
 
 namespace hapsyn::plugins {
 

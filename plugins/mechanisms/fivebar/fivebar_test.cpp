@@ -8,7 +8,7 @@
 
 #include <hapsyn/error.hpp>
 #include <hapsyn/options.hpp>
-#include <hapsyn/registry.hpp>
+#include <hapsyn/internal/registry.hpp>
 #include <hapsyn/schema.hpp>
 
 #include <gtest/gtest.h>

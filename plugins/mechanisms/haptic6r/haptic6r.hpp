@@ -39,8 +39,8 @@
 ///   only when asked for: the other flags run the same code as before.
 #include <hapsyn/mechanism.hpp>
 #include <hapsyn/options.hpp>
-#include <hapsyn/lanes.hpp>
-#include <hapsyn/sample_block.hpp>
+#include <hapsyn/accel/lanes.hpp>
+#include <hapsyn/accel/sample_block.hpp>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -293,7 +293,7 @@ class Haptic6RModel final : public MechanismModel {
 
  private:
   // The bodies of solve(), inverse_kinematics() and quantities(), compiled for AVX2/FMA and
-  // baseline CPUs (hapsyn/multiversion.hpp: GCC cannot multiversion the virtual solve(), and
+  // baseline CPUs (hapsyn/accel/multiversion.hpp: GCC cannot multiversion the virtual solve(), and
   // clang exports no plain symbol for a multiversioned function). Each is defined in the file
   // of its wrapper: solve_sample and inverse_kinematics_impl in haptic6r_kinematics.cpp,
   // quantities_impl in haptic6r_dynamics.cpp.

@@ -6,8 +6,8 @@
 #include "haptic6r_ik.hpp"
 
 #include <hapsyn/error.hpp>
-#include <hapsyn/lanes.hpp>
-#include <hapsyn/multiversion.hpp>
+#include <hapsyn/accel/lanes.hpp>
+#include <hapsyn/accel/multiversion.hpp>
 
 #include <algorithm>
 #include <cstddef>

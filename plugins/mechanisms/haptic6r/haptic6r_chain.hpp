@@ -3,12 +3,12 @@
 /// Private to the haptic6r model: the forward-chain kernels shared by the per-sample solve()
 /// (haptic6r_kinematics.cpp) and by quantities() / frames() / jacobian() / dynamics()
 /// (haptic6r_dynamics.cpp). Every function is [[gnu::always_inline]]: it is compiled inside each
-/// multiversioned caller (hapsyn/multiversion.hpp), so the AVX2/FMA clone gets an AVX2/FMA copy
+/// multiversioned caller (hapsyn/accel/multiversion.hpp), so the AVX2/FMA clone gets an AVX2/FMA copy
 /// and the baseline clone a baseline one, exactly as when they shared one file.
 #include "haptic6r.hpp"
 
-#include <hapsyn/fast_math.hpp>
-#include <hapsyn/lanes.hpp>
+#include <hapsyn/accel/fast_math.hpp>
+#include <hapsyn/accel/lanes.hpp>
 
 #include <Eigen/Core>
 #include <array>
@@ -20,7 +20,7 @@ namespace hapsyn::plugins::haptic6r_chain {
 // Plain arrays, not Eigen 3-vectors: the per-sample kernels are scalar code with many
 // live values, and Eigen's 2-wide packing of 3-vectors spilled halves to the stack and read
 // them back as pairs (store-forwarding stalls that cost more than the arithmetic).
-// T = double for one sample, T = hapsyn::Lanes for a block of samples (hapsyn/lanes.hpp): the
+// T = double for one sample, T = hapsyn::Lanes for a block of samples (hapsyn/accel/lanes.hpp): the
 // kernels below are templates on it, one source for the per-sample and the block path.
 template <typename T>
 struct ChainOf {

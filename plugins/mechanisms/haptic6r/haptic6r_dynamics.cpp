@@ -4,7 +4,7 @@
 #include "haptic6r.hpp"
 #include "haptic6r_chain.hpp"
 
-#include <hapsyn/multiversion.hpp>
+#include <hapsyn/accel/multiversion.hpp>
 
 #include <cstddef>
 
@@ -15,7 +15,7 @@ using haptic6r_chain::chain_from;
 using haptic6r_chain::dynamics_from;
 
 namespace {
-// Inlined into its multiversioned caller (hapsyn/multiversion.hpp): out of line it was a
+// Inlined into its multiversioned caller (hapsyn/accel/multiversion.hpp): out of line it was a
 // baseline-only copy and took 14 % of haptic6r_benchmark's BM_OursJacobianInertiaGravitySolve.
 [[gnu::always_inline]] inline Matrix6d jacobian_of(const Chain& c) {
   Matrix6d j;

@@ -14,12 +14,12 @@
 /// `git log -- README.md` holds that round). The quaternion's four are not (see target_of()).
 ///
 /// Every function is [[gnu::always_inline]]: it is compiled inside each multiversioned caller
-/// (hapsyn/multiversion.hpp). The model's translation units are compiled with -fno-math-errno
+/// (hapsyn/accel/multiversion.hpp). The model's translation units are compiled with -fno-math-errno
 /// so that a lane square root is one instruction (no result changes: only errno is dropped).
 #include "haptic6r.hpp"
 
-#include <hapsyn/fast_math.hpp>
-#include <hapsyn/lanes.hpp>
+#include <hapsyn/accel/fast_math.hpp>
+#include <hapsyn/accel/lanes.hpp>
 
 #include <array>
 #include <cmath>
@@ -34,7 +34,7 @@ constexpr double kPi = 3.14159265358979323846;
 // acos/asin arguments this far past +-1 are rounding at the reach boundary, not a miss.
 constexpr double kBoundaryTolerance = 1e-12;
 
-// ---- The scalar counterparts of the Lanes operations (hapsyn/lanes.hpp), so that one template
+// ---- The scalar counterparts of the Lanes operations (hapsyn/accel/lanes.hpp), so that one template
 // serves both. Truth values are numbers holding 1 or 0, as in the lane kernels.
 
 [[gnu::always_inline]] inline double where_less(double x, double y, double a, double b) { return x < y ? a : b; }

@@ -3,14 +3,14 @@
 // kernel runs at T = Lanes), and solve() (IK, then the forward-chain kernels of
 // haptic6r_chain.hpp).
 //
-// solve_sample() and inverse_kinematics_impl() are multiversioned (hapsyn/multiversion.hpp),
+// solve_sample() and inverse_kinematics_impl() are multiversioned (hapsyn/accel/multiversion.hpp),
 // each defined before its first call and next to its plain wrapper. The templates they call are
 // [[gnu::always_inline]], so every clone runs its own instruction set throughout.
 #include "haptic6r.hpp"
 #include "haptic6r_chain.hpp"
 #include "haptic6r_ik.hpp"
 
-#include <hapsyn/multiversion.hpp>
+#include <hapsyn/accel/multiversion.hpp>
 
 #include <algorithm>
 #include <cmath>

@@ -3,7 +3,7 @@
 #include <hapsyn/scene.hpp>
 
 #include <hapsyn/error.hpp>
-#include <hapsyn/multiversion.hpp>
+#include <hapsyn/accel/multiversion.hpp>
 
 #include <algorithm>
 #include <cmath>

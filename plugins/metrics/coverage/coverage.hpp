@@ -12,8 +12,8 @@
 /// n_reach^h is the sample count. A manipulator-unreachable (or singular / invalid) sample adds
 /// 0 to n_reach^m and to every eta sum. With n_reach^m = 0, J_v = J_a = J_f = 0.
 #include <hapsyn/metric.hpp>
-#include <hapsyn/lanes.hpp>
-#include <hapsyn/sample_block.hpp>
+#include <hapsyn/accel/lanes.hpp>
+#include <hapsyn/accel/sample_block.hpp>
 #include <hapsyn/options.hpp>
 
 #include <Eigen/Core>
@@ -88,7 +88,7 @@ class Coverage final : public Metric {
   /// Solves jacobian * x = x (x holds the right-hand side on entry, 6 x 6 or 6 x 12) by Gaussian
   /// elimination with partial pivoting: fixed size, allocation-free, and several times faster at
   /// this size than Eigen's PartialPivLU, which routes multi-column right-hand sides through its
-  /// blocked kernels. Compiled for AVX2/FMA and baseline CPUs (hapsyn/multiversion.hpp).
+  /// blocked kernels. Compiled for AVX2/FMA and baseline CPUs (hapsyn/accel/multiversion.hpp).
   /// \return false when a pivot is zero (J singular); x is then unspecified.
   static bool solve_jacobian(const Matrix6& jacobian, Eigen::Matrix<double, 6, 6>& x);
   static bool solve_jacobian(const Matrix6& jacobian, Eigen::Matrix<double, 6, 12>& x);
@@ -112,7 +112,7 @@ class Coverage final : public Metric {
                           double f_max);
 
  private:
-  // local()'s body, compiled for AVX2/FMA and baseline CPUs (see hapsyn/multiversion.hpp).
+  // local()'s body, compiled for AVX2/FMA and baseline CPUs (see hapsyn/accel/multiversion.hpp).
   void local_sample(const SampleQuantities& q, double* out) const;
   // local_block()'s body, compiled for AVX-512, AVX2/FMA and baseline CPUs.
   void local_block_impl(const QuantityBlock& q, double* out) const;

@@ -4,8 +4,8 @@
 #include "coverage.hpp"
 
 #include <hapsyn/error.hpp>
-#include <hapsyn/lanes.hpp>
-#include <hapsyn/multiversion.hpp>
+#include <hapsyn/accel/lanes.hpp>
+#include <hapsyn/accel/multiversion.hpp>
 
 #include <cstdint>
 #include <limits>

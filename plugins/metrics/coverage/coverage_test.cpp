@@ -9,7 +9,7 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/options.hpp>
 #include <hapsyn/problem.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/internal/study.hpp>
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 #include "gdi.hpp"
 
-#include <hapsyn/multiversion.hpp>
+#include <hapsyn/accel/multiversion.hpp>
 
 #include <Eigen/SVD>
 #include <cmath>

@@ -2,7 +2,7 @@
 
 #include <hapsyn/error.hpp>
 
-#include <hapsyn/multiversion.hpp>
+#include <hapsyn/accel/multiversion.hpp>
 
 #include <Eigen/SVD>
 #include <algorithm>

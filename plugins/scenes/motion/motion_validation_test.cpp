@@ -6,10 +6,10 @@
 // are the evaluations of each subject's own samples.
 #include "synthetic_motion.hpp"
 
-#include <hapsyn/groups.hpp>
-#include <hapsyn/maps.hpp>
+#include <hapsyn/internal/groups.hpp>
+#include <hapsyn/internal/maps.hpp>
 #include <hapsyn/mechanism.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/internal/study.hpp>
 
 #include <human_arm.hpp>
 

@@ -12,7 +12,7 @@
 #include "ga_options.hpp"
 
 #include <hapsyn/json.hpp>
-#include <hapsyn/plot.hpp>
+#include <hapsyn/convergence.hpp>
 #include <hapsyn/problem.hpp>
 #include <hapsyn/solver.hpp>
 

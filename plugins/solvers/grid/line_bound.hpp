@@ -13,7 +13,7 @@
 /// the constraints are evaluated at the run's ends (stepping inward past violators), and the
 /// designs between need no constraint evaluation of their own (verified()).
 #include <hapsyn/error.hpp>
-#include <hapsyn/fast_math.hpp>
+#include <hapsyn/accel/fast_math.hpp>
 #include <hapsyn/problem.hpp>
 
 #include <Eigen/Core>

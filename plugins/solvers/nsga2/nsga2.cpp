@@ -5,7 +5,7 @@
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/pareto.hpp>
-#include <hapsyn/plot.hpp>
+#include <hapsyn/convergence.hpp>
 
 #include <pagmo/algorithms/nsga2.hpp>
 #include <pagmo/batch_evaluators/member_bfe.hpp>

@@ -7,8 +7,8 @@
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/pareto.hpp>
-#include <hapsyn/plot.hpp>
-#include <hapsyn/study_runner.hpp>
+#include <hapsyn/internal/plot.hpp>
+#include <hapsyn/internal/study_runner.hpp>
 
 #include <atomic>
 #include <filesystem>

@@ -10,8 +10,8 @@
 /// every task done, re-checks every claimed value as on any resume, and writes result.json and
 /// the other outputs exactly as a single run would.
 #include <hapsyn/json.hpp>
-#include <hapsyn/registry.hpp>
-#include <hapsyn/study_runner.hpp>
+#include <hapsyn/internal/registry.hpp>
+#include <hapsyn/internal/study_runner.hpp>
 
 #include <string>
 #include <vector>

@@ -33,7 +33,7 @@
     !defined(HAPSYN_NO_MULTIVERSION) && !defined(HAPSYN_SANITIZED_BUILD)
 #define HAPSYN_MULTIVERSION __attribute__((target_clones("arch=x86-64-v3", "default")))
 /// HAPSYN_MULTIVERSION_WIDE: as HAPSYN_MULTIVERSION, plus an x86-64-v4 (AVX-512) version, for
-/// the block kernels whose lane loops the compiler vectorises (hapsyn/sample_block.hpp).
+/// the block kernels whose lane loops the compiler vectorises (hapsyn/accel/sample_block.hpp).
 #define HAPSYN_MULTIVERSION_WIDE __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
 #define HAPSYN_MULTIVERSION

@@ -6,7 +6,7 @@
 /// values over the workspace for studies with one design, Figure 2).
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/json.hpp>
-#include <hapsyn/registry.hpp>
+#include <hapsyn/internal/registry.hpp>
 
 #include <atomic>
 #include <cstdint>

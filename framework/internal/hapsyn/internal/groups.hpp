@@ -4,7 +4,7 @@
 /// comes from) and along time within one recording: the tables and plots of a validation on
 /// recorded motion (Fennel 2022, section VII-B: shares per subject with their spread).
 #include <hapsyn/json.hpp>
-#include <hapsyn/maps.hpp>
+#include <hapsyn/internal/maps.hpp>
 
 #include <Eigen/Core>
 #include <string>

@@ -4,7 +4,7 @@
 /// the rest of the study, exported as CSV, and, for a scene that declares a SampleLattice,
 /// its density drawn as lattice slices.
 #include <hapsyn/json.hpp>
-#include <hapsyn/registry.hpp>
+#include <hapsyn/internal/registry.hpp>
 #include <hapsyn/scene.hpp>
 
 #include <optional>

@@ -19,7 +19,7 @@
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/json.hpp>
 #include <hapsyn/solver.hpp>
-#include <hapsyn/study.hpp>
+#include <hapsyn/internal/study.hpp>
 
 #include <atomic>
 #include <cstdint>

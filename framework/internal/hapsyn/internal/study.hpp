@@ -6,7 +6,7 @@
 #include <hapsyn/json.hpp>
 #include <hapsyn/pareto.hpp>
 #include <hapsyn/problem.hpp>
-#include <hapsyn/registry.hpp>
+#include <hapsyn/internal/registry.hpp>
 #include <hapsyn/solver.hpp>
 
 #include <cstddef>

@@ -17,14 +17,14 @@
 /// tests/fast_math_test.cpp; benchmarks/fast_math_benchmark.cpp measures them against libm.
 ///
 /// They are always inlined: a caller compiled for a wider instruction set (HAPSYN_MULTIVERSION,
-/// hapsyn/multiversion.hpp) would otherwise call the baseline copy through the PLT, as the
+/// hapsyn/accel/multiversion.hpp) would otherwise call the baseline copy through the PLT, as the
 /// five-bar's envelope did (docs/design.md section 13.5).
 #include <cmath>
 
 namespace hapsyn::fast {
 
 /// The body of sin_cos() for |x| <= 1e6 on any number type with + - * by doubles (double, or
-/// hapsyn::Lanes for one value per SIMD lane, hapsyn/lanes.hpp): n = round(x / (pi/2)) (an
+/// hapsyn::Lanes for one value per SIMD lane, hapsyn/accel/lanes.hpp): n = round(x / (pi/2)) (an
 /// integer-valued number) and s, c = sin, cos of the reduced argument x - n pi/2. The caller
 /// maps (s, c) to the quadrant n mod 4.
 template <typename T>
@@ -70,9 +70,9 @@ template <typename T>
 
 /// floor(x) and ceil(x) without a library call: GCC does not expand std::floor / std::ceil
 /// inline on the baseline instruction set, nor in a multiversioned function
-/// (hapsyn/multiversion.hpp), and the call spills every live vector register. Exact for
+/// (hapsyn/accel/multiversion.hpp), and the call spills every live vector register. Exact for
 /// |x| < 2^52 (the conversion truncates toward zero); larger, infinite or NaN x go to
-/// std::floor / std::ceil. (hapsyn::floor_small in hapsyn/lanes.hpp is the lane version.)
+/// std::floor / std::ceil. (hapsyn::floor_small in hapsyn/accel/lanes.hpp is the lane version.)
 [[gnu::always_inline]] inline double floor_small(double x) {
   if (!(std::abs(x) < 4.5e15)) return std::floor(x);
   const double t = static_cast<double>(static_cast<long long>(x));
@@ -96,7 +96,7 @@ inline constexpr double kAtanTable[9] = {0.0,
                                          0.7853981633974483};
 
 /// The body of atan2() on any number type with + - * / by doubles (double, or hapsyn::Lanes,
-/// hapsyn/lanes.hpp): atan(t) for t = smallest / largest in [0, 1], given ck = k / 8 (k the
+/// hapsyn/accel/lanes.hpp): atan(t) for t = smallest / largest in [0, 1], given ck = k / 8 (k the
 /// nearest integer to 8 t) and table_k = kAtanTable[k]. The caller maps it to the octant.
 template <typename T>
 [[gnu::always_inline]] inline T atan_reduced(const T& t, const T& ck, const T& table_k) {
@@ -120,7 +120,7 @@ template <typename T>
   constexpr double kHalfPi = 1.5707963267948966, kPi = 3.141592653589793;
   if (ay > ax) angle = kHalfPi - angle;
   // The builtin, not std::signbit: libstdc++'s is an out-of-line call from a multiversioned
-  // caller (hapsyn/multiversion.hpp).
+  // caller (hapsyn/accel/multiversion.hpp).
   if (__builtin_signbit(x)) angle = kPi - angle;
   return __builtin_signbit(y) ? -angle : angle;
 }

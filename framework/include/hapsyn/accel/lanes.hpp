@@ -1,18 +1,18 @@
 #pragma once
 /// \file
 /// Lanes: kBlockLanes doubles with element-wise arithmetic, for block kernels
-/// (hapsyn/sample_block.hpp) written once for a scalar and for a block of samples.
+/// (hapsyn/accel/sample_block.hpp) written once for a scalar and for a block of samples.
 ///
 /// A kernel templated on its number type T runs with T = double (one sample) and T = Lanes (one
 /// sample per lane): the same expressions in the same order, so a lane rounds as the scalar code
 /// does wherever the compiler contracts the two alike. The operators act on the
 /// lanes' compiler vector (the GCC / clang vector extension): inlined ([[gnu::always_inline]])
 /// into a function compiled for a wide instruction set (HAPSYN_MULTIVERSION_WIDE,
-/// hapsyn/multiversion.hpp), each is one vector instruction; compiled for baseline CPUs, the
+/// hapsyn/accel/multiversion.hpp), each is one vector instruction; compiled for baseline CPUs, the
 /// compiler splits it into SSE2 halves. The vector sits in a struct passed by reference: clang
 /// refuses to pass a 64-byte vector by value in code not compiled for AVX-512.
-#include <hapsyn/fast_math.hpp>
-#include <hapsyn/sample_block.hpp>
+#include <hapsyn/accel/fast_math.hpp>
+#include <hapsyn/accel/sample_block.hpp>
 
 #include <cmath>
 #include <cstdint>
@@ -188,7 +188,7 @@ struct AtanCore {
 }
 }  // namespace lanes_detail
 
-/// fast::atan2 (hapsyn/fast_math.hpp) of every lane: the same table and series (one template,
+/// fast::atan2 (hapsyn/accel/fast_math.hpp) of every lane: the same table and series (one template,
 /// fast::atan_reduced), so a lane gets what the scalar call gives (up to the compiler's
 /// multiply-add fusion); lanes with a zero or non-finite argument take libm, as the scalar does.
 [[gnu::always_inline]] inline Lanes atan2(const Lanes& y, const Lanes& x) {
@@ -203,7 +203,7 @@ struct AtanCore {
   mirrored = lanes_detail::atan_quadrant(core, y, -x);
 }
 
-/// fast::sin_cos (hapsyn/fast_math.hpp) of every lane: the same reduction and polynomials, so a
+/// fast::sin_cos (hapsyn/accel/fast_math.hpp) of every lane: the same reduction and polynomials, so a
 /// lane gets what the scalar call gives (up to the compiler's multiply-add fusion).
 [[gnu::always_inline]] inline void sin_cos(const Lanes& x, Lanes& sine, Lanes& cosine) {
   const Lanes limit = Lanes::splat(1e6);

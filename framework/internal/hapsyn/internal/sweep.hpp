@@ -5,7 +5,7 @@
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/json.hpp>
 #include <hapsyn/pareto.hpp>  // inverted_generational_distance
-#include <hapsyn/registry.hpp>
+#include <hapsyn/internal/registry.hpp>
 
 #include <atomic>
 #include <cstdint>
