@@ -33,7 +33,7 @@ class AnalyticMechanism : public Mechanism {
   std::unique_ptr<const MechanismModel> build(const double* design) const override {
     return std::make_unique<Model>(design, n_);
   }
-  Needs provides() const override { return kNeedJacobian; }
+  MechanismSpecs specs() const override { return {kNeedJacobian, {}}; }
 
  private:
   int n_;
@@ -46,7 +46,7 @@ class AnalyticMetric : public Metric {
   void local(const SampleQuantities& q, double* out) const override {
     out[0] = local_(q.q.data(), q.scene->pose(q.sample));
   }
-  Needs needs() const override { return kNeedPose; }
+  MetricSpecs specs() const override { return {kNeedPose, {}}; }
 
  private:
   AnalyticLocal local_;

@@ -242,7 +242,7 @@ namespace {
 class MeanX final : public hapsyn::Metric {
  public:
   void local(const hapsyn::SampleQuantities& q, double* out) const override { out[0] = q.scene->pose(q.sample)[0]; }
-  hapsyn::Needs needs() const override { return 0; }
+  hapsyn::MetricSpecs specs() const override { return {0, {}}; }
   std::vector<hapsyn::LocalValue> locals() const override { return {{"x", hapsyn::Reduction::kSum, "m"}}; }
   double combine(const double* reduced, int samples) const override { return samples > 0 ? reduced[0] / samples : 0.0; }
 };
@@ -434,8 +434,7 @@ namespace {
 class MeanValue final : public hapsyn::Metric {
  public:
   void local(const hapsyn::SampleQuantities& q, double* out) const override { out[0] = q.attribute_row(0)[0]; }
-  hapsyn::Needs needs() const override { return 0; }
-  std::vector<std::string> scene_attributes() const override { return {"value"}; }
+  hapsyn::MetricSpecs specs() const override { return {0, {"value"}}; }
   std::vector<hapsyn::LocalValue> locals() const override { return {{"value", hapsyn::Reduction::kSum, ""}}; }
   double combine(const double* reduced, int samples) const override { return samples > 0 ? reduced[0] / samples : 0.0; }
 };
@@ -475,19 +474,20 @@ TEST(WeightedSamples, PositionMapsAreEachPositionsWeightedMean) {
 namespace {
 
 // A metric forwarding to another one, declaring a batch size: the evaluator must give exactly
-// the per-sample path's results (local_batch defaults to local() per sample).
-class Batched final : public hapsyn::Metric {
+// the per-sample path's results (local_batch calls local() per sample).
+class Batched final : public hapsyn::Metric, public hapsyn::MetricAcceleration {
  public:
   Batched(std::shared_ptr<const hapsyn::Metric> inner, int batch) : inner_(std::move(inner)), batch_(batch) {}
   void local(const hapsyn::SampleQuantities& q, double* out) const override { inner_->local(q, out); }
   void local_batch(const hapsyn::SampleQuantities* const* q, int count, double* out) const override {
     ++calls;
     largest = std::max(largest.load(), count);
-    hapsyn::Metric::local_batch(q, count, out);
+    const int k = static_cast<int>(inner_->locals().size());
+    for (int i = 0; i < count; ++i) inner_->local(*q[i], out + static_cast<long>(i) * k);
   }
   int batch_size() const override { return batch_; }
-  hapsyn::Needs needs() const override { return inner_->needs(); }
-  std::vector<std::string> scene_attributes() const override { return inner_->scene_attributes(); }
+  const hapsyn::MetricAcceleration* acceleration() const override { return this; }
+  hapsyn::MetricSpecs specs() const override { return inner_->specs(); }
   std::vector<hapsyn::LocalValue> locals() const override { return inner_->locals(); }
   double combine(const double* reduced, int samples) const override { return inner_->combine(reduced, samples); }
   hapsyn::Aggregation aggregation() const override { return inner_->aggregation(); }

@@ -80,7 +80,7 @@ class Planar2R final : public hapsyn::Mechanism {
   /// \throws hapsyn::Error unless the samples are (x, y) pairs and there is at least one.
   void check_scene(const hapsyn::SampleSet& scene) const override;
   /// The Jacobian (and the pose, always).
-  hapsyn::Needs provides() const override { return hapsyn::kNeedJacobian; }
+  hapsyn::MechanismSpecs specs() const override { return {hapsyn::kNeedJacobian, {}}; }
 
  private:
   Planar2ROptions options_;

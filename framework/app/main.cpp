@@ -162,7 +162,7 @@ void describe_design(const std::string& name, const std::string& options, const 
               << "); list them with: hapsyn describe " << name << " --options '{...}'\n";
     return;
   }
-  if (const std::string summary = mechanism->summary(); !summary.empty()) std::cout << "built: " << summary << "\n";
+  if (const std::string summary = mechanism->specs().summary; !summary.empty()) std::cout << "built: " << summary << "\n";
   std::cout << "design variables (default bounds; hard limits):\n";
   for (const hapsyn::VariableDecl& v : mechanism->variables()) {
     auto list = [](const std::vector<double>& x) {
@@ -496,7 +496,7 @@ int run_command(const Arguments& a, const Commands& c, const hapsyn::Registry& r
     const hapsyn::ProblemDirectoryScope scope(a.file);
     return hapsyn::load_study(document, registry, {}, load_settings(a.threads, quiet));
   });
-  if (!a.shard.empty() && !study.solver->shardable()) {
+  if (!a.shard.empty() && !study.solver->specs().shardable) {
     throw hapsyn::Error("shard", "--shard " + a.shard + ": solver " + study.solver_plugin +
                                      " cannot be split into shares (grid, culling and ga can; sweep and compare split "
                                      "their cases); run it whole, or on several ranks with mpirun");

@@ -1,5 +1,6 @@
 // The checkpoint file format (hapsyn/checkpoint.hpp): write with a checksum, read with every
 // check before a solver sees the state.
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/output_files.hpp>

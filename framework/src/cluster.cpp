@@ -111,6 +111,8 @@ int launcher_ranks() {
   return 1;
 }
 
+Cluster& SolverContext::cluster() const { return ranks != nullptr ? *ranks : Cluster::local(); }
+
 Json Solver::merge_shards(const Problem& problem, const std::vector<Json>& states) const {
   (void)problem;
   (void)states;

@@ -1,3 +1,4 @@
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/internal/compare.hpp>
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>

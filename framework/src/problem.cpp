@@ -1,3 +1,5 @@
+#include <hapsyn/accel/mechanism_acceleration.hpp>
+#include <hapsyn/accel/metric_acceleration.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/parallel.hpp>
 #include <hapsyn/problem.hpp>
@@ -15,6 +17,19 @@ namespace hapsyn {
 
 
 namespace {
+// Stand-ins for a plugin without a speed layer: their defaults say "not available" (no block
+// kernel, no bound, no batch), which is what the evaluator did before the layer existed. The
+// evaluator holds one of these instead of a null pointer, so its hot loops need no null checks.
+const MechanismAcceleration kNoMechanismAcceleration;
+const MetricAcceleration kNoMetricAcceleration;
+
+const MechanismAcceleration* accelerated(const MechanismAcceleration* acceleration) {
+  return acceleration != nullptr ? acceleration : &kNoMechanismAcceleration;
+}
+const MetricAcceleration* accelerated(const MetricAcceleration* acceleration) {
+  return acceleration != nullptr ? acceleration : &kNoMetricAcceleration;
+}
+
 std::string format_design(const Problem& problem, const Eigen::VectorXd& full) {
   return problem.design_to_json(full).dump();
 }
@@ -69,17 +84,20 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
   if (objectives_.empty()) throw Error("problem", "objectives: at least one objective is required");
   for (const ConstraintDecl& c : mechanism_->constraints()) constraint_names_.push_back(c.name);
 
-  const Needs provided = mechanism_->provides();
+  const Needs provided = mechanism_->specs().provides;
+  mechanism_accel_ = accelerated(mechanism_->acceleration());
   for (std::size_t m = 0; m < metrics_.size(); ++m) {
     const Metric& metric = *metrics_[m].metric;
-    const Needs missing = metric.needs() & ~provided;
+    const MetricSpecs specs = metric.specs();
+    metric_accel_.push_back(accelerated(metric.acceleration()));
+    const Needs missing = specs.needs & ~provided;
     if (missing != 0) {
       throw Error("problem", "objectives: metric '" + metrics_[m].plugin +
                                  "' needs quantities the mechanism '" + mechanism_plugin_ +
                                  "' does not provide: " + need_names(missing));
     }
-    needs_ |= metric.needs();
-    batch_ = std::max(batch_, metric.batch_size());
+    needs_ |= specs.needs;
+    batch_ = std::max(batch_, metric_accel_.back()->batch_size());
     const bool wc = metric.aggregation() == Aggregation::kWorstCase;
     worst_case_ = worst_case_ && wc;
     any_worst_case_ = any_worst_case_ || wc;
@@ -88,7 +106,7 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
     if (locals.empty()) throw Error("problem", "metric '" + metrics_[m].plugin + "' declares no local values");
     for (const LocalValue& l : locals) local_reduction_.push_back(l.reduction);
     std::vector<const AttributeMatrix*> attributes;
-    for (const std::string& name : metric.scene_attributes()) {
+    for (const std::string& name : specs.scene_attributes) {
       const auto it = samples_->attributes.find(name);
       attributes.push_back(it == samples_->attributes.end() ? nullptr : &it->second);
     }
@@ -148,9 +166,9 @@ void Problem::choose_block_path() {
   // Worst-case studies reduce per block with pruning (fold_block); averaging ones add every lane
   // (fold_block_sums). A study mixing both kinds keeps the per-sample loop.
   block_path_ = (worst_case_ || !any_worst_case_) && batch_ == 0 && !twist_ && !twist_rate_ &&
-                samples_->dimension() <= kBlockMaxCoordinates && mechanism_->solves_blocks(needs_);
+                samples_->dimension() <= kBlockMaxCoordinates && mechanism_accel_->solves_blocks(needs_);
   for (std::size_t m = 0; m < metrics_.size() && block_path_; ++m) {
-    block_path_ = metrics_[m].metric->has_local_block();
+    block_path_ = metric_accel_[m]->has_local_block();
   }
   if (!block_path_) return;
   // The poses in sample order, structure of arrays, padded to whole blocks with the last
@@ -243,7 +261,7 @@ void Problem::resolve_demanded_motion() {
     if (!(needs_ & flag) || attribute) return;
     std::string metrics;
     for (const MetricEntry& m : metrics_) {
-      if (m.metric->needs() & flag) metrics += (metrics.empty() ? "'" : ", '") + m.plugin + "'";
+      if (m.metric->specs().needs & flag) metrics += (metrics.empty() ? "'" : ", '") + m.plugin + "'";
     }
     throw Error("problem", "objectives: metric " + metrics + " needs the demanded motion of each sample (" +
                                need_names(flag) + "), but the scene has no '" + name +
@@ -263,6 +281,9 @@ std::shared_ptr<const Problem> Problem::with_design_space(DesignSpace space) con
   if (!same) throw Error("problem", "with_design_space: the design space must have the same components as the study's");
   return std::make_shared<const Problem>(mechanism_plugin_, mechanism_, samples_, metrics_, objectives_, std::move(space));
 }
+
+Problem::EvalScratch::EvalScratch() = default;
+Problem::EvalScratch::~EvalScratch() = default;
 
 std::unique_ptr<Problem::EvalScratch> Problem::make_eval_scratch() const {
   auto ws = std::make_unique<EvalScratch>();
@@ -497,17 +518,23 @@ double Problem::score_bound(const double* accumulator, long long samples) const 
   return bound;
 }
 
+bool Problem::reachable_interval(const double* full_design, int component, int sample, double& lower,
+                                 double& upper) const {
+  return any_worst_case_ &&
+         mechanism_accel_->reachable_interval(full_design, component, samples_->pose(sample), lower, upper);
+}
+
 double Problem::block_score_bound(const double* full_design, int component, double lower, double upper,
                                   int sample) const {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   if (!prunable_) return kInf;  // the sum of metric bounds bounds the score only for maximized, weight >= 0
   SampleEnvelope envelope;
-  if (!mechanism_->sample_envelope(full_design, component, lower, upper, samples_->pose(sample), needs_, envelope)) return kInf;
+  if (!mechanism_accel_->sample_envelope(full_design, component, lower, upper, samples_->pose(sample), needs_, envelope)) return kInf;
   if (envelope.all_fail) return -kInf;
   // Added as score_bound adds: each term is an upper bound, and rounded addition is monotone.
   double bound = 0.0;
   for (const Objective& objective : objectives_) {
-    const double value = metrics_[static_cast<std::size_t>(objective.metric)].metric->envelope_bound(envelope);
+    const double value = metric_accel_[static_cast<std::size_t>(objective.metric)]->envelope_bound(envelope);
     if (!(value < kInf)) return kInf;
     bound += objective.weight * value;
   }
@@ -561,7 +588,7 @@ const Evaluation& Problem::evaluate(const double* free_design, EvalScratch& ws, 
   if (!constraints_hold(ws.full.data(), ws, out)) return out;
 
   std::unique_ptr<const MechanismModel> owned;
-  const MechanismModel* model = mechanism_->build_in(ws.full.data(), *ws.scratch);
+  const MechanismModel* model = mechanism_accel_->build_in(ws.full.data(), *ws.scratch);
   if (!model) {
     owned = mechanism_->build(ws.full.data());
     model = owned.get();
@@ -631,7 +658,12 @@ const Evaluation& Problem::evaluate_batched(const MechanismModel& model, EvalScr
         q.attribute_count = static_cast<int>(metric_attributes_[m].size());
       }
       if (count > 0) {
-        metrics_[m].metric->local_batch(ws.batch_pointers.data(), count,
+        // A batch_size() > 0 without a local_batch() override writes nothing: the NaN left
+        // here is then reported as the metric's, not reduced as a stale value.
+        std::fill_n(ws.batch_locals.data() + static_cast<std::size_t>(batch_) * local_offset_[m],
+                    static_cast<std::size_t>(count) * static_cast<std::size_t>(local_offset_[m + 1] - local_offset_[m]),
+                    std::numeric_limits<double>::quiet_NaN());
+        metric_accel_[m]->local_batch(ws.batch_pointers.data(), count,
                                         ws.batch_locals.data() + static_cast<std::size_t>(batch_) * local_offset_[m]);
       }
     }
@@ -704,7 +736,7 @@ const Evaluation& Problem::evaluate_blocks(const MechanismModel& model, EvalScra
     }
     // The lanes' samples, padded with the last one (a kernel reads every lane).
     for (int i = 0; i < kBlockLanes; ++i) q.samples[i] = lane_sample[std::min(i, count - 1)];
-    model.solve_block(poses, needs_, *ws.scratch, q);
+    mechanism_accel_->solve_block(model, poses, needs_, *ws.scratch, q);
     if (!worst_case_) {  // averaging: every lane counts, whatever its status; nothing to prune
       fold_block_sums(model, ws, lane_sample, count);
       continue;
@@ -829,7 +861,7 @@ void Problem::block_locals(EvalScratch& ws) const {
       }
       q.attribute_lane_data = ws.attribute_lane_pointers.data();
     }
-    metrics_[m].metric->local_block(q, ws.block_locals.data() + static_cast<std::size_t>(local_offset_[m]) * kBlockLanes);
+    metric_accel_[m]->local_block(q, ws.block_locals.data() + static_cast<std::size_t>(local_offset_[m]) * kBlockLanes);
   }
 }
 
@@ -902,7 +934,7 @@ void Problem::evaluate_designs(const double* const* free_designs, int count, Eva
       designs[i] = lane_design[i < count && active[i] ? i : any];
     }
     const int sample = indices[t];
-    if (!mechanism_->solve_designs(designs, count, samples_->pose(sample), needs_, *ws.scratch, *ws.block)) {
+    if (!mechanism_accel_->solve_designs(designs, count, samples_->pose(sample), needs_, *ws.scratch, *ws.block)) {
       return one_by_one(0, active);  // these designs cannot share a vector: from scratch, one by one
     }
     std::fill_n(ws.block->samples, kBlockLanes, sample);
@@ -1080,7 +1112,7 @@ bool Problem::score_bound_lanes(const double* lane_accumulator, int samples, dou
   double combined[L];
   for (std::size_t o = 0; o < objectives_.size(); ++o) {
     const std::size_t m = static_cast<std::size_t>(objectives_[o].metric);
-    if (!metrics_[m].metric->combine_block(lane_accumulator + static_cast<std::size_t>(local_offset_[m]) * L, samples,
+    if (!metric_accel_[m]->combine_block(lane_accumulator + static_cast<std::size_t>(local_offset_[m]) * L, samples,
                                            combined)) {
       return false;
     }

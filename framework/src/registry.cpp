@@ -386,7 +386,7 @@ std::shared_ptr<const Solver> Registry::make_sub_solver(const Json& spec, const 
   }
   const Json options = spec.contains("options") ? spec["options"] : Json::object();
   std::shared_ptr<Solver> solver = create_solver(name, options, json_path);
-  if (solver->pareto()) {
+  if (solver->specs().pareto) {
     throw Error(component, json_path + ".plugin = \"" + name +
                                "\": a Pareto solver; the sub-solver must be single-objective (it returns one best design)");
   }

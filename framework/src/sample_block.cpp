@@ -1,7 +1,7 @@
-// The default block path of a mechanism model: solve() per lane. The evaluator takes the block
-// path only when Mechanism::solves_blocks() says a real kernel exists; this default serves
+// The default block path of a mechanism: model.solve() per lane. The evaluator takes the block
+// path only when MechanismAcceleration::solves_blocks() says a real kernel exists; this default serves
 // callers that use solve_block() directly (tests, plugins that forward to it).
-#include <hapsyn/mechanism.hpp>
+#include <hapsyn/accel/mechanism_acceleration.hpp>
 
 #include <cassert>
 
@@ -19,13 +19,13 @@ void store_lane(const Matrix& m, int lane, double (*block)[kBlockLanes], int& ro
 
 }  // namespace
 
-void MechanismModel::solve_block(const PoseBlock& poses, Needs needs, MechanismScratch& scratch,
-                                 QuantityBlock& out) const {
+void MechanismAcceleration::solve_block(const MechanismModel& model, const PoseBlock& poses, Needs needs,
+                                        MechanismScratch& scratch, QuantityBlock& out) const {
   SampleQuantities q;
   double pose[kBlockMaxCoordinates];
   for (int lane = 0; lane < poses.count; ++lane) {
     for (int c = 0; c < poses.dimension; ++c) pose[c] = poses.coordinate[c][lane];
-    solve(pose, needs, scratch, q);
+    model.solve(pose, needs, scratch, q);
     out.status[lane] = static_cast<std::int32_t>(q.status);
     if (q.status != SampleStatus::kReachable) continue;
     int square = 0;

@@ -1,5 +1,6 @@
 #include "serialized_plugins.hpp"
 
+#include <hapsyn/accel/metric_acceleration.hpp>
 #include <hapsyn/options.hpp>
 
 #include <mutex>
@@ -14,6 +15,24 @@ namespace {
 
 using Lock = std::lock_guard<std::mutex>;
 
+// The batch of a serialised metric, under the metric's lock.
+class SerializedBatch final : public MetricAcceleration {
+ public:
+  SerializedBatch(const MetricAcceleration* const& inner, std::mutex& mutex) : inner_(inner), mutex_(mutex) {}
+  int batch_size() const override {
+    Lock lock(mutex_);
+    return inner_->batch_size();
+  }
+  void local_batch(const SampleQuantities* const* q, int count, double* out) const override {
+    Lock lock(mutex_);
+    inner_->local_batch(q, count, out);
+  }
+
+ private:
+  const MetricAcceleration* const& inner_;
+  std::mutex& mutex_;
+};
+
 class SerializedMetric final : public Metric {
  public:
   explicit SerializedMetric(std::shared_ptr<Metric> inner) : inner_(std::move(inner)) {}
@@ -21,13 +40,9 @@ class SerializedMetric final : public Metric {
     Lock lock(mutex_);
     inner_->local(q, out);
   }
-  Needs needs() const override {
+  MetricSpecs specs() const override {
     Lock lock(mutex_);
-    return inner_->needs();
-  }
-  std::vector<std::string> scene_attributes() const override {
-    Lock lock(mutex_);
-    return inner_->scene_attributes();
+    return inner_->specs();
   }
   std::vector<LocalValue> locals() const override {
     Lock lock(mutex_);
@@ -41,18 +56,19 @@ class SerializedMetric final : public Metric {
     Lock lock(mutex_);
     return inner_->aggregation();
   }
-  int batch_size() const override {
+  // Of the speed layer only the batch is forwarded (an interpreted metric's); block kernels and
+  // bounds are for concurrent plugins.
+  const MetricAcceleration* acceleration() const override {
     Lock lock(mutex_);
-    return inner_->batch_size();
-  }
-  void local_batch(const SampleQuantities* const* q, int count, double* out) const override {
-    Lock lock(mutex_);
-    inner_->local_batch(q, count, out);
+    inner_acceleration_ = inner_->acceleration();
+    return inner_acceleration_ != nullptr ? &batch_ : nullptr;
   }
 
  private:
   std::shared_ptr<Metric> inner_;
   mutable std::mutex mutex_;
+  mutable const MetricAcceleration* inner_acceleration_ = nullptr;
+  SerializedBatch batch_{inner_acceleration_, mutex_};
 };
 
 // A model of a serialised mechanism shares the mechanism's lock: the plugin's code may keep
@@ -84,7 +100,8 @@ class SerializedMechanism final : public Mechanism {
     if (!model) return nullptr;
     return std::make_unique<SerializedModel>(std::move(model), mutex_);
   }
-  // build_in is left at its default (nullptr): a model built in scratch could not carry the lock.
+  // No speed layer (acceleration() is null): a model built in scratch could not carry the lock,
+  // and block kernels are for concurrent plugins.
   std::vector<VariableDecl> variables() const override {
     Lock lock(*mutex_);
     return inner_->variables();
@@ -105,9 +122,9 @@ class SerializedMechanism final : public Mechanism {
     Lock lock(*mutex_);
     inner_->check_scene(scene);
   }
-  Needs provides() const override {
+  MechanismSpecs specs() const override {
     Lock lock(*mutex_);
-    return inner_->provides();
+    return inner_->specs();
   }
 
  private:

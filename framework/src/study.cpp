@@ -190,7 +190,7 @@ void load_objectives(Json& objs, const Registry& registry, const std::vector<InP
     if (!std::isfinite(o["weight"].get<double>())) {
       throw Error("problem", path + ".weight = " + render_value(o["weight"]) + ": must be finite");
     }
-    for (const std::string& a : metric->scene_attributes()) {
+    for (const std::string& a : metric->specs().scene_attributes) {
       request.attributes.push_back(a);
       std::string& paths = requested_by[a][metric_name];
       paths += (paths.empty() ? "" : ", ") + path;
@@ -362,7 +362,7 @@ Study load_study(const Json& input, const Registry& registry, const std::vector<
       registry.create_solver(study.solver_plugin, resolved["solver"]["options"], "solver", &resolved["solver"]["options"]);
   note_plugin(study, registry, study.solver_plugin);
 
-  if (!study.solver->pareto()) check_weights_not_all_zero(resolved["objectives"]);
+  if (!study.solver->specs().pareto) check_weights_not_all_zero(resolved["objectives"]);
 
   // Scene.
   std::shared_ptr<SampleSet> samples = build_samples(resolved, registry, study, request, requested_by);
@@ -374,7 +374,7 @@ Study load_study(const Json& input, const Registry& registry, const std::vector<
     throw Error("problem", std::string("solver: ") + e.what());
   }
   load_indicators(resolved, *study.problem, study);
-  if (resolved["objectives"].size() > 1 && !study.solver->pareto()) {
+  if (resolved["objectives"].size() > 1 && !study.solver->specs().pareto) {
     resolved["aggregation"] = "weighted_sum";
   }
   study.output_directory = resolved["output"].contains("directory")

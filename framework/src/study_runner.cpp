@@ -291,7 +291,7 @@ Json result_document(const Study& study, const RunSetup& run, const SolverResult
   if (run.cluster != nullptr && run.cluster->size() > 1) {
     Json hosts = Json::array();
     for (int r = 0; r < run.cluster->size(); ++r) hosts.push_back(run.cluster->host(r));
-    doc["ranks"] = {{"count", run.cluster->size()}, {"hosts", hosts}, {"distributed", study.solver->distributed()}};
+    doc["ranks"] = {{"count", run.cluster->size()}, {"hosts", hosts}, {"distributed", study.solver->specs().distributed}};
   }
   if (run.cluster != nullptr && run.cluster->shard().second > 1) {
     // complete: the share ran to its end (a signal did not stop it first); merge refuses others.
@@ -306,7 +306,7 @@ Json result_document(const Study& study, const RunSetup& run, const SolverResult
   doc["status"] = to_string(result.status);
   doc["message"] = result.message;
   doc["evaluations"] = {{"designs", result.design_evaluations}, {"samples", result.sample_evaluations}};
-  if (const std::string summary = study.problem->mechanism().summary(); !summary.empty()) {
+  if (const std::string summary = study.problem->mechanism().specs().summary; !summary.empty()) {
     doc["mechanism_summary"] = summary;
   }
   doc["samples_in_scene"] = study.problem->samples().size();
@@ -763,7 +763,7 @@ Json solve_and_write(Study& study, const RunOptions& options, RunSetup& run, std
   context.checkpoint_file = run.checkpoint_file.string();
   context.resume = options.resume && !options.force;
   context.reference_point = study.reference_point;  // for a solver's per-generation hypervolume
-  if (study.solver->distributed()) {
+  if (study.solver->specs().distributed) {
     context.ranks = run.cluster;
   } else if (options.signal != nullptr) {
     context.stop = options.signal;  // rank 0 alone: its own signal, at once
@@ -843,7 +843,7 @@ Json run_here(Study& study, const RunOptions& options, Cluster* cluster, const s
       log << "warning: " << w << "\n";
       run.warnings.push_back(w);
     }
-    log << "ranks: " << cluster->size() << " (" << (study.solver->distributed() ? "distributed" : "solver on rank 0 alone")
+    log << "ranks: " << cluster->size() << " (" << (study.solver->specs().distributed ? "distributed" : "solver on rank 0 alone")
         << ")\n";
   }
   started(run);
@@ -874,7 +874,7 @@ Json follow_rank0(Study& study, const RunOptions& options, Cluster& cluster) {
   // An error here is (the ranks being alike) rank 0's too: this rank still takes part in the
   // last broadcast, so that rank 0 is not left waiting, and then lets rank 0 report it.
   std::exception_ptr own;
-  if (study.solver->distributed()) try {
+  if (study.solver->specs().distributed) try {
     std::vector<std::string> ignored;
     SolverContext context;
     context.threads = run_threads(study.resolved, options, ignored);

@@ -1,3 +1,4 @@
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/json_text.hpp>
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>

@@ -4,11 +4,12 @@
 /// hapsyn.register_metric in python/hapsyn/__init__.py for the Python side's contract).
 ///
 /// The C++ metric interface is per sample; a Python call per sample would cost microseconds
-/// each. The adapter therefore declares Metric::batch_size(): the evaluator solves up to that
+/// each. The adapter therefore declares a batch (MetricAcceleration::batch_size()): the evaluator solves up to that
 /// many samples of a design and hands them over at once, and the adapter calls the object's
 /// local_batch(quantities) ONCE per chunk with the chunk's quantities as NumPy arrays. Every
 /// Python call is made with the GIL held (taken here, from whichever thread evaluates); the
 /// study declares the metric ThreadSafety::kSerialized, so the framework never overlaps its calls.
+#include <hapsyn/accel/metric_acceleration.hpp>
 #include <hapsyn/metric.hpp>
 
 #include <pybind11/pybind11.h>
@@ -18,7 +19,7 @@
 
 namespace hapsyn::python {
 
-class PythonMetric final : public Metric {
+class PythonMetric final : public Metric, public MetricAcceleration {
  public:
   /// Reads the object's declarations (GIL held by the caller): `locals` (list of (name,
   /// reduction, unit)), `needs` (names), optional `scene_attributes`, optional `batch_size`
@@ -32,8 +33,8 @@ class PythonMetric final : public Metric {
 
   void local(const SampleQuantities& q, double* out) const override;
   void local_batch(const SampleQuantities* const* q, int count, double* out) const override;
-  Needs needs() const override { return needs_; }
-  std::vector<std::string> scene_attributes() const override { return attributes_; }
+  MetricSpecs specs() const override { return {needs_, attributes_}; }
+  const MetricAcceleration* acceleration() const override { return this; }
   std::vector<LocalValue> locals() const override { return locals_; }
   double combine(const double* reduced, int samples) const override;
   int batch_size() const override { return batch_; }

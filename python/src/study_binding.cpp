@@ -334,7 +334,7 @@ py::dict StudyHandle::evaluate_samples(const py::array_t<double, py::array::c_st
   for (std::size_t i = 0; i < quantities.size(); ++i) {
     needs |= need_of(quantities[i], "python", "quantities[" + std::to_string(i) + "]");
   }
-  const Needs missing = needs & ~problem.mechanism().provides();
+  const Needs missing = needs & ~problem.mechanism().specs().provides;
   if (missing != 0) {
     std::string names;
     for (const std::string& q : quantities) {

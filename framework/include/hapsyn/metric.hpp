@@ -10,14 +10,13 @@
 /// value over any subset of samples is then an upper bound of its value over the whole scene
 /// (the per-sample bound that culling uses: GII(p) <= sigma_min(J(p,a)) / sigma_max(J(p,b))).
 #include <hapsyn/quantities.hpp>
-#include <hapsyn/accel/sample_block.hpp>
-#include <hapsyn/accel/sample_envelope.hpp>
 
-#include <limits>
 #include <string>
 #include <vector>
 
 namespace hapsyn {
+
+class MetricAcceleration;  // hapsyn/accel/metric_acceleration.hpp
 
 enum class Reduction { kMin, kMax, kSum };
 
@@ -34,17 +33,27 @@ enum class Aggregation {
   kAveraging,  ///< sums over samples; unreachable samples are passed to local() too
 };
 
+/// What a metric needs from the mechanism and the scene: read once, at load (Metric::specs()).
+struct MetricSpecs {
+  /// Quantities needed at each sample (Need flags); the mechanism computes nothing else.
+  /// Default: the Jacobian.
+  Needs needs = kNeedJacobian;
+  /// Scene attributes needed (e.g. "human_velocity_axes"); the scene builds only those some
+  /// metric asks for. Default: none.
+  std::vector<std::string> scene_attributes;
+};
+
 /// Metric plugin: the one pure virtual is local(); everything else has a default.
 ///
 /// Life cycle: created once per study (options filled from its declarations, see
-/// hapsyn/options.hpp); needs(), scene_attributes(), locals() and aggregation() are read ONCE,
+/// hapsyn/options.hpp); specs(), locals() and aggregation() are read ONCE,
 /// when the study is loaded, and must not change afterwards; local() then runs for every
 /// (design, sample) pair, concurrently from several threads unless the class declares
 /// ThreadSafety::kSerialized; combine() runs once per design evaluation, and also on PARTIAL
 /// reductions (a chunk of samples, the samples seen before pruning stops, a culling subset).
 ///
 /// What the framework checks centrally, so a metric need not: the mechanism provides every
-/// Need flag in needs() (else the study is refused at load), the scene has the attributes the
+/// Need flag in specs().needs (else the study is refused at load), the scene has the attributes the
 /// metric lists (a missing one gives attribute_row(k) == nullptr), every local value and the
 /// combined value is finite (a NaN or inf is reported as an error naming the plugin, the design
 /// and the sample, never averaged away).
@@ -53,25 +62,26 @@ enum class Aggregation {
 /// kWorstCase), combine() must be non-decreasing in each min-reduced value and non-increasing
 /// in each max-reduced value. Culling and grid pruning rely on it to bound the full-scene value
 /// from a subset of samples; a combine() that breaks it makes them return wrong optima.
+///
+/// Speed: a metric with a block kernel, a vectorised combine, a bound over a block of designs or
+/// a batch interface (an interpreted metric) says so through acceleration()
+/// (hapsyn/accel/metric_acceleration.hpp); nothing else in this class is about speed.
 class Metric {
  public:
+  Metric() = default;
+  Metric(const Metric&) = delete;
+  Metric& operator=(const Metric&) = delete;
   virtual ~Metric() = default;
   /// Computes the local values of one sample.
-  /// \param q   the mechanism's quantities at the sample (only those in needs() are meaningful);
+  /// \param q   the mechanism's quantities at the sample (only those in specs().needs are meaningful);
   ///            `q.sample` / `q.scene` give the sample's index and scene, `q.attribute_row(k)`
-  ///            the sample's row of the k-th name in scene_attributes() (resolved once per
+  ///            the sample's row of the k-th name in specs().scene_attributes (resolved once per
   ///            study: no lookup by name per sample).
   /// \param out locals().size() values, written in the order of locals(), in their units.
   /// Worst-case metrics see only reachable samples; averaging metrics see every sample and read
   /// q.status. Called concurrently (see the class comment); must not allocate, lock or throw:
   /// it runs millions of times in the per-sample loop.
   virtual void local(const SampleQuantities& q, double* out) const = 0;
-  /// Quantities needed at each sample (Need flags); the mechanism computes nothing else.
-  /// Default: the Jacobian.
-  virtual Needs needs() const { return kNeedJacobian; }
-  /// Scene attributes needed (e.g. "human_velocity_axes"); the scene builds only those some
-  /// metric asks for. Default: none.
-  virtual std::vector<std::string> scene_attributes() const { return {}; }
   /// Declared local values, with their reductions and units (column names of samples.csv).
   /// Default: one value "value", reduced by min.
   virtual std::vector<LocalValue> locals() const { return {LocalValue{"value", Reduction::kMin, ""}}; }
@@ -85,55 +95,13 @@ class Metric {
   /// kWorstCase when every reduction is min or max (the default rule), else kAveraging.
   virtual Aggregation aggregation() const;
 
-  /// Optional batch interface, for metrics whose per-call cost dwarfs a sample's (a metric
-  /// written in an interpreted language: hapsyn's Python binding). 0 (the default): the
-  /// evaluator calls local() once per sample, as always. B > 0: the evaluator solves up to B
-  /// samples of a design, then calls local_batch() once for them, then reduces them one by one
-  /// in the same order as the per-sample path (so the result is the same to the last bit for a
-  /// metric whose local_batch agrees with its local()). Read ONCE, at load.
-  virtual int batch_size() const { return 0; }
-  /// The local values of `count` samples (1 <= count <= batch_size()): q[i] is sample i's
-  /// quantities (as for local(), attributes resolved), out[i * locals().size() + j] its j-th
-  /// local value. Same rules as local() (worst-case metrics see reachable samples only), except
-  /// that it may allocate. Default: local() per sample.
-  virtual void local_batch(const SampleQuantities* const* q, int count, double* out) const {
-    const int k = static_cast<int>(locals().size());
-    for (int i = 0; i < count; ++i) local(*q[i], out + static_cast<long>(i) * k);
-  }
-
-  /// Optional block path (hapsyn/accel/sample_block.hpp): true when local_block() computes what
-  /// local() does (read once, at load). The evaluator uses it in worst-case studies and in
-  /// averaging ones (not in a study that mixes both kinds). Default: false.
-  virtual bool has_local_block() const { return false; }
-  /// The local values of every lane of `q`: out[j * kBlockLanes + lane] is the lane's j-th local
-  /// value (to rounding what local() gives: agreement to 1e-12 relative). The lanes' samples and
-  /// this metric's scene attributes are in q.samples / q.attribute_row(). Lanes whose status is
-  /// not kReachable hold arbitrary quantities: a worst-case metric's outputs for them are
-  /// ignored; an averaging metric's are reduced, so they must be what local() gives for such a
-  /// sample. No lane may trap. Same rules as local() (concurrent, no allocation, lock or throw).
-  /// Default: nothing.
-  virtual void local_block(const QuantityBlock& q, double* out) const {}
-  /// Optional: combine() for kBlockLanes reductions at once, each lane's bit for bit what
-  /// combine() gives it. `reduced` is lane-minor: reduced[j * kBlockLanes + lane] is the lane's
-  /// j-th reduced value; out[lane] receives its combined value. The evaluator calls it when it
-  /// bounds several designs in one vector (Problem::evaluate_designs); lanes it will ignore may
-  /// hold any values, so no lane may trap. Same rules as combine() (concurrent, no allocation,
-  /// lock or throw). Returns false when not implemented (the default): the evaluator then calls
-  /// combine() per lane.
-  virtual bool combine_block(const double* reduced, int samples, double* out) const {
-    (void)reduced, (void)samples, (void)out;
-    return false;
-  }
-
-  /// Optional block bound (docs/design.md section 13.5), for worst-case metrics: an upper bound
-  /// of this metric's value over the whole scene, valid for every design of the envelope's block
-  /// that reaches its sample (the value at that one sample bounds the whole scene's). Use only
-  /// the envelope's fields; +inf when they say nothing this metric can use (the default). Must
-  /// not allocate or throw.
-  virtual double envelope_bound(const SampleEnvelope& envelope) const {
-    (void)envelope;
-    return std::numeric_limits<double>::infinity();
-  }
+  /// What the metric needs (read once, at load).
+  virtual MetricSpecs specs() const { return {}; }
+  /// The optional speed layer (block kernel, vectorised combine, envelope bound, batch), or
+  /// null (the default): the framework then calls local() per sample and combine() per design.
+  /// Read once, at load; the object must live as long as the metric (usually `this`: the
+  /// metric derives from MetricAcceleration too).
+  virtual const MetricAcceleration* acceleration() const { return nullptr; }
 };
 
 }  // namespace hapsyn

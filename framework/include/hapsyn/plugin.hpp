@@ -32,7 +32,11 @@
 /// Bumped whenever an interface in framework/include/hapsyn changes incompatibly.
 /// 3: options declared in C++ (hapsyn/options.hpp), sub-solvers created by the framework,
 ///    declared thread safety; Solver::prepare_sub_solvers and SolverContext::registry removed.
-#define HAPSYN_PLUGIN_API_VERSION 3
+/// 4: two layers: the speed hooks moved to Mechanism::acceleration() and Metric::acceleration()
+///    (hapsyn/accel/); capabilities in specs structs (MechanismSpecs, MetricSpecs,
+///    SolverSpecs); MechanismModel::solve_block became MechanismAcceleration::solve_block;
+///    plugin bases non-copyable; the framework's orchestration headers private.
+#define HAPSYN_PLUGIN_API_VERSION 4
 
 // Tests build a plugin with another version to exercise the registry's check.
 #ifndef HAPSYN_PLUGIN_BUILT_API_VERSION

@@ -21,6 +21,10 @@
 
 namespace hapsyn {
 
+class MechanismAcceleration;  // hapsyn/accel/mechanism_acceleration.hpp
+class MetricAcceleration;     // hapsyn/accel/metric_acceleration.hpp
+struct QuantityBlock;         // hapsyn/accel/sample_block.hpp
+
 enum class Sense { kMaximize, kMinimize };
 
 /// One objective of the study: a metric with a sense and, for weighted sums, a weight.
@@ -91,7 +95,7 @@ struct EvalOptions {
   const std::vector<double>* prune_dominated_by = nullptr;
   /// evaluate_designs only: the caller vouches that every design's constraints hold, so they
   /// are not evaluated again. A grid solver sets it for the designs inside a line's feasible
-  /// run when its ends were checked and the mechanism promises Mechanism::constraints_quasiconvex
+  /// run when its ends were checked and the mechanism promises MechanismAcceleration::constraints_quasiconvex
   /// along the line (plugins/solvers/grid/line_bound.hpp). Builds with assertions check anyway.
   bool constraints_verified = false;
 };
@@ -136,19 +140,21 @@ class Problem {
   /// Block bound of a run of a grid line (docs/design.md section 13.5): an upper bound of the
   /// score of every design equal to `full_design` (a full design vector) except in component
   /// `component`, which runs over [lower, upper], from the mechanism's envelope of sample
-  /// `sample` (Mechanism::sample_envelope) and each objective's Metric::envelope_bound. -inf
+  /// `sample` (MechanismAcceleration::sample_envelope) and each objective's
+  /// MetricAcceleration::envelope_bound. -inf
   /// when the sample fails for every such design (all are infeasible); +inf when nothing is
   /// known (a study that is not prunable, a mechanism or a metric without envelopes). No
   /// allocation.
   double block_score_bound(const double* full_design, int component, double lower, double upper, int sample) const;
   /// Line bound of one sample (docs/design.md section 13.6): sets [lower, upper] to the interval
   /// of component `component` of `full_design` outside which sample `sample` fails
-  /// (Mechanism::reachable_interval), and returns true, when a failed sample makes a design
+  /// (MechanismAcceleration::reachable_interval), and returns true, when a failed sample makes a design
   /// infeasible in this study (a worst-case metric) and the mechanism knows such an interval.
   /// No allocation.
-  bool reachable_interval(const double* full_design, int component, int sample, double& lower, double& upper) const {
-    return any_worst_case_ && mechanism_->reachable_interval(full_design, component, samples_->pose(sample), lower, upper);
-  }
+  bool reachable_interval(const double* full_design, int component, int sample, double& lower, double& upper) const;
+  /// The mechanism's speed layer (Mechanism::acceleration()), or a stand-in whose every hook
+  /// says "not available" when it has none: never null.
+  const MechanismAcceleration& mechanism_acceleration() const { return *mechanism_accel_; }
   /// True when evaluate() solves samples in blocks (hapsyn/accel/sample_block.hpp): the mechanism
   /// solves blocks for the study's needs, every metric is worst-case with a block local and no
   /// scene attributes, and the scene has at most kBlockMaxCoordinates coordinates and no
@@ -175,6 +181,10 @@ class Problem {
   /// per design, never share a line (false sharing made a 2-thread grid slower than 1 thread).
   class alignas(64) EvalScratch {
    public:
+    EvalScratch();
+    EvalScratch(const EvalScratch&) = delete;
+    EvalScratch& operator=(const EvalScratch&) = delete;
+    ~EvalScratch();
     const Evaluation& last() const { return result; }
 
    private:
@@ -188,7 +198,7 @@ class Problem {
     std::vector<double> g;
     std::vector<std::vector<double>> nested_locals;  // for SampleCallback
     std::vector<double> objective_bound;             // per objective, for Pareto pruning
-    // Batched evaluation (a metric with Metric::batch_size() > 0), empty otherwise: the
+    // Batched evaluation (a metric with MetricAcceleration::batch_size() > 0), empty otherwise: the
     // quantities of up to batch samples, pointers to them, and their flat local values.
     std::vector<SampleQuantities> batch_quantities;
     std::vector<const SampleQuantities*> batch_pointers;
@@ -222,7 +232,7 @@ class Problem {
   /// the same options would, into outs[0..count): the same statuses, sample counts, critical
   /// samples and objectives, bit for bit. `outs` is the caller's and is reused (no allocation
   /// once its evaluations have their sizes). Where the mechanism solves several designs per
-  /// vector (Mechanism::solve_designs: the five-bar's designs of one grid line), the first
+  /// vector (MechanismAcceleration::solve_designs: the five-bar's designs of one grid line), the first
   /// samples of all the designs are solved together, one vector per sample, and most designs
   /// are decided there (unreachable, pruned, or culled at a critical sample); a design still
   /// undecided after kBlockLanes samples is finished by evaluate() (docs/design.md section 13.4).
@@ -295,8 +305,10 @@ class Problem {
 
   std::string mechanism_plugin_;
   std::shared_ptr<const Mechanism> mechanism_;
+  const MechanismAcceleration* mechanism_accel_ = nullptr;  // never null once constructed
   std::shared_ptr<const SampleSet> samples_;
   std::vector<MetricEntry> metrics_;
+  std::vector<const MetricAcceleration*> metric_accel_;  // per metric, never null
   std::vector<Objective> objectives_;
   DesignSpace space_;
   std::vector<std::string> constraint_names_;
@@ -326,7 +338,7 @@ class Problem {
   std::vector<std::vector<double>> attribute_blocks_;
   std::vector<int> order_position_;  // sample -> its position in order_ (block path only)
   std::vector<std::vector<const double*>> metric_attribute_blocks_;
-  int batch_ = 0;  // largest Metric::batch_size(); 0 = the per-sample path only
+  int batch_ = 0;  // largest MetricAcceleration::batch_size(); 0 = the per-sample path only
 };
 
 }  // namespace hapsyn

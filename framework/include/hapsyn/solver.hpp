@@ -3,7 +3,6 @@
 /// Solvers: single-objective (maximize a metric or a weighted sum) or Pareto (a front).
 /// An optimizer outcome (converged, budget spent, infeasible) is a status and a message in
 /// the SolverResult, never an exception; exceptions are for bad input only.
-#include <hapsyn/cluster.hpp>
 #include <hapsyn/json.hpp>
 #include <hapsyn/problem.hpp>
 
@@ -16,6 +15,8 @@
 #include <vector>
 
 namespace hapsyn {
+
+class Cluster;  // hapsyn/cluster.hpp: the processes of a run
 
 enum class SolverStatus {
   kConverged,        ///< the solver's optimality/termination criterion was met
@@ -73,8 +74,9 @@ struct SolverContext {
 
   /// True once a stop was requested (see `stop`).
   bool stop_requested() const { return stop != nullptr && stop->load(std::memory_order_relaxed); }
-  /// The processes of this run: *ranks, else Cluster::local().
-  Cluster& cluster() const { return ranks != nullptr ? *ranks : Cluster::local(); }
+  /// The processes of this run: *ranks, else Cluster::local() (include hapsyn/cluster.hpp to
+  /// use it).
+  Cluster& cluster() const;
   /// This context for a sub-solver that runs inside one task of a farm: the same, on this
   /// process alone (Cluster::local()), without progress lines or a checkpoint of its own.
   SolverContext in_task() const {
@@ -88,10 +90,24 @@ struct SolverContext {
   }
 };
 
+/// What a solver can do: read once, at load (Solver::specs()).
+struct SolverSpecs {
+  /// A Pareto solver: several objectives give a front instead of a weighted sum.
+  bool pareto = false;
+  /// solve() spreads its work over the ranks of an MPI job through context.cluster().run_tasks
+  /// (and follows the rules of hapsyn/cluster.hpp: deterministic between farms, stop checks that
+  /// see the agreed flag). False: under mpirun the framework runs solve() on rank 0 alone and
+  /// the other ranks wait.
+  bool distributed = false;
+  /// `hapsyn run --shard i/N` can split this solver's job (it has a shardable task farm), and
+  /// Solver::merge_shards() combines the shares' checkpoints.
+  bool shardable = false;
+};
+
 /// Solver plugin: the one pure virtual is solve(); everything else has a default.
 ///
 /// Life cycle: created once per study (options filled from its declarations, sub-solvers
-/// created by the framework: see hapsyn/options.hpp, SubSolver); pareto() is read at load;
+/// created by the framework: see hapsyn/options.hpp, SubSolver); specs() is read at load;
 /// check() runs once at load, after the problem is built and before anything runs; solve() runs
 /// once per run, from one thread (it may start `context.threads` workers of its own and call
 /// Problem::evaluate / evaluate_parallel from them: the problem is thread-safe, one
@@ -104,31 +120,26 @@ struct SolverContext {
 /// check()), and never for an optimizer outcome.
 class Solver {
  public:
+  Solver() = default;
+  Solver(const Solver&) = delete;
+  Solver& operator=(const Solver&) = delete;
   virtual ~Solver() = default;
   /// Solves the problem. Returns kConverged, kBudgetExhausted, kInfeasible, kStopped (when
   /// *context.stop became true: return the best found so far promptly) or kFailed with a message
-  /// saying why. best (single-objective) or front (pareto()) holds full design vectors with
+  /// saying why. best (single-objective) or front (specs().pareto) holds full design vectors with
   /// their natural objective values. Never throws for an optimizer outcome.
   virtual SolverResult solve(const Problem& problem, const SolverContext& context) const = 0;
-  /// True for Pareto solvers (several objectives give a front instead of a weighted sum).
-  virtual bool pareto() const { return false; }
+  /// What the solver can do (read once, at load).
+  virtual SolverSpecs specs() const { return {}; }
   /// Throws hapsyn::Error if the problem is not one this solver handles (e.g. a non-worst-case
   /// metric for culling, a free variable without a grid step), and checks its sub-solvers
   /// against the problems they will see (check_sub_solver in plugins/solvers/shared). Called
   /// once at load, before solve(); the message is reported as "problem: solver: <message>".
   virtual void check(const Problem& problem) const {}
-  /// True when solve() spreads its work over the ranks of an MPI job through
-  /// context.cluster().run_tasks (and follows the rules of hapsyn/cluster.hpp: deterministic
-  /// between farms, stop checks that see the agreed flag). False (the default): under mpirun
-  /// the framework runs solve() on rank 0 alone and the other ranks wait.
-  virtual bool distributed() const { return false; }
-  /// True when `hapsyn run --shard i/N` can split this solver's job (it has a shardable task
-  /// farm) and merge_shards() combines the shares' checkpoints.
-  virtual bool shardable() const { return false; }
   /// Combines the checkpoint states ("state" of each shard's checkpoint.json, by shard index)
   /// of a sharded run into the state of one checkpoint from which `--resume` finishes the study
   /// with the result of a single run (every claimed value is re-checked there).
-  /// 	hrows Error("merge", ...) when the shares overlap, leave tasks out or disagree; the
+  /// \throws Error("merge", ...) when the shares overlap, leave tasks out or disagree; the
   ///         default throws "solver does not support --shard".
   virtual Json merge_shards(const Problem& problem, const std::vector<Json>& states) const;
 };

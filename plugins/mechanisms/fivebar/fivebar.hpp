@@ -25,6 +25,7 @@
 /// - J maps (q1dot, q4dot) [rad/s] to (xdot, ydot) [m/s]; D is the joint-space inertia in
 ///   (q1, q4) [kg m^2] of four uniform bars of width k and linear density rho; the effective
 ///   mass at the end effector is M = J^-T D J^-1 [kg].
+#include <hapsyn/accel/mechanism_acceleration.hpp>
 #include <hapsyn/mechanism.hpp>
 #include <hapsyn/options.hpp>
 
@@ -112,7 +113,7 @@ class FiveBarModel final : public MechanismModel {
 
   /// The block path: solve() for kBlockLanes samples at once, without trigonometry
   /// (fivebar_block.hpp). Fills status and J, D, M; never q.
-  void solve_block(const PoseBlock& poses, Needs needs, MechanismScratch& scratch, QuantityBlock& out) const override;
+  void solve_block(const PoseBlock& poses, Needs needs, MechanismScratch& scratch, QuantityBlock& out) const;
 
   /// Forward kinematics: the end effector (x, y) [m] in the scene frame from the actuated
   /// angles q1, q4 [rad], on the working-mode branch (sin(q3 - q2) > 0, E to the left of
@@ -140,7 +141,7 @@ class FiveBarModel final : public MechanismModel {
 };
 
 /// The five-bar mechanism plugin ("fivebar").
-class FiveBar final : public Mechanism {
+class FiveBar final : public Mechanism, public MechanismAcceleration {
  public:
   using Options = FiveBarOptions;
   /// \param options validated options (FiveBarOptions::declare), defaults filled.
@@ -196,7 +197,15 @@ class FiveBar final : public Mechanism {
   /// \throws Error unless the scene has samples with exactly two coordinates (x, y) [m].
   void check_scene(const SampleSet& scene) const override;
   /// kNeedJacobian | kNeedInertia | kNeedEffectiveMass.
-  Needs provides() const override;
+  Needs provides() const;
+  MechanismSpecs specs() const override { return {provides(), {}}; }
+  const MechanismAcceleration* acceleration() const override { return this; }
+  /// The block kernel of `model` (a FiveBarModel this mechanism built).
+  void solve_block(const MechanismModel& model, const PoseBlock& poses, Needs needs, MechanismScratch& scratch,
+                   QuantityBlock& out) const override {
+    static_cast<const FiveBarModel&>(model).solve_block(poses, needs, scratch, out);
+  }
+
   /// True when `needs` asks for nothing beyond J, D and M (the block kernel gives no q).
   bool solves_blocks(Needs needs) const override;
   /// Designs that differ only in r: the five-bar depends on r only through y + r, so lane i is

@@ -37,6 +37,7 @@
 ///   gravity torque (hapsyn/chain_motion.hpp), so tau = H qddot + c + gravity is the full inverse
 ///   dynamics. Without a twist (solve() outside the evaluator) these outputs are NaN. Computed
 ///   only when asked for: the other flags run the same code as before.
+#include <hapsyn/accel/mechanism_acceleration.hpp>
 #include <hapsyn/mechanism.hpp>
 #include <hapsyn/options.hpp>
 #include <hapsyn/accel/lanes.hpp>
@@ -252,7 +253,7 @@ class Haptic6RModel final : public MechanismModel {
   /// inertia and gravity torque of every lane at once (haptic6r_block.cpp); agreement with solve() to 1e-12 relative. Serves
   /// needs within kNeedPose | kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits
   /// (Haptic6R::solves_blocks).
-  void solve_block(const PoseBlock& poses, Needs needs, MechanismScratch& scratch, QuantityBlock& out) const override;
+  void solve_block(const PoseBlock& poses, Needs needs, MechanismScratch& scratch, QuantityBlock& out) const;
   /// The first half of solve() for one pose: its status, q as solve() sets it, and for a
   /// reachable or singular pose the chosen configuration's DH-angle cosines and sines.
   SampleStatus configuration(const double* pose, Vector6d& q, JointTrig& trig) const;
@@ -317,7 +318,7 @@ class Haptic6RModel final : public MechanismModel {
 };
 
 /// The "haptic6r" mechanism plugin.
-class Haptic6R final : public Mechanism {
+class Haptic6R final : public Mechanism, public MechanismAcceleration {
  public:
   using Options = Haptic6ROptions;
   /// Reads the data files (see Haptic6RSetup::from_options, which throws).
@@ -336,7 +337,15 @@ class Haptic6R final : public Mechanism {
   void check_scene(const SampleSet& scene) const override;
   /// kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits | kNeedJointVelocity |
   /// kNeedJointAcceleration | kNeedVelocityTorque.
-  Needs provides() const override;
+  Needs provides() const;
+  MechanismSpecs specs() const override { return {provides(), {}}; }
+  const MechanismAcceleration* acceleration() const override { return this; }
+  /// The block kernel of `model` (a Haptic6RModel this mechanism built).
+  void solve_block(const MechanismModel& model, const PoseBlock& poses, Needs needs, MechanismScratch& scratch,
+                   QuantityBlock& out) const override {
+    static_cast<const Haptic6RModel&>(model).solve_block(poses, needs, scratch, out);
+  }
+
   /// True for needs within kNeedPose | kNeedJacobian | kNeedInertia | kNeedGravity |
   /// kNeedActuatorLimits (Haptic6RModel::solve_block); the demanded motion stays per sample.
   bool solves_blocks(Needs needs) const override;

@@ -138,9 +138,10 @@ class SerialChain final : public Mechanism {
   /// Jacobian, inertia, effective mass, gravity, joint velocity, joint acceleration, velocity
   /// torque; actuator limits when a table is given or the file gives every joint's velocity and
   /// effort limits.
-  Needs provides() const override;
+  Needs provides() const;
+  MechanismSpecs specs() const override { return {provides(), summary()}; }
   /// "N moving joints base -> tip: name (revolute), ...; task T; IK selection S".
-  std::string summary() const override;
+  std::string summary() const;
 
   const SerialChainSetup& setup() const { return *setup_; }
 

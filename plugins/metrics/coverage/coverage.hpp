@@ -11,6 +11,7 @@
 /// applies blockdiag(C_S^B, C_S^B) to M_v, M_a. Every scene sample is a human-reachable pose, so
 /// n_reach^h is the sample count. A manipulator-unreachable (or singular / invalid) sample adds
 /// 0 to n_reach^m and to every eta sum. With n_reach^m = 0, J_v = J_a = J_f = 0.
+#include <hapsyn/accel/metric_acceleration.hpp>
 #include <hapsyn/metric.hpp>
 #include <hapsyn/accel/lanes.hpp>
 #include <hapsyn/accel/sample_block.hpp>
@@ -52,7 +53,7 @@ struct CoverageOptions {
 /// The "coverage" metric. Locals (all Sum-reduced): reach_h (1 per sample), reach_m (1 when the
 /// manipulator reaches), then eta_v, eta_a, eta_f for the selected terms (0 when unreachable).
 /// Thread safety: immutable after construction; local() is const, thread-safe, allocation-free.
-class Coverage final : public Metric {
+class Coverage final : public Metric, public MetricAcceleration {
  public:
   using Matrix6 = Eigen::Matrix<double, 6, 6>;
   using Vector6 = Eigen::Matrix<double, 6, 1>;
@@ -70,9 +71,12 @@ class Coverage final : public Metric {
   void local_block(const QuantityBlock& q, double* out) const override;
   /// pose only: kNeedPose; velocity: Jacobian + ActuatorLimits; acceleration: + Inertia +
   /// Gravity; force: Jacobian + Gravity + ActuatorLimits.
-  Needs needs() const override;
+  Needs needs() const;
+  MetricSpecs specs() const override { return {needs(), scene_attributes()}; }
+  const MetricAcceleration* acceleration() const override { return this; }
+
   /// "M_v" for velocity, "M_a" for acceleration, nothing else.
-  std::vector<std::string> scene_attributes() const override;
+  std::vector<std::string> scene_attributes() const;
   std::vector<LocalValue> locals() const override;
   /// The sum of the selected terms [-] (0 .. number of terms).
   double combine(const double* reduced, int samples) const override;

@@ -79,7 +79,7 @@ class CountingMechanism final : public Mechanism {
   }
   std::unique_ptr<MechanismScratch> make_scratch() const override { return inner_->make_scratch(); }
   void check_scene(const SampleSet& scene) const override { inner_->check_scene(scene); }
-  Needs provides() const override { return inner_->provides(); }
+  MechanismSpecs specs() const override { return {inner_->provides(), {}}; }
 
  private:
   std::shared_ptr<const Mechanism> inner_;
@@ -319,8 +319,7 @@ class AttributeProbe final : public Metric {
     }
     out[0] = all ? 1.0 : 0.0;
   }
-  Needs needs() const override { return kNeedPose; }
-  std::vector<std::string> scene_attributes() const override { return names_; }
+  MetricSpecs specs() const override { return {kNeedPose, names_}; }
   std::vector<LocalValue> locals() const override { return {{"resolved", Reduction::kSum, ""}}; }
   double combine(const double* reduced, int) const override { return reduced[0]; }
   Aggregation aggregation() const override { return Aggregation::kAveraging; }

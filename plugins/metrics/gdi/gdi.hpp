@@ -3,6 +3,7 @@
 /// The global dynamic index (Stocco et al. 1998; Unal 2008 eq. 2), a worst-case metric:
 ///   GDI = min over samples 1 / (1 + sigma_max(M)) = 1 / (1 + max over samples sigma_max(M)),
 /// M = J^-T D J^-1 the effective mass at the end effector [kg].
+#include <hapsyn/accel/metric_acceleration.hpp>
 #include <hapsyn/metric.hpp>
 
 #include <vector>
@@ -12,11 +13,14 @@ namespace hapsyn::plugins {
 /// The "gdi" metric. It has no options (no Options type): the framework default-constructs it.
 /// Local: sigma_max_M [kg] (reduced by max); combine = 1 / (1 + reduced[0]).
 /// Thread safety: stateless; every method is const and thread-safe; local() never allocates.
-class Gdi final : public Metric {
+class Gdi final : public Metric, public MetricAcceleration {
  public:
   /// out[0] = sigma_max(M) of q.effective_mass [kg].
   void local(const SampleQuantities& q, double* out) const override;
-  Needs needs() const override { return kNeedEffectiveMass; }
+  Needs needs() const { return kNeedEffectiveMass; }
+  MetricSpecs specs() const override { return {needs(), {}}; }
+  const MetricAcceleration* acceleration() const override { return this; }
+
   std::vector<LocalValue> locals() const override;
   /// 1 / (1 + reduced[0]) [-]; 0 for an infinite reduced[0].
   double combine(const double* reduced, int samples) const override;

@@ -3,6 +3,7 @@
 /// The global isotropy index (Stocco et al. 1998; Unal 2008 eq. 1), a worst-case metric:
 ///   GII = min over samples sigma_min(J) / max over samples sigma_max(J),
 /// J the mechanism's task Jacobian (task velocity per actuator rate).
+#include <hapsyn/accel/metric_acceleration.hpp>
 #include <hapsyn/metric.hpp>
 #include <hapsyn/options.hpp>
 
@@ -39,7 +40,7 @@ struct GiiOptions {
 /// Locals: sigma_min_J (reduced by min) and sigma_max_J (reduced by max), in
 /// the Jacobian's units (m/rad for the five-bar); combine = reduced[0] / reduced[1] [-].
 /// Thread safety: stateless; every method is const and thread-safe; local() never allocates.
-class Gii final : public Metric {
+class Gii final : public Metric, public MetricAcceleration {
  public:
   using Options = GiiOptions;
   Gii() = default;
@@ -49,7 +50,10 @@ class Gii final : public Metric {
   /// \throws Error("gii: ...") when J has angular rows, rows = all and no characteristic_length,
   ///         or rows = rotational and J has no angular rows (the first sample stops the study).
   void local(const SampleQuantities& q, double* out) const override;
-  Needs needs() const override { return kNeedJacobian; }
+  Needs needs() const { return kNeedJacobian; }
+  MetricSpecs specs() const override { return {needs(), {}}; }
+  const MetricAcceleration* acceleration() const override { return this; }
+
   std::vector<LocalValue> locals() const override;
   /// The block path: the 2 x 2 closed form of singular_values() per lane (other shapes: local()
   /// per lane). Not for rows = rotational (which local() refuses on J without angular rows).

@@ -56,7 +56,8 @@ class MotionFeasibility final : public Metric {
   void local(const SampleQuantities& q, double* out) const override;
   /// reachable: pose only; velocity: joint velocity and actuator limits; acceleration: joint
   /// acceleration, velocity torque, inertia, gravity and actuator limits; all: the union.
-  Needs needs() const override;
+  Needs needs() const;
+  MetricSpecs specs() const override { return {needs(), {}}; }
   std::vector<LocalValue> locals() const override;
   /// The chosen share [-] in [0, 1]: its sum over the samples / the sample count.
   double combine(const double* reduced, int samples) const override;

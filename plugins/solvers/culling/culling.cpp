@@ -8,6 +8,7 @@
 #include "grid/worst_case_check.hpp"
 #include "shared/minmax_sqp.hpp"
 
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 

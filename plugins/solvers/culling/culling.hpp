@@ -113,10 +113,9 @@ class CullingSolver : public Solver {
   ///         foreign or its reference does not re-evaluate to the score it claims.
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
   /// The lines are one task farm over the ranks of an MPI job; the seed runs on rank 0.
-  bool distributed() const override { return true; }
   /// `--shard i/N` sweeps the i-th contiguous slice of the lines (status stopped, the shard's
   /// checkpoint written).
-  bool shardable() const override { return true; }
+  SolverSpecs specs() const override { return {false, true, true}; }
   /// One state of the shards' checkpoint states (in shard order): the finished lines joined,
   /// the counts summed, the best reference (ties to the first grid index), the critical
   /// samples joined, the first shard's seed. Lines no shard finished stay unfinished.

@@ -4,6 +4,7 @@
 #include "ga_summary.hpp"
 #include "shared/pagmo_adapter.hpp"
 
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 

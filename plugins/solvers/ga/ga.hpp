@@ -47,8 +47,7 @@ class GaSolver : public Solver {
   /// \throws Error when there is no free design variable, or a repair/cluster variable is unknown.
   void check(const Problem& problem) const override;
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
-  bool distributed() const override { return true; }
-  bool shardable() const override { return true; }
+  SolverSpecs specs() const override { return {false, true, true}; }
   /// The shards' finished runs as one checkpoint state ("completed_runs" by run index, the
   /// evaluations summed, the longest elapsed time); --resume then re-checks every run's claimed
   /// optimum and summarises.

@@ -7,6 +7,7 @@
 #include "task_bytes.hpp"
 #include "worst_case_check.hpp"
 
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/pareto.hpp>

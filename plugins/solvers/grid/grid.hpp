@@ -100,12 +100,10 @@ class GridSolver : public Solver {
   /// \throws Error("checkpoint", ...) with context.resume when the checkpoint is damaged, edited,
   ///         foreign or its best (front) does not re-evaluate to the values it claims.
   SolverResult solve(const Problem& problem, const SolverContext& context) const override;
-  bool pareto() const override { return options_.pareto; }
   /// The chunks are one task farm over the ranks of an MPI job (pruning knowledge shared).
-  bool distributed() const override { return true; }
   /// `--shard i/N` runs the i-th contiguous slice of the chunks (status stopped, the shard's
   /// checkpoint written).
-  bool shardable() const override { return true; }
+  SolverSpecs specs() const override { return {options_.pareto, true, true}; }
   /// One state of the shards' checkpoint states (in shard order): the finished chunks joined,
   /// the counts summed, the best by score (ties to the first grid index) or the fronts joined.
   /// Chunks no shard finished stay unfinished (a resumed run visits them).

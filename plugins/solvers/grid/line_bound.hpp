@@ -3,13 +3,13 @@
 /// Block bounds of grid lines (header only; grid and culling share it, culling as
 /// "grid/line_bound.hpp"). A grid solver visits the designs in lines along the last free
 /// component; when the mechanism knows an interval of that component outside which a constraint
-/// is violated (Mechanism::constraint_interval), the designs of the line outside it are counted
+/// is violated (MechanismAcceleration::constraint_interval), the designs of the line outside it are counted
 /// as violating a constraint without being visited. The interval may be wider than the feasible
 /// set, never narrower; LineBound checks the claim on every line at the excluded grid values
 /// nearest the interval (the designs most likely to expose a wrong bound), so that a mechanism
 /// whose bound cuts a feasible design stops the run with an error instead of a silently wrong
 /// optimum (docs/design.md section 13.3). When the mechanism also promises that the line's
-/// feasible values form one run (Mechanism::constraints_quasiconvex), the bound is made exact:
+/// feasible values form one run (MechanismAcceleration::constraints_quasiconvex), the bound is made exact:
 /// the constraints are evaluated at the run's ends (stepping inward past violators), and the
 /// designs between need no constraint evaluation of their own (verified()).
 #include <hapsyn/error.hpp>
@@ -40,7 +40,7 @@ class LineBound {
       free_k_ = problem.design_space().free_size() - 1;
       component_ = problem.design_space().free_indices().back();
       count_ = problem.design_space().grid_counts().back();
-      one_run_ = enabled_ && problem.mechanism().constraints_quasiconvex(component_);
+      one_run_ = enabled_ && problem.mechanism_acceleration().constraints_quasiconvex(component_);
       if (count_ <= kMaxTabulated) {
         values_.resize(static_cast<std::size_t>(count_));
         for (long long i = 0; i < count_; ++i) values_[static_cast<std::size_t>(i)] = problem.design_space().grid_value(free_k_, i);
@@ -67,7 +67,7 @@ class LineBound {
     const DesignSpace& space = problem_.design_space();
     space.expand(free_design, full_.data());
     double lower = 0.0, upper = 0.0;
-    if (!problem_.mechanism().constraint_interval(full_.data(), component_, problem_.samples(), lower, upper)) return;
+    if (!problem_.mechanism_acceleration().constraint_interval(full_.data(), component_, problem_.samples(), lower, upper)) return;
     if (!(lower <= upper)) {  // empty (or NaN: then every design is checked as usual)
       if (lower > upper) {
         first_ = count_;

@@ -5,7 +5,7 @@
 /// (LineBound::verified()), a run of consecutive designs is ruled out at once when, at one
 /// sample, every design of the run fails (all infeasible in a worst-case study) or the study's
 /// score is bounded strictly below a threshold that a real design already reaches
-/// (Problem::block_score_bound, from Mechanism::sample_envelope and Metric::envelope_bound).
+/// (Problem::block_score_bound, from MechanismAcceleration::sample_envelope and MetricAcceleration::envelope_bound).
 /// No design that ties or beats the threshold is ever ruled out, so a grid optimum found with
 /// block bounds is the optimum found without them.
 ///
@@ -20,7 +20,7 @@
 ///
 /// Before any run, a line is cut to the values where the first kReachSamples samples of the
 /// caller's list can be solved (Problem::reachable_interval, from
-/// Mechanism::reachable_interval): the designs of the line outside that interval fail at a
+/// MechanismAcceleration::reachable_interval): the designs of the line outside that interval fail at a
 /// sample and are ruled out at once, without an envelope (in a worst-case study a failed sample
 /// makes a design infeasible).
 ///
@@ -215,7 +215,7 @@ class RunBounds {
     if (e.status != EvalStatus::kFeasible) return;
     std::ostringstream message;
     message << std::setprecision(17)
-            << "the mechanism's line bound (Mechanism::reachable_interval) is wrong: it claims that sample " << sample
+            << "the mechanism's line bound (MechanismAcceleration::reachable_interval) is wrong: it claims that sample " << sample
             << " fails for every " << problem_.design_space().components()[static_cast<std::size_t>(component_)].name
             << " outside the interval it gives, but grid value " << check_x_[n - 1]
             << " lies outside it and reaches the sample; " << solver_
@@ -269,7 +269,7 @@ class RunBounds {
     const Evaluation& e = problem_.evaluate(check_x_.data(), scratch, at_sample);
     if (e.status != EvalStatus::kFeasible || e.score <= bound) return;
     std::ostringstream message;
-    message << std::setprecision(17) << "the mechanism's block bound (Mechanism::sample_envelope) is wrong: over "
+    message << std::setprecision(17) << "the mechanism's block bound (MechanismAcceleration::sample_envelope) is wrong: over "
             << problem_.design_space().components()[static_cast<std::size_t>(component_)].name << " in ["
             << line.value(first) << ", " << line.value(last) << "] at sample " << sample << " it claims "
             << (bound == -kInf ? std::string("that every design fails") : "a score of at most " + std::to_string(bound))

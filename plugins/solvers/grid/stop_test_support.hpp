@@ -33,7 +33,7 @@ class StoppingMetric : public Metric {
     counter_->tick();
     out[0] = local_(q.q.data(), q.scene->pose(q.sample));
   }
-  Needs needs() const override { return kNeedPose; }
+  MetricSpecs specs() const override { return {kNeedPose, {}}; }
 
  private:
   AnalyticLocal local_;
@@ -47,7 +47,7 @@ class NonMonotoneMetric : public Metric {
   void local(const SampleQuantities& q, double* out) const override {
     out[0] = 1.0 + q.q[0] + 0.1 * q.q[1] * q.scene->pose(q.sample)[0];
   }
-  Needs needs() const override { return kNeedPose; }
+  MetricSpecs specs() const override { return {kNeedPose, {}}; }
   double combine(const double* reduced, int) const override { return -reduced[0]; }
 };
 

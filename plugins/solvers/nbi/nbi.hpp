@@ -99,7 +99,6 @@ class NbiSolver : public Solver {
  public:
   using Options = NbiOptions;
   explicit NbiSolver(const NbiOptions& options) : options_(options) {}
-  bool pareto() const override { return true; }
   /// Under MPI (and on several threads) the shadow optima are a task farm (each shadow solver
   /// runs whole on one rank, with its threads), then the subproblems run in waves: each wave is
   /// a farm of the subproblems whose warm start is settled (every earlier point that could be
@@ -109,7 +108,7 @@ class NbiSolver : public Solver {
   /// the last subproblem run side by side; with three or more, the waves grow. The reverse
   /// sweep runs in waves the same way. The seed pool is evaluated on every rank (the same
   /// designs, deterministic), before the first wave.
-  bool distributed() const override { return true; }
+  SolverSpecs specs() const override { return {true, true, false}; }
   /// \throws Error("nbi", ...) with fewer than two objectives, an integer free variable, no free
   ///         variable or a simplex grid too large; or when the shadow solver refuses one of the
   ///         single-objective problems ("<shadow_solver's path> (objective '<name>'): <its message>").

@@ -2,6 +2,7 @@
 
 #include "shared/pagmo_adapter.hpp"
 
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/pareto.hpp>

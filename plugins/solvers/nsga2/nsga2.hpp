@@ -84,8 +84,7 @@ class Nsga2Solver : public Solver {
   using Options = Nsga2Options;
   /// \throws Error("nsga2: options.population = 10: must be a multiple of 4 ...") and pagmo's refusals.
   explicit Nsga2Solver(const Nsga2Options& options);
-  bool pareto() const override { return true; }
-  bool distributed() const override { return true; }
+  SolverSpecs specs() const override { return {true, true, false}; }
   /// \throws Error with fewer than two objectives or no free design variable, or an unknown
   ///         repair variable.
   void check(const Problem& problem) const override;

@@ -35,11 +35,10 @@ class SequentialSolver : public Solver {
   using Options = SequentialOptions;
   explicit SequentialSolver(const SequentialOptions& options) : options_(options) {}
   /// Two objectives make a comparison with fronts, not a weighted sum.
-  bool pareto() const override { return true; }
   /// Under MPI the values are a task farm: each one's sub-solver runs whole on one rank (its
   /// threads, no progress lines of its own), and the design chosen is the same whatever the
   /// number of ranks (the values are independent).
-  bool distributed() const override { return true; }
+  SolverSpecs specs() const override { return {true, true, false}; }
   /// \throws Error("sequential", ...) unless there are exactly two objectives and `variable` is a
   ///         free design component with a grid step; or when the sub-solver refuses the first
   ///         objective's problem with the variable fixed ("<sub_solver's path>: <its message>").

@@ -1,5 +1,6 @@
 #include "pagmo_adapter.hpp"
 
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/bytes.hpp>
 
 #include <hapsyn/error.hpp>

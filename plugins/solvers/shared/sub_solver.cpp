@@ -1,5 +1,6 @@
 #include "sub_solver.hpp"
 
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 

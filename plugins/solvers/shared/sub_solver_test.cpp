@@ -8,6 +8,7 @@
 #include "analytic_problems.hpp"
 #include "test_support.hpp"
 
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 
@@ -239,7 +240,7 @@ class HalfReachable : public hapsyn::Mechanism {
   std::unique_ptr<const hapsyn::MechanismModel> build(const double* design) const override {
     return std::make_unique<Model>(design);
   }
-  hapsyn::Needs provides() const override { return hapsyn::kNeedJacobian; }
+  hapsyn::MechanismSpecs specs() const override { return {hapsyn::kNeedJacobian, {}}; }
 };
 
 std::shared_ptr<hapsyn::Problem> half_reachable_problem() {

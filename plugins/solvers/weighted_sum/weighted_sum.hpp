@@ -37,11 +37,10 @@ class WeightedSumSolver : public Solver {
  public:
   using Options = WeightedSumOptions;
   explicit WeightedSumSolver(const WeightedSumOptions& options) : options_(options) {}
-  bool pareto() const override { return true; }
   /// Under MPI the weight vectors are a task farm: each one's sub-solver runs whole on one
   /// rank (its threads, no progress lines of its own), and the front is the same whatever the
   /// number of ranks (the weight vectors are independent).
-  bool distributed() const override { return true; }
+  SolverSpecs specs() const override { return {true, true, false}; }
   /// \throws Error("weighted_sum", ...) with fewer than two objectives, or when a weight vector
   ///         has the wrong length, a negative or non-finite entry, or sums to zero; or when the
   ///         sub-solver refuses a reweighted problem ("<sub_solver's path>: <its message>").
