@@ -23,7 +23,8 @@ namespace hapsyn {
 
 class MechanismAcceleration;  // hapsyn/accel/mechanism_acceleration.hpp
 class MetricAcceleration;     // hapsyn/accel/metric_acceleration.hpp
-struct QuantityBlock;         // hapsyn/accel/sample_block.hpp
+class Evaluator;              // the framework's private implementation of Problem
+struct EvalData;              // an EvalScratch's contents (private)
 
 enum class Sense { kMaximize, kMinimize };
 
@@ -100,7 +101,9 @@ struct EvalOptions {
   bool constraints_verified = false;
 };
 
-/// The study's problem. Immutable and shared by threads; per-thread state is an EvalScratch.
+/// The study's problem. Immutable and shared by threads; per-thread state is an EvalScratch. Its
+/// evaluation paths (per sample, batches, sample blocks, design lanes) are the framework's
+/// private implementation.
 class Problem {
  public:
   /// \throws Error if the scene has no samples, a non-finite one or unusable weights
@@ -116,6 +119,7 @@ class Problem {
   /// pointer (with_objectives() and with_design_space() make a new problem instead).
   Problem(const Problem&) = delete;
   Problem& operator=(const Problem&) = delete;
+  ~Problem();
 
   /// The same study (mechanism, scene, metrics: shared, not copied) with other objectives,
   /// e.g. other weights for a weighted sum or one objective for a shadow optimum. Cheap: no
@@ -127,16 +131,16 @@ class Problem {
   /// \throws Error when `space` does not have the same components as design_space().
   std::shared_ptr<const Problem> with_design_space(DesignSpace space) const;
 
-  const DesignSpace& design_space() const { return space_; }
-  const SampleSet& samples() const { return *samples_; }
-  const Mechanism& mechanism() const { return *mechanism_; }
-  const std::vector<MetricEntry>& metrics() const { return metrics_; }
-  const std::vector<Objective>& objectives() const { return objectives_; }
-  std::size_t dimension() const { return space_.free_size(); }
-  std::size_t constraint_count() const { return constraint_names_.size(); }
-  const std::vector<std::string>& constraint_names() const { return constraint_names_; }
+  const DesignSpace& design_space() const;
+  const SampleSet& samples() const;
+  const Mechanism& mechanism() const;
+  const std::vector<MetricEntry>& metrics() const;
+  const std::vector<Objective>& objectives() const;
+  std::size_t dimension() const;
+  std::size_t constraint_count() const;
+  const std::vector<std::string>& constraint_names() const;
   /// True when every metric in the study is worst-case (culling and pruning apply).
-  bool worst_case() const { return worst_case_; }
+  bool worst_case() const;
   /// Block bound of a run of a grid line (docs/design.md section 13.5): an upper bound of the
   /// score of every design equal to `full_design` (a full design vector) except in component
   /// `component`, which runs over [lower, upper], from the mechanism's envelope of sample
@@ -154,72 +158,37 @@ class Problem {
   bool reachable_interval(const double* full_design, int component, int sample, double& lower, double& upper) const;
   /// The mechanism's speed layer (Mechanism::acceleration()), or a stand-in whose every hook
   /// says "not available" when it has none: never null.
-  const MechanismAcceleration& mechanism_acceleration() const { return *mechanism_accel_; }
+  const MechanismAcceleration& mechanism_acceleration() const;
   /// True when evaluate() solves samples in blocks (hapsyn/accel/sample_block.hpp): the mechanism
   /// solves blocks for the study's needs, every metric is worst-case with a block local and no
   /// scene attributes, and the scene has at most kBlockMaxCoordinates coordinates and no
   /// demanded motion. Same results as the per-sample path (docs/design.md section 13).
-  bool block_path() const { return block_path_; }
+  bool block_path() const;
   /// Union of the metrics' needs: what the mechanism computes per sample, and nothing else.
-  Needs needs() const { return needs_; }
+  Needs needs() const;
   /// Sample order used for full evaluations. With a worst-case metric: the scene's extreme
   /// samples first (far from the centroid), so infeasible designs and worst cases are met early;
   /// otherwise the scene's own order (cache-friendly; nothing to decide early). Deterministic.
-  const std::vector<int>& sample_order() const { return order_; }
+  const std::vector<int>& sample_order() const;
   /// Prepares `q` for MechanismModel::solve of sample `sample`: sets q.sample, q.scene and, when
   /// the scene carries the demanded motion, q.twist / q.twist_rate (else null). The evaluator
   /// calls it before every solve(); a tool that calls solve() itself should too.
-  void bind_sample(SampleQuantities& q, int sample) const {
-    q.sample = sample;
-    q.scene = samples_.get();
-    q.twist = twist_ ? twist_->row(sample).data() : nullptr;
-    q.twist_rate = twist_rate_ ? twist_rate_->row(sample).data() : nullptr;
-  }
+  void bind_sample(SampleQuantities& q, int sample) const;
 
-  /// Per-thread evaluation state (mechanism scratch, accumulators). Not shareable; its
-  /// members are the evaluator's business. Cache-line aligned: two threads' scratches, written
-  /// per design, never share a line (false sharing made a 2-thread grid slower than 1 thread).
-  class alignas(64) EvalScratch {
+  /// Per-thread evaluation state (mechanism scratch, accumulators, the evaluator's working
+  /// memory). Not shareable: one per thread. Its contents are the evaluator's business.
+  class EvalScratch {
    public:
     EvalScratch();
     EvalScratch(const EvalScratch&) = delete;
     EvalScratch& operator=(const EvalScratch&) = delete;
     ~EvalScratch();
-    const Evaluation& last() const { return result; }
+    /// The evaluation evaluate() returned last with this scratch.
+    const Evaluation& last() const;
 
    private:
     friend class Problem;
-    std::unique_ptr<MechanismScratch> scratch;
-    SampleQuantities quantities;
-    Eigen::VectorXd full;
-    std::vector<double> locals;       // flat local values of the current sample
-    std::vector<double> accumulator;  // flat reduced values
-    std::vector<int> argument;        // flat sample index attaining each reduction
-    std::vector<double> g;
-    std::vector<std::vector<double>> nested_locals;  // for SampleCallback
-    std::vector<double> objective_bound;             // per objective, for Pareto pruning
-    // Batched evaluation (a metric with MetricAcceleration::batch_size() > 0), empty otherwise: the
-    // quantities of up to batch samples, pointers to them, and their flat local values.
-    std::vector<SampleQuantities> batch_quantities;
-    std::vector<const SampleQuantities*> batch_pointers;
-    std::vector<double> batch_locals;
-    // Block path (Problem::block_path()), null otherwise: the block's quantities, its local
-    // values (local j of lane i at [j * kBlockLanes + i]), gathered poses of a subset, and the
-    // reductions before the block (restored when pruning replays the block lane by lane).
-    std::unique_ptr<QuantityBlock> block;
-    std::vector<double> block_locals;
-    std::vector<double> gathered;
-    // The current block's first position in order_ (its attributes in attribute_blocks_), or
-    // SIZE_MAX for a block of a subset; the pointers QuantityBlock::attribute_lane_data shows.
-    std::size_t block_first = SIZE_MAX;
-    std::vector<const double*> attribute_lane_pointers;
-    std::vector<double> saved_accumulator;
-    std::vector<int> saved_argument;
-    // Design lanes (evaluate_designs): each lane's full design and reductions.
-    std::vector<double> lane_full;      // lane i's full design at [i * design size]
-    std::vector<double> lane_accumulator;  // lane-minor: local j of lane i at [j * kBlockLanes + i]
-    std::vector<int> lane_argument;
-    Evaluation result;
+    std::unique_ptr<EvalData> data_;
   };
   std::unique_ptr<EvalScratch> make_eval_scratch() const;
 
@@ -267,78 +236,7 @@ class Problem {
   double score(const std::vector<double>& objectives) const;
 
  private:
-  void check_design(const double* free_design) const;
-  // The steps of evaluate().
-  bool constraints_hold(const double* full, EvalScratch& ws, Evaluation& out) const;
-  void accumulate_locals(int sample, EvalScratch& ws, bool keep_locals) const;
-  // `q`: the sample's quantities, blamed instead of the metric when a local value is not finite.
-  void fold_locals(int sample, EvalScratch& ws, bool keep_locals, const SampleQuantities& q) const;
-  [[noreturn]] void refuse_non_finite_local(std::size_t metric, int local, int sample, const EvalScratch& ws,
-                                            const SampleQuantities& q) const;
-  const Evaluation& evaluate_batched(const MechanismModel& model, EvalScratch& ws, const EvalOptions& options,
-                                     bool prune, bool prune_front) const;
-  const Evaluation& evaluate_blocks(const MechanismModel& model, EvalScratch& ws, const EvalOptions& options,
-                                    bool prune, bool prune_front) const;
-  bool block_moves(std::size_t i, const double* v, double current, int lanes) const;
-  bool fold_block(const MechanismModel& model, EvalScratch& ws, const EvalOptions& options, const int* lane_sample,
-                  int lanes, bool prune, bool prune_front) const;
-  void fold_block_sums(const MechanismModel& model, EvalScratch& ws, const int* lane_sample, int lanes) const;
-  void block_locals(EvalScratch& ws) const;
-  [[noreturn]] void refuse_non_finite_block_local(const MechanismModel& model, EvalScratch& ws, int sample) const;
-  void choose_block_path();
-  void copy_attribute_blocks();
-  std::size_t order_run(const std::vector<int>& subset) const;
-  const double* attribute_block_start(std::size_t i) const;
-  void order_extremes_first();
-  void size_evaluations(std::vector<Evaluation>& outs, int count) const;
-  int start_lanes(const double* const* free_designs, int count, bool constraints_verified, EvalScratch& ws,
-                  std::vector<Evaluation>& outs, bool* active, const double** lane_design) const;
-  int fold_lanes(int sample, int count, EvalScratch& ws, const EvalOptions& options, bool prune, bool prune_front,
-                 std::vector<Evaluation>& outs, bool* active, int& left) const;
-  double score_bound(const double* accumulator, long long samples) const;
-  bool score_bound_lanes(const double* lane_accumulator, int samples, double* bound) const;
-  void mark_pruned(const int* argument, Evaluation& out) const;
-  void combine_objectives(const EvalScratch& ws, Evaluation& out) const;
-  bool front_dominates(const std::vector<double>& front, const double* accumulator, double* bound) const;
-
-  void resolve_demanded_motion();
-
-  std::string mechanism_plugin_;
-  std::shared_ptr<const Mechanism> mechanism_;
-  const MechanismAcceleration* mechanism_accel_ = nullptr;  // never null once constructed
-  std::shared_ptr<const SampleSet> samples_;
-  std::vector<MetricEntry> metrics_;
-  std::vector<const MetricAcceleration*> metric_accel_;  // per metric, never null
-  std::vector<Objective> objectives_;
-  DesignSpace space_;
-  std::vector<std::string> constraint_names_;
-  std::vector<int> order_;
-  std::vector<double> free_lower_, free_upper_;  // bounds widened by a rounding tolerance
-  std::vector<std::vector<const AttributeMatrix*>> metric_attributes_;  // per metric, see SampleQuantities::attributes
-  std::vector<int> local_offset_;        // first local of metric m in the flat local array
-  std::vector<Reduction> local_reduction_;
-  std::vector<double> identity_accumulator_;  // per local: +inf (min), -inf (max), 0 (sum)
-  // Per sample, w_i N / W: the factor of its sum-reduced local values (SampleSet::weights);
-  // empty when the scene has no weights or equal ones.
-  std::vector<double> sample_scale_;
-  bool worst_case_ = true;
-  bool any_worst_case_ = false;
-  Needs needs_ = 0;
-  const AttributeMatrix* twist_ = nullptr;       // the scene's kTwistAttribute, when it has one
-  const AttributeMatrix* twist_rate_ = nullptr;  // the scene's kTwistRateAttribute
-  bool prunable_ = false;        // worst-case, every objective maximized with weight >= 0
-  bool all_maximized_ = false;   // every objective maximized
-  bool block_path_ = false;
-  std::size_t block_stride_ = 0;         // order_ padded to whole blocks
-  std::vector<double> block_poses_;       // coordinate c of order_[k] at [c * block_stride_ + k]
-  // The metrics' scene attributes in order_ by blocks, structure of arrays (one copy per
-  // attribute, however many metrics list it): entry e of order_[b * kBlockLanes + i] at
-  // [(b * cols + e) * kBlockLanes + i] from a 64-byte aligned start. Per metric and attribute,
-  // that start (block 0) or null. See QuantityBlock::attribute_lanes.
-  std::vector<std::vector<double>> attribute_blocks_;
-  std::vector<int> order_position_;  // sample -> its position in order_ (block path only)
-  std::vector<std::vector<const double*>> metric_attribute_blocks_;
-  int batch_ = 0;  // largest MetricAcceleration::batch_size(); 0 = the per-sample path only
+  std::unique_ptr<const Evaluator> impl_;
 };
 
 }  // namespace hapsyn

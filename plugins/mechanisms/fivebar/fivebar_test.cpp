@@ -1046,7 +1046,7 @@ TEST(FiveBarPlugin, LoadedPluginsReproduceTable2) {
   SampleQuantities q;
   double reduced_gii[2] = {std::numeric_limits<double>::infinity(), 0.0}, reduced_gdi = 0.0;
   for (int i = 0; i < samples.size(); ++i) {
-    model->solve(samples.pose(i), gii->needs() | gdi->needs(), *scratch, q);
+    model->solve(samples.pose(i), gii->specs().needs | gdi->specs().needs, *scratch, q);
     ASSERT_EQ(q.status, SampleStatus::kReachable);
     double local[2];
     gii->local(q, local);

@@ -108,8 +108,8 @@ inline Haptic6RComparison compare_with_haptic6r(Json options, int restarts, cons
   const auto coverage = test::registry().create_metric(
       "coverage", Json{{"terms", {"pose", "velocity", "acceleration", "force"}}}, "objectives[0]");
   const auto scene_plugin = test::registry().create_scene("human_arm", scene_options, "scene");
-  const SampleSet scene = scene_plugin->build(SceneRequest{coverage->scene_attributes()});
-  const std::vector<std::string> names = coverage->scene_attributes();
+  const SampleSet scene = scene_plugin->build(SceneRequest{coverage->specs().scene_attributes});
+  const std::vector<std::string> names = coverage->specs().scene_attributes;
   std::vector<const AttributeMatrix*> attributes;
   for (const std::string& n : names) attributes.push_back(&scene.attributes.at(n));
   const std::size_t local_count = coverage->locals().size();

@@ -82,10 +82,11 @@ class Coverage final : public Metric, public MetricAcceleration {
   double combine(const double* reduced, int samples) const override;
   Aggregation aggregation() const override { return Aggregation::kAveraging; }
 
-  bool pose() const { return pose_; }
-  bool velocity() const { return velocity_; }
-  bool acceleration() const { return acceleration_; }
-  bool force() const { return force_; }
+  /// Which terms the options select.
+  bool pose_term() const { return pose_; }
+  bool velocity_term() const { return velocity_; }
+  bool acceleration_term() const { return acceleration_; }
+  bool force_term() const { return force_; }
   double m_max() const { return options_.m_max; }  ///< [N m]
   double f_max() const { return options_.f_max; }  ///< [N]
 

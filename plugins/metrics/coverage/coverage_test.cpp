@@ -79,7 +79,7 @@ class CountingMechanism final : public Mechanism {
   }
   std::unique_ptr<MechanismScratch> make_scratch() const override { return inner_->make_scratch(); }
   void check_scene(const SampleSet& scene) const override { inner_->check_scene(scene); }
-  MechanismSpecs specs() const override { return {inner_->provides(), {}}; }
+  MechanismSpecs specs() const override { return inner_->specs(); }
 
  private:
   std::shared_ptr<const Mechanism> inner_;
