@@ -1,11 +1,11 @@
 #include "culling.hpp"
 
-#include "grid/ledger.hpp"
-#include "grid/line_bound.hpp"
-#include "grid/run_bounds.hpp"
-#include "grid/rank_support.hpp"
-#include "grid/task_bytes.hpp"
-#include "grid/worst_case_check.hpp"
+#include "shared/bounds/ledger.hpp"
+#include "shared/bounds/line_bound.hpp"
+#include "shared/bounds/run_bounds.hpp"
+#include "shared/bounds/rank_support.hpp"
+#include "shared/bounds/task_bytes.hpp"
+#include "shared/bounds/worst_case_check.hpp"
 #include "shared/minmax_sqp.hpp"
 
 #include <hapsyn/cluster.hpp>

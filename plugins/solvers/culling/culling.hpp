@@ -31,7 +31,7 @@
 /// shard runs alike) and merge_shards() joins the shares' states. The grid optimum does not
 /// depend on the thread count, rank count or shard split; the polish runs on rank 0.
 ///
-/// Monotonicity spot check (grid/worst_case_check.hpp): every design that survives its bound
+/// Monotonicity spot check (shared/bounds/worst_case_check.hpp): every design that survives its bound
 /// at the critical samples and is then searched in full compares that bound with its full
 /// value, and the grid optimum is checked on half of the samples; a bound below the full value
 /// (a metric breaking the worst-case rule) gives status failed naming the metric.

@@ -1,10 +1,9 @@
 // Culling must return exactly what the exhaustive grid search returns.
 #include "culling.hpp"
 
-#include "../grid/grid.hpp"
-#include "grid/forwarding_mechanism.hpp"
-#include "grid/rank_test_support.hpp"
-#include "grid/stop_test_support.hpp"
+#include "shared/testing/forwarding_mechanism.hpp"
+#include "shared/testing/rank_test_support.hpp"
+#include "shared/testing/stop_test_support.hpp"
 #include "test_support.hpp"
 
 #include <filesystem>
@@ -15,9 +14,10 @@ using hapsyn::Json;
 using hapsyn::test::expect_error;
 
 namespace {
-// A grid solver with these options (the rest default).
-hapsyn::plugins::GridSolver grid_solver(const Json& options) {
-  return hapsyn::plugins::GridSolver(hapsyn::make_options<hapsyn::plugins::GridOptions>(options));
+// The grid plugin with these options (the rest default), created through the registry: the
+// oracle is the shipped grid solver, and culling's code does not link grid's.
+std::shared_ptr<hapsyn::Solver> grid_solver(const Json& options) {
+  return hapsyn::test::registry().create_solver("grid", options, "solver");
 }
 
 hapsyn::SolverResult solve(const hapsyn::Solver& solver, const hapsyn::Problem& problem, int threads) {
@@ -49,8 +49,8 @@ TEST(Culling, ReturnsTheExhaustiveOptimumOnRandomSubBoxes) {
     for (const Json& objectives : objective_sets) {
       doc["objectives"] = objectives;
       const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
-      const hapsyn::plugins::GridSolver grid = grid_solver(Json{{"prune", false}, {"progress_interval", 1e9}});
-      const auto exhaustive = solve(grid, *study.problem, 2);
+      const auto grid = grid_solver(Json{{"prune", false}, {"progress_interval", 1e9}});
+      const auto exhaustive = solve(*grid, *study.problem, 2);
       for (bool seed : {false, true}) {
         for (int threads : {1, 2}) {
           const hapsyn::plugins::CullingSolver culling(hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(seed, false)));
@@ -77,9 +77,9 @@ TEST(Culling, SearchesFarFewerWorkspacesThanExhaustiveSearch) {
   doc["design"]["r"]["step"] = 0.05;
   doc["scene"]["options"]["step"] = 0.01;
   const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
-  const hapsyn::plugins::GridSolver grid = grid_solver(Json{{"prune", false}, {"progress_interval", 1e9}});
+  const auto grid = grid_solver(Json{{"prune", false}, {"progress_interval", 1e9}});
   const hapsyn::plugins::CullingSolver culling(hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(true, false)));
-  const auto exhaustive = solve(grid, *study.problem, 2);
+  const auto exhaustive = solve(*grid, *study.problem, 2);
   const auto culled = solve(culling, *study.problem, 2);
   ASSERT_TRUE(culled.best && exhaustive.best);
   EXPECT_EQ(culled.best->design, exhaustive.best->design);
@@ -566,7 +566,7 @@ TEST(Culling, BlockBoundsGiveTheExhaustiveOptimumOnLongLines) {
     for (const Json& objectives : objective_sets) {
       doc["objectives"] = objectives;
       const hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
-      const auto exhaustive = solve(grid_solver(Json{{"prune", false}, {"progress_interval", 1e9}}), *study.problem, 2);
+      const auto exhaustive = solve(*grid_solver(Json{{"prune", false}, {"progress_interval", 1e9}}), *study.problem, 2);
       for (int threads : {1, 2}) {
         const hapsyn::plugins::CullingSolver culling(
             hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(threads == 2, false)));

@@ -1,11 +1,11 @@
 #include "grid.hpp"
 
-#include "ledger.hpp"
-#include "line_bound.hpp"
-#include "run_bounds.hpp"
-#include "rank_support.hpp"
-#include "task_bytes.hpp"
-#include "worst_case_check.hpp"
+#include "shared/bounds/ledger.hpp"
+#include "shared/bounds/line_bound.hpp"
+#include "shared/bounds/run_bounds.hpp"
+#include "shared/bounds/rank_support.hpp"
+#include "shared/bounds/task_bytes.hpp"
+#include "shared/bounds/worst_case_check.hpp"
 
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/checkpoint.hpp>

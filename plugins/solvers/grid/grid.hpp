@@ -9,7 +9,7 @@
 /// design that could tie or beat the optimum is ever cut, so the result is the same. With
 /// `block_bounds` as well (default on; single objective or weighted sum) runs of a grid line are
 /// ruled out at once where the mechanism's envelope of a sample bounds the run below the best
-/// score found, or shows that every design of the run fails there (grid/run_bounds.hpp); the
+/// score found, or shows that every design of the run fails there (shared/bounds/run_bounds.hpp); the
 /// counts then differ from a run without them (ruled-out designs count as pruned or failed),
 /// the best design does not.
 ///
@@ -39,7 +39,7 @@
 /// thread count, rank count or shard split.
 ///
 /// With pruning, designs that improve a thread's best (enter the front) and the winner are
-/// spot-checked for the worst-case monotonicity rule (grid/worst_case_check.hpp): a breach
+/// spot-checked for the worst-case monotonicity rule (shared/bounds/worst_case_check.hpp): a breach
 /// gives status failed naming the metric.
 #include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>

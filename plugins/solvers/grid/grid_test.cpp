@@ -1,12 +1,12 @@
 // The grid solver is the oracle of later solvers: check it against a plain loop over the grid.
 #include "grid.hpp"
-#include "line_bound.hpp"
-#include "run_bounds.hpp"
+#include "shared/bounds/line_bound.hpp"
+#include "shared/bounds/run_bounds.hpp"
 
 #include "analytic_problems.hpp"
-#include "forwarding_mechanism.hpp"
-#include "rank_test_support.hpp"
-#include "stop_test_support.hpp"
+#include "shared/testing/forwarding_mechanism.hpp"
+#include "shared/testing/rank_test_support.hpp"
+#include "shared/testing/stop_test_support.hpp"
 #include "test_support.hpp"
 
 #include <hapsyn/pareto.hpp>
@@ -766,7 +766,7 @@ TEST(GridLineBound, ABoundThatCutsAFeasibleDesignStopsTheRunNamingIt) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Block bounds (grid/run_bounds.hpp, docs/design.md section 13.5).
+// Block bounds (shared/bounds/run_bounds.hpp, docs/design.md section 13.5).
 
 TEST(GridBlockBounds, GiveTheExhaustiveOptimumOnLongLines) {
   // Random sub-boxes with long lines of r, GII, GDI and a weighted sum of both: the pruned grid

@@ -525,232 +525,282 @@ std::string degenerate_message(const Problem& problem, const Chim& chim, const J
          " alone), or use nsga2 or weighted_sum, which need no normalization";
 }
 
-}  // namespace
+// Shadow optimum i: the shadow solver on objective i alone, its design re-evaluated with all the
+// objectives (a record without a point when it found none: the message says why). Nullopt when a
+// stop request interrupted it (its cost goes to `interrupted_*`).
+std::optional<FinishedSubproblem> solve_shadow(const Solver& shadow_solver, const Problem& problem,
+                                               const SolverContext& inner, std::size_t i, const std::string& what,
+                                               std::atomic<long long>& interrupted_designs,
+                                               std::atomic<long long>& interrupted_samples) {
+  const auto t0 = Clock::now();
+  const SolverResult r = run_sub_solver(shadow_solver, *single_objective_problem(problem, i), inner, what);
+  if (r.status == SolverStatus::kStopped) {
+    interrupted_designs += r.design_evaluations;
+    interrupted_samples += r.sample_evaluations;
+    return std::nullopt;
+  }
+  FinishedSubproblem f;
+  f.design_evaluations = r.design_evaluations;
+  f.sample_evaluations = r.sample_evaluations;
+  std::vector<double> values;
+  if (!r.best || !evaluate_full_design(problem, r.best->design, inner.threads, values, f.sample_evaluations)) {
+    // Not found: no point; the message says why (the record never reaches the statistics).
+    f.record = {{"objective", problem.objectives()[i].name}, {"status", to_string(r.status)},
+                {"message", r.message}, {"seconds", seconds_since(t0)}};
+    return f;
+  }
+  f.point = SolutionPoint{r.best->design, values, problem.score(values)};
+  f.record = {{"objective", problem.objectives()[i].name}, {"design", problem.design_to_json(r.best->design)},
+              {"objectives", values}, {"status", to_string(r.status)}, {"seconds", seconds_since(t0)},
+              {"design_evaluations", f.design_evaluations}, {"sample_evaluations", f.sample_evaluations}};
+  return f;
+}
 
-SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& context) const {
-  const auto t_start = Clock::now();
-  SolverResult result;
-  Json stats = Json::object();
-  const Solver* shadow_solver = sub_solver_for_solve(options_.shadow_solver, "nbi", "shadow solver", result);
-  if (!shadow_solver) return result;
-  const std::size_t m = problem.objectives().size();
-  const std::vector<std::vector<double>> grid = simplex_grid(static_cast<int>(m), options_.points - 1);
-  const std::vector<std::vector<double>> interior = interior_points(grid);
-  const std::string fingerprint = study_fingerprint(problem, OptionDeclarations<NbiOptions>::to_json(options_));
+// The grid points' starts in the order a sweep's farm hands them out: task and start.
+using Starts = std::vector<std::pair<std::size_t, Solved>>;
 
-  NbiProgress progress;
-  progress.shadows.resize(m);
-  progress.subproblems.resize(interior.size());
-  if (options_.reverse_sweep) progress.reverse.resize(interior.size());
-  resume(problem, context, fingerprint, interior, progress);
-  const auto elapsed = [&] { return progress.seconds_before + seconds_since(t_start); };
-  const auto checkpoint = [&] {
+// One solve() call, phase by phase: the shadow optima, the payoff matrix and the CHIM (the
+// normalization and the utopia plane), the first sweep of subproblems and the reverse sweep,
+// then the front. It holds what every phase reads and writes: the study, its grid, what has
+// been done (the checkpoint's content) and the statistics so far. A phase that ends the run
+// returns its result.
+class NbiRun {
+ public:
+  NbiRun(const Problem& problem, const SolverContext& context, const NbiOptions& options, Clock::time_point t_start,
+         SolverResult result)
+      : problem_(problem),
+        context_(context),
+        options_(options),
+        t_start_(t_start),
+        m_(problem.objectives().size()),
+        grid_(simplex_grid(static_cast<int>(m_), options.points - 1)),
+        interior_(interior_points(grid_)),
+        fingerprint_(study_fingerprint(problem, OptionDeclarations<NbiOptions>::to_json(options))),
+        result_(std::move(result)) {
+    progress_.shadows.resize(m_);
+    progress_.subproblems.resize(interior_.size());
+    if (options_.reverse_sweep) progress_.reverse.resize(interior_.size());
+    resume(problem_, context_, fingerprint_, interior_, progress_);
+  }
+
+  SolverResult run(const Solver& shadow_solver) {
+    if (finished_count(progress_.shadows) < m_) {
+      if (std::optional<SolverResult> ended = find_shadow_optima(shadow_solver)) return *ended;
+    }
+    if (std::optional<SolverResult> ended = normalize_to_chim()) return *ended;
+    prepare_starts();
+    if (std::optional<SolverResult> ended = first_sweep()) return *ended;
+    if (std::optional<SolverResult> ended = reverse_sweep()) return *ended;
+    return assemble_front();
+  }
+
+ private:
+  double elapsed() const { return progress_.seconds_before + seconds_since(t_start_); }
+
+  void checkpoint() const {
     // A shadow objective without a design (not found) is not kept: a resume runs it again.
-    SubproblemSlots shadows = progress.shadows;
+    SubproblemSlots shadows = progress_.shadows;
     for (std::optional<FinishedSubproblem>& f : shadows) {
       if (f && !f->point) f.reset();
     }
-    write_subproblem_checkpoint(context, "nbi", fingerprint, {{"shadows", &shadows}, {"subproblems", &progress.subproblems}, {"reverse", &progress.reverse}},
+    write_subproblem_checkpoint(context_, "nbi", fingerprint_,
+                                {{"shadows", &shadows}, {"subproblems", &progress_.subproblems}, {"reverse", &progress_.reverse}},
                                 elapsed());
-  };
+  }
+
   // The result from what has been done (the counts of every finished unit and of interrupted
   // ones), with `status` and `message`.
-  const auto finish = [&](SolverStatus status, const std::string& message, bool with_front) {
-    result.design_evaluations = progress.interrupted_designs + progress.pool_designs;
-    result.sample_evaluations = progress.interrupted_samples + progress.pool_samples;
-    for (const auto* list : {&progress.shadows, &progress.subproblems, &progress.reverse}) {
+  SolverResult finish(SolverStatus status, const std::string& message, bool with_front) {
+    result_.design_evaluations = progress_.interrupted_designs + progress_.pool_designs;
+    result_.sample_evaluations = progress_.interrupted_samples + progress_.pool_samples;
+    for (const auto* list : {&progress_.shadows, &progress_.subproblems, &progress_.reverse}) {
       for (const std::optional<FinishedSubproblem>& f : *list) {
         if (!f) continue;
-        result.design_evaluations += f->design_evaluations;
-        result.sample_evaluations += f->sample_evaluations;
+        result_.design_evaluations += f->design_evaluations;
+        result_.sample_evaluations += f->sample_evaluations;
       }
     }
     double shadow_seconds = 0.0, subproblem_seconds = 0.0;
-    stats["shadows"] = records_of(progress.shadows, shadow_seconds);
-    stats["shadow_seconds"] = shadow_seconds;
-    stats["subproblems"] = records_of(progress.subproblems, subproblem_seconds);
+    stats_["shadows"] = records_of(progress_.shadows, shadow_seconds);
+    stats_["shadow_seconds"] = shadow_seconds;
+    stats_["subproblems"] = records_of(progress_.subproblems, subproblem_seconds);
     double reverse_seconds = 0.0;
-    stats["reverse"] = records_of(progress.reverse, reverse_seconds);
-    stats["subproblem_seconds"] = subproblem_seconds + reverse_seconds;
-    stats["grid_points"] = grid.size();
-    const std::vector<SolutionPoint> candidates = candidates_of(progress);
-    if (with_front) result.front = front_of(problem, candidates, options_.filter_dominated);
-    stats["candidates"] = candidates.size();
-    stats["filtered_out"] = with_front ? candidates.size() - result.front.size() : 0;
-    if (!progress.resumed.is_null()) stats["resumed"] = progress.resumed;
-    stats["seconds"] = elapsed();
-    result.statistics = stats;
-    result.status = status;
-    result.message = message;
-    return result;
-  };
-  const auto stopped = [&](const std::string& where) {
+    stats_["reverse"] = records_of(progress_.reverse, reverse_seconds);
+    stats_["subproblem_seconds"] = subproblem_seconds + reverse_seconds;
+    stats_["grid_points"] = grid_.size();
+    const std::vector<SolutionPoint> candidates = candidates_of(progress_);
+    if (with_front) result_.front = front_of(problem_, candidates, options_.filter_dominated);
+    stats_["candidates"] = candidates.size();
+    stats_["filtered_out"] = with_front ? candidates.size() - result_.front.size() : 0;
+    if (!progress_.resumed.is_null()) stats_["resumed"] = progress_.resumed;
+    stats_["seconds"] = elapsed();
+    result_.statistics = stats_;
+    result_.status = status;
+    result_.message = message;
+    return result_;
+  }
+
+  SolverResult stopped(const std::string& where) {
     checkpoint();
     return finish(SolverStatus::kStopped,
                   "NBI stopped on request " + where + "; the front is that of the points found so far" +
-                      checkpoint_note(context),
+                      checkpoint_note(context_),
                   true);
-  };
+  }
+
+  std::string shadows_done() const {
+    return "after " + std::to_string(finished_count(progress_.shadows)) + " of " + std::to_string(m_) + " shadow optima";
+  }
 
   // 1. Shadow optima: one task each, a whole shadow-solver run on one rank's threads.
-  if (finished_count(progress.shadows) < m) {
-    const auto where = [&] {
-      return "after " + std::to_string(finished_count(progress.shadows)) + " of " + std::to_string(m) + " shadow optima";
-    };
-    if (context.stop_requested()) return stopped(where());
-    const SolverContext inner = task_context(context);
+  std::optional<SolverResult> find_shadow_optima(const Solver& shadow_solver) {
+    if (context_.stop_requested()) return stopped(shadows_done());
+    const SolverContext inner = task_context(context_);
     std::atomic<long long> interrupted_designs{0}, interrupted_samples{0};
     std::atomic<int> interrupted{-1};  // the objective whose shadow solver a stop interrupted
     const auto what = [&](std::size_t i) {
-      return "nbi: shadow optimum " + std::to_string(i + 1) + " of " + std::to_string(m) + " (" +
-             problem.objectives()[i].name + ")";
+      return "nbi: shadow optimum " + std::to_string(i + 1) + " of " + std::to_string(m_) + " (" +
+             problem_.objectives()[i].name + ")";
     };
     SubproblemFarm farm;
     farm.what = what;
     farm.run = [&](std::size_t i) -> std::optional<FinishedSubproblem> {
       if (inner.stop_requested()) return std::nullopt;
-      const auto t0 = Clock::now();
-      const SolverResult r = run_sub_solver(*shadow_solver, *single_objective_problem(problem, i), inner, what(i));
-      if (r.status == SolverStatus::kStopped) {
-        interrupted_designs += r.design_evaluations;
-        interrupted_samples += r.sample_evaluations;
-        interrupted = static_cast<int>(i);
-        return std::nullopt;
-      }
-      FinishedSubproblem f;
-      f.design_evaluations = r.design_evaluations;
-      f.sample_evaluations = r.sample_evaluations;
-      std::vector<double> values;
-      if (!r.best || !evaluate_full_design(problem, r.best->design, inner.threads, values, f.sample_evaluations)) {
-        // Not found: no point; the message says why (the record never reaches the statistics).
-        f.record = {{"objective", problem.objectives()[i].name}, {"status", to_string(r.status)},
-                    {"message", r.message}, {"seconds", seconds_since(t0)}};
-        return f;
-      }
-      f.point = SolutionPoint{r.best->design, values, problem.score(values)};
-      f.record = {{"objective", problem.objectives()[i].name}, {"design", problem.design_to_json(r.best->design)},
-                  {"objectives", values}, {"status", to_string(r.status)}, {"seconds", seconds_since(t0)},
-                  {"design_evaluations", f.design_evaluations}, {"sample_evaluations", f.sample_evaluations}};
+      std::optional<FinishedSubproblem> f =
+          solve_shadow(shadow_solver, problem_, inner, i, what(i), interrupted_designs, interrupted_samples);
+      if (!f) interrupted = static_cast<int>(i);
       return f;
     };
     farm.collected = [&](std::size_t) { checkpoint(); };
-    farm.on_abort = checkpoint;
-    run_subproblem_farm(problem, context, progress.shadows, farm);
-    progress.interrupted_designs += interrupted_designs;
-    progress.interrupted_samples += interrupted_samples;
-    // In objective order, as when the shadow optima were found one after the other: the first
-    // one not finished (a stop) or not found ends the run there.
-    for (std::size_t i = 0; i < m; ++i) {
-      if (!progress.shadows[i]) {
+    farm.on_abort = [&] { checkpoint(); };
+    run_subproblem_farm(problem_, context_, progress_.shadows, farm);
+    progress_.interrupted_designs += interrupted_designs;
+    progress_.interrupted_samples += interrupted_samples;
+    return settle_shadow_optima(interrupted);
+  }
+
+  // In objective order, as when the shadow optima were found one after the other: the first
+  // one not finished (a stop) or not found ends the run there. `interrupted`: the objective
+  // whose shadow solver a stop interrupted (-1: none).
+  std::optional<SolverResult> settle_shadow_optima(int interrupted) {
+    for (std::size_t i = 0; i < m_; ++i) {
+      if (!progress_.shadows[i]) {
         // A later objective's shadow not found is found again on resume (the checkpoint leaves
         // it out); only its cost stays.
-        for (std::optional<FinishedSubproblem>& f : progress.shadows) {
+        for (std::optional<FinishedSubproblem>& f : progress_.shadows) {
           if (f && !f->point) {
-            progress.interrupted_designs += f->design_evaluations;
-            progress.interrupted_samples += f->sample_evaluations;
+            progress_.interrupted_designs += f->design_evaluations;
+            progress_.interrupted_samples += f->sample_evaluations;
             f.reset();
           }
         }
         std::string note;
         if (interrupted >= 0) {
-          note = " (the shadow solver of objective '" + problem.objectives()[static_cast<std::size_t>(interrupted.load())].name +
+          note = " (the shadow solver of objective '" + problem_.objectives()[static_cast<std::size_t>(interrupted)].name +
                  "' was interrupted)";
         }
-        return stopped(where() + note);
+        return stopped(shadows_done() + note);
       }
-      if (!progress.shadows[i]->point) {
+      if (!progress_.shadows[i]->point) {
         // The cost of the ones up to this one; those after it do not count (they would not
         // have run one after the other).
-        progress.interrupted_designs += progress.shadows[i]->design_evaluations;
-        progress.interrupted_samples += progress.shadows[i]->sample_evaluations;
-        const std::string message = progress.shadows[i]->record.value("message", std::string());
-        for (std::size_t j = i; j < m; ++j) progress.shadows[j].reset();
+        progress_.interrupted_designs += progress_.shadows[i]->design_evaluations;
+        progress_.interrupted_samples += progress_.shadows[i]->sample_evaluations;
+        const std::string message = progress_.shadows[i]->record.value("message", std::string());
+        for (std::size_t j = i; j < m_; ++j) progress_.shadows[j].reset();
         return finish(SolverStatus::kInfeasible,
-                      "shadow optimum of objective '" + problem.objectives()[i].name + "' not found: " + message, false);
+                      "shadow optimum of objective '" + problem_.objectives()[i].name + "' not found: " + message, false);
       }
     }
+    return std::nullopt;
   }
 
-  // 2. Payoff matrix and CHIM; a degenerate one ends here.
-  Subproblem sub;
-  const ShadowOptima shadows = shadow_optima(progress.shadows);
-  const Chim chim = normalize(problem, shadows, sub, stats);
-  if (chim.degenerate_objectives.size() == m) {
-    // Every objective has its best value at every shadow optimum: one design is best in all of
-    // them; the front is that one point (no trade-off to draw).
-    return finish(SolverStatus::kConverged,
-                  "NBI: the objectives do not conflict: every shadow optimum has the same objective values, so the "
-                  "front is one point and no subproblem was solved (check that these are the objectives meant)",
-                  true);
-  }
-  if (!chim.degenerate_objectives.empty()) {
-    return finish(SolverStatus::kFailed, degenerate_message(problem, chim, stats["payoff"]), false);
+  // 2. Payoff matrix and CHIM (the utopia plane); a degenerate one ends here.
+  std::optional<SolverResult> normalize_to_chim() {
+    shadows_ = shadow_optima(progress_.shadows);
+    chim_ = normalize(problem_, shadows_, sub_, stats_);
+    if (chim_.degenerate_objectives.size() == m_) {
+      // Every objective has its best value at every shadow optimum: one design is best in all of
+      // them; the front is that one point (no trade-off to draw).
+      return finish(SolverStatus::kConverged,
+                    "NBI: the objectives do not conflict: every shadow optimum has the same objective values, so the "
+                    "front is one point and no subproblem was solved (check that these are the objectives meant)",
+                    true);
+    }
+    if (!chim_.degenerate_objectives.empty()) {
+      return finish(SolverStatus::kFailed, degenerate_message(problem_, chim_, stats_["payoff"]), false);
+    }
+    return std::nullopt;
   }
 
-  // 3. One subproblem per interior grid point, warm-started from the nearest solved point. Each
-  // depends on the ones before it that could be its start, so they run in waves: a farm of the
-  // subproblems whose start is known (start_of), then the next wave. The starts, and so the
-  // front, are those of the one-by-one run in grid order, whatever the ranks and threads.
-  std::vector<Solved> shadow_starts;
-  for (std::size_t j = 0; j < m; ++j) {
-    std::vector<double> beta(m, 0.0);
-    beta[j] = 1.0;
-    shadow_starts.push_back({beta, free_design(problem.design_space(), shadows.designs[j]), "shadows[" + std::to_string(j) + "]"});
-  }
-  // The pool is evaluated on every solve() (a resumed one too, and on every rank): 64 designs
-  // against the subproblems' thousands; its cost counts once per solve(), as in an
+  // The subproblems' starts besides the solved grid points: the shadow optima, and the seed
+  // pool. The pool is evaluated on every solve() (a resumed one too, and on every rank): 64
+  // designs against the subproblems' thousands; its cost counts once per solve(), as in an
   // uninterrupted run.
-  const SeedPool pool = seed_pool(problem, options_.seed_designs, context, shadows);
-  stats["seed_designs"] = {{"feasible", pool.feasible}, {"of", options_.seed_designs}, {"sample_evaluations", pool.samples}};
-  progress.pool_designs = pool.designs;
-  progress.pool_samples = pool.samples;
+  void prepare_starts() {
+    for (std::size_t j = 0; j < m_; ++j) {
+      std::vector<double> beta(m_, 0.0);
+      beta[j] = 1.0;
+      shadow_starts_.push_back(
+          {beta, free_design(problem_.design_space(), shadows_.designs[j]), "shadows[" + std::to_string(j) + "]"});
+    }
+    pool_ = seed_pool(problem_, options_.seed_designs, context_, shadows_);
+    stats_["seed_designs"] = {{"feasible", pool_.feasible}, {"of", options_.seed_designs}, {"sample_evaluations", pool_.samples}};
+    progress_.pool_designs = pool_.designs;
+    progress_.pool_samples = pool_.samples;
+  }
+
   // One sweep in waves: each wave is a farm of the unfinished tasks of `slots` whose start is
   // settled (starts(): task and start, in the order the farm hands them out), each one
   // single-threaded SQP run, as many at a time as the rank has threads. False on a stop.
-  using Starts = std::vector<std::pair<std::size_t, Solved>>;
-  const auto run_sweep = [&](SubproblemSlots& slots, const std::function<Starts()>& starts,
-                             const std::function<FinishedSubproblem(std::size_t, const Solved&)>& solve,
-                             const std::string& done_line) {
+  bool run_sweep(SubproblemSlots& slots, const std::function<Starts()>& starts,
+                 const std::function<FinishedSubproblem(std::size_t, const Solved&)>& solve, const std::string& done_line) {
     while (finished_count(slots) < slots.size()) {
-      if (context.stop_requested()) return false;
+      if (context_.stop_requested()) return false;
       std::map<std::size_t, Solved> start_of_task;
       SubproblemFarm farm;
       for (auto& [k, start] : starts()) {
         farm.tasks.push_back(k);
         start_of_task[k] = std::move(start);
       }
-      farm.threads = context.threads;
+      farm.threads = context_.threads;
       farm.run = [&](std::size_t k) -> std::optional<FinishedSubproblem> {
-        if (context.stop_requested()) return std::nullopt;
+        if (context_.stop_requested()) return std::nullopt;
         return solve(k, start_of_task.at(k));
       };
       farm.collected = [&](std::size_t k) {
         checkpoint();
-        solver_line(context, "nbi: subproblem " + std::to_string(k + 1) + " of " + std::to_string(slots.size()) + done_line);
+        solver_line(context_, "nbi: subproblem " + std::to_string(k + 1) + " of " + std::to_string(slots.size()) + done_line);
       };
-      farm.on_abort = checkpoint;
-      const FarmOutcome outcome = run_subproblem_farm(problem, context, slots, farm);
+      farm.on_abort = [&] { checkpoint(); };
+      const FarmOutcome outcome = run_subproblem_farm(problem_, context_, slots, farm);
       if (outcome.stopped && finished_count(slots) < slots.size()) return false;
     }
     return true;
-  };
-  const std::size_t n = interior.size();
-  const auto first_starts = [&] {
-    Starts starts;
-    for (std::size_t k = 0; k < n; ++k) {
-      if (progress.subproblems[k]) continue;
-      if (std::optional<Solved> start = start_of(k, shadow_starts, interior, progress.subproblems, problem.design_space(),
-                                                    [](std::size_t j) { return "subproblems[" + std::to_string(j) + "]"; })) {
-        starts.emplace_back(k, std::move(*start));
+  }
+
+  // 3. One subproblem per interior grid point, warm-started from the nearest solved point. Each
+  // depends on the ones before it that could be its start, so they run in waves: a farm of the
+  // subproblems whose start is known (start_of), then the next wave. The starts, and so the
+  // front, are those of the one-by-one run in grid order, whatever the ranks and threads.
+  std::optional<SolverResult> first_sweep() {
+    const std::size_t n = interior_.size();
+    const auto starts = [&] {
+      Starts settled;
+      for (std::size_t k = 0; k < n; ++k) {
+        if (progress_.subproblems[k]) continue;
+        if (std::optional<Solved> start = start_of(k, shadow_starts_, interior_, progress_.subproblems, problem_.design_space(),
+                                                      [](std::size_t j) { return "subproblems[" + std::to_string(j) + "]"; })) {
+          settled.emplace_back(k, std::move(*start));
+        }
       }
-    }
-    return starts;
-  };
-  const auto first_solve = [&](std::size_t k, const Solved& start) {
-    return solve_subproblem(problem, options_, chim, sub, interior[k], start, &pool);
-  };
-  if (!run_sweep(progress.subproblems, first_starts, first_solve, " solved")) {
-    return stopped("after " + std::to_string(finished_count(progress.subproblems)) + " of " + std::to_string(n) +
+      return settled;
+    };
+    const auto solve = [&](std::size_t k, const Solved& start) {
+      return solve_subproblem(problem_, options_, chim_, sub_, interior_[k], start, &pool_);
+    };
+    if (run_sweep(progress_.subproblems, starts, solve, " solved")) return std::nullopt;
+    return stopped("after " + std::to_string(finished_count(progress_.subproblems)) + " of " + std::to_string(n) +
                    " subproblems (all shadow optima found)");
   }
 
@@ -758,71 +808,114 @@ SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& conte
   // of the shadow optima and the points after it (their better result), in waves as above. A
   // chain of warm starts can hold every point of a front in the basin of the first shadow
   // optimum's branch; the reverse chain starts from the other end.
-  const std::vector<std::vector<double>> reversed(interior.rbegin(), interior.rend());
-  const auto reverse_starts = [&] {
+  std::optional<SolverResult> reverse_sweep() {
+    const std::vector<std::vector<double>> reversed(interior_.rbegin(), interior_.rend());
+    const auto starts = [&] { return reverse_starts(reversed); };
+    const auto solve = [&](std::size_t k, const Solved& start) { return solve_again(k, start); };
+    if (run_sweep(progress_.reverse, starts, solve, " done in the reverse sweep")) return std::nullopt;
+    return stopped("in the reverse sweep, after " + std::to_string(finished_count(progress_.reverse)) + " of " +
+                   std::to_string(interior_.size()) + " subproblems (all subproblems solved once)");
+  }
+
+  // The reverse sweep's settled starts: the unfinished grid points, in reverse grid order
+  // (`reversed`: the interior points in that order), whose start is known.
+  Starts reverse_starts(const std::vector<std::vector<double>>& reversed) const {
+    const std::size_t n = interior_.size();
     SubproblemSlots best(n);  // by index in the reverse order
     std::vector<bool> from_reverse(n, false);
     for (std::size_t r = 0; r < n; ++r) {
       const std::size_t k = n - 1 - r;
-      if (!progress.reverse[k]) continue;
-      from_reverse[r] = reverse_is_better(progress.subproblems[k], progress.reverse[k]);
-      best[r] = from_reverse[r] ? progress.reverse[k] : progress.subproblems[k];
+      if (!progress_.reverse[k]) continue;
+      from_reverse[r] = reverse_is_better(progress_.subproblems[k], progress_.reverse[k]);
+      best[r] = from_reverse[r] ? progress_.reverse[k] : progress_.subproblems[k];
     }
     const auto name_of = [&](std::size_t r) {
       return std::string(from_reverse[r] ? "reverse[" : "subproblems[") + std::to_string(n - 1 - r) + "]";
     };
     Starts starts;
     for (std::size_t r = 0; r < n; ++r) {
-      if (progress.reverse[n - 1 - r]) continue;
-      if (std::optional<Solved> start = start_of(r, shadow_starts, reversed, best, problem.design_space(), name_of, true)) {
+      if (progress_.reverse[n - 1 - r]) continue;
+      if (std::optional<Solved> start = start_of(r, shadow_starts_, reversed, best, problem_.design_space(), name_of, true)) {
         starts.emplace_back(n - 1 - r, std::move(*start));
       }
     }
     return starts;
-  };
-  const auto reverse_solve = [&](std::size_t k, const Solved& start) {
-    const std::string first_start = progress.subproblems[k]->record.value("start", std::string());
-    if (start.name == first_start) {
-      // The first sweep's start: the same run again would give the same result. The nearest
-      // (L1, ties to the first in grid order) other grid point the first sweep solved gives a
-      // second start instead: the subproblem next to a shadow optimum otherwise only ever
-      // starts from the shadow, and near the five-bar's GDI optimum (on a reach cliff) a
-      // shadow a few 1e-4 m off left it well below the front. The first sweep's results are
-      // final while this sweep runs, so the choice does not depend on the threads.
-      std::optional<std::size_t> nearest;
-      for (std::size_t j = 0; j < n; ++j) {
-        if (j == k || !progress.subproblems[j] || !progress.subproblems[j]->point) continue;
-        if ("subproblems[" + std::to_string(j) + "]" == first_start) continue;
-        if (!nearest || l1_distance(interior[j], interior[k]) < l1_distance(interior[*nearest], interior[k]) - kSameDistance) {
-          nearest = j;
-        }
-      }
-      if (nearest) {
-        const Solved second{interior[*nearest],
-                            free_design(problem.design_space(), progress.subproblems[*nearest]->point->design),
-                            "subproblems[" + std::to_string(*nearest) + "]"};
-        return solve_subproblem(problem, options_, chim, sub, interior[k], second, nullptr);
-      }
-      FinishedSubproblem same;
-      same.record = {{"beta", interior[k]}, {"start", start.name}, {"status", "not solved again: the first sweep's start"}};
-      return same;
+  }
+
+  // Grid point k in the reverse sweep, from `start`; when that is the first sweep's start, from
+  // a second one instead (second_start), or not at all.
+  FinishedSubproblem solve_again(std::size_t k, const Solved& start) const {
+    if (start.name != progress_.subproblems[k]->record.value("start", std::string())) {
+      return solve_subproblem(problem_, options_, chim_, sub_, interior_[k], start, nullptr);
     }
-    return solve_subproblem(problem, options_, chim, sub, interior[k], start, nullptr);
-  };
-  if (!run_sweep(progress.reverse, reverse_starts, reverse_solve, " done in the reverse sweep")) {
-    return stopped("in the reverse sweep, after " + std::to_string(finished_count(progress.reverse)) + " of " +
-                   std::to_string(n) + " subproblems (all subproblems solved once)");
+    if (std::optional<Solved> second = second_start(k)) {
+      return solve_subproblem(problem_, options_, chim_, sub_, interior_[k], *second, nullptr);
+    }
+    FinishedSubproblem same;
+    same.record = {{"beta", interior_[k]}, {"start", start.name}, {"status", "not solved again: the first sweep's start"}};
+    return same;
+  }
+
+  // The first sweep's start would give the same result again. The nearest (L1, ties to the first
+  // in grid order) other grid point the first sweep solved gives a second start instead: the
+  // subproblem next to a shadow optimum otherwise only ever starts from the shadow, and near the
+  // five-bar's GDI optimum (on a reach cliff) a shadow a few 1e-4 m off left it well below the
+  // front. The first sweep's results are final while this sweep runs, so the choice does not
+  // depend on the threads. Nullopt: no other solved point.
+  std::optional<Solved> second_start(std::size_t k) const {
+    const std::string first_start = progress_.subproblems[k]->record.value("start", std::string());
+    std::optional<std::size_t> nearest;
+    for (std::size_t j = 0; j < interior_.size(); ++j) {
+      if (j == k || !progress_.subproblems[j] || !progress_.subproblems[j]->point) continue;
+      if ("subproblems[" + std::to_string(j) + "]" == first_start) continue;
+      if (!nearest || l1_distance(interior_[j], interior_[k]) < l1_distance(interior_[*nearest], interior_[k]) - kSameDistance) {
+        nearest = j;
+      }
+    }
+    if (!nearest) return std::nullopt;
+    return Solved{interior_[*nearest], free_design(problem_.design_space(), progress_.subproblems[*nearest]->point->design),
+                  "subproblems[" + std::to_string(*nearest) + "]"};
   }
 
   // 4. The front.
-  std::ostringstream message;
-  const std::size_t candidates = candidates_of(progress).size();
-  finish(SolverStatus::kConverged, "", true);
-  message << "NBI: " << result.front.size() << " non-dominated points of " << candidates << " (" << m
-          << " shadow optima, " << interior.size() << " subproblems"
-          << (options_.reverse_sweep ? ", each solved again in reverse order" : "") << ")";
-  result.message = message.str();
-  return result;
+  SolverResult assemble_front() {
+    std::ostringstream message;
+    const std::size_t candidates = candidates_of(progress_).size();
+    finish(SolverStatus::kConverged, "", true);
+    message << "NBI: " << result_.front.size() << " non-dominated points of " << candidates << " (" << m_
+            << " shadow optima, " << interior_.size() << " subproblems"
+            << (options_.reverse_sweep ? ", each solved again in reverse order" : "") << ")";
+    result_.message = message.str();
+    return result_;
+  }
+
+  const Problem& problem_;
+  const SolverContext& context_;
+  const NbiOptions& options_;
+  const Clock::time_point t_start_;
+  const std::size_t m_;
+  const std::vector<std::vector<double>> grid_;
+  const std::vector<std::vector<double>> interior_;
+  const std::string fingerprint_;
+  SolverResult result_;
+  Json stats_ = Json::object();
+  NbiProgress progress_;
+  // Set by the phases, in order.
+  ShadowOptima shadows_;
+  Subproblem sub_;
+  Chim chim_;
+  std::vector<Solved> shadow_starts_;
+  SeedPool pool_;
+};
+
+}  // namespace
+
+SolverResult NbiSolver::solve(const Problem& problem, const SolverContext& context) const {
+  const auto t_start = Clock::now();
+  SolverResult result;
+  const Solver* shadow_solver = sub_solver_for_solve(options_.shadow_solver, "nbi", "shadow solver", result);
+  if (!shadow_solver) return result;
+  return NbiRun(problem, context, options_, t_start, std::move(result)).run(*shadow_solver);
 }
 
 }  // namespace hapsyn::plugins

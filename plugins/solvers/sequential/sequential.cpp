@@ -1,12 +1,11 @@
 #include "sequential.hpp"
 
 #include "shared/sub_solver.hpp"
+#include "shared/sub_solver_sweep.hpp"
 
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 
-#include <atomic>
-#include <chrono>
 #include <sstream>
 
 namespace hapsyn::plugins {
@@ -39,88 +38,33 @@ void SequentialSolver::check(const Problem& problem) const {
 }
 
 SolverResult SequentialSolver::solve(const Problem& problem, const SolverContext& context) const {
-  using Clock = std::chrono::steady_clock;
-  const auto t_start = Clock::now();
   SolverResult result;
   const Solver* solver = sub_solver_for_solve(options_.sub_solver, "sequential", "sub-solver", result);
   if (!solver) return result;
   const std::size_t k = free_index(problem);
   const auto first = single_objective_problem(problem, 0);
   const std::size_t values = static_cast<std::size_t>(problem.design_space().grid_count(k));
-  const std::string fingerprint = study_fingerprint(problem, OptionDeclarations<SequentialOptions>::to_json(options_));
+  const auto value = [&](std::size_t i) { return problem.design_space().grid_value(k, static_cast<long long>(i)); };
 
-  // The values a checkpoint has finished (their designs re-evaluated on reading).
-  SubproblemSlots finished(values);
-  double seconds_before = 0.0;
-  Json resumed = nullptr;
-  if (std::optional<SubproblemCheckpoint> checkpoint =
-          read_subproblem_checkpoint(problem, context, "sequential", fingerprint, {{"finished", values}})) {
-    finished = std::move(checkpoint->lists["finished"]);
-    for (std::size_t i = 0; i < finished.size(); ++i) {
-      const double v = problem.design_space().grid_value(k, static_cast<long long>(i));
-      if (finished[i] && finished[i]->record.value("value", Json()) != Json(v)) {
-        throw bad_checkpoint(context, checkpoint->where("finished", i) + ".record.value = " +
-                                          finished[i]->record.value("value", Json()).dump() + ": this study's value " +
-                                          std::to_string(i) + " of " + options_.variable + " is " + Json(v).dump());
-      }
-    }
-    seconds_before = checkpoint->seconds;
-    resumed = {{"checkpoint", context.checkpoint_file},
-               {"finished", finished_count(finished)},
-               {"recheck_sample_evaluations", checkpoint->recheck_samples}};
-    solver_line(context, "sequential: resuming from " + context.checkpoint_file + ": " +
-                             std::to_string(finished_count(finished)) + " of " + std::to_string(values) + " values of " +
-                             options_.variable + " finished");
-  }
-  const auto elapsed = [&] { return seconds_before + std::chrono::duration<double>(Clock::now() - t_start).count(); };
-  const auto checkpoint = [&] {
-    write_subproblem_checkpoint(context, "sequential", fingerprint, {{"finished", &finished}}, elapsed());
-  };
-
-  // One task per value: a whole sub-solver run on one rank's threads. The values are
-  // independent (no warm start), so the result does not depend on where each one runs.
-  const SolverContext inner = task_context(context);
-  std::atomic<long long> interrupted_designs{0}, interrupted_samples{0};
-  const auto what = [&](std::size_t i) {
+  // One subproblem per value: the first objective with the variable fixed there.
+  SubSolverSweep sweep;
+  sweep.solver = "sequential";
+  sweep.fingerprint = study_fingerprint(problem, OptionDeclarations<SequentialOptions>::to_json(options_));
+  sweep.count = values;
+  sweep.units = "values of " + options_.variable;
+  sweep.key = "value";
+  sweep.identity = [&](std::size_t i) { return Json(value(i)); };
+  sweep.named = [&](std::size_t i) { return "value " + std::to_string(i) + " of " + options_.variable; };
+  sweep.what = [&](std::size_t i) {
     std::ostringstream name;
-    name << "sequential: " << options_.variable << " = "
-         << problem.design_space().grid_value(k, static_cast<long long>(i)) << " (" << i + 1 << " of " << values << ")";
+    name << "sequential: " << options_.variable << " = " << value(i) << " (" << i + 1 << " of " << values << ")";
     return name.str();
   };
-  SubproblemFarm farm;
-  farm.what = what;
-  farm.run = [&](std::size_t i) -> std::optional<FinishedSubproblem> {
-    if (inner.stop_requested()) return std::nullopt;
-    const auto t0 = Clock::now();
-    const double v = problem.design_space().grid_value(k, static_cast<long long>(i));
-    const SolverResult r = run_sub_solver(*solver, *fixed_component_problem(*first, k, v), inner, what(i));
-    if (r.status == SolverStatus::kStopped) {
-      // Its best is not this value's optimum: the value is run again on --resume.
-      interrupted_designs += r.design_evaluations;
-      interrupted_samples += r.sample_evaluations;
-      return std::nullopt;
-    }
-    FinishedSubproblem f;
-    f.design_evaluations = r.design_evaluations;
-    f.sample_evaluations = r.sample_evaluations;
-    f.record = {{"value", v}, {"status", to_string(r.status)}};
-    std::vector<double> objectives;
-    if (r.best && evaluate_full_design(problem, r.best->design, inner.threads, objectives, f.sample_evaluations)) {
-      f.point = SolutionPoint{r.best->design, objectives, problem.score(objectives)};
-      f.record["design"] = problem.design_to_json(r.best->design);
-      f.record["objectives"] = objectives;
-    }
-    f.record["seconds"] = std::chrono::duration<double>(Clock::now() - t0).count();
-    return f;
-  };
-  farm.collected = [&](std::size_t) { checkpoint(); };
-  farm.on_abort = checkpoint;
-  // A stop that came after the last value finished changes nothing.
-  const bool stopped =
-      run_subproblem_farm(problem, context, finished, farm).stopped && finished_count(finished) < finished.size();
-  if (stopped) checkpoint();
-  result.design_evaluations = interrupted_designs;
-  result.sample_evaluations = interrupted_samples;
+  sweep.problem = [&](std::size_t i) { return fixed_component_problem(*first, k, value(i)); };
+  const SubSolverSweepOutcome outcome = run_sub_solver_sweep(*solver, problem, context, sweep);
+  const bool stopped = outcome.stopped;
+  result.design_evaluations = outcome.design_evaluations;
+  result.sample_evaluations = outcome.sample_evaluations;
 
   // The best second objective among the per-value designs (ties: the better first objective),
   // in value order.
@@ -132,18 +76,16 @@ SolverResult SequentialSolver::solve(const Problem& problem, const SolverContext
   };
   Json per_value = Json::array();
   std::optional<SolutionPoint> chosen;
-  for (const std::optional<FinishedSubproblem>& f : finished) {
+  for (const std::optional<FinishedSubproblem>& f : outcome.finished) {
     if (!f) continue;
-    result.design_evaluations += f->design_evaluations;
-    result.sample_evaluations += f->sample_evaluations;
     per_value.push_back(f->record);
     if (f->point && (!chosen || better(f->point->objectives, chosen->objectives))) chosen = f->point;
   }
   result.statistics = {{"variable", options_.variable},
                        {"per_value", per_value},
                        {"sub_solver", sub_solver_json(options_.sub_solver)},
-                       {"seconds", elapsed()}};
-  if (!resumed.is_null()) result.statistics["resumed"] = resumed;
+                       {"seconds", outcome.elapsed()}};
+  if (!outcome.resumed.is_null()) result.statistics["resumed"] = outcome.resumed;
   result.best = chosen;
   std::ostringstream message;
   if (stopped) {

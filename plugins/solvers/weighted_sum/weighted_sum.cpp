@@ -1,14 +1,13 @@
 #include "weighted_sum.hpp"
 
 #include "shared/sub_solver.hpp"
+#include "shared/sub_solver_sweep.hpp"
 
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/pareto.hpp>
 
 #include <algorithm>
-#include <atomic>
-#include <chrono>
 #include <cmath>
 #include <sstream>
 
@@ -48,92 +47,35 @@ void WeightedSumSolver::check(const Problem& problem) const {
 }
 
 SolverResult WeightedSumSolver::solve(const Problem& problem, const SolverContext& context) const {
-  using Clock = std::chrono::steady_clock;
-  const auto t_start = Clock::now();
   SolverResult result;
   const Solver* solver = sub_solver_for_solve(options_.sub_solver, "weighted_sum", "sub-solver", result);
   if (!solver) return result;
   const std::size_t m = problem.objectives().size();
   const std::vector<std::vector<double>> all_weights = weight_vectors(m);
-  const std::string fingerprint = study_fingerprint(problem, OptionDeclarations<WeightedSumOptions>::to_json(options_));
 
-  // The weight vectors a checkpoint has finished (their designs re-evaluated on reading).
-  SubproblemSlots finished(all_weights.size());
-  double seconds_before = 0.0;
-  Json resumed = nullptr;
-  if (std::optional<SubproblemCheckpoint> checkpoint =
-          read_subproblem_checkpoint(problem, context, "weighted_sum", fingerprint, {{"finished", all_weights.size()}})) {
-    finished = std::move(checkpoint->lists["finished"]);
-    for (std::size_t k = 0; k < finished.size(); ++k) {
-      if (finished[k] && finished[k]->record.value("weights", Json()) != Json(all_weights[k])) {
-        throw bad_checkpoint(context, checkpoint->where("finished", k) + ".record.weights = " +
-                                          finished[k]->record.value("weights", Json()).dump() +
-                                          ": this study's weight vector " + std::to_string(k) + " is " +
-                                          Json(all_weights[k]).dump());
-      }
-    }
-    seconds_before = checkpoint->seconds;
-    resumed = {{"checkpoint", context.checkpoint_file},
-               {"finished", finished_count(finished)},
-               {"recheck_sample_evaluations", checkpoint->recheck_samples}};
-    solver_line(context, "weighted_sum: resuming from " + context.checkpoint_file + ": " +
-                             std::to_string(finished_count(finished)) + " of " + std::to_string(all_weights.size()) +
-                             " weight vectors finished");
-  }
-  const auto elapsed = [&] { return seconds_before + std::chrono::duration<double>(Clock::now() - t_start).count(); };
-  const auto checkpoint = [&] {
-    write_subproblem_checkpoint(context, "weighted_sum", fingerprint, {{"finished", &finished}}, elapsed());
-  };
-
-  // One task per weight vector: a whole sub-solver run on one rank's threads. The weight vectors
-  // are independent (no warm start), so the result does not depend on where each one runs.
-  const SolverContext inner = task_context(context);
-  std::atomic<long long> interrupted_designs{0}, interrupted_samples{0};
-  const auto what = [&](std::size_t k) {
+  // One subproblem per weight vector: the study's objectives with those weights.
+  SubSolverSweep sweep;
+  sweep.solver = "weighted_sum";
+  sweep.fingerprint = study_fingerprint(problem, OptionDeclarations<WeightedSumOptions>::to_json(options_));
+  sweep.count = all_weights.size();
+  sweep.units = "weight vectors";
+  sweep.key = "weights";
+  sweep.identity = [&](std::size_t k) { return Json(all_weights[k]); };
+  sweep.named = [&](std::size_t k) { return "weight vector " + std::to_string(k); };
+  sweep.what = [&](std::size_t k) {
     return "weighted_sum: weights " + Json(all_weights[k]).dump() + " (" + std::to_string(k + 1) + " of " +
            std::to_string(all_weights.size()) + ")";
   };
-  SubproblemFarm farm;
-  farm.what = what;
-  farm.run = [&](std::size_t k) -> std::optional<FinishedSubproblem> {
-    if (inner.stop_requested()) return std::nullopt;
-    const std::vector<double>& w = all_weights[k];
-    const auto t0 = Clock::now();
-    const SolverResult r = run_sub_solver(*solver, *reweighted_problem(problem, w), inner, what(k));
-    if (r.status == SolverStatus::kStopped) {
-      // Its best is not this weight's optimum: the weight is run again on --resume.
-      interrupted_designs += r.design_evaluations;
-      interrupted_samples += r.sample_evaluations;
-      return std::nullopt;
-    }
-    FinishedSubproblem f;
-    f.design_evaluations = r.design_evaluations;
-    f.sample_evaluations = r.sample_evaluations;
-    f.record = {{"weights", w}, {"status", to_string(r.status)}};
-    std::vector<double> values;
-    if (r.best && evaluate_full_design(problem, r.best->design, inner.threads, values, f.sample_evaluations)) {
-      f.point = SolutionPoint{r.best->design, values, problem.score(values)};
-      f.record["design"] = problem.design_to_json(r.best->design);
-      f.record["objectives"] = values;
-    }
-    f.record["seconds"] = std::chrono::duration<double>(Clock::now() - t0).count();
-    return f;
-  };
-  farm.collected = [&](std::size_t) { checkpoint(); };
-  farm.on_abort = checkpoint;
-  // A stop that came after the last weight vector finished changes nothing.
-  const bool stopped =
-      run_subproblem_farm(problem, context, finished, farm).stopped && finished_count(finished) < finished.size();
-  if (stopped) checkpoint();
-  result.design_evaluations = interrupted_designs;
-  result.sample_evaluations = interrupted_samples;
+  sweep.problem = [&](std::size_t k) { return reweighted_problem(problem, all_weights[k]); };
+  const SubSolverSweepOutcome outcome = run_sub_solver_sweep(*solver, problem, context, sweep);
+  const bool stopped = outcome.stopped;
+  result.design_evaluations = outcome.design_evaluations;
+  result.sample_evaluations = outcome.sample_evaluations;
 
   std::vector<SolutionPoint> points;
   Json runs = Json::array();
-  for (const std::optional<FinishedSubproblem>& f : finished) {
+  for (const std::optional<FinishedSubproblem>& f : outcome.finished) {
     if (!f) continue;
-    result.design_evaluations += f->design_evaluations;
-    result.sample_evaluations += f->sample_evaluations;
     runs.push_back(f->record);
     if (f->point) points.push_back(*f->point);
   }
@@ -147,8 +89,8 @@ SolverResult WeightedSumSolver::solve(const Problem& problem, const SolverContex
     return (senses[0] == Sense::kMaximize ? 1.0 : -1.0) * (a.objectives[0] - b.objectives[0]) > 0;
   });
   result.statistics = {{"runs", runs}, {"designs_found", points.size()}, {"distinct_non_dominated", keep.size()},
-                       {"sub_solver", sub_solver_json(options_.sub_solver)}, {"seconds", elapsed()}};
-  if (!resumed.is_null()) result.statistics["resumed"] = resumed;
+                       {"sub_solver", sub_solver_json(options_.sub_solver)}, {"seconds", outcome.elapsed()}};
+  if (!outcome.resumed.is_null()) result.statistics["resumed"] = outcome.resumed;
   std::ostringstream message;
   if (stopped) {
     message << "weighted sums stopped on request after " << runs.size() << " of " << all_weights.size()

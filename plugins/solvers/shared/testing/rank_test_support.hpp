@@ -7,7 +7,7 @@
 // results go to rank 0's collect(), and after each task the rank learns what every other rank
 // shares, as under MPI (where it happens per request). broadcast and all_gather are
 // collectives; a call order that differs between ranks hangs here as it would under MPI.
-#include "stop_test_support.hpp"
+#include "shared/testing/stop_test_support.hpp"
 
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/solver.hpp>

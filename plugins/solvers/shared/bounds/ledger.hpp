@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// Which units of a grid sweep are finished (grid's chunks, culling's lines), as the checkpoint
-/// and `hapsyn merge` need it (header only; culling includes it as "grid/ledger.hpp").
+/// and `hapsyn merge` need it (header only; both include it as "shared/bounds/ledger.hpp").
 ///
 /// Finished units are kept as disjoint ranges: a run that hands its units out in order has a
 /// finished prefix and a few units beyond it, and one share of a `--shard i/N` split has one

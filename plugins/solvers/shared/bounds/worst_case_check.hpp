@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// The worst-case monotonicity spot check that grid pruning and culling share (header only;
-/// culling includes it as "grid/worst_case_check.hpp").
+/// both include it as "shared/bounds/worst_case_check.hpp").
 ///
 /// Both rely on the rule of hapsyn/metric.hpp: a worst-case metric's value over a subset of the
 /// samples bounds its value over the whole scene from above. A third-party metric whose

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
-/// Block bounds of grid lines (header only; grid and culling share it, culling as
-/// "grid/line_bound.hpp"). A grid solver visits the designs in lines along the last free
+/// Block bounds of grid lines (header only; grid and culling share it, as
+/// "shared/bounds/line_bound.hpp"). A grid solver visits the designs in lines along the last free
 /// component; when the mechanism knows an interval of that component outside which a constraint
 /// is violated (MechanismAcceleration::constraint_interval), the designs of the line outside it are counted
 /// as violating a constraint without being visited. The interval may be wider than the feasible

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
-/// What grid and culling share on ranks and shards (header only; culling includes it as
-/// "grid/rank_support.hpp"): the result of ranks other than 0, and reading a shard's state for
+/// What grid and culling share on ranks and shards (header only; both include it as
+/// "shared/bounds/rank_support.hpp"): the result of ranks other than 0, and reading a shard's state for
 /// merge_shards with the resume's checks.
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/error.hpp>

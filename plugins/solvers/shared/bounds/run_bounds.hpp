@@ -1,7 +1,7 @@
 #pragma once
 /// \file
-/// Block bounds of runs of a grid line (header only; grid and culling share it, culling as
-/// "grid/run_bounds.hpp"; docs/design.md sections 13.5 and 13.6). Within a line's verified run
+/// Block bounds of runs of a grid line (header only; grid and culling share it, as
+/// "shared/bounds/run_bounds.hpp"; docs/design.md sections 13.5 and 13.6). Within a line's verified run
 /// (LineBound::verified()), a run of consecutive designs is ruled out at once when, at one
 /// sample, every design of the run fails (all infeasible in a worst-case study) or the study's
 /// score is bounded strictly below a threshold that a real design already reaches
@@ -31,7 +31,7 @@
 /// off, instead of a silently wrong optimum. A line cut by a sample's reachable interval has,
 /// on the same clock, its excluded design nearest the interval solved at that sample, which
 /// must fail.
-#include "line_bound.hpp"
+#include "shared/bounds/line_bound.hpp"
 
 #include <hapsyn/error.hpp>
 #include <hapsyn/problem.hpp>

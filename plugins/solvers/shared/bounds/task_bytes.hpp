@@ -1,9 +1,9 @@
 #pragma once
 /// \file
-/// The bytes grid and culling pass between ranks (header only; culling includes it as
-/// "grid/task_bytes.hpp"): a task's result (TaskFarm::run -> collect) and the pruning knowledge
+/// The bytes grid and culling pass between ranks (header only; both include it as
+/// "shared/bounds/task_bytes.hpp"): a task's result (TaskFarm::run -> collect) and the pruning knowledge
 /// (TaskFarm::share -> learn), written with hapsyn/bytes.hpp (bit for bit).
-#include "worst_case_check.hpp"
+#include "shared/bounds/worst_case_check.hpp"
 
 #include <hapsyn/bytes.hpp>
 #include <hapsyn/error.hpp>
