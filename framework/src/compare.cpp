@@ -3,12 +3,12 @@
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/output_files.hpp>
+#include <hapsyn/internal/case_batch.hpp>
 #include <hapsyn/internal/plot.hpp>
 #include <hapsyn/internal/problem_file.hpp>
 #include <hapsyn/solver.hpp>
 #include <hapsyn/internal/study.hpp>
 #include <hapsyn/internal/study_runner.hpp>
-#include <hapsyn/internal/sweep.hpp>  // reusable_result
 
 #include <boost/filesystem.hpp>
 
@@ -184,21 +184,6 @@ Json essentials(const Json& result) {
   return e;
 }
 
-// An error decided on rank 0, thrown alike on every rank: {"component", "message"}.
-Json error_record(const std::exception& e) {
-  if (const auto* error = dynamic_cast<const Error*>(&e)) {
-    const std::string what = error->what();
-    const std::string prefix = error->component() + ": ";
-    return {{"component", error->component()},
-            {"message", what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what}};
-  }
-  return {{"component", "compare"}, {"message", e.what()}};
-}
-
-[[noreturn]] void throw_record(const Json& record) {
-  throw Error(record["component"].get<std::string>(), record["message"].get<std::string>());
-}
-
 // A study of the comparison: its file, its document (overrides applied) and its name.
 struct CompareCase {
   std::string file;
@@ -255,82 +240,44 @@ Study load_case(const CompareCase& k, const CompareOptions& options, const Regis
   }
 }
 
-// Rank 0: the rows (file order) of this share's finished studies, the plots, compare.csv and
-// compare.json.
-Json tabulate(const std::vector<CompareCase>& cases, const std::vector<std::optional<Json>>& results,
-              const std::vector<std::string>& solvers, const std::vector<char>& reused, const std::vector<char>& started,
-              long long first, long long last, const Cluster& cluster, const CompareOptions& options) {
-  const fs::path out(options.output_directory);
-  std::vector<Json> finished;
-  Json rows = Json::array();
-  std::string stopped_at;  // the first study of this share that did not finish
-  for (long long c = first; c < last; ++c) {
-    const std::size_t i = static_cast<std::size_t>(c);
-    if (!results[i]) {
-      if (stopped_at.empty()) stopped_at = cases[i].name + (cluster.size() == 1 && !started[i] ? " (not started)" : "");
-      continue;
-    }
-    const Json& result = *results[i];
-    Json row = {{"study", cases[i].name},
-                {"file", cases[i].file},
-                {"solver", solvers[i]},
-                {"status", result["status"]},
-                {"reused", reused[i] != 0},
-                {"points", result.contains("front") ? result["front"].size() : (result.contains("best") ? 1 : 0)},
-                {"hypervolume", indicator(result, "hypervolume")},
-                {"spacing", indicator(result, "spacing")},
-                {"spacing_relative", indicator(result, "spacing_relative")},
-                {"generational_distance", indicator(result, "generational_distance")},
-                {"inverted_generational_distance", indicator(result, "inverted_generational_distance")},
-                {"max_domination_gap", indicator(result, "max_domination_gap")},
-                {"best_dominated", indicator(result, "best_dominated")},
-                {"best_domination_gap", indicator(result, "best_domination_gap")},
-                {"reference", cases[i].reference.empty() ? Json(nullptr) : Json(cases[i].reference)},
-                {"reference_front_missing", indicator(result, "reference_front_missing")},
-                {"designs", result["evaluations"]["designs"]},
-                {"samples", result["evaluations"]["samples"]},
-                {"wall_time_s", result["wall_time_s"]},
-                {"output_directory", (out / cases[i].name).string()}};
-    rows.push_back(row);
-    finished.push_back(result);
-  }
-  if (!rows.empty()) {
-    const double first_time = rows[0]["wall_time_s"].get<double>();
-    for (Json& row : rows) row["time_ratio"] = row["wall_time_s"].get<double>() / first_time;
-  }
+// A study's row of the table (its essentials in `result`).
+Json study_row(const CompareCase& k, const Json& result, const std::string& solver, bool reused, const fs::path& out) {
+  return {{"study", k.name},
+          {"file", k.file},
+          {"solver", solver},
+          {"status", result["status"]},
+          {"reused", reused},
+          {"points", result.contains("front") ? result["front"].size() : (result.contains("best") ? 1 : 0)},
+          {"hypervolume", indicator(result, "hypervolume")},
+          {"spacing", indicator(result, "spacing")},
+          {"spacing_relative", indicator(result, "spacing_relative")},
+          {"generational_distance", indicator(result, "generational_distance")},
+          {"inverted_generational_distance", indicator(result, "inverted_generational_distance")},
+          {"max_domination_gap", indicator(result, "max_domination_gap")},
+          {"best_dominated", indicator(result, "best_dominated")},
+          {"best_domination_gap", indicator(result, "best_domination_gap")},
+          {"reference", k.reference.empty() ? Json(nullptr) : Json(k.reference)},
+          {"reference_front_missing", indicator(result, "reference_front_missing")},
+          {"designs", result["evaluations"]["designs"]},
+          {"samples", result["evaluations"]["samples"]},
+          {"wall_time_s", result["wall_time_s"]},
+          {"output_directory", (out / k.name).string()}};
+}
 
-  Json summary = {{"hapsyn", version()}, {"machine", machine_info()}, {"rows", rows}, {"plots", Json::object()}};
-  summary["status"] = stopped_at.empty() ? "finished" : "stopped";
-  if (!stopped_at.empty()) {
-    summary["message"] = "stopped on request at " + stopped_at + " after " + std::to_string(rows.size()) + " of " +
-                         std::to_string(options.files.size()) +
-                         " studies; run the same command again to continue (finished studies are reused, a stopped "
-                         "one resumes from its checkpoint)";
+// The fronts overlaid, and the local values of each study that wrote samples.csv.
+void add_plots(const fs::path& out, const std::vector<Json>& finished, const Json& rows, Json& summary) {
+  const std::string why = plot_fronts(out, finished, rows);
+  summary["plots"]["fronts"] = why.empty() ? Json("fronts.png, fronts.svg") : Json("not written: " + why);
+  for (const Json& row : rows) {
+    const fs::path dir = row["output_directory"].get<std::string>();
+    if (!fs::exists(dir / "samples.csv")) continue;
+    const std::string w = plot_samples(dir);
+    summary["plots"][row["study"].get<std::string>()] =
+        w.empty() ? Json(row["study"].get<std::string>() + "/local_values.png, .svg") : Json("not written: " + w);
   }
-  const auto [shard_index, shard_count] = cluster.shard();
-  if (shard_count > 1) {
-    Json names = Json::array();
-    for (long long c = first; c < last; ++c) names.push_back(cases[static_cast<std::size_t>(c)].name);
-    summary["shard"] = {{"index", shard_index + 1}, {"count", shard_count}, {"cases", names}};
-    if (stopped_at.empty()) summary["message"] = cluster.shard_message();
-  }
-  boost::system::error_code ec;
-  summary["options"] = {{"files", options.files},
-                        {"overrides", options.overrides},
-                        {"seed", options.seed ? Json(*options.seed) : Json(nullptr)},
-                        {"plots", options.plots}};
-  summary["working_directory"] = fs::current_path(ec).string();
-  if (options.plots && !finished.empty()) {
-    const std::string why = plot_fronts(out, finished, rows);
-    summary["plots"]["fronts"] = why.empty() ? Json("fronts.png, fronts.svg") : Json("not written: " + why);
-    for (const Json& row : rows) {
-      const fs::path dir = row["output_directory"].get<std::string>();
-      if (!fs::exists(dir / "samples.csv")) continue;
-      const std::string w = plot_samples(dir);
-      summary["plots"][row["study"].get<std::string>()] =
-          w.empty() ? Json(row["study"].get<std::string>() + "/local_values.png, .svg") : Json("not written: " + w);
-    }
-  }
+}
+
+std::string compare_csv(const Json& rows) {
   std::ostringstream csv;
   csv.precision(12);
   const std::vector<std::string> columns = {"study", "solver", "status", "points", "hypervolume", "spacing",
@@ -347,17 +294,54 @@ Json tabulate(const std::vector<CompareCase>& cases, const std::vector<std::opti
     csv << "," << (row["max_domination_gap"].is_null() ? "" : std::to_string(max_of(row["max_domination_gap"])))
         << "," << (row["best_dominated"].is_null() ? "" : row["best_dominated"].dump()) << "\n";
   }
-  write_file_atomically((out / "compare.csv").string(), csv.str());
+  return csv.str();
+}
+
+// Rank 0: the rows (file order) of this share's finished studies, the plots, compare.csv and
+// compare.json. A study's record is {"solver", "result": its essentials}.
+Json tabulate(const std::vector<CompareCase>& cases, const std::vector<std::string>& names, const CaseBatchOutcome& o,
+              const Cluster& cluster, const CompareOptions& options) {
+  const fs::path out(options.output_directory);
+  std::vector<Json> finished;
+  Json rows = Json::array();
+  for (long long c = o.first; c < o.last; ++c) {
+    const std::size_t i = static_cast<std::size_t>(c);
+    if (!o.records[i]) continue;
+    const Json& record = *o.records[i];
+    rows.push_back(study_row(cases[i], record["result"], record["solver"].get<std::string>(), o.reused[i] != 0, out));
+    finished.push_back(record["result"]);
+  }
+  if (!rows.empty()) {
+    const double first_time = rows[0]["wall_time_s"].get<double>();
+    for (Json& row : rows) row["time_ratio"] = row["wall_time_s"].get<double>() / first_time;
+  }
+  const std::string stopped_at = first_unfinished(o, names, cluster);  // of this share
+  Json summary = {{"hapsyn", version()}, {"machine", machine_info()}, {"rows", rows}, {"plots", Json::object()}};
+  summary["status"] = stopped_at.empty() ? "finished" : "stopped";
+  if (!stopped_at.empty()) {
+    summary["message"] = "stopped on request at " + stopped_at + " after " + std::to_string(rows.size()) + " of " +
+                         std::to_string(options.files.size()) +
+                         " studies; run the same command again to continue (finished studies are reused, a stopped "
+                         "one resumes from its checkpoint)";
+  }
+  add_shard_entry(summary, o, names, cluster, stopped_at);
+  boost::system::error_code ec;
+  summary["options"] = {{"files", options.files},
+                        {"overrides", options.overrides},
+                        {"seed", options.seed ? Json(*options.seed) : Json(nullptr)},
+                        {"plots", options.plots}};
+  summary["working_directory"] = fs::current_path(ec).string();
+  if (options.plots && !finished.empty()) add_plots(out, finished, rows, summary);
+  write_file_atomically((out / "compare.csv").string(), compare_csv(rows));
   summary["output_directory"] = options.output_directory;
   write_file_atomically((out / "compare.json").string(), summary.dump(2) + "\n");
   return summary;
 }
 
-Json run_compare_cases(const CompareOptions& options, const Registry& registry, bool reuse_only) {
-  if (options.files.empty()) throw Error("compare", "at least one problem file is required");
-  Cluster& cluster = options.cluster != nullptr ? *options.cluster : Cluster::local();
-  // Every file is read and named before any study runs, on every rank alike. A study is loaded
-  // (validated) just before it runs: an earlier study may write the reference front it names.
+// Every file read and named before any study runs, on every rank alike (a file one rank cannot
+// read is every rank's error; the lowest rank's is reported). A study is loaded (validated) just
+// before it runs: an earlier study may write the reference front it names.
+std::vector<CompareCase> read_cases(const CompareOptions& options, Cluster& cluster) {
   std::vector<CompareCase> cases;
   Json read_error = nullptr;
   try {
@@ -374,124 +358,83 @@ Json run_compare_cases(const CompareOptions& options, const Registry& registry, 
     point_references_into_the_comparison(cases, options.output_directory);
   } catch (const std::exception& e) {
     if (cluster.size() == 1) throw;
-    read_error = error_record(e);
+    read_error = error_record(e, "compare");
   }
   if (cluster.size() > 1) {
-    // A file one rank cannot read is every rank's error (the lowest rank's is reported).
     for (const std::string& bytes : cluster.all_gather(read_error.dump())) {
       const Json record = Json::parse(bytes);
       if (!record.is_null()) throw_record(record);
     }
   }
-  const auto range = shard_tasks(cluster, static_cast<long long>(cases.size()));
-  const long long first = range.first, last = range.second;  // captured below (C++17: no structured binding)
+  return cases;
+}
+
+// Rank 0: the record of a study folder's finished result (loaded and checked; another problem's
+// result is refused, never overwritten silently), or nullopt to run the study.
+std::optional<Json> reusable_study(const CompareCase& k, const std::string& folder, const CompareOptions& options,
+                                   const Registry& registry, bool reuse_only) {
+  boost::system::error_code ec;
+  if (!fs::exists(fs::path(folder) / "result.json", ec)) {
+    if (reuse_only) throw Error("merge", folder + ": no result.json of this study to reuse");
+    return std::nullopt;
+  }
+  std::optional<Study> study;
+  try {
+    study = load_case(k, options, registry);
+  } catch (const Error&) {
+    if (reuse_only) throw;
+    return std::nullopt;  // it may need an earlier study's output: its task loads it again
+  }
+  std::optional<Json> stored = reusable_result(folder, study->resolved, options.seed, "compare", "this comparison's " + k.file);
+  if (!stored) {
+    if (reuse_only) throw Error("merge", folder + ": no finished result of this study to reuse (a merge runs nothing again)");
+    return std::nullopt;
+  }
+  return Json{{"solver", study->solver_plugin}, {"result", essentials(*stored)}};
+}
+
+// Runs a study on this process alone (a stopped one is resumed from its checkpoint): its record,
+// or nullopt when it stopped.
+std::optional<Json> run_case(const CompareCase& k, const std::string& folder, const CompareOptions& options,
+                             const Registry& registry) {
+  Study study = load_case(k, options, registry);
+  RunOptions run;
+  run.output_directory = folder;
+  run.threads = options.threads;
+  run.seed = options.seed;
+  run.quiet = true;
+  run.stop = options.stop;
+  continue_in_folder(run, options.force);
+  Json result;
+  try {
+    result = run_study(study, run);
+  } catch (const Error& e) {
+    throw Error("compare", k.file + ": " + e.what());
+  }
+  if (result["status"] == to_string(SolverStatus::kStopped)) return std::nullopt;
+  return Json{{"solver", study.solver_plugin}, {"result", essentials(result)}};
+}
+
+Json run_compare_cases(const CompareOptions& options, const Registry& registry, bool reuse_only) {
+  if (options.files.empty()) throw Error("compare", "at least one problem file is required");
+  Cluster& cluster = options.cluster != nullptr ? *options.cluster : Cluster::local();
+  const std::vector<CompareCase> cases = read_cases(options, cluster);
+  std::vector<std::string> names;  // per study, its folder name
+  for (const CompareCase& k : cases) names.push_back(k.name);
   const fs::path out(options.output_directory);
-  auto folder = [&](const CompareCase& k) { return (out / k.name).string(); };
-
-  // Rank 0 finds the finished studies to reuse (a folder with a result.json: loaded and checked;
-  // another problem's result is refused, never overwritten silently) and tells the other ranks
-  // which are done, or the error every rank throws.
-  std::vector<std::optional<Json>> results(cases.size());  // rank 0: per study, its essentials
-  std::vector<std::string> solvers(cases.size());           // rank 0: per study, its solver plugin
-  std::vector<char> reused(cases.size(), 0);
-  {
-    Json decision = Json::object();
-    if (cluster.root()) {
-      try {
-        fs::create_directories(out);
-        boost::system::error_code ec;
-        for (long long c = first; c < last && !options.force; ++c) {
-          const CompareCase& k = cases[static_cast<std::size_t>(c)];
-          if (!fs::exists(fs::path(folder(k)) / "result.json", ec)) {
-            if (reuse_only) throw Error("merge", folder(k) + ": no result.json of this study to reuse");
-            continue;
-          }
-          std::optional<Study> study;
-          try {
-            study = load_case(k, options, registry);
-          } catch (const Error&) {
-            if (reuse_only) throw;
-            continue;  // it may need an earlier study's output: its task loads it again
-          }
-          std::optional<Json> stored =
-              reusable_result(folder(k), study->resolved, options.seed, "compare", "this comparison's " + k.file);
-          if (!stored) {
-            if (reuse_only) throw Error("merge", folder(k) + ": no finished result of this study to reuse (a merge runs nothing again)");
-            continue;
-          }
-          results[static_cast<std::size_t>(c)] = essentials(*stored);
-          solvers[static_cast<std::size_t>(c)] = study->solver_plugin;
-          decision["reused"].push_back(c);
-        }
-      } catch (const std::exception& e) {
-        decision = {{"error", error_record(e)}};
-      }
-    }
-    std::string bytes = decision.dump();
-    cluster.broadcast(bytes);
-    decision = Json::parse(bytes);
-    if (decision.contains("error")) throw_record(decision["error"]);
-    if (decision.contains("reused")) {
-      for (const Json& c : decision["reused"]) reused[c.get<std::size_t>()] = 1;
-    }
-  }
-
-  const auto stop_requested = [&] { return options.stop != nullptr && options.stop->load(); };
-  std::vector<char> started(cases.size(), 0);  // by this process
-  TaskFarm farm;
-  farm.count = static_cast<long long>(cases.size());
-  farm.shardable = true;
-  farm.done = [&](long long c) { return reused[static_cast<std::size_t>(c)] != 0; };
-  farm.run = [&](long long c, int) -> std::optional<std::string> {
-    if (stop_requested()) return std::nullopt;
-    const CompareCase& k = cases[static_cast<std::size_t>(c)];
-    started[static_cast<std::size_t>(c)] = 1;
-    Study study = load_case(k, options, registry);
-    RunOptions run;
-    run.output_directory = folder(k);
-    run.threads = options.threads;
-    run.seed = options.seed;
-    run.quiet = true;
-    run.stop = options.stop;
-    // A stopped study is resumed from its checkpoint. It runs on this process alone.
-    boost::system::error_code ec;
-    if (options.force) {
-      run.force = true;
-    } else {
-      fs::remove(fs::path(run.output_directory) / "result.json", ec);  // a stopped study's
-      run.resume = fs::exists(fs::path(run.output_directory) / "checkpoint.json", ec);
-    }
-    Json result;
-    try {
-      result = run_study(study, run);
-    } catch (const Error& e) {
-      throw Error("compare", k.file + ": " + e.what());
-    }
-    if (result["status"] == to_string(SolverStatus::kStopped)) return std::nullopt;
-    return Json{{"solver", study.solver_plugin}, {"result", essentials(result)}}.dump();
+  const auto folder = [&](long long c) { return (out / names[static_cast<std::size_t>(c)]).string(); };
+  CaseBatch batch;
+  batch.count = static_cast<long long>(cases.size());
+  batch.output_directory = options.output_directory;
+  batch.component = "compare";
+  batch.force = options.force;
+  batch.stop = options.stop;
+  batch.reuse = [&](long long c) {
+    return reusable_study(cases[static_cast<std::size_t>(c)], folder(c), options, registry, reuse_only);
   };
-  farm.collect = [&](long long c, std::string&& bytes) {
-    Json message = Json::parse(bytes);
-    solvers[static_cast<std::size_t>(c)] = message["solver"];
-    results[static_cast<std::size_t>(c)] = std::move(message["result"]);
-  };
-  (void)cluster.run_tasks(farm, 1);  // one study at a time per rank, each with options.threads
-
-  // Rank 0 tabulates (rows in file order, whoever ran them) and writes the files; every rank
-  // returns its summary.
-  Json message = Json::object();
-  if (cluster.root()) {
-    try {
-      message = {{"summary", tabulate(cases, results, solvers, reused, started, first, last, cluster, options)}};
-    } catch (const std::exception& e) {
-      message = {{"error", error_record(e)}};
-    }
-  }
-  std::string bytes = message.dump();
-  cluster.broadcast(bytes);
-  if (!cluster.root()) message = Json::parse(bytes);
-  if (message.contains("error")) throw_record(message["error"]);
-  return std::move(message["summary"]);
+  batch.run = [&](long long c) { return run_case(cases[static_cast<std::size_t>(c)], folder(c), options, registry); };
+  const CaseBatchOutcome outcome = run_case_batch(batch, cluster);  // one study at a time per rank
+  return summary_on_every_rank(cluster, [&] { return tabulate(cases, names, outcome, cluster, options); }, "compare");
 }
 
 }  // namespace

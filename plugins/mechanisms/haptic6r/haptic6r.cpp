@@ -51,7 +51,7 @@ Haptic6RSetup Haptic6RSetup::from_options(const Haptic6ROptions& options) {
   Haptic6RSetup s;
   s.options = options;
   s.dh = read_haptic6r_dh(resolve_haptic6r_file("dh_file", options.dh_file));
-  s.actuators = read_actuator_table(resolve_haptic6r_file("actuator_file", options.actuator_file));
+  s.actuators = read_actuator_table(resolve_haptic6r_file("actuator_file", options.actuator_file), kName);
   s.selection = selection_rule(options.selection);
   s.home = radians(options.home);
   s.joint_lower = radians(options.joint_lower);

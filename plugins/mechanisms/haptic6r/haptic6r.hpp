@@ -38,6 +38,7 @@
 ///   dynamics. Without a twist (solve() outside the evaluator) these outputs are NaN. Computed
 ///   only when asked for: the other flags run the same code as before.
 #include <hapsyn/accel/mechanism_acceleration.hpp>
+#include <hapsyn/actuator_table.hpp>
 #include <hapsyn/mechanism.hpp>
 #include <hapsyn/options.hpp>
 #include <hapsyn/accel/lanes.hpp>
@@ -80,26 +81,9 @@ struct Haptic6RDh {
   std::array<Haptic6RDhRow, 6> rows;
 };
 
-/// The actuator table file (share/haptic6r/actuators_assumed.json).
-struct ActuatorTable {
-  std::string file;
-  std::array<double, 6> gear_ratios{};   ///< per gear code 1..6 [-]
-  double gear_efficiency = 1.0;          ///< [-]
-  std::array<double, 3> mass{};          ///< per size 1..3 [kg]
-  std::array<double, 3> motor_speed{};   ///< [rad/s]
-  std::array<double, 3> motor_torque{};  ///< motor peak torque [N m]
-  std::array<double, 3> gear_torque{};   ///< gear peak torque [N m]
-  /// qdot_max(s, r) [rad/s] for size 1..3 and code 1..6 (unchecked).
-  double max_velocity(int size, int code) const;
-  /// tau_max(s, r) [N m].
-  double max_torque(int size, int code) const;
-};
-
 /// Reads a DH table file. \throws Error("haptic6r", "<file>: <json path> = <value>: <rule>"),
 /// also when the structure is not the one the closed-form IK serves.
 Haptic6RDh read_haptic6r_dh(const std::string& path);
-/// Reads an actuator table file. \throws Error("haptic6r", "<file>: <json path> = <value>: <rule>").
-ActuatorTable read_actuator_table(const std::string& path);
 /// Resolves a data-file option: absolute, relative to the current directory, or to hapsyn's
 /// share directory (source tree, then install tree). \throws Error naming the option.
 std::string resolve_haptic6r_file(const std::string& option_name, const std::string& value);

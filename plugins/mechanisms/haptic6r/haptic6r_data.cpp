@@ -1,5 +1,6 @@
-// The haptic6r data files: the DH table and the actuator table (share/haptic6r/), read and
-// checked with messages naming the file, the JSON path, the value and the rule.
+// The haptic6r data file: the DH table (share/haptic6r/), read and checked with messages naming
+// the file, the JSON path, the value and the rule. (The actuator table's format is the
+// framework's: hapsyn/actuator_table.hpp.)
 #include "haptic6r.hpp"
 
 #include <hapsyn/json_text.hpp>
@@ -7,7 +8,6 @@
 #include <hapsyn/error.hpp>
 #include <hapsyn/read_file.hpp>
 
-#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <string>
@@ -71,15 +71,6 @@ bool same_ref(const LinkRef& r, int link, double factor) {
 
 }  // namespace
 
-double ActuatorTable::max_velocity(int size, int code) const {
-  return motor_speed[static_cast<std::size_t>(size - 1)] / gear_ratios[static_cast<std::size_t>(code - 1)];
-}
-
-double ActuatorTable::max_torque(int size, int code) const {
-  const std::size_t s = static_cast<std::size_t>(size - 1);
-  return std::min(motor_torque[s] * gear_ratios[static_cast<std::size_t>(code - 1)] * gear_efficiency, gear_torque[s]);
-}
-
 std::string resolve_haptic6r_file(const std::string& option_name, const std::string& value) {
   return find_data_file(kName, option_name, value);
 }
@@ -125,44 +116,6 @@ Haptic6RDh read_haptic6r_dh(const std::string& path) {
     dh.rows[i].alpha = alpha_deg[i] * kDeg;
   }
   return dh;
-}
-
-ActuatorTable read_actuator_table(const std::string& path) {
-  const Json doc = read_json_file(path);
-  ActuatorTable t;
-  t.file = path;
-  if (!doc.is_object() || doc.value("format", "") != "hapsyn-actuator-table") {
-    throw Error(kName, path + ": format = " + (doc.is_object() && doc.contains("format") ? show(doc["format"]) : "(missing)") +
-                           ": must be \"hapsyn-actuator-table\"");
-  }
-  if (!doc.contains("gear_ratios") || !doc["gear_ratios"].is_array() || doc["gear_ratios"].size() != 6) {
-    throw Error(kName, path + ": gear_ratios = " + (doc.contains("gear_ratios") ? show(doc["gear_ratios"]) : "(missing)") +
-                           ": must be an array of 6 ratios (gear codes 1..6)");
-  }
-  for (std::size_t i = 0; i < 6; ++i) {
-    t.gear_ratios[i] = number_at(doc, path, "gear_ratios[" + std::to_string(i) + "]", doc["gear_ratios"][i], 0.0, 1e6, true);
-  }
-  if (!doc.contains("gear_efficiency")) throw Error(kName, path + ": gear_efficiency: missing");
-  t.gear_efficiency = number_at(doc, path, "gear_efficiency", doc["gear_efficiency"], 0.0, 1.0, true);
-  if (!doc.contains("sizes") || !doc["sizes"].is_array() || doc["sizes"].size() != 3) {
-    throw Error(kName, path + ": sizes = " + (doc.contains("sizes") ? show(doc["sizes"]) : "(missing)") +
-                           ": must be an array of 3 entries (sizes 1..3)");
-  }
-  for (std::size_t i = 0; i < 3; ++i) {
-    const Json& s = doc["sizes"][i];
-    const std::string at = "sizes[" + std::to_string(i) + "]";
-    for (const char* key : {"size", "mass", "motor_speed_rpm", "motor_peak_torque", "gear_peak_torque"}) {
-      if (!s.is_object() || !s.contains(key)) throw Error(kName, path + ": " + at + "." + key + ": missing");
-    }
-    if (!s["size"].is_number_integer() || s["size"].get<int>() != static_cast<int>(i) + 1) {
-      throw Error(kName, path + ": " + at + ".size = " + show(s["size"]) + ": must be " + std::to_string(i + 1) + " (sizes in order)");
-    }
-    t.mass[i] = number_at(doc, path, at + ".mass", s["mass"], 0.0, 1e3);
-    t.motor_speed[i] = number_at(doc, path, at + ".motor_speed_rpm", s["motor_speed_rpm"], 0.0, 1e6, true) * 2.0 * kPi / 60.0;
-    t.motor_torque[i] = number_at(doc, path, at + ".motor_peak_torque", s["motor_peak_torque"], 0.0, 1e6, true);
-    t.gear_torque[i] = number_at(doc, path, at + ".gear_peak_torque", s["gear_peak_torque"], 0.0, 1e6, true);
-  }
-  return t;
 }
 
 }  // namespace hapsyn::plugins

@@ -2,8 +2,7 @@
 // frames and home posture in SI), and the Mechanism interface (design space, constraints).
 #include "serial_chain.hpp"
 
-#include "haptic6r.hpp"  // ActuatorTable, read_actuator_table: the actuator table format is shared
-
+#include <hapsyn/actuator_table.hpp>
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
 
@@ -124,9 +123,9 @@ std::shared_ptr<SerialChainSetup> make_setup(const SerialChainOptions& o) {
   if (!o.actuator_file.empty()) {
     const std::string file = find_data_file(kName, "actuator_file", o.actuator_file);
     try {
-      s->actuators = std::make_shared<const ActuatorTable>(read_actuator_table(file));
+      s->actuators = std::make_shared<const ActuatorTable>(read_actuator_table(file, kName));
     } catch (const Error& e) {
-      // The table's reader is the haptic 6R's (the format is shared); the user configured serial_chain.
+      // The table names its JSON paths; the message names the option that gave the file.
       throw Error(kName, "options.actuator_file: " + std::string(e.what()).substr(e.component().size() + 2));
     }
   } else if (!o.actuator_size.empty() || !o.actuator_gear.empty()) {

@@ -41,9 +41,11 @@
 #include <string>
 #include <vector>
 
-namespace hapsyn::plugins {
+namespace hapsyn {
+struct ActuatorTable;  // hapsyn/actuator_table.hpp
+}  // namespace hapsyn
 
-struct ActuatorTable;
+namespace hapsyn::plugins {
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 

@@ -2,8 +2,7 @@
 // the IK, the classification and the quantities the metrics asked for.
 #include "serial_chain.hpp"
 
-#include "haptic6r.hpp"  // ActuatorTable
-
+#include <hapsyn/actuator_table.hpp>
 #include <hapsyn/chain_motion.hpp>
 
 #include <Eigen/Cholesky>

@@ -78,7 +78,7 @@ bool is_compare_output(const std::string& dir);
 /// their study folders are linked or copied into out_dir and the comparison runs there with
 /// every study reused (none runs again; a relative file that is not found from the current
 /// directory is taken relative to the recorded working directory). Returns the summary.
-/// 	hrows Error("merge", ...) as merge_sweep_shards (with "comparison" for "sweep").
+/// \throws Error("merge", ...) as merge_sweep_shards (with "comparison" for "sweep").
 Json merge_compare_shards(const std::vector<std::string>& dirs, const std::string& out_dir, const Registry& registry,
                           int threads);
 

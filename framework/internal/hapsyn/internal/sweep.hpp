@@ -11,7 +11,6 @@
 #include <cstdint>
 #include <optional>
 #include <string>
-#include <utility>
 #include <vector>
 
 namespace hapsyn {
@@ -96,7 +95,7 @@ bool is_sweep_output(const std::string& dir);
 /// run, reusing every run (none runs again). Returns the summary, the same as a single
 /// `hapsyn sweep` gives (values, objectives, errors; "reused" is true and the times are the
 /// shares'), also written as out_dir/sweep.json and sweep.csv.
-/// 	hrows Error("merge", ...) naming the rule and the directory: no directory given;
+/// \throws Error("merge", ...) naming the rule and the directory: no directory given;
 ///         "<dir>/sweep.json: not a readable sweep summary (...)"; "<dir> is not a shard of a
 ///         sweep (its sweep.json has no "shard" entry: it ran without --shard)"; "<dir> (shard
 ///         2/3) is not of the same sweep as <dir0> (shard 1/3): its <problem / axes / reference
@@ -106,32 +105,5 @@ bool is_sweep_output(const std::string& dir);
 ///         folder>: missing ..." or one that holds no finished result of the sweep's run.
 Json merge_sweep_shards(const std::vector<std::string>& dirs, const std::string& out_dir, const Registry& registry,
                         int threads);
-
-/// The tasks [first, last) of a shardable task farm of `count` tasks that run on `cluster`: all
-/// of them, or under --shard i/N the i-th contiguous share as ShardCluster runs it (sweep and
-/// compare: the runs a share's summary covers).
-std::pair<long long, long long> shard_tasks(const Cluster& cluster, long long count);
-
-/// (sweep and compare) The summaries `<dir>/<summary_file>` of the shares of one job, read and
-/// checked for merging (see merge_sweep_shards for the rules; `same` lists the JSON pointers
-/// that must agree, each with its name for the message, `what` names the job: "sweep"), returned
-/// in share order; each share's case folders ("shard"/"cases") are then hard-linked or copied
-/// into out_dir.
-/// 	hrows Error("merge", ...) as merge_sweep_shards.
-std::vector<Json> gather_shards(const std::vector<std::string>& dirs, const std::string& out_dir,
-                                const std::string& summary_file, const std::string& what,
-                                const std::vector<std::pair<std::string, std::string>>& same);
-
-/// The finished result to reuse from a run folder (sweep and compare): the parsed
-/// <directory>/result.json when it exists, is not "stopped", and was run with `resolved` as its
-/// problem (and `seed` when given); nullopt when there is none or it was stopped (the caller
-/// resumes that run). `component` and `what` (e.g. "sweep", "this sweep") name the caller in
-/// errors.
-/// \throws Error(component, "<directory> holds a result of another problem (first difference
-///         at <JSON pointer>: ...)" / "... with seed <s>, ..." / "<file>: not a readable result
-///         (...)", each ending "; delete it, or choose another --out").
-std::optional<Json> reusable_result(const std::string& directory, const Json& resolved,
-                                    const std::optional<std::uint64_t>& seed, const std::string& component,
-                                    const std::string& what);
 
 }  // namespace hapsyn
