@@ -213,8 +213,8 @@ void BM_FiveBarReachConstraint(benchmark::State& state) {
   per_sample(state);
 }
 
-// The block bound of one sample over a run of r (FiveBar::sample_envelope, docs/design.md
-// section 13.5), as culling and the pruned grid call it: 4,096 runs of 8 to 64 designs at a 2 mm
+// The block bound of one sample over a run of r (FiveBar::sample_envelope,
+// plugins/mechanisms/fivebar/KERNELS.md section 13.5), as culling and the pruned grid call it: 4,096 runs of 8 to 64 designs at a 2 mm
 // step (seed 1) of designs and samples of the paper's kind, each tried above the joints' axis.
 // Argument: 0 the GII envelope (no mass bound), 1 GDI's (with the bound of sigma_max(M)).
 void BM_FiveBarSampleEnvelope(benchmark::State& state) {

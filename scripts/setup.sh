@@ -13,7 +13,7 @@ packages=(
   python3-dev python3-numpy python3-pytest pybind11-dev
   openmpi-bin libopenmpi-dev
   libhwy-dev
-  mkdocs jupyter-nbconvert python3-ipykernel python3-nbformat python3-venv
+  mkdocs doxygen jupyter-nbconvert python3-ipykernel python3-nbformat python3-venv
 )
 # Extra packages requested through the environment (e.g. HAPSYN_EXTRA_PACKAGES="gnuplot").
 if [[ -n "${HAPSYN_EXTRA_PACKAGES:-}" ]]; then

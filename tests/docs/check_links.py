@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Checks the documentation's cross-references against the tree (ctest Docs.LinksAndNamedConstantsResolve).
 
-1. Every relative Markdown link in the README, docs/ and each README under framework/,
-   plugins/, python/, examples/, tests/ names a file or directory that exists (anchors are not
-   followed).
+1. Every relative Markdown link in the README, docs/ and each README, KERNELS.md and
+   BLOCK_BOUNDS.md (the kernels' design notes) under framework/, plugins/, python/, examples/,
+   tests/ names a file or directory that exists (anchors are not followed).
 2. docs/limits.md names the constants that hold each limit: each `kName` it quotes is defined
    (`kName =`) somewhere under framework/ or plugins/, and each XmlShapeLimits field it quotes
    is a member of that struct. A limit renamed or removed in the code fails here until its page
@@ -23,7 +23,8 @@ FENCE = re.compile(r"^```")
 def markdown_files(root: Path) -> list:
     files = [root / "README.md"] + sorted((root / "docs").rglob("*.md"))
     for top in ("framework", "plugins", "python", "examples", "tests", "share"):
-        files += sorted((root / top).rglob("README.md"))
+        for name in ("README.md", "KERNELS.md", "BLOCK_BOUNDS.md"):  # the kernels' design notes too
+            files += sorted((root / top).rglob(name))
     return [f for f in files if f.is_file()]
 
 

@@ -64,13 +64,23 @@ struct WorldBody {
 
 /// Jdot qdot of the point `point` fixed in the last body (rows omega then v: [rad/s^2; m/s^2]),
 /// i.e. the point's acceleration at qddot = 0 — what the task acceleration lacks beyond
-/// J qddot. \param joints n joints; \param qdot n joint rates [rad/s or m/s]; \param out 6 values.
+/// J qddot.
+/// \param joints n joints
+/// \param n      the number of joints
+/// \param point  the point, fixed in the last body [m, base axes]
+/// \param qdot   n joint rates [rad/s or m/s]
+/// \param out    6 values
 void jacobian_rate_times_rate(const WorldJoint* joints, int n, const Eigen::Vector3d& point, const double* qdot,
                               double out[6]);
 
 /// c = C(q, qdot) qdot [N m or N], n values: the joint torques of the velocity terms alone
 /// (Newton-Euler at qddot = 0 without gravity), so that tau = H qddot + c + gravity torque for
-/// the inertia H of the same bodies. \param bodies n bodies, body i moving with joint i.
+/// the inertia H of the same bodies.
+/// \param joints n joints
+/// \param bodies n bodies, body i moving with joint i
+/// \param n      the number of joints
+/// \param qdot   n joint rates [rad/s or m/s]
+/// \param out    n values
 void velocity_torque(const WorldJoint* joints, const WorldBody* bodies, int n, const double* qdot, double* out);
 
 /// Solves J x = b for joint rates x (n = J.cols() values): J square by LU with partial
@@ -86,7 +96,9 @@ class JointRateSolver {
  public:
   /// Factorizes J (rows <= kMaxTask, cols <= kMaxDof).
   void compute(const TaskJointMatrix& jacobian);
-  /// x = J^-1 b (minimum norm, or least squares; see the class). \param b J.rows() values.
+  /// x = J^-1 b (minimum norm, or least squares; see the class).
+  /// \param b J.rows() values
+  /// \param x J.cols() values
   void solve(const double* b, JointVector& x) const;
 
  private:

@@ -35,10 +35,13 @@ std::string study_fingerprint(const Problem& problem, const Json& solver_options
 /// changing the result (progress and checkpoint intervals, a size cap).
 std::string study_fingerprint(const Problem& problem, Json solver_options, std::initializer_list<const char*> ignored);
 
-/// Reads object[key] of a checkpoint's state as T for a solver's resume. \param path the
-/// object's path in the state, for the message ("state", "state.best")
-/// \throws bad_checkpoint(context, "<path>.<key> is missing") or "<path>.<key> = <value>: not of
-///         the expected type" (never a raw JSON exception).
+/// Reads object[key] of a checkpoint's state as T for a solver's resume.
+/// \param context the solver's context, for the message (its checkpoint file)
+/// \param object  an object of the state
+/// \param path    the object's path in the state, for the message ("state", "state.best")
+/// \param key     the field to read
+/// \throws bad_checkpoint `(context, "<path>.<key> is missing")` or `"<path>.<key> = <value>: not
+///         of the expected type"` (never a raw JSON exception).
 template <class T>
 T checkpoint_field(const SolverContext& context, const Json& object, const std::string& path, const std::string& key);
 

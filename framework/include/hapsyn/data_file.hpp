@@ -35,11 +35,11 @@ std::string problem_directory();
 /// \param component  the plugin, for the error ("human_arm")
 /// \param option     the option's name, for the error ("arm_file")
 /// \param value      the option's value
-/// \throws Error("<component>: options.<option> = \"<value>\": no such file (tried ...)")
+/// \throws Error `("<component>: options.<option> = \"<value>\": no such file (tried ...)")`
 std::string find_data_file(const std::string& component, const std::string& option, const std::string& value);
 
 /// As find_data_file, but a folder is accepted too (a data set of several files).
-/// \throws Error("<component>: options.<option> = \"<value>\": no such file or folder (tried ...)")
+/// \throws Error `("<component>: options.<option> = \"<value>\": no such file or folder (tried ...)")`
 std::string find_data_path(const std::string& component, const std::string& option, const std::string& value);
 
 /// A path named by the framework's part of a problem file (indicators.reference_front): an

@@ -73,7 +73,7 @@ class DesignSpace {
   Eigen::VectorXd expand(const Eigen::VectorXd& free_values) const;
   /// Number of grid points of free component k (requires a step): floor((upper-lower)/step)+1,
   /// with a relative tolerance so that an upper bound on the grid is included.
-  /// \throws Error("problem: design.<name>: ...") above kMaxGridAxisPoints (build_design_space
+  /// \throws Error `("problem: design.<name>: ...")` above kMaxGridAxisPoints (build_design_space
   ///         refuses such steps first; this guards spaces built by hand).
   long long grid_count(std::size_t free_k) const;
   /// Grid value i of free component k: lower + i*step (clamped to upper).
@@ -83,9 +83,9 @@ class DesignSpace {
   /// \param component the solver, for the error ("grid", "culling")
   /// \param max_designs when > 0, the most grid designs the solver accepts (its `max_designs`
   ///        option): a search of more is refused at load, not discovered after days
-  /// \throws Error("<component>: design.<var> has no step: ...") or when the grid exceeds 9e18
-  ///         points, or Error("<component>: the design grid has N designs (<axes>), more than
-  ///         solver.options.max_designs = M; ...") when it exceeds max_designs.
+  /// \throws Error `("<component>: design.<var> has no step: ...")` or when the grid exceeds
+  ///         9e18 points, or `Error("<component>: the design grid has N designs (<axes>), more
+  ///         than solver.options.max_designs = M; ...")` when it exceeds max_designs.
   long long check_grid(const std::string& component, double max_designs = 0.0) const;
   /// Grid counts of every free component (each needs a step).
   std::vector<long long> grid_counts() const;

@@ -12,7 +12,9 @@ namespace hapsyn {
 
 /// Refuses, before any document is built: a NUL byte, malformed JSON, nesting deeper than
 /// kMaxJsonDepth (problem_file.hpp) and a key given twice in one object.
-/// \param source names the text in messages (a file path)
+/// \param text      the JSON text
+/// \param source    names the text in messages (a file path)
+/// \param component the prefix of the error ("problem", "merge", "sweep")
 /// \throws Error(component, "SOURCE:LINE:COLUMN: malformed JSON: REASON"), "...: nesting deeper
 ///         than 256 levels ...", "...: duplicate key \"K\" in PATH ...", "...: a NUL byte ...".
 void check_json_text(const std::string& text, const std::string& source, const char* component);

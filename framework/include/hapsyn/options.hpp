@@ -313,8 +313,9 @@ Json options_schema() {
 /// Validates `options` (a problem file's "options" object; null = {}) against O's declarations,
 /// fills the defaults and returns the struct. Sub-solvers stay uncreated (SubSolver::solver is
 /// null): this is for tests and for code that builds a plugin directly, without a registry.
+/// \param options   the options object of the problem file (null = {})
 /// \param json_path where the options sit, for messages (e.g. "solver.options")
-/// \throws Error("problem: <json_path>.<key> = <value>: <rule>")
+/// \throws Error `("problem: <json_path>.<key> = <value>: <rule>")`
 template <class O>
 O make_options(const Json& options = Json::object(), const std::string& json_path = "options");
 

@@ -20,8 +20,8 @@ namespace hapsyn {
 /// Writes `content` to `path` atomically: a temporary file in the same directory (named
 /// ".tmp-<file name>-<pid>-<n>", unique per call in this process), then rename(2), so readers
 /// see the old file or the new one, never a partial one. The directory must exist.
-/// \throws Error("output", "cannot write <temporary>: <reason>") or Error("output", "cannot move
-///         <temporary> to <path>: <reason>"); the temporary file is removed on failure.
+/// \throws Error `("output", "cannot write <temporary>: <reason>")` or `Error("output", "cannot
+///         move <temporary> to <path>: <reason>")`; the temporary file is removed on failure.
 void write_file_atomically(const std::string& path, const std::string& content);
 /// The same for content in pieces, written in order (a large payload behind a header is not
 /// copied into one string first).
@@ -33,15 +33,15 @@ void write_file_atomically(const std::string& path, std::initializer_list<std::s
 class LogFile {
  public:
   /// Opens `path` for writing, appending when `append` (a resumed run), else truncating.
-  /// \throws Error("output", "<path> is a symbolic link; a run log is never written through one
-  ///         (remove it)") or Error("output", "cannot open <path>: <reason>").
+  /// \throws Error `("output", "<path> is a symbolic link; a run log is never written through
+  ///         one (remove it)")` or `Error("output", "cannot open <path>: <reason>")`.
   LogFile(const std::string& path, bool append);
   ~LogFile();
   LogFile(const LogFile&) = delete;
   LogFile& operator=(const LogFile&) = delete;
   std::ostream& stream();
   /// Empties the file (a log opened with `append` that turns out to start afresh).
-  /// \throws Error("output", "cannot truncate <path>: <reason>").
+  /// \throws Error `("output", "cannot truncate <path>: <reason>")`.
   void truncate();
 
  private:
@@ -55,8 +55,9 @@ class LogFile {
 /// waits on the old one). The lock dies with its process: a killed run never leaves it taken.
 class DirectoryLock {
  public:
-  /// \throws Error("output", "<directory> is in use by another hapsyn run (pid <n>)") when another
-  ///         process holds it, Error("output", "cannot lock <directory>/.lock: <reason>") else.
+  /// \throws Error `("output", "<directory> is in use by another hapsyn run (pid <n>)")` when
+  ///         another process holds it, `Error("output", "cannot lock <directory>/.lock: <reason>")`
+  ///         else.
   explicit DirectoryLock(const std::string& directory);
   ~DirectoryLock();
   DirectoryLock(const DirectoryLock&) = delete;
@@ -67,18 +68,20 @@ class DirectoryLock {
 };
 
 /// Bytes available to this user on the file system holding `directory` (statvfs(2) f_bavail).
-/// \throws Error("output", "cannot query the free space of <directory>: <reason>").
+/// \throws Error `("output", "cannot query the free space of <directory>: <reason>")`.
 std::uint64_t free_bytes(const std::string& directory);
 
 /// Refuses a run whose outputs will not fit: less than `needed` bytes, or less than 1 MiB (the
 /// floor for result.json, the log and the checkpoint), free on the file system of `directory`.
-/// \param what the outputs, for the message ("samples.csv (10201 rows x 5 columns) and maps.csv")
-/// \throws Error("output", "<directory>: only <free> free on its file system; this run's outputs
-///         (<what>) need about <needed>; free some space or choose another --out").
+/// \param directory the run's output directory
+/// \param needed    the bytes the outputs will take (estimated)
+/// \param what      the outputs, for the message ("samples.csv (10201 rows x 5 columns) and maps.csv")
+/// \throws Error `("output", "<directory>: only <free> free on its file system; this run's
+///         outputs (<what>) need about <needed>; free some space or choose another --out")`.
 void check_free_space(const std::string& directory, std::uint64_t needed, const std::string& what);
 
 /// Moves `from` to `to` with rename(2) (same file system), replacing `to`.
-/// \throws Error("output", "cannot move <from> to <to>: <reason>").
+/// \throws Error `("output", "cannot move <from> to <to>: <reason>")`.
 void move_file(const std::string& from, const std::string& to);
 
 /// fsync(2) of a directory, so that renames into it survive a crash (best effort: errors ignored).

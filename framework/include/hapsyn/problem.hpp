@@ -97,7 +97,7 @@ struct EvalOptions {
   /// evaluate_designs only: the caller vouches that every design's constraints hold, so they
   /// are not evaluated again. A grid solver sets it for the designs inside a line's feasible
   /// run when its ends were checked and the mechanism promises MechanismAcceleration::constraints_quasiconvex
-  /// along the line (plugins/solvers/grid/line_bound.hpp). Builds with assertions check anyway.
+  /// along the line (plugins/solvers/shared/bounds/line_bound.hpp). Builds with assertions check anyway.
   bool constraints_verified = false;
 };
 

@@ -10,13 +10,14 @@
 namespace hapsyn {
 
 /// Returns the content of the regular file `path`.
+/// \param path       the file
 /// \param component  who reads it, the prefix of the error ("problem", "checkpoint", "human_arm")
 /// \param what       what the file is, for the message ("problem file", "checkpoint", "cache")
 /// \param max_bytes  the largest size accepted [bytes]
-/// \throws Error("<component>: cannot read <what> <path>: <reason>") when it does not exist or
-///         cannot be read; Error("<component>: <what> <path> is not a regular file (a FIFO,
-///         device or directory)"); Error("<component>: <what> <path> is <n> bytes, more than
-///         the <max> this reader accepts").
+/// \throws Error `("<component>: cannot read <what> <path>: <reason>")` when it does not exist
+///         or cannot be read; `Error("<component>: <what> <path> is not a regular file (a FIFO,
+///         device or directory)")`; `Error("<component>: <what> <path> is <n> bytes, more than
+///         the <max> this reader accepts")`.
 std::string read_regular_file(const std::string& path, const std::string& component, const std::string& what,
                               std::uint64_t max_bytes);
 
@@ -31,7 +32,7 @@ bool exists_but_not_regular(const std::string& path);
 std::size_t invalid_utf8_at(const std::string& text);
 
 /// `text` as a message shows it whatever its bytes: in double quotes, printable ASCII as is,
-/// every other byte as \xHH, at most 80 bytes ("..." after them).
+/// every other byte as `\xHH`, at most 80 bytes ("..." after them).
 std::string shown_bytes(const std::string& text);
 
 }  // namespace hapsyn

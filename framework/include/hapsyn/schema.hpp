@@ -20,8 +20,11 @@ namespace hapsyn {
 void check_schema(const Json& schema, const std::string& where);
 
 /// Validates `value` against `schema` and returns it with defaults filled in (recursively for
-/// objects). \param path JSON path of `value` in the problem file, e.g. "scene.options".
-/// \throws Error("problem: <path>.<key> = <value>: <rule>") on the first violation.
+/// objects).
+/// \param schema the schema (check_schema() accepted it)
+/// \param value  the JSON value to check
+/// \param path   JSON path of `value` in the problem file, e.g. "scene.options"
+/// \throws Error `("problem: <path>.<key> = <value>: <rule>")` on the first violation.
 Json validate_and_fill(const Json& schema, const Json& value, const std::string& path);
 
 }  // namespace hapsyn

@@ -36,7 +36,7 @@ enum class LegResult { kSolved, kUnreachable, kOnJoint };
 
 /// Elbow-out inverse kinematics of one leg with E - A = (dx, dy).
 ///
-/// Without the angle at A or rho = |E - A| (docs/design.md section 13.2): with along = 2 l1 rho
+/// Without the angle at A or rho = |E - A| (KERNELS.md section 13.2): with along = 2 l1 rho
 /// cos(angle) = l1^2 - l2^2 + rho^2 and root = 2 l1 rho sin(angle) >= 0, the law of cosines in
 /// Heron's form gives root^2 = ((l1 + l2)^2 - rho^2)(rho^2 - (l1 - l2)^2), and the actuated link's
 /// unit vector is (along (dx, dy) + root (-dy, dx)) / (2 l1 rho^2): one square root and one

@@ -12,7 +12,7 @@
 // than the rest of a sample. For a sample that is not singular (every transmission sine at
 // least singularity_tolerance = 1e-4, far above the 1e-9 rad angle tolerance), the paper's G is
 // equivalent to sign tests on the link vectors of each leg, in its own (possibly mirrored) frame
-// (docs/design.md section 13.2):
+// (KERNELS.md section 13.2):
 //   - the free link points up: w_y >= -tan(1e-9) max(w_x, 0)     (q2 >= -t and q2 not above pi)
 //   - the actuated link does not point below the horizon on a branch that makes q1 negative:
 //     not (u_y < 0 and atan2(d) < 0)                            (q2 <= q1 + t)

@@ -3,7 +3,7 @@
 /// The five-bar's block kernel (hapsyn/accel/sample_block.hpp): kBlockLanes samples per call, one per
 /// SIMD lane, without trigonometric functions. The same model as FiveBarModel::solve (README,
 /// "Conventions and equations"); its validity test works on the link vectors instead of the
-/// joint angles, which is equivalent for every non-singular sample (docs/design.md section 13.2).
+/// joint angles, which is equivalent for every non-singular sample (KERNELS.md section 13.2).
 #include <hapsyn/quantities.hpp>
 #include <hapsyn/accel/sample_block.hpp>
 

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// The five-bar's block bound of one sample over a run of r (docs/design.md section 13.5).
+/// The five-bar's block bound of one sample over a run of r (KERNELS.md section 13.5).
 ///
 /// The designs (l0, l1, l2, r) with r in [r_lo, r_hi] put the sample (x, y) at E = (x, Y),
 /// Y = y + r in [y + r_lo, y + r_hi]. Everything the metrics use is a function of three angles

@@ -1,4 +1,4 @@
-// The five-bar's block bound of a sample over a run of r (fivebar_envelope.hpp, docs/design.md
+// The five-bar's block bound of a sample over a run of r (fivebar_envelope.hpp, KERNELS.md
 // section 13.5), checked against the model itself: every design of random runs, solved by
 // FiveBarModel, must obey what the envelope claims; on a run of one design the GII bound must
 // equal the design's own sigma_min / sigma_max (up to the margins), which checks the formulas,

@@ -1,5 +1,5 @@
 // The five-bar's reachable interval of a sample along r (FiveBar::reachable_interval,
-// docs/design.md section 13.6), checked against the model itself: no value of r outside the
+// KERNELS.md section 13.6), checked against the model itself: no value of r outside the
 // interval may let FiveBarModel solve the sample (the claim a grid solver rules designs out
 // on), and on analytic cases the interval's ends are where the legs' reach puts them.
 #include "fivebar.hpp"

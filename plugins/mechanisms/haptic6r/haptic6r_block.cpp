@@ -1,4 +1,4 @@
-// Haptic6RModel's block kernel (docs/design.md section 14): the IK, its selection and the
+// Haptic6RModel's block kernel (KERNELS.md sections 14.3 and 14.4): the IK, its selection and the
 // classification (haptic6r_ik.hpp), the forward chain, Jacobian, inertia and gravity torque
 // (haptic6r_chain.hpp) run once for the block, one sample per lane (the templates at T = Lanes).
 #include "haptic6r.hpp"

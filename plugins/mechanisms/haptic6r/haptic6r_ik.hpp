@@ -472,7 +472,7 @@ template <typename T>
 }
 
 // ---- Step 4 and after for a block (T = Lanes): what configure_branches() decides for each
-// lane, as lane-wise selections (docs/design.md section 14.4). The eight slots share their
+// lane, as lane-wise selections (KERNELS.md section 14.4). The eight slots share their
 // angles (theta1 and theta2 come from two planar solutions and two elbows, theta4 from two
 // branches, theta5 and theta6 from two branches and two h signs; only theta3 is the slot's
 // own), so 26 wrapped angles serve the 48 of the per-pose code, each wrapped, tested against

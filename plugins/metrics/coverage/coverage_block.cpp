@@ -1,4 +1,4 @@
-// Coverage's block path (docs/design.md section 14): local() for kBlockLanes samples at once, one
+// Coverage's block path (KERNELS.md section 14.3): local() for kBlockLanes samples at once, one
 // sample per lane. The elimination of J with partial pivoting picks each lane's own pivot row
 // and swaps rows by lane-wise selection, so every lane takes the pivots local() takes.
 #include "coverage.hpp"

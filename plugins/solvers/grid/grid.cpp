@@ -272,7 +272,7 @@ void prepare_thread(SweepThread<Extra>& s, const Problem& problem, bool line_bou
   s.x.resize(problem.design_space().free_size());
   s.bound.emplace(problem, line_bounds, "grid");
   // Lines of a few dozen designs: one sample per try, and the wait carries over (measured on
-  // the 10 mm GII grid, docs/design.md section 13.6).
+  // the 10 mm GII grid, BLOCK_BOUNDS.md section 13.6).
   s.run_bounds.emplace(problem, "grid", RunBounds::Policy{1, true});
   s.hints.reserve(kHints + 1);
   s.pending_x.assign(static_cast<std::size_t>(kBlockLanes) * s.x.size(), 0.0);

@@ -766,7 +766,7 @@ TEST(GridLineBound, ABoundThatCutsAFeasibleDesignStopsTheRunNamingIt) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Block bounds (shared/bounds/run_bounds.hpp, docs/design.md section 13.5).
+// Block bounds (shared/bounds/run_bounds.hpp, shared/bounds/BLOCK_BOUNDS.md section 13.5).
 
 TEST(GridBlockBounds, GiveTheExhaustiveOptimumOnLongLines) {
   // Random sub-boxes with long lines of r, GII, GDI and a weighted sum of both: the pruned grid

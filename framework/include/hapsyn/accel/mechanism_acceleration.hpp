@@ -59,7 +59,7 @@ class MechanismAcceleration {
   /// violated, the other components as in `design`. It may be wider than the feasible set
   /// (inside it, evaluate_constraints decides) but never narrower: a solver counts the designs
   /// outside it as violating a constraint without evaluating them. The framework spot-checks
-  /// the claim (plugins/solvers/grid/line_bound.hpp). An empty interval (lower > upper) means no
+  /// the claim (plugins/solvers/shared/bounds/line_bound.hpp). An empty interval (lower > upper) means no
   /// value is feasible. Default: false (no bound known; every design is evaluated).
   /// Called once per line of a design grid; must not allocate or throw.
   virtual bool constraint_interval(const double* design, int component, const SampleSet& scene, double& lower,

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// Block bounds of runs of a grid line (header only; grid and culling share it, as
-/// "shared/bounds/run_bounds.hpp"; docs/design.md sections 13.5 and 13.6). Within a line's verified run
+/// "shared/bounds/run_bounds.hpp"; BLOCK_BOUNDS.md sections 13.5 and 13.6). Within a line's verified run
 /// (LineBound::verified()), a run of consecutive designs is ruled out at once when, at one
 /// sample, every design of the run fails (all infeasible in a worst-case study) or the study's
 /// score is bounded strictly below a threshold that a real design already reaches
@@ -16,7 +16,7 @@
 /// not help the tries cost little beside the designs' own evaluations. A try takes first the
 /// sample that ruled out the same part of the previous line (the run that contains its first
 /// design, or the next one): which critical sample bounds a run changes along a line, and the
-/// caller's order only remembers the last one (docs/design.md section 13.5).
+/// caller's order only remembers the last one (BLOCK_BOUNDS.md section 13.5).
 ///
 /// Before any run, a line is cut to the values where the first kReachSamples samples of the
 /// caller's list can be solved (Problem::reachable_interval, from
