@@ -84,6 +84,8 @@ HAPSYN_LANES_OPERATOR(/)
 HAPSYN_LANES_WHERE(where_less, <)
 HAPSYN_LANES_WHERE(where_greater, >)
 HAPSYN_LANES_WHERE(where_equal, ==)
+HAPSYN_LANES_WHERE(where_less_equal, <=)
+HAPSYN_LANES_WHERE(where_greater_equal, >=)
 #undef HAPSYN_LANES_WHERE
 
 /// Lane-wise |a| (as std::fabs: the sign bit cleared).
@@ -111,6 +113,22 @@ HAPSYN_LANES_WHERE(where_equal, ==)
   m |= __builtin_shufflevector(m, m, 1, 0, 3, 2, 5, 4, 7, 6);
   return m[0];
 }
+
+/// The bitwise AND of the lanes of `bits` (the fold of or_of_lanes()).
+[[gnu::always_inline]] inline std::int64_t and_of_lanes(const LaneBits& bits) {
+  static_assert(kBlockLanes == 8, "the fold below halves eight lanes three times");
+  LaneBits m = bits;
+  m &= __builtin_shufflevector(m, m, 4, 5, 6, 7, 0, 1, 2, 3);
+  m &= __builtin_shufflevector(m, m, 2, 3, 0, 1, 6, 7, 4, 5);
+  m &= __builtin_shufflevector(m, m, 1, 0, 3, 2, 5, 4, 7, 6);
+  return m[0];
+}
+
+/// Whether every lane of `a` is strictly greater than `b` (false when a lane is NaN): one
+/// compare and and_of_lanes(), no branch per lane.
+[[gnu::always_inline]] inline bool all_greater(const Lanes& a, double b) { return and_of_lanes(a.v > b) != 0; }
+/// Whether every lane of `a` is strictly less than `b` (false when a lane is NaN).
+[[gnu::always_inline]] inline bool all_less(const Lanes& a, double b) { return and_of_lanes(a.v < b) != 0; }
 
 /// Whether any lane of `a` is non-zero (NaN counts as non-zero): one compare and or_of_lanes(),
 /// instead of a branch per lane.
