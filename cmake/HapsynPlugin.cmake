@@ -65,3 +65,43 @@ function(hapsyn_add_test name)
   endif()
   gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${labels}" TIMEOUT 600)
 endfunction()
+
+# hapsyn_kernel_sources(<target> [CONTRACT] [TRAPPING_MATH] <source>...)
+#
+# Adds <source>... to <target> as kernel sources: files holding per-sample or block kernels
+# (hapsyn/accel/lanes.hpp, multiversion.hpp), compiled with the floating-point flags those need.
+# None changes a computed value; each lets the compiler emit vector code where it otherwise
+# could not, or keeps it from fusing:
+#   -fno-math-errno     std::sqrt is one instruction (sqrtsd / vsqrtpd), not a libm call per lane
+#                       kept for errno; sqrt's results are the same, only errno is not set.
+#   -fno-trapping-math  a selection may compute both of its sides, so lane loops with a
+#                       condition vectorise; only floating-point exception flags differ.
+#   -ftree-vectorize    the lane loops vectorise also in builds below -O3 (RelWithDebInfo, -O2);
+#                       at -O3 (Release) it is the default.
+#   -ffp-contract=off   no contraction of a * b + c into a fused multiply-add in the AVX2 and
+#                       AVX-512 versions: a kernel rounds as the scalar path does, bit for bit
+#                       (block and per-sample paths agree; results do not depend on the CPU).
+# CONTRACT leaves contraction to the compiler (GCC's default for C++: fused in the versions with
+# FMA), for kernels that are faster fused and whose results may differ in the last bits between
+# CPUs (hapsyn/accel/multiversion.hpp). TRAPPING_MATH keeps the default -ftrapping-math, for
+# kernels without lane loops that need it: -fno-trapping-math also lets GCC evaluate comparisons
+# and conversions speculatively, which changes the machine code of branchy per-sample code (the
+# five-bar's and haptic 6R's kept the code they were verified with). Works in the hapsyn tree and
+# out of tree; call it in the directory that defines the sources (source file properties are
+# directory-scoped).
+function(hapsyn_kernel_sources target)
+  cmake_parse_arguments(ARG "CONTRACT;TRAPPING_MATH" "" "" ${ARGN})
+  if(NOT ARG_UNPARSED_ARGUMENTS)
+    message(FATAL_ERROR "hapsyn_kernel_sources(${target}): no source files given")
+  endif()
+  set(flags -fno-math-errno)
+  if(NOT ARG_TRAPPING_MATH)
+    list(APPEND flags -fno-trapping-math)
+  endif()
+  list(APPEND flags -ftree-vectorize)
+  if(NOT ARG_CONTRACT)
+    list(APPEND flags -ffp-contract=off)
+  endif()
+  target_sources(${target} PRIVATE ${ARG_UNPARSED_ARGUMENTS})
+  set_property(SOURCE ${ARG_UNPARSED_ARGUMENTS} APPEND PROPERTY COMPILE_OPTIONS ${flags})
+endfunction()

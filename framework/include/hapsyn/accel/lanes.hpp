@@ -84,6 +84,8 @@ HAPSYN_LANES_OPERATOR(/)
 HAPSYN_LANES_WHERE(where_less, <)
 HAPSYN_LANES_WHERE(where_greater, >)
 HAPSYN_LANES_WHERE(where_equal, ==)
+HAPSYN_LANES_WHERE(where_less_equal, <=)
+HAPSYN_LANES_WHERE(where_greater_equal, >=)
 #undef HAPSYN_LANES_WHERE
 
 /// Lane-wise |a| (as std::fabs: the sign bit cleared).
@@ -110,6 +112,35 @@ HAPSYN_LANES_WHERE(where_equal, ==)
   m |= __builtin_shufflevector(m, m, 2, 3, 0, 1, 6, 7, 4, 5);
   m |= __builtin_shufflevector(m, m, 1, 0, 3, 2, 5, 4, 7, 6);
   return m[0];
+}
+
+namespace lanes_detail {
+// Two lanes as a vector of the baseline instruction set (SSE2).
+typedef double Pair __attribute__((vector_size(2 * sizeof(double))));
+typedef std::int64_t PairBits __attribute__((vector_size(2 * sizeof(double))));
+// The AND over the lanes of `a op b`, by pairs of lanes: GCC 12 compiles a comparison of the
+// whole 64-byte vector lane by lane (a scalar compare and set per lane) in code not compiled for
+// AVX-512, such as the evaluator's; by pairs it is one packed compare per pair everywhere.
+template <typename Compare>
+[[gnu::always_inline]] inline bool all_pairs(const Lanes& a, double b, Compare compare) {
+  PairBits all = {-1, -1};
+  for (int i = 0; i < kBlockLanes; i += 2) {
+    Pair pair;
+    std::memcpy(&pair, reinterpret_cast<const double*>(&a.v) + i, sizeof pair);
+    all &= compare(pair, b);
+  }
+  return (all[0] & all[1]) != 0;
+}
+}  // namespace lanes_detail
+
+/// Whether every lane of `a` is strictly greater than `b` (false when a lane is NaN), without a
+/// branch per lane: one packed compare per pair of lanes, also in baseline code.
+[[gnu::always_inline]] inline bool all_greater(const Lanes& a, double b) {
+  return lanes_detail::all_pairs(a, b, [](const lanes_detail::Pair& p, double c) { return p > c; });
+}
+/// Whether every lane of `a` is strictly less than `b` (false when a lane is NaN).
+[[gnu::always_inline]] inline bool all_less(const Lanes& a, double b) {
+  return lanes_detail::all_pairs(a, b, [](const lanes_detail::Pair& p, double c) { return p < c; });
 }
 
 /// Whether any lane of `a` is non-zero (NaN counts as non-zero): one compare and or_of_lanes(),
