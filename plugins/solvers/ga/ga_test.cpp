@@ -318,23 +318,23 @@ TEST(Ga, OutcomesAreStatusesNotExceptions) {
 TEST(Ga, BadOptionsNameThePathTheValueAndTheRule) {
   using hapsyn::test::expect_error;
   expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"algorithm", "gaco"}, {"population", 10}, {"gaco", {{"ker", 30}}}})); },
-               {"ga: options.gaco.ker = 30", "must not exceed options.population (10)"});
+               {"problem: solver.options.gaco.ker = 30", "must not exceed options.population (10)"});
   expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"population", 4}, {"sga", {{"param_s", 5}}}})); },
-               {"ga: options.sga.param_s = 5", "must not exceed options.population (4)"});
+               {"problem: solver.options.sga.param_s = 5", "must not exceed options.population (4)"});
   expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"sga", {{"mutation", "gaussian"}, {"param_m", 5.0}}}})); },
-               {"ga: options.sga.param_m = 5", "[0, 1]"});
+               {"problem: solver.options.sga.param_m = 5", "[0, 1]"});
   expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"fidelity", {{"subset_fraction", 0.1}}}})); },
-               {"ga: options.fidelity.subset_fraction = 0.1", "needs options.fidelity.generations >= 1"});
+               {"problem: solver.options.fidelity.subset_fraction = 0.1", "needs options.fidelity.generations >= 1"});
   expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"fidelity", {{"generations", 4}}}})); },
-               {"ga: options.fidelity.generations = 4", "subset_fraction < 1"});
+               {"problem: solver.options.fidelity.generations = 4", "subset_fraction < 1"});
   expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"fidelity", {{"refine_fraction", 0.5}}}})); },
-               {"ga: options.fidelity.refine_fraction = 0.5", "needs options.fidelity.generations >= 1"});
+               {"problem: solver.options.fidelity.refine_fraction = 0.5", "needs options.fidelity.generations >= 1"});
   expect_error(
       [] {
         hapsyn::plugins::GaSolver s(
             ga_options({{"fidelity", {{"subset_fraction", 0.2}, {"generations", 3}, {"refine_fraction", 0.2}}}}));
       },
-      {"ga: options.fidelity.refine_fraction = 0.2", "must be greater than options.fidelity.subset_fraction (0.2)"});
+      {"problem: solver.options.fidelity.refine_fraction = 0.2", "must be greater than options.fidelity.subset_fraction (0.2)"});
   expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"fidelity", {{"final_candidates", 0}}}})); },
                {"solver.options.fidelity.final_candidates", "0"});
   const auto problem = toy_problem();
