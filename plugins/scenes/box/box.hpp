@@ -6,6 +6,7 @@
 #include <hapsyn/scene.hpp>
 
 #include <array>
+#include <string>
 #include <vector>
 
 namespace hapsyn::plugins {
@@ -14,6 +15,13 @@ namespace hapsyn::plugins {
 constexpr long long kBoxMaxSamples = 2000000;
 
 /// The options of box (`hapsyn describe box`).
+struct BoxOptions;
+/// The rule relating step and size: "" when step is <= every side and divides it into whole steps
+/// (relative tolerance 1e-9), else what is wrong.
+std::string box_step_rule(const BoxOptions& o);
+/// "" when `values` has one number per dimension, else what is wrong.
+std::string one_per_dimension(const std::vector<double>& values, int dimension);
+
 struct BoxOptions {
   int dimension{};                  ///< 2 (rectangle) or 3 (box)
   std::vector<double> center{};     ///< dimension numbers [m]
@@ -47,6 +55,11 @@ struct BoxOptions {
           "Empty: positions only. Otherwise a unit quaternion [qw, qx, qy, qz] (norm 1 within 1e-6, normalized) "
           "given to every sample, which becomes the pose x, y, z, qw, qx, qy, qz; dimension 3 only.")
         .max_size(4);
+    d.rule({"center", "dimension"}, "one number per dimension",
+           [](const BoxOptions& o) { return one_per_dimension(o.center, o.dimension); });
+    d.rule({"size", "dimension"}, "one number per dimension",
+           [](const BoxOptions& o) { return one_per_dimension(o.size, o.dimension); });
+    d.rule({"step", "size"}, "step <= every size[i] and divides it into whole steps", &box_step_rule);
   }
 };
 
