@@ -14,7 +14,6 @@ namespace hapsyn::plugins {
 /// Largest number of samples the scene builds (memory guard: at most 56 bytes per sample, 7-D).
 constexpr long long kBoxMaxSamples = 2000000;
 
-/// The options of box (`hapsyn describe box`).
 struct BoxOptions;
 /// The rule relating step and size: "" when step is <= every side and divides it into whole steps
 /// (relative tolerance 1e-9), else what is wrong.
@@ -22,6 +21,7 @@ std::string box_step_rule(const BoxOptions& o);
 /// "" when `values` has one number per dimension, else what is wrong.
 std::string one_per_dimension(const std::vector<double>& values, int dimension);
 
+/// The options of box (`hapsyn describe box`).
 struct BoxOptions {
   int dimension{};                  ///< 2 (rectangle) or 3 (box)
   std::vector<double> center{};     ///< dimension numbers [m]
