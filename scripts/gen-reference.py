@@ -71,11 +71,26 @@ def option_rows(schema: dict, prefix: str = "") -> list:
     return rows
 
 
+def cross_rules(schema: dict, prefix: str = "") -> list:
+    """The rules relating several options ("x-rules"), of the object and of its groups."""
+    lines = []
+    for r in schema.get("x-rules", []):
+        lines.append("- " + ", ".join(code(prefix + f) for f in r["fields"]) + ": " + code(r["rule"]))
+    for name, p in schema.get("properties", {}).items():
+        if schema_type(p) == "object" and "properties" in p:
+            lines += cross_rules(p, prefix + name + ".")
+    return lines
+
+
 def options_table(schema: dict) -> str:
     rows = option_rows(schema)
     if not rows:
         return "No options.\n"
-    return ("| key | type | default | unit | rule | description |\n|---|---|---|---|---|---|\n" + "\n".join(rows) + "\n")
+    table = "| key | type | default | unit | rule | description |\n|---|---|---|---|---|---|\n" + "\n".join(rows) + "\n"
+    rules = cross_rules(schema)
+    if rules:
+        table += "\nRules between options:\n\n" + "\n".join(rules) + "\n"
+    return table
 
 
 def cli_page(cli: dict) -> str:

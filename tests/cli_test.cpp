@@ -175,13 +175,31 @@ TEST(Cli, DescribeShowsOptionsDefaultsUnitsAndVariables) {
   EXPECT_NE(unknown.out.find("did you mean 'fivebar'"), std::string::npos) << unknown.out;
 }
 
+// The rules relating several options are listed after the options, with their fields' paths
+// (those of a group under the group's path).
+TEST(Cli, DescribeShowsTheRulesBetweenOptions) {
+  const Output square = hapsyn_cli("describe planar_square");
+  ASSERT_EQ(square.code, 0) << square.out;
+  EXPECT_NE(square.out.find("  rule (step, side): step <= side and divides it into whole steps\n"), std::string::npos)
+      << square.out;
+  const Output ga = hapsyn_cli("describe ga");
+  ASSERT_EQ(ga.code, 0) << ga.out;
+  EXPECT_NE(ga.out.find("  rule (fidelity.subset_fraction, fidelity.generations): subset_fraction < 1 needs generations >= 1"),
+            std::string::npos)
+      << ga.out;
+  const Output json = hapsyn_cli("describe planar_square --json");
+  ASSERT_EQ(json.code, 0) << json.out;
+  EXPECT_NE(json.out.find("\"x-rules\""), std::string::npos) << json.out;
+}
+
 // A mechanism whose variables come from its options (serial_chain reads them from the chain
 // file) lists them with --options, and says how without.
 TEST(Cli, DescribeListsTheDesignVariablesOfGivenOptions) {
   const Output plain = hapsyn_cli("describe serial_chain");
   ASSERT_EQ(plain.code, 0) << plain.out;
   EXPECT_NE(plain.out.find("design variables: depend on the options (with the defaults: problem: mechanism.options: "
-                           "serial_chain: options: give the chain as options.urdf or options.dh_file); list them with: "
+                           "serial_chain: options.urdf = \"\": give the chain as options.urdf or options.dh_file); list "
+                           "them with: "
                            "hapsyn describe serial_chain --options '{...}'"),
             std::string::npos)
       << plain.out;

@@ -129,6 +129,17 @@ std::string schema_type(const Json& s) {
   return t;
 }
 
+// The cross-field rules declared next to the options ("x-rules"), with their fields' full paths.
+void describe_rules(const Json& schema, const std::string& prefix, std::ostream& out) {
+  const auto rules = schema.find("x-rules");
+  if (rules == schema.end()) return;
+  for (const Json& r : *rules) {
+    std::string fields;
+    for (const Json& f : r["fields"]) fields += (fields.empty() ? "" : ", ") + prefix + f.get<std::string>();
+    out << "  rule (" << fields << "): " << r["rule"].get<std::string>() << "\n";
+  }
+}
+
 void describe_properties(const Json& schema, const std::string& prefix, std::ostream& out) {
   if (!schema.contains("properties")) return;
   for (auto it = schema["properties"].begin(); it != schema["properties"].end(); ++it) {
@@ -146,6 +157,7 @@ void describe_properties(const Json& schema, const std::string& prefix, std::ost
     out << "\n";
     if (schema_type(p) == "object") describe_properties(p, prefix + it.key() + ".", out);
   }
+  describe_rules(schema, prefix, out);
 }
 
 // The design variables and constraints of a mechanism created with `options` (a JSON object's

@@ -24,7 +24,8 @@ const std::vector<std::string>& keywords() {
   static const std::vector<std::string> words = {
       "type",  "properties", "required", "additionalProperties", "default",
       "enum",  "minimum",    "maximum",  "exclusiveMinimum",     "exclusiveMaximum",
-      "items", "minItems",   "maxItems", "description",          "unit", "plugin_kind"};
+      "items", "minItems",   "maxItems", "description",          "unit", "plugin_kind",
+      "x-rules"};
   return words;
 }
 
@@ -296,6 +297,7 @@ class SchemaChecker {
         refuse_value(spath, annotation, schema[annotation], "must be a string");
       }
     }
+    if (const auto it = schema.find("x-rules"); it != schema.end()) check_rules(*it, spath);
     if (const auto it = schema.find("plugin_kind"); it != schema.end()) {
       // The framework creates plugin-valued options at load; only sub-solvers exist so far.
       if (*it != "solver" || schema.value("type", "") != "object")
@@ -334,6 +336,24 @@ class SchemaChecker {
       validate(schema, value, spath);
     } catch (const Violation& v) {
       throw Error("schema", where_ + ": " + v.message);
+    }
+  }
+
+  // "x-rules" lists the cross-field rules of an options object for `describe` (the plugin checks
+  // them): [{"fields": ["a", "b"], "rule": "a < b"}, ...].
+  void check_rules(const Json& rules, const std::string& spath) const {
+    const auto well_formed = [](const Json& r) {
+      if (!r.is_object() || r.size() != 2 || !r.contains("rule") || !r["rule"].is_string()) return false;
+      const auto f = r.find("fields");
+      if (f == r.end() || !f->is_array() || f->empty()) return false;
+      for (const Json& name : *f) {
+        if (!name.is_string()) return false;
+      }
+      return true;
+    };
+    if (!rules.is_array()) refuse_value(spath, "x-rules", rules, "must be an array of {\"fields\": [...], \"rule\": TEXT}");
+    for (const Json& r : rules) {
+      if (!well_formed(r)) refuse_value(spath, "x-rules", rules, "must be an array of {\"fields\": [...], \"rule\": TEXT}");
     }
   }
 

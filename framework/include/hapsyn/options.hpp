@@ -20,7 +20,11 @@
 /// From that one declaration the framework derives the plugin's schema (what `hapsyn describe`
 /// prints and what the problem file is validated against, with path, value, rule and
 /// did-you-mean in every message), fills the struct before the plugin's constructor runs, and
-/// creates sub-solvers at load. Member initialisers should be `{}` only: the declared default
+/// creates sub-solvers at load. A rule relating several options is declared next to them, so that
+/// `describe` shows it and it is checked before the constructor runs:
+///
+///       d.rule({"step", "side"}, "step <= side", [](const CullingOptions& o) { return o.step <= o.side; });
+/// Member initialisers should be `{}` only: the declared default
 /// is the one default. Every option has a default; a problem file may leave any option out.
 #include <hapsyn/json.hpp>
 #include <hapsyn/schema.hpp>
@@ -87,7 +91,31 @@ struct OptionDecl {
   std::function<Json(const O&)> to_json;
 };
 
+/// One declared cross-field rule of an options struct O.
+template <class O>
+struct RuleDecl {
+  std::vector<std::string> fields;  ///< the options it relates, as paths below O ("step", "gaco.ker")
+  std::string text;                 ///< the rule as shown by `describe`, e.g. "step <= side"
+  /// "" when `o` keeps the rule, else what is wrong ("must be <= side (0.1)"; see OptionDeclarations::rule).
+  std::function<std::string(const O&)> check;
+};
+
 std::shared_ptr<const Solver> find_sub_solver(const PluginArguments& arguments, const std::string& relative_path);
+
+/// The member at `dotted` ("a" or "a.b") of an options object as OptionDeclarations::to_json gives it.
+const Json& value_at(const Json& values, const std::string& dotted);
+
+/// "must satisfy <text> (<other> = <value>, ...)": the message of a broken rule declared with a predicate.
+std::string broken_rule(const std::string& text, const std::vector<std::string>& fields, const Json& values);
+
+/// Throws the message of a broken rule: "<root>.<field> = <value>: <what>", or "<root>.<field><what>"
+/// when `what` names an element ("[2] = 90: must be ..."). The component is the plugin when known
+/// (the registry adds where its options sit), else "problem", as for a schema violation.
+[[noreturn]] void throw_broken_rule(const PluginArguments& arguments, const std::string& path, const Json& value,
+                                    const std::string& what);
+
+/// Throws when a rule names a field that `schema` (an options schema) does not declare.
+void check_rule_fields(const Json& schema, const std::vector<std::string>& fields, const std::string& text);
 
 }  // namespace detail
 
@@ -148,6 +176,30 @@ class OptionDeclarations {
 
   /// The plugin's description (the schema's top-level "description"; `hapsyn describe`).
   void describe(const std::string& text) { description_ = text; }
+
+  /// A rule relating several options, checked after the options are filled and before the
+  /// plugin's constructor runs; shown by `hapsyn describe` and in the schema's "x-rules"
+  /// ({"fields": [...], "rule": text}). `fields` are paths below this struct ("step", "gaco.ker");
+  /// the first is the one the message names. `check` either returns a bool (true: kept; the
+  /// message is then "options.<first> = <value>: must satisfy <text> (<other> = <value>, ...)")
+  /// or a std::string: "" when kept, else what is wrong, so that the message reads
+  /// "options.<first> = <value>: <returned>"; a returned text starting with "[" names an element
+  /// of the first field instead ("[2] = 90: must be ..." gives "options.<first>[2] = 90: must be ...").
+  template <class Check>
+  void rule(std::vector<std::string> fields, const std::string& text, Check check) {
+    using Result = std::invoke_result_t<Check, const O&>;
+    static_assert(std::is_same_v<Result, bool> || std::is_same_v<Result, std::string>,
+                  "a rule's check returns bool or std::string");
+    std::function<std::string(const O&)> f;
+    if constexpr (std::is_same_v<Result, bool>) {
+      f = [check, text, fields](const O& o) {
+        return check(o) ? std::string() : detail::broken_rule(text, fields, to_json(o));
+      };
+    } else {
+      f = std::move(check);
+    }
+    rules_.push_back(detail::RuleDecl<O>{std::move(fields), text, std::move(f)});
+  }
 
   Option& add(bool O::*member, const std::string& name, bool def, const std::string& description) {
     return plain(member, name, "boolean", Json(def), description);
@@ -233,13 +285,16 @@ class OptionDeclarations {
     return out;
   }
 
-  /// O filled from options already validated against schema() (defaults present).
+  /// O filled from options already validated against schema() (defaults present), its rules
+  /// (those of its groups first) checked.
+  /// \throws Error naming the first broken rule (see rule())
   static O fill(const Json& resolved, const PluginArguments& arguments, const std::string& prefix = "") {
     O out{};
     for (const auto& d : instance().decls_) {
       const auto it = resolved.find(d.name);
       d.fill(out, it != resolved.end() ? *it : d.schema.at("default"), arguments, prefix);
     }
+    check_rules(out, arguments, prefix);
     return out;
   }
 
@@ -261,7 +316,29 @@ class OptionDeclarations {
     for (const auto& decl : d.decls_) properties[decl.name] = decl.schema;
     Json schema{{"type", "object"}, {"additionalProperties", false}, {"properties", properties}};
     if (!d.description_.empty()) schema["description"] = d.description_;
+    if (!d.rules_.empty()) {
+      Json rules = Json::array();
+      for (const auto& r : d.rules_) {
+        detail::check_rule_fields(schema, r.fields, r.text);
+        rules.push_back(Json{{"fields", r.fields}, {"rule", r.text}});
+      }
+      schema["x-rules"] = std::move(rules);
+    }
     return schema;
+  }
+  static void check_rules(const O& options, const PluginArguments& arguments, const std::string& prefix) {
+    const auto& rules = instance().rules_;
+    if (rules.empty()) return;
+    for (const auto& r : rules) {
+      const std::string what = r.check(options);
+      if (what.empty()) continue;
+      const std::string& first = r.fields.front();
+      throw_broken_rule(arguments, join(prefix, first), detail::value_at(to_json(options), first), what);
+    }
+  }
+  [[noreturn]] static void throw_broken_rule(const PluginArguments& arguments, const std::string& path,
+                                             const Json& value, const std::string& what) {
+    detail::throw_broken_rule(arguments, path, value, what);
   }
   static std::string join(const std::string& prefix, const std::string& name) {
     return prefix.empty() ? name : prefix + "." + name;
@@ -296,6 +373,7 @@ class OptionDeclarations {
   std::string description_;
   std::deque<detail::OptionDecl<O>> decls_;  // deque: Option keeps a pointer into each schema
   std::deque<Option> options_;
+  std::vector<detail::RuleDecl<O>> rules_;
 };
 
 /// A plugin without options: `using Options = hapsyn::NoOptions;` (the default when a plugin

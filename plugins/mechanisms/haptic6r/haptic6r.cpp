@@ -28,24 +28,19 @@ Haptic6RSelection selection_rule(const std::string& name) {
                                  : Haptic6RSelection::kClosestToHome;
 }
 
-// The relations between options that the declarations cannot express.
-void check_relations(const Haptic6RSetup& s) {
+}  // namespace
+
+std::string haptic6r_joint_range_rule(const Haptic6ROptions& o) {
+  const Vector6d lower = radians(o.joint_lower), upper = radians(o.joint_upper);
   for (int i = 0; i < 6; ++i) {
     // Compared in radians, as the model compares the angles; reported in degrees.
-    if (!(s.joint_upper(i) >= s.joint_lower(i)) || s.joint_upper(i) - s.joint_lower(i) > 2.0 * kPi + 1e-12) {
-      throw Error(kName, "options.joint_upper[" + std::to_string(i) + "] = " + std::to_string(s.joint_upper(i) / kDeg) +
-                             ": must be >= joint_lower[" + std::to_string(i) + "] (" + std::to_string(s.joint_lower(i) / kDeg) +
-                             ") and span at most 360 deg");
+    if (!(upper(i) >= lower(i)) || upper(i) - lower(i) > 2.0 * kPi + 1e-12) {
+      return "[" + std::to_string(i) + "] = " + std::to_string(upper(i) / kDeg) + ": must be >= joint_lower[" +
+             std::to_string(i) + "] (" + std::to_string(lower(i) / kDeg) + ") and span at most 360 deg";
     }
   }
-  const Haptic6ROptions& o = s.options;
-  if (2.0 * o.tube_wall > o.tube_outer_diameter) {
-    throw Error(kName, "options.tube_wall = " + std::to_string(o.tube_wall) + ": must be <= tube_outer_diameter / 2 (" +
-                           std::to_string(o.tube_outer_diameter / 2) + ")");
-  }
+  return "";
 }
-
-}  // namespace
 
 Haptic6RSetup Haptic6RSetup::from_options(const Haptic6ROptions& options) {
   Haptic6RSetup s;
@@ -56,7 +51,6 @@ Haptic6RSetup Haptic6RSetup::from_options(const Haptic6ROptions& options) {
   s.home = radians(options.home);
   s.joint_lower = radians(options.joint_lower);
   s.joint_upper = radians(options.joint_upper);
-  check_relations(s);
   return s;
 }
 

@@ -88,6 +88,11 @@ Haptic6RDh read_haptic6r_dh(const std::string& path);
 /// share directory (source tree, then install tree). \throws Error naming the option.
 std::string resolve_haptic6r_file(const std::string& option_name, const std::string& value);
 
+struct Haptic6ROptions;
+/// The rule relating joint_lower and joint_upper: "" when every joint_upper[i] >= joint_lower[i]
+/// and the span is at most 360 deg (compared in radians, as the model compares), else what is wrong.
+std::string haptic6r_joint_range_rule(const Haptic6ROptions& o);
+
 /// Options of the mechanism, declared once (the plugin's schema is derived from them), as the
 /// problem file gives them: data files by name, angles in degrees. Haptic6RSetup holds what the
 /// model computes with.
@@ -162,6 +167,14 @@ struct Haptic6ROptions {
     d.add(&Haptic6ROptions::gravity, "gravity", 9.81, "Gravitational acceleration, along -z of B.")
         .minimum(0)
         .unit("m/s^2");
+    d.rule({"joint_upper", "joint_lower"}, "joint_lower[i] <= joint_upper[i] <= joint_lower[i] + 360",
+           &haptic6r_joint_range_rule);
+    d.rule({"tube_wall", "tube_outer_diameter"}, "tube_wall <= tube_outer_diameter / 2",
+           [](const Haptic6ROptions& o) {
+             return 2.0 * o.tube_wall > o.tube_outer_diameter
+                        ? "must be <= tube_outer_diameter / 2 (" + std::to_string(o.tube_outer_diameter / 2) + ")"
+                        : std::string();
+           });
   }
 };
 

@@ -34,20 +34,8 @@ Eigen::Isometry3d pose_from(const std::vector<double>& xyz, const std::vector<do
 }
 
 ChainTemplate read_chain(const SerialChainOptions& o) {
-  if (o.urdf.empty() == o.dh_file.empty()) {
-    throw Error(kName, o.urdf.empty() ? "options: give the chain as options.urdf or options.dh_file"
-                                      : "options.dh_file = \"" + o.dh_file + "\": give either urdf or dh_file, not both");
-  }
-  if (!o.dh_file.empty()) {
-    if (!o.base_link.empty() || !o.tip_link.empty()) {
-      throw Error(kName, "options.base_link / tip_link: only for a URDF (a DH table's chain is its rows)");
-    }
-    return ChainTemplate::from_dh_file(find_data_file(kName, "dh_file", o.dh_file));
-  }
-  if (o.base_link.empty() || o.tip_link.empty()) {
-    throw Error(kName, std::string("options.") + (o.base_link.empty() ? "base_link" : "tip_link") +
-                           " = \"\": a URDF chain needs base_link and tip_link (the links it runs between)");
-  }
+  // Exactly one of urdf and dh_file, the links with a URDF only: declared rules (serial_chain_options.hpp).
+  if (!o.dh_file.empty()) return ChainTemplate::from_dh_file(find_data_file(kName, "dh_file", o.dh_file));
   return ChainTemplate::from_urdf(find_data_file(kName, "urdf", o.urdf), o.base_link, o.tip_link);
 }
 
@@ -128,9 +116,7 @@ std::shared_ptr<SerialChainSetup> make_setup(const SerialChainOptions& o) {
       // The table names its JSON paths; the message names the option that gave the file.
       throw Error(kName, "options.actuator_file: " + std::string(e.what()).substr(e.component().size() + 2));
     }
-  } else if (!o.actuator_size.empty() || !o.actuator_gear.empty()) {
-    throw Error(kName, "options.actuator_size / actuator_gear: only with an actuator_file");
-  }
+  }  // actuator_size and actuator_gear without an actuator_file: declared rules
   check_codes(o.actuator_size, n, 3, "actuator_size");
   check_codes(o.actuator_gear, n, 6, "actuator_gear");
   s->task = task_of(o);

@@ -4,6 +4,7 @@
 #include <hapsyn/options.hpp>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace hapsyn::plugins {
@@ -129,6 +130,37 @@ struct SerialChainOptions {
           "Linear design constraints over design variables, e.g. \"l1 + l2 <= 0.9\" or the monotone sequence "
           "\"size[0] >= size[1] >= size[2]\".");
     d.add(&SerialChainOptions::ik, "ik", "Inverse kinematics.");
+    declare_rules(d);
+  }
+
+ private:
+  // Which options go together: the chain from exactly one file, the links only with a URDF, the
+  // actuator codes only with a table.
+  static void declare_rules(OptionDeclarations<SerialChainOptions>& d) {
+    using O = SerialChainOptions;
+    const auto when = [](bool broken, const char* what) { return broken ? std::string(what) : std::string(); };
+    d.rule({"urdf", "dh_file"}, "urdf or dh_file given", [when](const O& o) {
+      return when(o.urdf.empty() && o.dh_file.empty(), "give the chain as options.urdf or options.dh_file");
+    });
+    d.rule({"dh_file", "urdf"}, "not both urdf and dh_file", [when](const O& o) {
+      return when(!o.urdf.empty() && !o.dh_file.empty(), "give either urdf or dh_file, not both");
+    });
+    for (const char* link : {"base_link", "tip_link"}) {
+      const std::string name = link;
+      const auto member = name == "base_link" ? &O::base_link : &O::tip_link;
+      d.rule({name, "dh_file"}, name + " only with urdf", [when, member](const O& o) {
+        return when(!o.dh_file.empty() && !(o.*member).empty(), "only for a URDF (a DH table's chain is its rows)");
+      });
+      d.rule({name, "urdf"}, "a URDF chain needs " + name, [when, member](const O& o) {
+        return when(!o.urdf.empty() && (o.*member).empty(),
+                    "a URDF chain needs base_link and tip_link (the links it runs between)");
+      });
+    }
+    for (const auto& [name, member] : {std::pair{"actuator_size", &O::actuator_size}, std::pair{"actuator_gear", &O::actuator_gear}}) {
+      d.rule({name, "actuator_file"}, std::string(name) + " only with actuator_file", [when, member = member](const O& o) {
+        return when(o.actuator_file.empty() && !(o.*member).empty(), "only with an actuator_file");
+      });
+    }
   }
 };
 

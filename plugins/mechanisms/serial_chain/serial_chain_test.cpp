@@ -107,7 +107,7 @@ TEST(SerialChain, OptionErrorsNameTheOptionTheValueAndTheRule) {
   Json both = haptic6r_dh_options();
   both["urdf"] = "serial_chain/haptic6r.urdf";
   EXPECT_NE(error(both).find("give either urdf or dh_file, not both"), std::string::npos);
-  EXPECT_NE(error(Json::object()).find("serial_chain: options: give the chain as options.urdf or options.dh_file"), std::string::npos);
+  EXPECT_NE(error(Json::object()).find("problem: options.urdf = \"\": give the chain as options.urdf or options.dh_file"), std::string::npos);
   Json no_tip = haptic6r_urdf_options();
   no_tip.erase("tip_link");
   EXPECT_NE(error(no_tip).find("options.tip_link = \"\": a URDF chain needs base_link and tip_link"), std::string::npos);

@@ -47,6 +47,14 @@ struct CoverageOptions {
     d.add(&CoverageOptions::f_max, "f_max", 50.0, "Worst-case force magnitude of the force/torque term (eq. 17).")
         .greater_than(0)
         .unit("N");
+    d.rule({"terms"}, "no term listed twice", [](const CoverageOptions& o) -> std::string {
+      for (std::size_t i = 0; i < o.terms.size(); ++i) {
+        for (std::size_t k = 0; k < i; ++k) {
+          if (o.terms[k] == o.terms[i]) return "[" + std::to_string(i) + "] = " + Json(o.terms[i]).dump() + ": listed twice";
+        }
+      }
+      return "";
+    });
   }
 };
 
@@ -60,8 +68,6 @@ class Coverage final : public Metric, public MetricAcceleration {
 
   using Options = CoverageOptions;
   /// \param options validated options (CoverageOptions::declare).
-  /// \throws Error("coverage: options.terms[i] = <term>: listed twice") for a repeated term
-  ///         (the one rule the declarations cannot express).
   explicit Coverage(const CoverageOptions& options);
 
   void local(const SampleQuantities& q, double* out) const override;

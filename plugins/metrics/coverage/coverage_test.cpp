@@ -253,12 +253,12 @@ TEST(Coverage, ReducedCountsMatchTheirDefinitions) {
 
 TEST(Coverage, ErrorMessagesNameTheOptionValueAndRule) {
   using test::expect_error;
-  // The declared rules (the framework's messages) and the one the constructor keeps (a repeat).
+  // The declared rules (the framework's messages), a repeat among them.
   expect_error([] { coverage(Json{{"terms", {"speed"}}}); }, {"problem", "options.terms[0] = \"speed\"", "\"velocity\""});
   // (A list's size through the registry: the schema as the plugin file exports it.)
   expect_error([] { test::registry().create_metric("coverage", Json{{"terms", Json::array()}}, "metrics[0]"); },
                {"options.terms", "must have at least 1 item"});
-  expect_error([] { coverage(Json{{"terms", {"pose", "pose"}}}); }, {"coverage", "options.terms[1] = \"pose\"", "twice"});
+  expect_error([] { coverage(Json{{"terms", {"pose", "pose"}}}); }, {"problem: options.terms[1] = \"pose\": listed twice"});
   expect_error([] { coverage(Json{{"m_max", 0}}); }, {"options.m_max = 0", "> 0"});
   expect_error([] { coverage(Json{{"bogus", 0}}); }, {"options.bogus", "unknown key"});
   // A velocity term without a sample (called outside the evaluator), and with a scene lacking M_v.

@@ -15,33 +15,32 @@ std::string show(const Json& value) { return value.dump(); }
 
 }  // namespace
 
+std::string one_per_dimension(const std::vector<double>& values, int dimension) {
+  if (values.size() == static_cast<std::size_t>(dimension)) return "";
+  return "must have " + std::to_string(dimension) + " numbers (one per dimension)";
+}
+
+std::string box_step_rule(const BoxOptions& o) {
+  for (std::size_t a = 0; a < o.size.size(); ++a) {
+    const double side = o.size[a];
+    const std::string side_name = "size[" + std::to_string(a) + "] (" + show(Json(side)) + ")";
+    if (o.step > side) return "must be <= " + side_name;
+    const double ratio = side / o.step;
+    if (!(std::abs(ratio - std::round(ratio)) <= 1e-9 * ratio)) return "must divide " + side_name + " into whole steps";
+  }
+  return "";
+}
+
 Box::Box(const BoxOptions& options) : options_(options) {
+  // center and size have one number per dimension and step divides every side: declared rules.
   const int dim = options_.dimension;
   const std::size_t n = static_cast<std::size_t>(dim);
-  if (options_.center.size() != n) {
-    throw Error(kName, "options.center = " + show(Json(options_.center)) + ": must have " + std::to_string(dim) +
-                           " numbers (one per dimension)");
-  }
-  if (options_.size.size() != n) {
-    throw Error(kName, "options.size = " + show(Json(options_.size)) + ": must have " + std::to_string(dim) +
-                           " numbers (one per dimension)");
-  }
   orientation_ = orientation_option(options_.orientation, dim, kName);
   const double step = options_.step;
   // Counted in double: a product of per-axis counts cannot overflow before it is compared.
   double samples = 1.0;
   per_axis_ = {1, 1, 1};
-  for (std::size_t a = 0; a < n; ++a) {
-    const double side = options_.size[a];
-    const std::string side_name = "size[" + std::to_string(a) + "] (" + show(Json(side)) + ")";
-    if (step > side) throw Error(kName, "options.step = " + show(Json(step)) + ": must be <= " + side_name);
-    const double ratio = side / step;
-    const double steps = std::round(ratio);
-    if (!(std::abs(ratio - steps) <= 1e-9 * ratio)) {
-      throw Error(kName, "options.step = " + show(Json(step)) + ": must divide " + side_name + " into whole steps");
-    }
-    samples *= steps + 1.0;
-  }
+  for (std::size_t a = 0; a < n; ++a) samples *= std::round(options_.size[a] / step) + 1.0;
   if (samples > static_cast<double>(kBoxMaxSamples)) {
     std::string grid;
     for (std::size_t a = 0; a < n; ++a) {

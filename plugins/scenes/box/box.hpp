@@ -6,12 +6,20 @@
 #include <hapsyn/scene.hpp>
 
 #include <array>
+#include <string>
 #include <vector>
 
 namespace hapsyn::plugins {
 
 /// Largest number of samples the scene builds (memory guard: at most 56 bytes per sample, 7-D).
 constexpr long long kBoxMaxSamples = 2000000;
+
+struct BoxOptions;
+/// The rule relating step and size: "" when step is <= every side and divides it into whole steps
+/// (relative tolerance 1e-9), else what is wrong.
+std::string box_step_rule(const BoxOptions& o);
+/// "" when `values` has one number per dimension, else what is wrong.
+std::string one_per_dimension(const std::vector<double>& values, int dimension);
 
 /// The options of box (`hapsyn describe box`).
 struct BoxOptions {
@@ -47,6 +55,11 @@ struct BoxOptions {
           "Empty: positions only. Otherwise a unit quaternion [qw, qx, qy, qz] (norm 1 within 1e-6, normalized) "
           "given to every sample, which becomes the pose x, y, z, qw, qx, qy, qz; dimension 3 only.")
         .max_size(4);
+    d.rule({"center", "dimension"}, "one number per dimension",
+           [](const BoxOptions& o) { return one_per_dimension(o.center, o.dimension); });
+    d.rule({"size", "dimension"}, "one number per dimension",
+           [](const BoxOptions& o) { return one_per_dimension(o.size, o.dimension); });
+    d.rule({"step", "size"}, "step <= every size[i] and divides it into whole steps", &box_step_rule);
   }
 };
 

@@ -140,9 +140,9 @@ TEST(Box, OrientationGivesFullPosesWithThatNormalizedOrientation) {
 
 TEST(Box, RefusesCenterAndSizeThatDoNotMatchTheDimension) {
   EXPECT_EQ(error_of(Json{{"dimension", 3}, {"size", {0.1, 0.1, 0.1}}}),
-            "box: options.center = [0.0,0.0]: must have 3 numbers (one per dimension)");
+            "problem: options.center = [0.0,0.0]: must have 3 numbers (one per dimension)");
   EXPECT_EQ(error_of(Json{{"center", {0, 0}}, {"size", {0.1, 0.1, 0.1}}}),
-            "box: options.size = [0.1,0.1,0.1]: must have 2 numbers (one per dimension)");
+            "problem: options.size = [0.1,0.1,0.1]: must have 2 numbers (one per dimension)");
 }
 
 TEST(Box, RefusesABadOrientation) {
@@ -164,10 +164,10 @@ TEST(Box, RefusesABadOrientation) {
 
 TEST(Box, RefusesAStepThatDoesNotDivideASideOrExceedsIt) {
   EXPECT_EQ(error_of(Json{{"size", {0.1, 0.12}}, {"step", 0.03}}),
-            "box: options.step = 0.03: must divide size[0] (0.1) into whole steps");
+            "problem: options.step = 0.03: must divide size[0] (0.1) into whole steps");
   EXPECT_EQ(error_of(Json{{"size", {0.1, 0.12}}, {"step", 0.05}}),
-            "box: options.step = 0.05: must divide size[1] (0.12) into whole steps");
-  EXPECT_EQ(error_of(Json{{"size", {0.4, 0.1}}, {"step", 0.2}}), "box: options.step = 0.2: must be <= size[1] (0.1)");
+            "problem: options.step = 0.05: must divide size[1] (0.12) into whole steps");
+  EXPECT_EQ(error_of(Json{{"size", {0.4, 0.1}}, {"step", 0.2}}), "problem: options.step = 0.2: must be <= size[1] (0.1)");
   // Within 1e-9 relative is accepted, like planar_square.
   EXPECT_EQ(error_of(Json{{"size", {0.1, 0.1}}, {"step", 0.005 * (1 + 1e-12)}}), "no error");
 }

@@ -25,11 +25,8 @@ int Disc::row_half_width(double m) {
 }
 
 Disc::Disc(const DiscOptions& options) : options_(options) {
+  // center has one number per dimension: a declared rule.
   const int dim = options_.dimension;
-  if (options_.center.size() != static_cast<std::size_t>(dim)) {
-    throw Error(kName, "options.center = " + show(Json(options_.center)) + ": must have " + std::to_string(dim) +
-                           " numbers (one per dimension)");
-  }
   orientation_ = orientation_option(options_.orientation, dim, kName);
   const double step = options_.step;
   const double reach = options_.radius / step * (1.0 + 1e-9);  // in steps, with the boundary tolerance

@@ -5,6 +5,7 @@
 #include <hapsyn/options.hpp>
 #include <hapsyn/scene.hpp>
 
+#include <string>
 #include <vector>
 
 namespace hapsyn::plugins {
@@ -44,6 +45,11 @@ struct DiscOptions {
           "Empty: positions only. Otherwise a unit quaternion [qw, qx, qy, qz] (norm 1 within 1e-6, normalized) "
           "given to every sample, which becomes the pose x, y, z, qw, qx, qy, qz; dimension 3 only.")
         .max_size(4);
+    d.rule({"center", "dimension"}, "one number per dimension", [](const DiscOptions& o) {
+      return o.center.size() == static_cast<std::size_t>(o.dimension)
+                 ? std::string()
+                 : "must have " + std::to_string(o.dimension) + " numbers (one per dimension)";
+    });
   }
 };
 

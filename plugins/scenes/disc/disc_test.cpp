@@ -125,7 +125,7 @@ TEST(Disc, OrientationGivesFullPosesWithThatNormalizedOrientation) {
 }
 
 TEST(Disc, RefusesACenterThatDoesNotMatchTheDimensionAndABadOrientation) {
-  EXPECT_EQ(error_of(Json{{"dimension", 3}}), "disc: options.center = [0.0,0.0]: must have 3 numbers (one per dimension)");
+  EXPECT_EQ(error_of(Json{{"dimension", 3}}), "problem: options.center = [0.0,0.0]: must have 3 numbers (one per dimension)");
   EXPECT_EQ(error_of(Json{{"center", {0, 0}}, {"orientation", {1.0, 0.0, 0.0, 0.0}}}),
             "disc: options.orientation = [1.0,0.0,0.0,0.0]: needs dimension 3 (a full pose is x, y, z, qw, qx, qy, qz)");
   const Json ball = {{"dimension", 3}, {"center", {0, 0, 0}}};

@@ -53,16 +53,6 @@ namespace {
 
 Eigen::Vector3d vector3(const std::vector<double>& v) { return Eigen::Vector3d(v[0], v[1], v[2]); }
 
-// The lattice size depends on two options together, which no single declaration can bound.
-void check_lattice_size(double lattice_step, double lattice_extent) {
-  const double per_axis = 2.0 * std::floor(lattice_extent / lattice_step + 1e-9) + 1.0;
-  if (per_axis > 401.0) {
-    throw Error(kName, "options.lattice_step = " + show(Json(lattice_step)) + ": gives " + show(Json(per_axis)) +
-                           " lattice points per axis; at most 401 are allowed (lattice_extent " +
-                           show(Json(lattice_extent)) + ")");
-  }
-}
-
 Json vector_json(const Eigen::Vector3d& v) { return Json::array({v(0), v(1), v(2)}); }
 Json matrix_json(const Eigen::Matrix3d& C) {
   Json rows = Json::array();
@@ -77,23 +67,22 @@ std::string resolve_arm_file(const std::string& option) {
   return find_data_file(kName, "arm_file", option.empty() ? default_options<HumanArmOptions>().arm_file : option);
 }
 
+std::string human_arm_lattice_rule(const HumanArmOptions& o) {
+  // The lattice size depends on two options together, which no single declaration can bound.
+  const double per_axis = 2.0 * std::floor(o.lattice_extent / o.lattice_step + 1e-9) + 1.0;
+  if (per_axis <= 401.0) return "";
+  return "gives " + show(Json(per_axis)) + " lattice points per axis; at most 401 are allowed (lattice_extent " +
+         show(Json(o.lattice_extent)) + ")";
+}
+
 HumanArmSceneOptions resolve_human_arm_scene_options(const HumanArmOptions& options) {
   HumanArmSceneOptions o;
+  static_cast<HumanArmOptions&>(o) = options;
   o.arm_file = resolve_arm_file(options.arm_file);
-  check_lattice_size(options.lattice_step, options.lattice_extent);
-  o.lattice_step = options.lattice_step;
-  o.lattice_extent = options.lattice_extent;
-  o.orientations = options.orientations;
-  o.joint3_steps = options.joint3_steps;
   o.x_S_B = vector3(options.x_S_B);
   o.C_S_B = rotation_option(options.C_S_B, "C_S_B", kName);
   o.C_E_P = rotation_option(options.C_E_P, "C_E_P", kName);
   o.x_E_P = vector3(options.x_E_P);
-  o.cache = options.cache;
-  o.cache_directory = options.cache_directory;
-  o.threads = options.threads;
-  o.max_samples = options.max_samples;
-  o.max_ik_solves = options.max_ik_solves;
   return o;
 }
 

@@ -145,9 +145,14 @@ constexpr long long kHumanArmMaxSamples = 50000000;
 /// needs about 11 million).
 constexpr long long kHumanArmMaxIkSolves = 1000000000;
 
+struct HumanArmOptions;
+/// The rule relating lattice_step and lattice_extent: "" when they give at most 401 lattice points
+/// per axis, else what is wrong.
+std::string human_arm_lattice_rule(const HumanArmOptions& o);
+
 /// The options of the human_arm scene as a problem file gives them, declared once
-/// (`hapsyn describe human_arm`). Shapes, ranges and types are checked by the framework from
-/// these declarations; HumanArmScene's constructor checks the rest (see
+/// (`hapsyn describe human_arm`). Shapes, ranges, types and the lattice size are checked by the
+/// framework from these declarations; HumanArmScene's constructor checks the rest (see
 /// resolve_human_arm_scene_options).
 struct HumanArmOptions {
   std::string arm_file;                     ///< as given; resolved by resolve_arm_file
@@ -233,26 +238,20 @@ struct HumanArmOptions {
           "Largest number of inverse-kinematics solves (candidate poses x joint3_steps) the build may do; larger "
           "scenes are refused before anything is built.")
         .minimum(1);
+    d.rule({"lattice_step", "lattice_extent"}, "at most 401 lattice points per axis (2 floor(extent / step) + 1)",
+           &human_arm_lattice_rule);
   }
 };
 
-/// The options resolved for building (what build() and the cache key read): the arm file found,
-/// the placement as Eigen types, the rotations checked.
-struct HumanArmSceneOptions {
-  std::string arm_file;          ///< resolved absolute path
-  double lattice_step{};         ///< [m]
-  double lattice_extent{};       ///< [m], cube of +-extent around the shoulder
-  int orientations{};
-  int joint3_steps{};
-  Eigen::Vector3d x_S_B;         ///< shoulder position in B [m]
-  Eigen::Matrix3d C_S_B;         ///< rotation S -> B
-  Eigen::Matrix3d C_E_P;         ///< rotation E -> P
-  Eigen::Vector3d x_E_P;         ///< end-effector position in P [m]
-  bool cache{};
-  std::string cache_directory;   ///< "" = $XDG_CACHE_HOME/hapsyn or ~/.cache/hapsyn
-  int threads{};                 ///< 0 = SceneRequest::threads, else all cores
-  long long max_samples{};       ///< cap on candidate poses
-  long long max_ik_solves{};     ///< cap on IK solves
+/// The options resolved for building (what build() and the cache key read): the declared options
+/// with arm_file the resolved absolute path, and the placement as Eigen types, the rotations
+/// checked. The placement members hide the declared ones of the same name (HumanArmOptions::x_S_B
+/// etc. keep the values as given).
+struct HumanArmSceneOptions : HumanArmOptions {
+  Eigen::Vector3d x_S_B;  ///< shoulder position in B [m]
+  Eigen::Matrix3d C_S_B;  ///< rotation S -> B
+  Eigen::Matrix3d C_E_P;  ///< rotation E -> P
+  Eigen::Vector3d x_E_P;  ///< end-effector position in P [m]
 };
 
 /// How big a human_arm scene is before it is built: what the size caps compare.
@@ -275,8 +274,7 @@ void check_human_arm_scene_size(const HumanArmSceneOptions& options, const Human
 
 /// Resolves declared options (already validated against HumanArmOptions::declare) for building.
 /// \\throws Error("human_arm", "options.<key> = <value>: <rule>") for what the declarations cannot
-///         express: an arm_file that is not found (resolve_arm_file); lattice_step and
-///         lattice_extent giving more than 401 lattice points per axis; C_S_B or C_E_P not a
+///         express: an arm_file that is not found (resolve_arm_file); C_S_B or C_E_P not a
 ///         rotation (max |C^T C - I| > 1e-6 or det <= 0).
 HumanArmSceneOptions resolve_human_arm_scene_options(const HumanArmOptions& options);
 

@@ -950,10 +950,11 @@ TEST(HumanArm, OptionErrorsNameTheOptionTheValueAndTheRule) {
   EXPECT_EQ(registry_error(Json{{"x_S_B", {0.0, 1.0}}}),
             "problem: scene.options.x_S_B = [0.0,1.0]: must have at least 3 items");
   EXPECT_EQ(registry_error(Json{{"cache", "yes"}}), "problem: scene.options.cache = \"yes\": must be a boolean");
-  // What the declarations cannot express, checked by the constructor.
+  // The declared rule relating lattice_step and lattice_extent, checked when the options are filled.
   EXPECT_EQ(error_of([] { HumanArmScene(options_of(Json{{"lattice_step", 0.001}})); }),
-            "human_arm: options.lattice_step = 0.001: gives 1401.0 lattice points per axis; at most 401 are allowed "
+            "problem: options.lattice_step = 0.001: gives 1401.0 lattice points per axis; at most 401 are allowed "
             "(lattice_extent 0.7)");
+  // What the declarations cannot express (a rotation), checked by the constructor.
   const std::string rotation = error_of([] {
     HumanArmScene(options_of(Json{{"C_S_B", {{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, -1.0}}}}));
   });

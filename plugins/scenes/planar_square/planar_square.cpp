@@ -14,18 +14,17 @@ std::string show(double value) { return Json(value).dump(); }
 
 }  // namespace
 
+std::string planar_square_step_rule(const PlanarSquareOptions& o) {
+  if (o.step > o.side) return "must be <= side (" + show(o.side) + ")";
+  const double ratio = o.side / o.step;
+  if (!(std::abs(ratio - std::round(ratio)) <= 1e-9 * ratio)) return "must divide side (" + show(o.side) + ") into whole steps";
+  return "";
+}
+
 PlanarSquare::PlanarSquare(const PlanarSquareOptions& options) : options_(options) {
-  const double side = options_.side, step = options_.step;
-  if (step > side) {
-    throw Error(kName, "options.step = " + show(step) + ": must be <= side (" + show(side) + ")");
-  }
-  const double ratio = side / step;
-  const double steps = std::round(ratio);
-  if (!(std::abs(ratio - steps) <= 1e-9 * ratio)) {
-    throw Error(kName, "options.step = " + show(step) + ": must divide side (" + show(side) +
-                           ") into whole steps");
-  }
-  const double per_axis = steps + 1.0;
+  // step <= side and divides it into whole steps: a declared rule (planar_square_step_rule).
+  const double step = options_.step;
+  const double per_axis = std::round(options_.side / step) + 1.0;
   if (per_axis * per_axis > static_cast<double>(kPlanarSquareMaxSamples)) {
     throw Error(kName, "options.step = " + show(step) + ": gives " + show(per_axis) + " x " +
                            show(per_axis) + " samples; at most " +

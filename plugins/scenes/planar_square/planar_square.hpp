@@ -5,10 +5,17 @@
 #include <hapsyn/options.hpp>
 #include <hapsyn/scene.hpp>
 
+#include <string>
+
 namespace hapsyn::plugins {
 
 /// Largest number of samples the scene builds (memory guard: 16 bytes per sample).
 constexpr long long kPlanarSquareMaxSamples = 2000000;  // 0.07 mm steps on a 100 mm square
+
+struct PlanarSquareOptions;
+/// The rule relating step and side: "" when step <= side and divides it into whole steps (relative
+/// tolerance 1e-9), else what is wrong.
+std::string planar_square_step_rule(const PlanarSquareOptions& o);
 
 /// The options of planar_square (`hapsyn describe planar_square`).
 struct PlanarSquareOptions {
@@ -28,6 +35,7 @@ struct PlanarSquareOptions {
           "uses 0.001 m.")
         .greater_than(0)
         .unit("m");
+    d.rule({"step", "side"}, "step <= side and divides it into whole steps", &planar_square_step_rule);
   }
 };
 

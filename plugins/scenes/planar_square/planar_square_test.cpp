@@ -97,14 +97,14 @@ TEST(PlanarSquare, GridIsMirrorSymmetricAndSpacedByStep) {
 
 TEST(PlanarSquare, RefusesAStepThatDoesNotDivideTheSide) {
   EXPECT_EQ(error_of(Json{{"side", 0.1}, {"step", 0.03}}),
-            "planar_square: options.step = 0.03: must divide side (0.1) into whole steps");
-  EXPECT_EQ(error_of(Json{{"side", 0.1}, {"step", 0.1 / 3 * 1.000001}}).rfind("planar_square: options.step = ", 0), 0u);
+            "problem: options.step = 0.03: must divide side (0.1) into whole steps");
+  EXPECT_EQ(error_of(Json{{"side", 0.1}, {"step", 0.1 / 3 * 1.000001}}).rfind("problem: options.step = ", 0), 0u);
   // Within 1e-9 relative is accepted.
   EXPECT_EQ(error_of(Json{{"side", 0.1}, {"step", 0.005 * (1 + 1e-12)}}), "no error");
 }
 
 TEST(PlanarSquare, RefusesAStepLargerThanTheSide) {
-  EXPECT_EQ(error_of(Json{{"side", 0.1}, {"step", 0.2}}), "planar_square: options.step = 0.2: must be <= side (0.1)");
+  EXPECT_EQ(error_of(Json{{"side", 0.1}, {"step", 0.2}}), "problem: options.step = 0.2: must be <= side (0.1)");
 }
 
 TEST(PlanarSquare, RefusesNonPositiveUnknownAndHugeOptions) {

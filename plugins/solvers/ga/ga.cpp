@@ -743,40 +743,8 @@ SolverResult GaSearch::summary() {
 }  // namespace
 
 GaSolver::GaSolver(const GaOptions& options) : options_(options) {
+  // The relations between the options are declared rules (ga_options.hpp), checked before this runs.
   const GaOptions& o = options_;
-  if (o.algorithm == "gaco" && o.gaco.ker > o.population) {
-    throw Error("ga", "options.gaco.ker = " + std::to_string(o.gaco.ker) + ": must not exceed options.population (" +
-                          std::to_string(o.population) + "): gaco fills its solution archive from the population");
-  }
-  if (o.algorithm == "sga" && o.sga.selection == "tournament" && o.sga.param_s > o.population) {
-    throw Error("ga", "options.sga.param_s = " + std::to_string(o.sga.param_s) +
-                          ": the tournament size must not exceed options.population (" + std::to_string(o.population) +
-                          ")");
-  }
-  const std::string& mutation = o.sga.mutation;
-  const double param_m = o.sga.param_m;
-  if (mutation == "polynomial" ? (param_m < 1.0 || param_m > 100.0) : (param_m < 0.0 || param_m > 1.0)) {
-    throw Error("ga", "options.sga.param_m = " + with_digits(param_m) + ": must lie in " +
-                          (mutation == "polynomial" ? "[1, 100] (distribution index of polynomial mutation)"
-                                                    : "[0, 1] (width of " + mutation + " mutation)"));
-  }
-  if (o.fidelity.subset_fraction < 1.0 && o.fidelity.generations == 0) {
-    throw Error("ga", "options.fidelity.subset_fraction = " + with_digits(o.fidelity.subset_fraction) +
-                          ": needs options.fidelity.generations >= 1 (the generations evaluated on the subset)");
-  }
-  if (o.fidelity.generations > 0 && o.fidelity.subset_fraction >= 1.0) {
-    throw Error("ga", "options.fidelity.generations = " + std::to_string(o.fidelity.generations) +
-                          ": needs options.fidelity.subset_fraction < 1 (the share of the samples evaluated early)");
-  }
-  if (o.fidelity.refine_fraction < 1.0 && o.fidelity.generations == 0) {
-    throw Error("ga", "options.fidelity.refine_fraction = " + with_digits(o.fidelity.refine_fraction) +
-                          ": needs options.fidelity.generations >= 1 (the refine subset follows the subset generations)");
-  }
-  if (o.fidelity.refine_fraction < 1.0 && !(o.fidelity.refine_fraction > o.fidelity.subset_fraction)) {
-    throw Error("ga", "options.fidelity.refine_fraction = " + with_digits(o.fidelity.refine_fraction) +
-                          ": must be greater than options.fidelity.subset_fraction (" +
-                          with_digits(o.fidelity.subset_fraction) + ") or 1 (the full scene)");
-  }
   try {
     (void)make_algorithm(o, 1);
   } catch (const std::invalid_argument& e) {

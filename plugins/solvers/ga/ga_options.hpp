@@ -4,6 +4,8 @@
 /// choices and descriptions live only here. `hapsyn describe ga` prints them.
 /// The checkpoint's study fingerprint takes the values through hapsyn::options_to_json, from the
 /// same declarations, so no option is listed a second time.
+#include "shared/batch_options.hpp"
+
 #include <hapsyn/options.hpp>
 
 #include <string>
@@ -35,6 +37,29 @@ struct GaFidelityOptions {
           "With refine_fraction < 1: how many of a run's last population (best first, at the refine fidelity) are "
           "evaluated on the full scene when the run ends")
         .range(1, 1000000);
+    using F = GaFidelityOptions;
+    d.rule({"subset_fraction", "generations"}, "subset_fraction < 1 needs generations >= 1", [](const F& f) {
+      return f.subset_fraction < 1.0 && f.generations == 0
+                 ? "needs options.fidelity.generations >= 1 (the generations evaluated on the subset)"
+                 : std::string();
+    });
+    d.rule({"generations", "subset_fraction"}, "generations >= 1 needs subset_fraction < 1", [](const F& f) {
+      return f.generations > 0 && f.subset_fraction >= 1.0
+                 ? "needs options.fidelity.subset_fraction < 1 (the share of the samples evaluated early)"
+                 : std::string();
+    });
+    d.rule({"refine_fraction", "generations"}, "refine_fraction < 1 needs generations >= 1", [](const F& f) {
+      return f.refine_fraction < 1.0 && f.generations == 0
+                 ? "needs options.fidelity.generations >= 1 (the refine subset follows the subset generations)"
+                 : std::string();
+    });
+    d.rule({"refine_fraction", "subset_fraction"}, "refine_fraction > subset_fraction or refine_fraction = 1",
+           [](const F& f) {
+             return f.refine_fraction < 1.0 && !(f.refine_fraction > f.subset_fraction)
+                        ? "must be greater than options.fidelity.subset_fraction (" + render_value(Json(f.subset_fraction)) +
+                              ") or 1 (the full scene)"
+                        : std::string();
+           });
   }
 };
 
@@ -45,8 +70,8 @@ struct GaSgaOptions {
   double eta_c{};
   double mutation_probability{};
   std::string mutation;  ///< "gaussian", "polynomial" or "uniform"
-  /// Polynomial: distribution index in [1, 100]; gaussian/uniform: width in [0, 1] (the
-  /// constructor checks the range that goes with `mutation`).
+  /// Polynomial: distribution index in [1, 100]; gaussian/uniform: width in [0, 1] (a declared
+  /// rule checks the range that goes with `mutation`).
   double param_m{};
   std::string selection;  ///< "tournament" or "truncated"
   int param_s{};
@@ -66,12 +91,21 @@ struct GaSgaOptions {
     d.add(&GaSgaOptions::selection, "selection", "tournament", "Selection").one_of({"tournament", "truncated"});
     d.add(&GaSgaOptions::param_s, "param_s", 2, "Tournament size, or the number of best individuals kept (truncated)")
         .minimum(1);
+    d.rule({"param_m", "mutation"}, "param_m in [1, 100] (polynomial) or [0, 1] (gaussian, uniform)",
+           [](const GaSgaOptions& o) -> std::string {
+             if (o.mutation == "polynomial") {
+               return o.param_m < 1.0 || o.param_m > 100.0
+                          ? "must lie in [1, 100] (distribution index of polynomial mutation)"
+                          : "";
+             }
+             return o.param_m < 0.0 || o.param_m > 1.0 ? "must lie in [0, 1] (width of " + o.mutation + " mutation)" : "";
+           });
   }
 };
 
 /// options.gaco: the parameters of pagmo::gaco (run with memory on).
 struct GaGacoOptions {
-  int ker{};  ///< solution archive size; at most the population (checked by the constructor)
+  int ker{};  ///< solution archive size; at most the population (a rule of GaOptions)
   double q{};
   double oracle{};
   double acc{};
@@ -136,19 +170,7 @@ struct GaOptions {
     d.add(&GaOptions::checkpoint_every, "checkpoint_every", 0,
           "Generations between checkpoints (output directory's checkpoint.json, for hapsyn run --resume); 0 = none")
         .minimum(0);
-    d.add(&GaOptions::parallel_over, "parallel_over", "individuals",
-          "How a batch of designs (initial population, generations, re-rankings) uses the threads: one design "
-          "per thread, or each design split over the samples")
-        .one_of({"individuals", "samples"});
-    d.add(&GaOptions::sample_chunks, "sample_chunks", 16,
-          "Fixed number of sample chunks when one design is split over the samples (results independent of the "
-          "thread count)")
-        .range(1, 4096);
-    d.add(&GaOptions::sort_descending, "sort_descending", {},
-          "Repair: design variables whose free components are sorted in descending order before evaluation "
-          "(haptic6r: [\"s\"] for s_i >= s_{i+1})");
-    d.add(&GaOptions::sort_ascending, "sort_ascending", {},
-          "Repair: design variables whose free components are sorted in ascending order before evaluation");
+    declare_batch_options(d);
     d.add(&GaOptions::fidelity, "fidelity",
           "Multi-fidelity: the first generations on a deterministic stratified subset of the scene, then the "
           "population re-evaluated and the run continued on the full scene");
@@ -164,6 +186,20 @@ struct GaOptions {
         .unit("s");
     d.add(&GaOptions::sga, "sga", "pagmo::sga parameters");
     d.add(&GaOptions::gaco, "gaco", "pagmo::gaco parameters (memory on: one generation per call)");
+    d.rule({"gaco.ker", "population", "algorithm"}, "gaco.ker <= population (algorithm gaco)",
+           [](const GaOptions& o) {
+             return o.algorithm == "gaco" && o.gaco.ker > o.population
+                        ? "must not exceed options.population (" + std::to_string(o.population) +
+                              "): gaco fills its solution archive from the population"
+                        : std::string();
+           });
+    d.rule({"sga.param_s", "population", "algorithm", "sga.selection"},
+           "sga.param_s <= population (algorithm sga, tournament selection)", [](const GaOptions& o) {
+             return o.algorithm == "sga" && o.sga.selection == "tournament" && o.sga.param_s > o.population
+                        ? "the tournament size must not exceed options.population (" + std::to_string(o.population) +
+                              ")"
+                        : std::string();
+           });
   }
 };
 

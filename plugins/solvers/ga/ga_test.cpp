@@ -25,6 +25,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <thread>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -318,23 +319,23 @@ TEST(Ga, OutcomesAreStatusesNotExceptions) {
 TEST(Ga, BadOptionsNameThePathTheValueAndTheRule) {
   using hapsyn::test::expect_error;
   expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"algorithm", "gaco"}, {"population", 10}, {"gaco", {{"ker", 30}}}})); },
-               {"ga: options.gaco.ker = 30", "must not exceed options.population (10)"});
+               {"problem: solver.options.gaco.ker = 30", "must not exceed options.population (10)"});
   expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"population", 4}, {"sga", {{"param_s", 5}}}})); },
-               {"ga: options.sga.param_s = 5", "must not exceed options.population (4)"});
+               {"problem: solver.options.sga.param_s = 5", "must not exceed options.population (4)"});
   expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"sga", {{"mutation", "gaussian"}, {"param_m", 5.0}}}})); },
-               {"ga: options.sga.param_m = 5", "[0, 1]"});
+               {"problem: solver.options.sga.param_m = 5", "[0, 1]"});
   expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"fidelity", {{"subset_fraction", 0.1}}}})); },
-               {"ga: options.fidelity.subset_fraction = 0.1", "needs options.fidelity.generations >= 1"});
+               {"problem: solver.options.fidelity.subset_fraction = 0.1", "needs options.fidelity.generations >= 1"});
   expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"fidelity", {{"generations", 4}}}})); },
-               {"ga: options.fidelity.generations = 4", "subset_fraction < 1"});
+               {"problem: solver.options.fidelity.generations = 4", "subset_fraction < 1"});
   expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"fidelity", {{"refine_fraction", 0.5}}}})); },
-               {"ga: options.fidelity.refine_fraction = 0.5", "needs options.fidelity.generations >= 1"});
+               {"problem: solver.options.fidelity.refine_fraction = 0.5", "needs options.fidelity.generations >= 1"});
   expect_error(
       [] {
         hapsyn::plugins::GaSolver s(
             ga_options({{"fidelity", {{"subset_fraction", 0.2}, {"generations", 3}, {"refine_fraction", 0.2}}}}));
       },
-      {"ga: options.fidelity.refine_fraction = 0.2", "must be greater than options.fidelity.subset_fraction (0.2)"});
+      {"problem: solver.options.fidelity.refine_fraction = 0.2", "must be greater than options.fidelity.subset_fraction (0.2)"});
   expect_error([] { hapsyn::plugins::GaSolver s(ga_options({{"fidelity", {{"final_candidates", 0}}}})); },
                {"solver.options.fidelity.final_candidates", "0"});
   const auto problem = toy_problem();
@@ -419,6 +420,20 @@ Json other_value(const Json& property) {
 TEST(Ga, CheckpointFingerprintChangesWithEveryOption) {
   const auto problem = toy_problem();
   const std::string reference = hapsyn::study_fingerprint(*problem, hapsyn::options_to_json(ga_options({})));
+  const auto fingerprint = [&](const Json& o) { return hapsyn::study_fingerprint(*problem, hapsyn::options_to_json(ga_options(o))); };
+  // A declared rule ties these options to others: each is changed between two option sets that
+  // keep the rules and differ in it alone.
+  const Json fidelity = {{"subset_fraction", 0.5}, {"generations", 1}, {"refine_fraction", 0.75}};
+  const auto with = [](Json base, const std::string& key, const Json& value) {
+    base[key] = value;
+    return base;
+  };
+  const std::map<std::string, std::pair<Json, Json>> tied = {
+      {"fidelity.subset_fraction", {{{"fidelity", fidelity}}, {{"fidelity", with(fidelity, "subset_fraction", 0.25)}}}},
+      {"fidelity.generations", {{{"fidelity", fidelity}}, {{"fidelity", with(fidelity, "generations", 2)}}}},
+      {"fidelity.refine_fraction", {{{"fidelity", fidelity}}, {{"fidelity", with(fidelity, "refine_fraction", 1.0)}}}},
+      {"sga.mutation",
+       {{{"sga", {{"mutation", "gaussian"}, {"param_m", 0.5}}}}, {{"sga", {{"mutation", "uniform"}, {"param_m", 0.5}}}}}}};
   int options_changed = 0;
   std::function<void(const Json&, const std::vector<std::string>&)> visit = [&](const Json& schema,
                                                                                  const std::vector<std::string>& path) {
@@ -427,6 +442,13 @@ TEST(Ga, CheckpointFingerprintChangesWithEveryOption) {
       at.push_back(name);
       if (property["type"] == "object") {
         visit(property, at);
+        continue;
+      }
+      std::string key;
+      for (const std::string& part : at) key += (key.empty() ? "" : ".") + part;
+      if (const auto it = tied.find(key); it != tied.end()) {
+        EXPECT_NE(fingerprint(it->second.first), fingerprint(it->second.second)) << key;
+        ++options_changed;
         continue;
       }
       Json overrides = Json::object();

@@ -225,10 +225,6 @@ RunState restore_state(const SolverContext& context, const Nsga2Options& o, cons
 
 Nsga2Solver::Nsga2Solver(const Nsga2Options& options) : options_(options) {
   const Nsga2Options& o = options_;
-  if (o.population % 4 != 0) {
-    throw Error("nsga2", "options.population = " + std::to_string(o.population) +
-                             ": must be a multiple of 4 (pagmo's NSGA-II pairs parents in fours)");
-  }
   try {
     (void)make_algorithm(o, 1);
   } catch (const std::invalid_argument& e) {

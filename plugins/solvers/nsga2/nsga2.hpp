@@ -22,6 +22,8 @@
 /// farm over the ranks whose fitness values rank 0 broadcasts (shared/pagmo_adapter.hpp), and
 /// the stop check between generations sees the agreed flag, so the front does not depend on the
 /// rank count. Not shardable: the generations follow one another.
+#include "shared/batch_options.hpp"
+
 #include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
 
@@ -32,7 +34,7 @@ namespace hapsyn::plugins {
 
 /// Options of `nsga2`.
 struct Nsga2Options {
-  int population{};  ///< a multiple of 4 (pagmo's rule; checked by the constructor)
+  int population{};  ///< a multiple of 4 (pagmo's rule; a declared rule)
   int generations{};
   double cr{};     ///< crossover probability
   double eta_c{};  ///< sbx distribution index
@@ -58,16 +60,7 @@ struct Nsga2Options {
     d.add(&Nsga2Options::eta_c, "eta_c", 10.0, "Distribution index of the sbx crossover").range(1, 100);
     d.add(&Nsga2Options::m, "m", 0.01, "Mutation probability per component").range(0, 1);
     d.add(&Nsga2Options::eta_m, "eta_m", 50.0, "Distribution index of the polynomial mutation").range(1, 100);
-    d.add(&Nsga2Options::parallel_over, "parallel_over", "individuals",
-          "How a batch uses the threads: one design per thread, or each design split over the samples")
-        .one_of({"individuals", "samples"});
-    d.add(&Nsga2Options::sample_chunks, "sample_chunks", 16,
-          "Fixed number of sample chunks when a design is split over the samples")
-        .range(1, 4096);
-    d.add(&Nsga2Options::sort_descending, "sort_descending", {},
-          "Repair: design variables whose free components are sorted in descending order before evaluation");
-    d.add(&Nsga2Options::sort_ascending, "sort_ascending", {},
-          "Repair: design variables whose free components are sorted in ascending order before evaluation");
+    declare_batch_options(d);
     d.add(&Nsga2Options::progress_interval, "progress_interval", 2.0,
           "Seconds between progress lines on stderr (run.log gets every generation)")
         .greater_than(0)
@@ -76,13 +69,17 @@ struct Nsga2Options {
           "Generations between checkpoints (output directory's checkpoint.json, for hapsyn run --resume; one is "
           "also written at a stop); 0 = only at a stop")
         .range(0, 1000000);
+    d.rule({"population"}, "population is a multiple of 4", [](const Nsga2Options& o) {
+      return o.population % 4 != 0 ? std::string("must be a multiple of 4 (pagmo's NSGA-II pairs parents in fours)")
+                                   : std::string();
+    });
   }
 };
 
 class Nsga2Solver : public Solver {
  public:
   using Options = Nsga2Options;
-  /// \throws Error("nsga2: options.population = 10: must be a multiple of 4 ...") and pagmo's refusals.
+  /// \throws Error for pagmo's refusals (the declared rules are checked before this runs).
   explicit Nsga2Solver(const Nsga2Options& options);
   SolverSpecs specs() const override { return {true, true, false}; }
   /// \throws Error with fewer than two objectives or no free design variable, or an unknown
