@@ -200,7 +200,7 @@ TEST_P(Conformance, BlockPathsEqualThePerSampleLoop) {
   }
 }
 
-// Mechanism::reachable_interval, where a mechanism has one, never leaves out a value at which
+// MechanismAcceleration::reachable_interval, where a mechanism has one, never leaves out a value at which
 // the sample solves: the grid solvers rule whole runs of designs out on it. Each component of
 // the study's design is scanned over the interval and as far again on either side, at the
 // study's first samples.
@@ -245,7 +245,7 @@ TEST_P(Conformance, ReachableIntervalsHoldEverySolvedValue) {
   }
 }
 
-// Metric::combine_block, where a metric has it, is combine() per lane bit for bit (the design
+// MetricAcceleration::combine_block, where a metric has it, is combine() per lane bit for bit (the design
 // lanes' pruning decisions rest on it), also for reductions at their identities, zero and
 // negative values.
 TEST_P(Conformance, CombineBlockEqualsCombinePerLane) {

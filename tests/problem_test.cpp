@@ -469,7 +469,7 @@ TEST(WeightedSamples, PositionMapsAreEachPositionsWeightedMean) {
   EXPECT_NEAR(value_of(*problem), (2.0 * 1 + 1.0 * 4 + 1.0 * 10) / 4, 1e-15);
 }
 
-// ---- Batched metrics (Metric::batch_size, local_batch) ------------------------------------------
+// ---- Batched metrics (MetricAcceleration::batch_size, local_batch) ------------------------------------------
 
 namespace {
 

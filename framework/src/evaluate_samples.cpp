@@ -69,7 +69,7 @@ const Evaluation& Evaluator::evaluate(const double* free_design, EvalData& ws, c
   return out;
 }
 
-// The per-sample loop of evaluate() for studies with a batched metric (Metric::batch_size()):
+// The per-sample loop of evaluate() for studies with a batched metric (MetricAcceleration::batch_size()):
 // up to batch_ samples are solved, their local values computed with one local_batch() call per
 // metric, then reduced one by one exactly as the per-sample loop does (same order, same checks,
 // same pruning decisions after each sample). Kept apart so that the per-sample loop is untouched.

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// What a plugin library exports. A plugin is a shared library hapsyn-<name>.so (built with the
+/// What a plugin library exports. A plugin is a shared library `hapsyn-<name>.so` (built with the
 /// CMake function hapsyn_add_plugin; the file name must equal the registered name) that registers
 /// exactly one class with one of:
 ///

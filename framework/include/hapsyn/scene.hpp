@@ -117,7 +117,7 @@ struct SampleSet {
 };
 
 /// Checks a scene's SampleLattice declaration against its samples (nothing to check without
-/// one). \param scene the scene plugin, for the error
+/// one). \param samples the scene's samples \param scene the scene plugin, for the error
 /// \throws Error("<scene>: lattice: ...") when per_axis < 1, step <= 0 or not finite,
 ///         candidates_per_point < 1, index_of_sample does not hold one entry per sample, or an
 ///         index lies outside [0, per_axis^3).
@@ -130,6 +130,7 @@ void check_lattice(const SampleSet& samples, const std::string& scene);
 void check_groups(const SampleSet& samples, const std::string& scene);
 
 /// Checks a scene's per-sample weights (nothing to check when SampleSet::weights is empty).
+/// \param samples the scene's samples
 /// \param component the component named in the error (the Problem passes "problem")
 /// \throws Error("<component>: scene: weights ...") when there is not one weight per sample,
 ///         a weight is NaN, infinite or negative ("weights[i] = v: must be finite and >= 0"), or
@@ -138,16 +139,18 @@ void check_weights(const SampleSet& samples, const std::string& component);
 
 /// A scene option giving one orientation to every sample (box, disc): empty, or a unit
 /// quaternion [qw, qx, qy, qz] whose norm is 1 within 1e-6, returned normalised.
-/// \param scene the plugin, for the error; \param dimension the scene's position dimension
-/// \throws Error("<scene>: options.orientation = ...: <rule>") for another size, a norm off by
+/// \param orientation the option's value; \param dimension the scene's position dimension;
+/// \param scene the plugin, for the error
+/// \throws Error `("<scene>: options.orientation = ...: <rule>")` for another size, a norm off by
 ///         more than 1e-6, or dimension != 3 (a pose is x, y, z, qw, qx, qy, qz).
 std::vector<double> orientation_option(const std::vector<double>& orientation, int dimension, const std::string& scene);
 
 /// A scene option giving a rotation matrix as 3 rows of 3 (human_arm's C_S_B, motion's
 /// recording_rotation): the declarations fix the shape, this checks the rest.
-/// \param key the option's name, \param scene the plugin, for the error
-/// \throws Error("<scene>: options.<key> = <rows>: must be a rotation matrix (orthonormal, det +1);
-///         max |C^T C - I| = ..., det = ...") when max |C^T C - I| > 1e-6 or det <= 0.
+/// \param rows the option's value, \param key the option's name, \param scene the plugin, for
+/// the error
+/// \throws Error `("<scene>: options.<key> = <rows>: must be a rotation matrix (orthonormal,
+///         det +1); max |C^T C - I| = ..., det = ...")` when max |C^T C - I| > 1e-6 or det <= 0.
 Eigen::Matrix3d rotation_option(const std::vector<std::vector<double>>& rows, const std::string& key,
                                 const std::string& scene);
 

@@ -107,7 +107,7 @@ void FiveBarModel::solve_block(const PoseBlock& poses, Needs needs, MechanismScr
   (void)scratch;
   solve_fivebar_block(block_, poses.coordinate[0], poses.coordinate[1], needs, out);
 #else
-  MechanismModel::solve_block(poses, needs, scratch, out);  // built without Highway: solve() per lane
+  MechanismAcceleration::solve_block(poses, needs, scratch, out);  // built without Highway: solve() per lane
 #endif
 }
 

@@ -82,8 +82,8 @@ struct CullingOptions {
           "docs/design.md section 13.3)");
     d.add(&CullingOptions::block_bounds, "block_bounds", true,
           "Rule out runs of a grid line at once where the mechanism bounds a critical sample over the run "
-          "(Mechanism::sample_envelope) and the metrics turn that into a score bound below the reference, and where a "
-          "critical sample cannot be solved outside an interval of the line (Mechanism::reachable_interval); exact: the "
+          "(MechanismAcceleration::sample_envelope) and the metrics turn that into a score bound below the reference, and where a "
+          "critical sample cannot be solved outside an interval of the line (MechanismAcceleration::reachable_interval); exact: the "
           "same optimum (docs/design.md sections 13.5 and 13.6). Ruled-out designs are counted in block_ruled_out, not "
           "culled");
     d.add(&CullingOptions::progress_interval, "progress_interval", 2.0, "Seconds between progress lines on stderr")

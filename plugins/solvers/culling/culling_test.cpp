@@ -632,7 +632,7 @@ TEST(Culling, AFalseBlockBoundStopsTheRunNamingIt) {
       p.metrics(), p.objectives(), p.design_space());
   const hapsyn::plugins::CullingSolver culling(hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(true, false)));
   expect_error([&] { solve(culling, *problem, 1); },
-               {"culling: the mechanism's block bound (Mechanism::sample_envelope) is wrong: over r in [",
+               {"culling: the mechanism's block bound (MechanismAcceleration::sample_envelope) is wrong: over r in [",
                 "it claims that every design fails, but grid value", "reaches the sample and scores",
                 "set solver.options.block_bounds = false"});
   // Without block bounds the same problem runs to the optimum.
@@ -653,7 +653,7 @@ TEST(Culling, AFalseReachableIntervalStopsTheRunNamingIt) {
       p.metrics(), p.objectives(), p.design_space());
   const hapsyn::plugins::CullingSolver culling(hapsyn::make_options<hapsyn::plugins::CullingOptions>(culling_options(true, false)));
   expect_error([&] { solve(culling, *problem, 1); },
-               {"culling: the mechanism's line bound (Mechanism::reachable_interval) is wrong: it claims that sample ",
+               {"culling: the mechanism's line bound (MechanismAcceleration::reachable_interval) is wrong: it claims that sample ",
                 "fails for every r outside the interval it gives, but grid value", "lies outside it and reaches the sample",
                 "set solver.options.block_bounds = false"});
   // Without block bounds the same problem runs to the optimum.

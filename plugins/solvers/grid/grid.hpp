@@ -70,9 +70,9 @@ struct GridOptions {
           "docs/design.md section 13.3)");
     d.add(&GridOptions::block_bounds, "block_bounds", true,
           "With prune, single objective or weighted sum: rule out runs of a grid line at once where the mechanism "
-          "bounds a sample over the run (Mechanism::sample_envelope) and the metrics turn that into a score bound "
+          "bounds a sample over the run (MechanismAcceleration::sample_envelope) and the metrics turn that into a score bound "
           "below the best found, or every design of the run fails there, and where a sample cannot be solved outside an "
-          "interval of the line (Mechanism::reachable_interval); exact: the same optimum (docs/design.md sections 13.5 "
+          "interval of the line (MechanismAcceleration::reachable_interval); exact: the same optimum (docs/design.md sections 13.5 "
           "and 13.6). Ruled-out designs are counted as pruned (or failing at a sample) and in block_ruled_out");
     d.add(&GridOptions::progress_interval, "progress_interval", 2.0, "Seconds between progress lines on stderr")
         .greater_than(0)

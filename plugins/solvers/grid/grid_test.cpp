@@ -841,7 +841,7 @@ TEST(GridBlockBounds, AWrongEnvelopeStopsTheRunNamingIt) {
   hapsyn::SolverContext context;
   context.threads = 1;
   hapsyn::test::expect_error([&] { grid_solver(Json{{"progress_interval", 1e9}}).solve(*problem, context); },
-                             {"grid: the mechanism's block bound (Mechanism::sample_envelope) is wrong: over r in [",
+                             {"grid: the mechanism's block bound (MechanismAcceleration::sample_envelope) is wrong: over r in [",
                               "it claims that every design fails, but grid value", "reaches the sample and scores",
                               "grid could cut the optimum: set solver.options.block_bounds = false"});
   const auto result = grid_solver(Json{{"block_bounds", false}, {"progress_interval", 1e9}}).solve(*problem, context);
@@ -973,7 +973,7 @@ TEST(GridBlockBounds, AWrongReachableIntervalStopsTheRunNamingIt) {
   hapsyn::SolverContext context;
   context.threads = 1;
   hapsyn::test::expect_error([&] { grid_solver(Json{{"progress_interval", 1e9}}).solve(*problem, context); },
-                             {"grid: the mechanism's line bound (Mechanism::reachable_interval) is wrong: it claims "
+                             {"grid: the mechanism's line bound (MechanismAcceleration::reachable_interval) is wrong: it claims "
                               "that sample ",
                               "fails for every r outside the interval it gives, but grid value",
                               "lies outside it and reaches the sample; grid could cut the optimum: set "

@@ -1,8 +1,8 @@
 #pragma once
 /// \file
 /// Sample blocks: the optional block path of the per-sample loop. A mechanism whose model can
-/// solve several samples at once (MechanismModel::solve_block) and metrics that can compute
-/// their local values for them at once (Metric::local_block) let the evaluator handle
+/// solve several samples at once (MechanismAcceleration::solve_block) and metrics that can compute
+/// their local values for them at once (MetricAcceleration::local_block) let the evaluator handle
 /// kBlockLanes samples per call, structure of arrays, so that the kernels run one sample per
 /// SIMD lane. The evaluator reduces the lanes one by one in the scene's order, so a study gets
 /// the same statuses, critical samples, pruning decisions and sample counts as on the
@@ -49,9 +49,9 @@ struct QuantityBlock {
   double max_torque[kMaxTask] = {};    ///< actuator torque limits [N m]: the design's
 
   /// Set by the evaluator before each metric's local_block(), like SampleQuantities::sample and
-  /// ::attributes: the scene index of each lane's sample (lanes at or beyond the block's count
-  /// repeat a valid one; -1 outside the evaluator), and the scene attributes that metric lists
-  /// in scene_attributes().
+  /// SampleQuantities::attributes: the scene index of each lane's sample (lanes at or beyond the
+  /// block's count repeat a valid one; -1 outside the evaluator), and the scene attributes that
+  /// metric lists in MetricSpecs::scene_attributes.
   int samples[kBlockLanes] = {-1, -1, -1, -1, -1, -1, -1, -1};
   const AttributeMatrix* const* attributes = nullptr;
   int attribute_count = 0;

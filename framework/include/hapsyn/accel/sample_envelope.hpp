@@ -2,8 +2,8 @@
 /// \file
 /// Bounds of one sample's quantities over a block of designs: the designs that equal a given
 /// design except in one component, which runs over an interval (a run of a grid line). A
-/// mechanism fills what it can prove (Mechanism::sample_envelope), a worst-case metric turns it
-/// into an upper bound of its value (Metric::envelope_bound), and a grid solver then rules out
+/// mechanism fills what it can prove (MechanismAcceleration::sample_envelope), a worst-case metric turns it
+/// into an upper bound of its value (MetricAcceleration::envelope_bound), and a grid solver then rules out
 /// the whole block at once when that bound cannot beat its reference (docs/design.md
 /// section 13.5). Every field is a rigorous bound, rounding included: a field the mechanism
 /// cannot prove keeps its default, which says nothing.

@@ -51,7 +51,7 @@ struct RunOptions {
   const std::atomic<bool>* stop = nullptr;
   /// The processes of the run (an MPI job or a shard; hapsyn/cluster.hpp); null: this one.
   /// Under MPI every rank calls run_study: rank 0 does everything below, the others take part
-  /// in the solve of a distributed solver (Solver::distributed; else rank 0 solves alone) and
+  /// in the solve of a distributed solver (SolverSpecs::distributed; else rank 0 solves alone) and
   /// return rank 0's result document.
   Cluster* cluster = nullptr;
   /// Under MPI: the flag this rank's signal handlers set (`stop` is then the agreed flag the
