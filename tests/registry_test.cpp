@@ -123,9 +123,10 @@ TEST(Registry, OptionsAreValidatedAndDefaultsFilled) {
                {"solver.options.prun", "did you mean 'prune'"});
 }
 
-TEST(Registry, Version2PluginIsRefusedNamingBothVersions) {
-  expect_error([] { broken().find("version2"); },
-               {"hapsyn-version2.so", "plugin API version 2", "this hapsyn has API version 3", "rebuild the plugin"});
+TEST(Registry, Api3PluginIsRefusedNamingBothVersions) {
+  static_assert(HAPSYN_PLUGIN_API_VERSION == 4, "a plugin built for the previous API must be refused");
+  expect_error([] { broken().find("version3"); },
+               {"hapsyn-version3.so", "plugin API version 3", "this hapsyn has API version 4", "rebuild the plugin"});
 }
 
 TEST(Registry, BadDeclarationNamesTheOptionAndItsRule) {
