@@ -1,6 +1,5 @@
 #include "human_arm.hpp"
 
-#include <hapsyn/data_file.hpp>
 
 #include <hapsyn/error.hpp>
 #include <hapsyn/output_files.hpp>
@@ -38,7 +37,38 @@ constexpr char kCacheMagic[8] = {'H', 'A', 'P', 'S', 'Y', 'N', 'H', 'A'};
 
 std::string show(const Json& value) { return render_value(value); }
 
+constexpr double kPi = 3.14159265358979323846;
+
+double positive_mod(double x, double m) {
+  double r = std::fmod(x, m);
+  if (r < 0.0) r += m;
+  return r;
+}
+
 }  // namespace
+
+// ---------------------------------------------------------------- poses ----
+
+std::vector<Eigen::Quaterniond> orientation_set(int n) {
+  // Plastic number: the real root of x^3 = x + 1 (the generalized golden ratio for 3 dims).
+  constexpr double kPlastic = 1.32471795724474602596;
+  const double g1 = 1.0 / kPlastic, g2 = 1.0 / (kPlastic * kPlastic);
+  std::vector<Eigen::Quaterniond> set;
+  set.reserve(static_cast<std::size_t>(std::max(0, n)));
+  for (int i = 0; i < n; ++i) {
+    const double u1 = (i + 0.5) / n;
+    const double u2 = positive_mod(i * g1, 1.0);
+    const double u3 = positive_mod(i * g2, 1.0);
+    const double psi = kPi * (u3 - 0.5);  // [-pi/2, pi/2): cos >= 0, the w >= 0 hemisphere
+    const double chi = 2.0 * kPi * u2;
+    const double r1 = std::sqrt(u1), r2 = std::sqrt(1.0 - u1);
+    Eigen::Quaterniond q(r1 * std::cos(psi), r2 * std::sin(chi), r2 * std::cos(chi), r1 * std::sin(psi));
+    q.normalize();
+    if (q.w() < 0.0) q.w() = 0.0;  // cos(-pi/2) rounding; never negative
+    set.push_back(q);
+  }
+  return set;
+}
 
 std::vector<double> lattice_axis(double step, double extent) {
   const int m = static_cast<int>(std::floor(extent / step + 1e-9));
@@ -61,11 +91,6 @@ Json matrix_json(const Eigen::Matrix3d& C) {
 }
 
 }  // namespace
-
-std::string resolve_arm_file(const std::string& option) {
-  // An empty option means the declared default, the shipped right arm.
-  return find_data_file(kName, "arm_file", option.empty() ? default_options<HumanArmOptions>().arm_file : option);
-}
 
 std::string human_arm_lattice_rule(const HumanArmOptions& o) {
   // The lattice size depends on two options together, which no single declaration can bound.

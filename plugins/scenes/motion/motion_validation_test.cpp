@@ -11,7 +11,7 @@
 #include <hapsyn/mechanism.hpp>
 #include <hapsyn/internal/study.hpp>
 
-#include <human_arm.hpp>
+#include "shared/human_arm_model/human_arm_model.hpp"
 
 #include "test_support.hpp"
 

@@ -2,17 +2,18 @@
 /// \file
 /// Synthetic human arm motion: activities of daily living (reaching, wiping, lifting, drinking,
 /// side_reach)
-/// performed by the 7-DOF arm of Fennel et al. 2022 (human_arm.hpp), written in the
+/// performed by the 7-DOF arm of Fennel et al. 2022 (the shared arm model,
+/// shared/human_arm_model/human_arm_model.hpp), written in the
 /// "hapsyn-motion" CSV format and as BVH. The data are made, not recorded: joint-space keyframes
 /// with per-subject perturbations, joined by quintic (minimum-jerk) rest-to-rest segments whose
 /// durations keep every joint below a fraction of Table II's maximal velocity and acceleration,
 /// sampled at a fixed rate (optionally with time-stamp jitter), plus Gaussian measurement noise.
 /// Everything is deterministic in the seed (own splitmix64 generator and Box-Muller transform).
 ///
-/// Frames as in human_arm.hpp: S the shoulder (DH frame 0: x lateral to the right, y up, z
+/// Frames as in human_arm_model.hpp: S the shoulder (DH frame 0: x lateral to the right, y up, z
 /// backwards for the right arm at q = 0 hanging down), P the palm (DH frame 7). Twists are ordered
 /// (omega, v) and expressed in S. Units: s, m, rad (degrees only where named so).
-#include "human_arm.hpp"
+#include "shared/human_arm_model/human_arm_model.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

@@ -1,8 +1,9 @@
-// The option-independent half of the human_arm scene: the arm file, the arm's kinematics and
-// closed-form IK, the ellipsoid axes and the orientation set. human_arm.cpp holds the scene: its
-// options, the position lattice, the disk cache and build().
-#include "human_arm.hpp"
+// The human arm model shared by the human_arm and motion scenes: the arm file, the arm's
+// kinematics and closed-form IK, the ellipsoid axes. The human_arm scene (orientation set, lattice,
+// options, cache, build()) lives in plugins/scenes/human_arm/.
+#include "human_arm_model.hpp"
 
+#include <hapsyn/data_file.hpp>
 #include <hapsyn/json_text.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/read_file.hpp>
@@ -218,6 +219,11 @@ HumanArmData load_human_arm(const std::string& path) {
   return arm;
 }
 
+std::string resolve_arm_file(const std::string& option) {
+  // An empty option means the default, the shipped right arm.
+  return find_data_file(kName, "arm_file", option.empty() ? kHumanArmDefaultArmFile : option);
+}
+
 // ---------------------------------------------------------------- kinematics ----
 
 HumanArm::HumanArm(HumanArmData data) : data_(std::move(data)) {
@@ -415,27 +421,6 @@ Matrix6d ellipsoid_axes(const Matrix67d& J, const Vector7d& scale) {
     if (M(at, c) < 0.0) M.col(c) = -M.col(c);
   }
   return M;
-}
-
-std::vector<Eigen::Quaterniond> orientation_set(int n) {
-  // Plastic number: the real root of x^3 = x + 1 (the generalized golden ratio for 3 dims).
-  constexpr double kPlastic = 1.32471795724474602596;
-  const double g1 = 1.0 / kPlastic, g2 = 1.0 / (kPlastic * kPlastic);
-  std::vector<Eigen::Quaterniond> set;
-  set.reserve(static_cast<std::size_t>(std::max(0, n)));
-  for (int i = 0; i < n; ++i) {
-    const double u1 = (i + 0.5) / n;
-    const double u2 = positive_mod(i * g1, 1.0);
-    const double u3 = positive_mod(i * g2, 1.0);
-    const double psi = kPi * (u3 - 0.5);  // [-pi/2, pi/2): cos >= 0, the w >= 0 hemisphere
-    const double chi = 2.0 * kPi * u2;
-    const double r1 = std::sqrt(u1), r2 = std::sqrt(1.0 - u1);
-    Eigen::Quaterniond q(r1 * std::cos(psi), r2 * std::sin(chi), r2 * std::cos(chi), r1 * std::sin(psi));
-    q.normalize();
-    if (q.w() < 0.0) q.w() = 0.0;  // cos(-pi/2) rounding; never negative
-    set.push_back(q);
-  }
-  return set;
 }
 
 }  // namespace hapsyn::plugins
