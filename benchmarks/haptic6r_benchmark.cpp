@@ -19,6 +19,8 @@
 #include <haptic6r.hpp>
 #include <human_arm.hpp>
 
+#include <hapsyn/accel/mechanism_acceleration.hpp>
+#include <hapsyn/accel/metric_acceleration.hpp>
 #include <hapsyn/problem.hpp>
 #include <hapsyn/internal/registry.hpp>
 #include <hapsyn/internal/study.hpp>

@@ -8,6 +8,9 @@
 // substituted. A plugin that fits neither fails here: ship a conformance.json with it.
 #include "test_support.hpp"
 
+#include <hapsyn/accel/mechanism_acceleration.hpp>
+#include <hapsyn/accel/metric_acceleration.hpp>
+
 #include <boost/filesystem.hpp>
 
 #include <algorithm>

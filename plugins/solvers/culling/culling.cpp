@@ -8,6 +8,7 @@
 #include "shared/bounds/worst_case_check.hpp"
 #include "shared/minmax_sqp.hpp"
 
+#include <hapsyn/accel/sample_block.hpp>
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>

@@ -7,6 +7,7 @@
 #include "shared/bounds/task_bytes.hpp"
 #include "shared/bounds/worst_case_check.hpp"
 
+#include <hapsyn/accel/sample_block.hpp>
 #include <hapsyn/cluster.hpp>
 #include <hapsyn/checkpoint.hpp>
 #include <hapsyn/error.hpp>

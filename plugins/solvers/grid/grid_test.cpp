@@ -9,6 +9,8 @@
 #include "shared/testing/stop_test_support.hpp"
 #include "test_support.hpp"
 
+#include <hapsyn/accel/mechanism_acceleration.hpp>
+#include <hapsyn/accel/metric_acceleration.hpp>
 #include <hapsyn/pareto.hpp>
 
 #include <cmath>
@@ -855,7 +857,7 @@ class OneDecidingSample final : public hapsyn::test::ForwardingMechanism {
  public:
   OneDecidingSample(std::shared_ptr<const hapsyn::Mechanism> inner, const hapsyn::SampleSet& scene, int decider)
       : ForwardingMechanism(std::move(inner)), scene_(scene), decider_(decider), calls_(scene.size(), 0) {}
-  bool constraints_quasiconvex(int component) const override { return inner().constraints_quasiconvex(component); }
+  bool constraints_quasiconvex(int component) const override { return inner_acceleration().constraints_quasiconvex(component); }
   bool sample_envelope(const double*, int, double, double, const double* pose, hapsyn::Needs,
                        hapsyn::SampleEnvelope& out) const override {
     int sample = 0;
@@ -914,7 +916,7 @@ class ShortRunsOnly final : public hapsyn::test::ForwardingMechanism {
  public:
   ShortRunsOnly(std::shared_ptr<const hapsyn::Mechanism> inner, double width)
       : ForwardingMechanism(std::move(inner)), width_(width) {}
-  bool constraints_quasiconvex(int component) const override { return inner().constraints_quasiconvex(component); }
+  bool constraints_quasiconvex(int component) const override { return inner_acceleration().constraints_quasiconvex(component); }
   bool sample_envelope(const double*, int, double lower, double upper, const double*, hapsyn::Needs,
                        hapsyn::SampleEnvelope& out) const override {
     ++calls;

@@ -6,6 +6,7 @@
 /// checkpoints (finished subproblems by task index) and their task farms over the run's ranks
 /// (run_subproblem_farm: results collected on rank 0, then handed to every rank).
 /// Shared by the solver plugins; not a plugin itself.
+#include <hapsyn/cluster.hpp>
 #include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
 
