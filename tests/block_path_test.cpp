@@ -3,6 +3,7 @@
 // critical samples and pruning decisions for every design, threshold, subset and front, and the
 // same objectives. Averaging, on the haptic 6R with coverage (scene attributes): the same status
 // and sample count, reductions and objectives to 1e-12 relative.
+#include <hapsyn/accel/sample_block.hpp>
 #include "test_support.hpp"
 
 #include <hapsyn/problem.hpp>

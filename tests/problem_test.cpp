@@ -1,5 +1,6 @@
 // The evaluator: determinism across threads, exactness of the per-sample bound and pruning,
 // and the central checks of plugin input and output.
+#include <hapsyn/accel/metric_acceleration.hpp>
 #include "test_support.hpp"
 
 #include <hapsyn/internal/maps.hpp>

@@ -70,7 +70,7 @@ class MeanIsotropy final : public hapsyn::Metric {
     out[1] = 1.0;
   }
 
-  MetricSpecs specs() const override { return {hapsyn::kNeedJacobian, {}}; }
+  hapsyn::MetricSpecs specs() const override { return {hapsyn::kNeedJacobian, {}}; }
 
   std::vector<LocalValue> locals() const override {
     return {LocalValue{"isotropy", Reduction::kSum, ""}, LocalValue{"reachable", Reduction::kSum, ""}};

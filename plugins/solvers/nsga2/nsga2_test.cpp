@@ -94,8 +94,8 @@ TEST(Nsga2, BatchesOverRanksGiveTheSingleProcessFront) {
   const Json doc = pareto_study({{"population", 16}, {"generations", 6}});
   const auto plain = solve(doc, 2);
   hapsyn::Study study = hapsyn::load_study(doc, hapsyn::test::registry());
-  EXPECT_TRUE(study.solver->distributed());
-  EXPECT_FALSE(study.solver->shardable());
+  EXPECT_TRUE(study.solver->specs().distributed);
+  EXPECT_FALSE(study.solver->specs().shardable);
   PretendTwoRanks ranks;
   hapsyn::SolverContext context;
   context.threads = 2;

@@ -12,6 +12,7 @@
 /// feasible values form one run (MechanismAcceleration::constraints_quasiconvex), the bound is made exact:
 /// the constraints are evaluated at the run's ends (stepping inward past violators), and the
 /// designs between need no constraint evaluation of their own (verified()).
+#include <hapsyn/accel/mechanism_acceleration.hpp>
 #include <hapsyn/error.hpp>
 #include <hapsyn/accel/fast_math.hpp>
 #include <hapsyn/problem.hpp>
