@@ -500,12 +500,18 @@ class Batched final : public hapsyn::Metric, public hapsyn::MetricAcceleration {
   int batch_;
 };
 
-// The study's problem with every metric wrapped in Batched (the study must outlive it).
+// The study's problem with every metric (or only the first) wrapped in Batched (the study must
+// outlive it).
 std::shared_ptr<hapsyn::Problem> batched(const hapsyn::Study& study, int batch,
-                                         std::vector<std::shared_ptr<Batched>>* wrappers = nullptr) {
+                                         std::vector<std::shared_ptr<Batched>>* wrappers = nullptr,
+                                         bool only_first = false) {
   const hapsyn::Problem& p = *study.problem;
   std::vector<hapsyn::MetricEntry> metrics;
   for (const hapsyn::MetricEntry& m : p.metrics()) {
+    if (only_first && !metrics.empty()) {
+      metrics.push_back(m);
+      continue;
+    }
     auto b = std::make_shared<Batched>(m.metric, batch);
     if (wrappers) wrappers->push_back(b);
     metrics.push_back({m.plugin, b});
@@ -532,6 +538,51 @@ void expect_same(const hapsyn::Evaluation& a, const hapsyn::Evaluation& b, const
 }
 
 }  // namespace
+
+TEST(BatchedMetric, BesideAMetricWithoutABatchGivesThePerSampleResults) {
+  // GII batched (as a Python metric would be), GDI not: the evaluator takes the batch path for
+  // the study and must compute GDI's local values per sample there.
+  const auto study = study_with({"gii", "gdi"});
+  std::vector<std::shared_ptr<Batched>> wrappers;
+  const auto problem = batched(study, 7, &wrappers, true);
+  ASSERT_EQ(wrappers.size(), 1u);
+  auto ws = study.problem->make_eval_scratch();
+  auto wb = problem->make_eval_scratch();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int feasible = 0;
+  for (int trial = 0; trial < 100; ++trial) {
+    const std::vector<double> x = trial == 0 ? kGood
+                                             : std::vector<double>{0.3 * u(rng), 0.05 + 0.25 * u(rng),
+                                                                   0.05 + 0.25 * u(rng), 0.6 * u(rng)};
+    const hapsyn::Evaluation plain = study.problem->evaluate(x.data(), *ws);
+    expect_same(plain, problem->evaluate(x.data(), *wb), "mixed batch");
+    feasible += plain.status == EvalStatus::kFeasible ? 1 : 0;
+  }
+  EXPECT_GT(feasible, 5);
+  EXPECT_GT(wrappers[0]->calls.load(), 0);
+}
+
+namespace {
+// Declares a batch but never writes its values: the evaluator must report it, not reduce
+// whatever its buffer held.
+class SilentBatch final : public hapsyn::Metric, public hapsyn::MetricAcceleration {
+ public:
+  void local(const hapsyn::SampleQuantities&, double* out) const override { out[0] = 1.0; }
+  int batch_size() const override { return 4; }
+  const hapsyn::MetricAcceleration* acceleration() const override { return this; }
+};
+}  // namespace
+
+TEST(BatchedMetric, ABatchThatWritesNothingIsReportedAsTheMetricsNan) {
+  const auto study = study_with({"gii"});
+  const hapsyn::Problem& p = *study.problem;
+  const std::shared_ptr<const hapsyn::Mechanism> mechanism(std::shared_ptr<const hapsyn::Mechanism>{}, &p.mechanism());
+  const hapsyn::Problem problem("fivebar", mechanism, std::make_shared<hapsyn::SampleSet>(p.samples()),
+                                {{"silent", std::make_shared<SilentBatch>()}}, p.objectives(), p.design_space());
+  auto ws = problem.make_eval_scratch();
+  expect_error([&] { problem.evaluate(kGood.data(), *ws); }, {"metric 'silent' returned nan", "sample"});
+}
 
 TEST(BatchedMetric, GivesThePerSampleResultsBitForBitWithPruningSubsetsAndFailures) {
   const auto study = study_with({"gii", "gdi"});

@@ -100,15 +100,17 @@ const Evaluation& Evaluator::evaluate_batched(const MechanismModel& model, EvalD
         q.attributes = metric_attributes_[m].data();
         q.attribute_count = static_cast<int>(metric_attributes_[m].size());
       }
-      if (count > 0) {
-        // A batch_size() > 0 without a local_batch() override writes nothing: the NaN left
-        // here is then reported as the metric's, not reduced as a stale value.
-        std::fill_n(ws.batch_locals.data() + static_cast<std::size_t>(batch_) * local_offset_[m],
-                    static_cast<std::size_t>(count) * static_cast<std::size_t>(local_offset_[m + 1] - local_offset_[m]),
-                    std::numeric_limits<double>::quiet_NaN());
-        metric_accel_[m]->local_batch(ws.batch_pointers.data(), count,
-                                        ws.batch_locals.data() + static_cast<std::size_t>(batch_) * local_offset_[m]);
+      if (count == 0) continue;
+      const std::size_t k = static_cast<std::size_t>(local_offset_[m + 1] - local_offset_[m]);
+      double* locals = ws.batch_locals.data() + static_cast<std::size_t>(batch_) * local_offset_[m];
+      if (metric_accel_[m]->batch_size() == 0) {  // a metric without a batch beside one with
+        for (int i = 0; i < count; ++i) metrics_[m].metric->local(*ws.batch_pointers[static_cast<std::size_t>(i)], locals + i * k);
+        continue;
       }
+      // A batch_size() > 0 without a local_batch() override writes nothing: the NaN left here is
+      // then reported as the metric's, not reduced as a stale value.
+      std::fill_n(locals, static_cast<std::size_t>(count) * k, std::numeric_limits<double>::quiet_NaN());
+      metric_accel_[m]->local_batch(ws.batch_pointers.data(), count, locals);
     }
     for (int i = 0; i < count; ++i) {
       const SampleQuantities& q = ws.batch_quantities[static_cast<std::size_t>(i)];
