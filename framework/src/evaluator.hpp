@@ -51,28 +51,16 @@ struct alignas(64) EvalData {
 /// (EvalData). Problem forwards its public API here; nothing outside the framework sees it.
 class Evaluator {
  public:
-  /// \throws Error if the scene has no samples, a non-finite one or unusable weights
-  ///         (check_weights), a metric needs quantities the mechanism does not provide, the
-  ///         scene is not one the mechanism serves, or an objective refers to a missing metric.
-  /// With SampleSet::weights, every Reduction::kSum local value of sample i is multiplied by
-  /// w_i N / W before it is summed, so averaging metrics give weighted means with no change to
-  /// their combine(); min/max reductions ignore the weights (a worst case is a worst case).
+  // The public methods are Problem's (hapsyn/problem.hpp carries their contracts); those taking
+  // an EvalData take what Problem::EvalScratch holds.
   Evaluator(std::string mechanism_plugin, std::shared_ptr<const Mechanism> mechanism,
-          std::shared_ptr<const SampleSet> samples, std::vector<MetricEntry> metrics,
-          std::vector<Objective> objectives, DesignSpace space);
-  /// Not copyable: the evaluator's block copies of the scene attributes are referred to by
-  /// pointer (with_objectives() and with_design_space() make a new problem instead).
+            std::shared_ptr<const SampleSet> samples, std::vector<MetricEntry> metrics,
+            std::vector<Objective> objectives, DesignSpace space);
+  // Not copyable: the block copies of the scene attributes are referred to by pointer.
   Evaluator(const Evaluator&) = delete;
   Evaluator& operator=(const Evaluator&) = delete;
 
-  /// The same study (mechanism, scene, metrics: shared, not copied) with other objectives,
-  /// e.g. other weights for a weighted sum or one objective for a shadow optimum. Cheap: no
-  /// plugin is created and no sample rebuilt.
-  /// \throws Error as the constructor (an objective naming no metric, a non-finite weight).
   std::shared_ptr<const Problem> with_objectives(std::vector<Objective> objectives) const;
-  /// The same study over another design space (same components, other bounds/steps/fixed
-  /// values, e.g. one variable fixed for sequential optimization).
-  /// \throws Error when `space` does not have the same components as design_space().
   std::shared_ptr<const Problem> with_design_space(DesignSpace space) const;
 
   const DesignSpace& design_space() const { return space_; }
@@ -83,40 +71,13 @@ class Evaluator {
   std::size_t dimension() const { return space_.free_size(); }
   std::size_t constraint_count() const { return constraint_names_.size(); }
   const std::vector<std::string>& constraint_names() const { return constraint_names_; }
-  /// True when every metric in the study is worst-case (culling and pruning apply).
   bool worst_case() const { return worst_case_; }
-  /// Block bound of a run of a grid line (docs/design.md section 13.5): an upper bound of the
-  /// score of every design equal to `full_design` (a full design vector) except in component
-  /// `component`, which runs over [lower, upper], from the mechanism's envelope of sample
-  /// `sample` (MechanismAcceleration::sample_envelope) and each objective's
-  /// MetricAcceleration::envelope_bound. -inf
-  /// when the sample fails for every such design (all are infeasible); +inf when nothing is
-  /// known (a study that is not prunable, a mechanism or a metric without envelopes). No
-  /// allocation.
   double block_score_bound(const double* full_design, int component, double lower, double upper, int sample) const;
-  /// Line bound of one sample (docs/design.md section 13.6): sets [lower, upper] to the interval
-  /// of component `component` of `full_design` outside which sample `sample` fails
-  /// (MechanismAcceleration::reachable_interval), and returns true, when a failed sample makes a design
-  /// infeasible in this study (a worst-case metric) and the mechanism knows such an interval.
-  /// No allocation.
   bool reachable_interval(const double* full_design, int component, int sample, double& lower, double& upper) const;
-  /// The mechanism's speed layer (Mechanism::acceleration()), or a stand-in whose every hook
-  /// says "not available" when it has none: never null.
   const MechanismAcceleration& mechanism_acceleration() const { return *mechanism_accel_; }
-  /// True when evaluate() solves samples in blocks (hapsyn/accel/sample_block.hpp): the mechanism
-  /// solves blocks for the study's needs, every metric is worst-case with a block local and no
-  /// scene attributes, and the scene has at most kBlockMaxCoordinates coordinates and no
-  /// demanded motion. Same results as the per-sample path (docs/design.md section 13).
   bool block_path() const { return block_path_; }
-  /// Union of the metrics' needs: what the mechanism computes per sample, and nothing else.
   Needs needs() const { return needs_; }
-  /// Sample order used for full evaluations. With a worst-case metric: the scene's extreme
-  /// samples first (far from the centroid), so infeasible designs and worst cases are met early;
-  /// otherwise the scene's own order (cache-friendly; nothing to decide early). Deterministic.
   const std::vector<int>& sample_order() const { return order_; }
-  /// Prepares `q` for MechanismModel::solve of sample `sample`: sets q.sample, q.scene and, when
-  /// the scene carries the demanded motion, q.twist / q.twist_rate (else null). The evaluator
-  /// calls it before every solve(); a tool that calls solve() itself should too.
   void bind_sample(SampleQuantities& q, int sample) const {
     q.sample = sample;
     q.scene = samples_.get();
@@ -126,39 +87,20 @@ class Evaluator {
 
   std::unique_ptr<EvalData> make_eval_data() const;
 
-  /// Evaluates a design given as the free vector (dimension() values; not checkable through
-  /// the pointer). One EvalData per thread: a scratch is never used by two threads at once.
-  /// \throws Error on a NaN/inf or out-of-bounds component, or a NaN/inf from a plugin.
   const Evaluation& evaluate(const double* free_design, EvalData& eval_scratch,
                              const EvalOptions& options = {}) const;
-  /// Evaluates `count` designs (1..kBlockLanes free vectors) as `count` calls of evaluate() with
-  /// the same options would, into outs[0..count): the same statuses, sample counts, critical
-  /// samples and objectives, bit for bit. `outs` is the caller's and is reused (no allocation
-  /// once its evaluations have their sizes). Where the mechanism solves several designs per
-  /// vector (MechanismAcceleration::solve_designs: the five-bar's designs of one grid line), the first
-  /// samples of all the designs are solved together, one vector per sample, and most designs
-  /// are decided there (unreachable, pruned, or culled at a critical sample); a design still
-  /// undecided after kBlockLanes samples is finished by evaluate() (docs/design.md section 13.4).
-  /// \throws Error as evaluate().
   void evaluate_designs(const double* const* free_designs, int count, EvalData& eval_scratch,
                         const EvalOptions& options, std::vector<Evaluation>& outs) const;
 
   using ParallelOptions = Problem::ParallelOptions;
-  /// Same, over all samples (or `options.subset`) split into chunks across `threads` threads
-  /// (deterministic merge: the result does not depend on the thread count for a given chunk
-  /// count; worst-case reductions not at all).
   Evaluation evaluate_parallel(const double* free_design, int threads, const ParallelOptions& options) const;
   Evaluation evaluate_parallel(const double* free_design, int threads) const {
     return evaluate_parallel(free_design, threads, ParallelOptions{});
   }
-  /// Evaluates the design constraints into g (size constraint_count()); true when all <= 0.
   bool constraints(const double* free_design, double* g) const;
 
-  /// Full design (all components) from a free vector.
   Eigen::VectorXd full_design(const double* free_design) const;
-  /// {"l0": 0.1, "l": [..], ...} from a full design vector, grouped by variable.
   Json design_to_json(const Eigen::VectorXd& full_design) const;
-  /// Score of objective values: sum_i w_i * s_i * f_i.
   double score(const std::vector<double>& objectives) const;
 
  private:
