@@ -1,4 +1,5 @@
-// Problem: the public face of the evaluator (evaluator.hpp). Every method forwards; the
+// Problem: the public face of the evaluator (evaluator.hpp). Every method forwards (the cheap
+// accessors, inline in problem.hpp, read pointers taken here at construction); the
 // evaluation paths and their per-thread data stay private to the framework.
 #include <hapsyn/problem.hpp>
 
@@ -10,7 +11,21 @@ Problem::Problem(std::string mechanism_plugin, std::shared_ptr<const Mechanism> 
                  std::shared_ptr<const SampleSet> samples, std::vector<MetricEntry> metrics,
                  std::vector<Objective> objectives, DesignSpace space)
     : impl_(std::make_unique<const Evaluator>(std::move(mechanism_plugin), std::move(mechanism), std::move(samples),
-                                              std::move(metrics), std::move(objectives), std::move(space))) {}
+                                              std::move(metrics), std::move(objectives), std::move(space))) {
+  const Evaluator& e = *impl_;
+  view_.space = &e.design_space();
+  view_.samples = &e.samples();
+  view_.mechanism = &e.mechanism();
+  view_.metrics = &e.metrics();
+  view_.objectives = &e.objectives();
+  view_.constraint_names = &e.constraint_names();
+  view_.sample_order = &e.sample_order();
+  view_.mechanism_acceleration = &e.mechanism_acceleration();
+  view_.dimension = e.dimension();
+  view_.worst_case = e.worst_case();
+  view_.block_path = e.block_path();
+  view_.needs = e.needs();
+}
 
 Problem::~Problem() = default;
 
@@ -21,15 +36,6 @@ std::shared_ptr<const Problem> Problem::with_design_space(DesignSpace space) con
   return impl_->with_design_space(std::move(space));
 }
 
-const DesignSpace& Problem::design_space() const { return impl_->design_space(); }
-const SampleSet& Problem::samples() const { return impl_->samples(); }
-const Mechanism& Problem::mechanism() const { return impl_->mechanism(); }
-const std::vector<MetricEntry>& Problem::metrics() const { return impl_->metrics(); }
-const std::vector<Objective>& Problem::objectives() const { return impl_->objectives(); }
-std::size_t Problem::dimension() const { return impl_->dimension(); }
-std::size_t Problem::constraint_count() const { return impl_->constraint_count(); }
-const std::vector<std::string>& Problem::constraint_names() const { return impl_->constraint_names(); }
-bool Problem::worst_case() const { return impl_->worst_case(); }
 double Problem::block_score_bound(const double* full_design, int component, double lower, double upper,
                                   int sample) const {
   return impl_->block_score_bound(full_design, component, lower, upper, sample);
@@ -38,10 +44,6 @@ bool Problem::reachable_interval(const double* full_design, int component, int s
                                  double& upper) const {
   return impl_->reachable_interval(full_design, component, sample, lower, upper);
 }
-const MechanismAcceleration& Problem::mechanism_acceleration() const { return impl_->mechanism_acceleration(); }
-bool Problem::block_path() const { return impl_->block_path(); }
-Needs Problem::needs() const { return impl_->needs(); }
-const std::vector<int>& Problem::sample_order() const { return impl_->sample_order(); }
 void Problem::bind_sample(SampleQuantities& q, int sample) const { impl_->bind_sample(q, sample); }
 
 Problem::EvalScratch::EvalScratch() = default;

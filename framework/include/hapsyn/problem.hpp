@@ -131,16 +131,16 @@ class Problem {
   /// \throws Error when `space` does not have the same components as design_space().
   std::shared_ptr<const Problem> with_design_space(DesignSpace space) const;
 
-  const DesignSpace& design_space() const;
-  const SampleSet& samples() const;
-  const Mechanism& mechanism() const;
-  const std::vector<MetricEntry>& metrics() const;
-  const std::vector<Objective>& objectives() const;
-  std::size_t dimension() const;
-  std::size_t constraint_count() const;
-  const std::vector<std::string>& constraint_names() const;
+  const DesignSpace& design_space() const { return *view_.space; }
+  const SampleSet& samples() const { return *view_.samples; }
+  const Mechanism& mechanism() const { return *view_.mechanism; }
+  const std::vector<MetricEntry>& metrics() const { return *view_.metrics; }
+  const std::vector<Objective>& objectives() const { return *view_.objectives; }
+  std::size_t dimension() const { return view_.dimension; }
+  std::size_t constraint_count() const { return view_.constraint_names->size(); }
+  const std::vector<std::string>& constraint_names() const { return *view_.constraint_names; }
   /// True when every metric in the study is worst-case (culling and pruning apply).
-  bool worst_case() const;
+  bool worst_case() const { return view_.worst_case; }
   /// Block bound of a run of a grid line (docs/design.md section 13.5): an upper bound of the
   /// score of every design equal to `full_design` (a full design vector) except in component
   /// `component`, which runs over [lower, upper], from the mechanism's envelope of sample
@@ -158,18 +158,18 @@ class Problem {
   bool reachable_interval(const double* full_design, int component, int sample, double& lower, double& upper) const;
   /// The mechanism's speed layer (Mechanism::acceleration()), or a stand-in whose every hook
   /// says "not available" when it has none: never null.
-  const MechanismAcceleration& mechanism_acceleration() const;
+  const MechanismAcceleration& mechanism_acceleration() const { return *view_.mechanism_acceleration; }
   /// True when evaluate() solves samples in blocks (hapsyn/accel/sample_block.hpp): the mechanism
   /// solves blocks for the study's needs, every metric is worst-case with a block local and no
   /// scene attributes, and the scene has at most kBlockMaxCoordinates coordinates and no
   /// demanded motion. Same results as the per-sample path (docs/design.md section 13).
-  bool block_path() const;
+  bool block_path() const { return view_.block_path; }
   /// Union of the metrics' needs: what the mechanism computes per sample, and nothing else.
-  Needs needs() const;
+  Needs needs() const { return view_.needs; }
   /// Sample order used for full evaluations. With a worst-case metric: the scene's extreme
   /// samples first (far from the centroid), so infeasible designs and worst cases are met early;
   /// otherwise the scene's own order (cache-friendly; nothing to decide early). Deterministic.
-  const std::vector<int>& sample_order() const;
+  const std::vector<int>& sample_order() const { return *view_.sample_order; }
   /// Prepares `q` for MechanismModel::solve of sample `sample`: sets q.sample, q.scene and, when
   /// the scene carries the demanded motion, q.twist / q.twist_rate (else null). The evaluator
   /// calls it before every solve(); a tool that calls solve() itself should too.
@@ -236,7 +236,24 @@ class Problem {
   double score(const std::vector<double>& objectives) const;
 
  private:
+  // What the accessors above return, taken from the evaluator once: they are called per design
+  // (and per line by the grid solvers), where a call into the evaluator cost a few percent of a
+  // pruned grid on one thread.
+  struct View {
+    const DesignSpace* space = nullptr;
+    const SampleSet* samples = nullptr;
+    const Mechanism* mechanism = nullptr;
+    const std::vector<MetricEntry>* metrics = nullptr;
+    const std::vector<Objective>* objectives = nullptr;
+    const std::vector<std::string>* constraint_names = nullptr;
+    const std::vector<int>* sample_order = nullptr;
+    const MechanismAcceleration* mechanism_acceleration = nullptr;
+    std::size_t dimension = 0;
+    bool worst_case = false, block_path = false;
+    Needs needs = 0;
+  };
   std::unique_ptr<const Evaluator> impl_;
+  View view_;
 };
 
 }  // namespace hapsyn
