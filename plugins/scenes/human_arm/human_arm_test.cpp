@@ -4,6 +4,7 @@
 // declared schema. The arm model's own tests (arm file, kinematics, IK, ellipsoid axes) are in
 // plugins/scenes/shared/human_arm_model/human_arm_model_test.cpp.
 #include "human_arm.hpp"
+#include "shared/human_arm_model/human_arm_model_testing.hpp"
 #include "test_support.hpp"
 
 #include <hapsyn/error.hpp>
@@ -30,21 +31,10 @@ namespace fs = std::filesystem;
 using hapsyn::Json;
 using hapsyn::SampleSet;
 using namespace hapsyn::plugins;
+using namespace hapsyn::plugins::human_arm_testing;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
-
-const std::string kArmFile = HAPSYN_SOURCE_DIR "/share/human_arm/fennel2022_right_arm.json";
-
-const HumanArm& arm() {
-  static const HumanArm a(load_human_arm(kArmFile));
-  return a;
-}
-
-Json arm_document() {
-  std::ifstream in(kArmFile);
-  return Json::parse(in);
-}
 
 // The scene created as a study creates it: the options validated against the declared schema
 // (defaults filled), then the constructor.
@@ -60,15 +50,6 @@ std::string error_of(Fn&& fn) {
     return e.what();
   }
   return "no error";
-}
-
-double rotation_distance(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B) { return (A - B).cwiseAbs().maxCoeff(); }
-
-fs::path temp_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("hapsyn-human-arm-" + name + "-" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
 }
 
 // The options as the registry hands them over: validated against the declarations, defaults filled.

@@ -534,26 +534,21 @@ std::optional<FinishedSubproblem> solve_shadow(const Solver& shadow_solver, cons
                                                std::atomic<long long>& interrupted_samples) {
   const auto t0 = Clock::now();
   const SolverResult r = run_sub_solver(shadow_solver, *single_objective_problem(problem, i), inner, what);
-  if (r.status == SolverStatus::kStopped) {
-    interrupted_designs += r.design_evaluations;
-    interrupted_samples += r.sample_evaluations;
-    return std::nullopt;
-  }
-  FinishedSubproblem f;
-  f.design_evaluations = r.design_evaluations;
-  f.sample_evaluations = r.sample_evaluations;
+  std::optional<FinishedSubproblem> finished = finished_unless_stopped(r, interrupted_designs, interrupted_samples);
+  if (!finished) return std::nullopt;
+  FinishedSubproblem& f = *finished;
   std::vector<double> values;
   if (!r.best || !evaluate_full_design(problem, r.best->design, inner.threads, values, f.sample_evaluations)) {
     // Not found: no point; the message says why (the record never reaches the statistics).
     f.record = {{"objective", problem.objectives()[i].name}, {"status", to_string(r.status)},
                 {"message", r.message}, {"seconds", seconds_since(t0)}};
-    return f;
+    return finished;
   }
   f.point = SolutionPoint{r.best->design, values, problem.score(values)};
   f.record = {{"objective", problem.objectives()[i].name}, {"design", problem.design_to_json(r.best->design)},
               {"objectives", values}, {"status", to_string(r.status)}, {"seconds", seconds_since(t0)},
               {"design_evaluations", f.design_evaluations}, {"sample_evaluations", f.sample_evaluations}};
-  return f;
+  return finished;
 }
 
 // The grid points' starts in the order a sweep's farm hands them out: task and start.

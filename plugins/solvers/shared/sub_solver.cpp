@@ -192,6 +192,20 @@ Json entry_json(const FinishedSubproblem& f) {
 
 }  // namespace
 
+std::optional<FinishedSubproblem> finished_unless_stopped(const SolverResult& result,
+                                                          std::atomic<long long>& interrupted_designs,
+                                                          std::atomic<long long>& interrupted_samples) {
+  if (result.status == SolverStatus::kStopped) {
+    interrupted_designs += result.design_evaluations;
+    interrupted_samples += result.sample_evaluations;
+    return std::nullopt;
+  }
+  FinishedSubproblem f;
+  f.design_evaluations = result.design_evaluations;
+  f.sample_evaluations = result.sample_evaluations;
+  return f;
+}
+
 std::size_t finished_count(const SubproblemSlots& slots) {
   return static_cast<std::size_t>(
       std::count_if(slots.begin(), slots.end(), [](const std::optional<FinishedSubproblem>& f) { return f.has_value(); }));

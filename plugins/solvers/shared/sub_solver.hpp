@@ -10,6 +10,7 @@
 #include <hapsyn/options.hpp>
 #include <hapsyn/solver.hpp>
 
+#include <atomic>
 #include <functional>
 #include <map>
 #include <memory>
@@ -73,6 +74,14 @@ struct FinishedSubproblem {
   long long design_evaluations = 0;     ///< what it cost, its final full evaluation included
   long long sample_evaluations = 0;
 };
+
+/// A sub-solver's result as a finished subproblem with its counts (the caller fills the record
+/// and the point), or nullopt when a stop request interrupted it: its best is not the
+/// subproblem's optimum, the subproblem runs again on --resume, and its counts are added to
+/// `interrupted_designs` / `interrupted_samples`.
+std::optional<FinishedSubproblem> finished_unless_stopped(const SolverResult& result,
+                                                          std::atomic<long long>& interrupted_designs,
+                                                          std::atomic<long long>& interrupted_samples);
 
 /// The subproblems of one list by task index (0 .. count-1); nullopt: not finished. Tasks
 /// finish in any order when they run on several threads or ranks.

@@ -48,15 +48,9 @@ std::optional<FinishedSubproblem> run_one(const Solver& solver, const Problem& p
   if (inner.stop_requested()) return std::nullopt;
   const auto t0 = Clock::now();
   const SolverResult r = run_sub_solver(solver, *sweep.problem(i), inner, sweep.what(i));
-  if (r.status == SolverStatus::kStopped) {
-    // Its best is not this subproblem's optimum: the subproblem is run again on --resume.
-    interrupted_designs += r.design_evaluations;
-    interrupted_samples += r.sample_evaluations;
-    return std::nullopt;
-  }
-  FinishedSubproblem f;
-  f.design_evaluations = r.design_evaluations;
-  f.sample_evaluations = r.sample_evaluations;
+  std::optional<FinishedSubproblem> finished = finished_unless_stopped(r, interrupted_designs, interrupted_samples);
+  if (!finished) return std::nullopt;
+  FinishedSubproblem& f = *finished;
   f.record = {{sweep.key, sweep.identity(i)}, {"status", to_string(r.status)}};
   std::vector<double> objectives;
   if (r.best && evaluate_full_design(problem, r.best->design, inner.threads, objectives, f.sample_evaluations)) {
@@ -65,7 +59,7 @@ std::optional<FinishedSubproblem> run_one(const Solver& solver, const Problem& p
     f.record["objectives"] = objectives;
   }
   f.record["seconds"] = std::chrono::duration<double>(Clock::now() - t0).count();
-  return f;
+  return finished;
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 // force, M_v / M_a against a direct SVD, and the left arm as the mirrored right arm. The
 // human_arm scene's tests are in plugins/scenes/human_arm/human_arm_test.cpp.
 #include "human_arm_model.hpp"
+#include "human_arm_model_testing.hpp"
 
 #include <hapsyn/error.hpp>
 
@@ -32,21 +33,10 @@ namespace {
 namespace fs = std::filesystem;
 using hapsyn::Json;
 using namespace hapsyn::plugins;
+using namespace hapsyn::plugins::human_arm_testing;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
-
-const std::string kArmFile = HAPSYN_SOURCE_DIR "/share/human_arm/fennel2022_right_arm.json";
-
-const HumanArm& arm() {
-  static const HumanArm a(load_human_arm(kArmFile));
-  return a;
-}
-
-Json arm_document() {
-  std::ifstream in(kArmFile);
-  return Json::parse(in);
-}
 
 std::string arm_error(const Json& doc) {
   try {
@@ -88,15 +78,6 @@ Eigen::Isometry3d second_dh(const Vector7d& q) {
         Eigen::Translation3d(r.a, 0, 0) * Eigen::AngleAxisd(r.alpha, Eigen::Vector3d::UnitX());
   }
   return T;
-}
-
-double rotation_distance(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B) { return (A - B).cwiseAbs().maxCoeff(); }
-
-fs::path temp_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("hapsyn-human-arm-" + name + "-" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
 }
 
 // ------------------------------------------------------------------------- model ----
