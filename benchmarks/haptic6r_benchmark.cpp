@@ -21,6 +21,7 @@
 
 #include <hapsyn/accel/mechanism_acceleration.hpp>
 #include <hapsyn/accel/metric_acceleration.hpp>
+#include <hapsyn/accel/vector_dispatch.hpp>
 #include <hapsyn/problem.hpp>
 #include <hapsyn/internal/registry.hpp>
 #include <hapsyn/internal/study.hpp>
@@ -142,6 +143,21 @@ void BM_CoverageAllFourTermsBlock(benchmark::State& state) {
   state.counters["poses"] = n;
   state.counters["per_pose"] = benchmark::Counter(static_cast<double>(n) * static_cast<double>(state.iterations()),
                                                   benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+// BM_CoverageAllFourTermsBlock with the block kernels compiled for one instruction set
+// (hapsyn/accel/vector_dispatch.hpp; 0 = SSE2, 1 = AVX2, 2 = AVX-512), as on a CPU whose widest
+// it is: the kernels' cost per instruction set on this machine.
+void BM_CoverageAllFourTermsBlockOnTarget(benchmark::State& state) {
+  const auto target = static_cast<hapsyn::VectorTarget>(state.range(0));
+  if (!hapsyn::vector_target_available(target)) {
+    state.SkipWithError("this CPU lacks the instruction set");
+    return;
+  }
+  state.SetLabel(hapsyn::vector_target_name(target));
+  hapsyn::force_vector_target(target);
+  BM_CoverageAllFourTermsBlock(state);
+  hapsyn::force_vector_target(std::nullopt);
 }
 
 hapsyn::Study& full_study() {
@@ -359,6 +375,7 @@ BENCHMARK(BM_CoveragePoseVelocity)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CoveragePoseVelocityAcceleration)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CoverageAllFourTerms)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CoverageAllFourTermsBlock)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CoverageAllFourTermsBlockOnTarget)->ArgName("target")->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FullObjectivePerDesignPerSample)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_FullObjectivePerDesignGathered)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_FullObjectivePerDesign)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();

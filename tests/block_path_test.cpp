@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include "vector_targets.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -67,7 +69,7 @@ TEST(BlockPath, FiveBarStudiesTakeIt) {
   EXPECT_TRUE(fivebar_problem(Json::array({Json{{"metric", "gii"}}, Json{{"metric", "gdi"}}}))->block_path());
 }
 
-TEST(BlockPath, EvaluationsEqualThePerSamplePathWithAndWithoutPruning) {
+void evaluations_equal_the_per_sample_path() {
   const auto problem = fivebar_problem(Json::array({Json{{"metric", "gii"}}}));
   ASSERT_TRUE(problem->block_path());
   auto block_scratch = problem->make_eval_scratch();
@@ -83,7 +85,7 @@ TEST(BlockPath, EvaluationsEqualThePerSamplePathWithAndWithoutPruning) {
       const Evaluation b = problem->evaluate(x.data(), *block_scratch, block);
       const Evaluation& s = problem->evaluate(x.data(), *single_scratch, single);
       expect_same(b, s, "threshold " + std::to_string(below));
-      if (HasFatalFailure()) return;
+      if (::testing::Test::HasFatalFailure()) return;
       feasible += s.status == EvalStatus::kFeasible;
       pruned += s.status == EvalStatus::kPruned;
       failed += s.status == EvalStatus::kSampleFailed;
@@ -93,6 +95,17 @@ TEST(BlockPath, EvaluationsEqualThePerSamplePathWithAndWithoutPruning) {
   EXPECT_GT(feasible, 100);
   EXPECT_GT(pruned, 100);
   EXPECT_GT(failed, 100);
+}
+
+// On every vector target this machine runs (hapsyn/accel/vector_dispatch.hpp: gii's block loop
+// is compiled per target).
+TEST(BlockPath, EvaluationsEqualThePerSamplePathWithAndWithoutPruning) {
+  for (const hapsyn::VectorTarget target : hapsyn::testing::available_vector_targets()) {
+    const hapsyn::testing::ForcedVectorTarget forced(target);
+    SCOPED_TRACE(hapsyn::vector_target_name(target));
+    evaluations_equal_the_per_sample_path();
+    if (HasFatalFailure()) return;
+  }
 }
 
 TEST(BlockPath, SubsetsInAnyOrderEqualThePerSamplePath) {
@@ -258,7 +271,7 @@ TEST(BlockPath, AveragingStudiesWithSceneAttributesTakeIt) {
   EXPECT_FALSE(coverage_problem(Json::array({"pose"}), Json{{"metric", "gii"}, {"options", {{"rows", "translational"}}}})->block_path());
 }
 
-TEST(BlockPath, AveragingEvaluationsEqualThePerSamplePath) {
+void averaging_evaluations_equal_the_per_sample_path() {
   std::mt19937_64 rng(31);
   for (const Json& terms : {Json::array({"pose", "velocity", "acceleration", "force"}), Json::array({"velocity"}),
                             Json::array({"acceleration", "force"})}) {
@@ -293,6 +306,16 @@ TEST(BlockPath, AveragingEvaluationsEqualThePerSamplePath) {
       }
     }
     EXPECT_GT(reached, 6) << "too few designs reach the workspace to test anything";
+  }
+}
+
+// On every vector target this machine runs: the haptic 6R's and coverage's block kernels are
+// compiled per target (hapsyn/accel/vector_dispatch.hpp), each with its own lanes type.
+TEST(BlockPath, AveragingEvaluationsEqualThePerSamplePath) {
+  for (const hapsyn::VectorTarget target : hapsyn::testing::available_vector_targets()) {
+    const hapsyn::testing::ForcedVectorTarget forced(target);
+    SCOPED_TRACE(hapsyn::vector_target_name(target));
+    averaging_evaluations_equal_the_per_sample_path();
   }
 }
 

@@ -102,11 +102,11 @@ TEST(FastMath, LaneSinCosEqualsTheScalarCallLaneByLane) {
       double expected_s = 0.0, expected_c = 0.0;
       hapsyn::fast::sin_cos(xs[first + static_cast<std::size_t>(lane)], expected_s, expected_c);
       if (std::isnan(expected_s)) {
-        EXPECT_TRUE(std::isnan(s.v[lane]) && std::isnan(c.v[lane])) << xs[first + static_cast<std::size_t>(lane)];
+        EXPECT_TRUE(std::isnan(s[lane]) && std::isnan(c[lane])) << xs[first + static_cast<std::size_t>(lane)];
         continue;
       }
-      EXPECT_EQ(s.v[lane], expected_s) << "sin(" << xs[first + static_cast<std::size_t>(lane)] << ")";
-      EXPECT_EQ(c.v[lane], expected_c) << "cos(" << xs[first + static_cast<std::size_t>(lane)] << ")";
+      EXPECT_EQ(s[lane], expected_s) << "sin(" << xs[first + static_cast<std::size_t>(lane)] << ")";
+      EXPECT_EQ(c[lane], expected_c) << "cos(" << xs[first + static_cast<std::size_t>(lane)] << ")";
     }
   }
 }
@@ -143,20 +143,20 @@ TEST(FastMath, LaneAtan2EqualsTheScalarCallLaneByLane) {
       const double expected = hapsyn::fast::atan2(ys[lane], xs[lane]);
       const double expected_mirrored = hapsyn::fast::atan2(ys[lane], -xs[lane]);
       if (std::isnan(expected)) {
-        EXPECT_TRUE(std::isnan(angle.v[lane])) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
-        EXPECT_TRUE(std::isnan(pair_angle.v[lane])) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
-        EXPECT_TRUE(std::isnan(pair_mirrored.v[lane])) << "atan2(" << ys[lane] << ", " << -xs[lane] << ")";
+        EXPECT_TRUE(std::isnan(angle[lane])) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
+        EXPECT_TRUE(std::isnan(pair_angle[lane])) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
+        EXPECT_TRUE(std::isnan(pair_mirrored[lane])) << "atan2(" << ys[lane] << ", " << -xs[lane] << ")";
       } else {
-        EXPECT_EQ(std::signbit(angle.v[lane]), std::signbit(expected)) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
-        EXPECT_EQ(angle.v[lane], expected) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
-        const double got = pair_angle.v[lane], got_mirrored = pair_mirrored.v[lane];  // clang: no address of a vector element
+        EXPECT_EQ(std::signbit(angle[lane]), std::signbit(expected)) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
+        EXPECT_EQ(angle[lane], expected) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
+        const double got = pair_angle[lane], got_mirrored = pair_mirrored[lane];  // clang: no address of a vector element
         EXPECT_EQ(std::memcmp(&got, &expected, sizeof expected), 0) << "atan2(" << ys[lane] << ", " << xs[lane] << ")";
         EXPECT_EQ(std::memcmp(&got_mirrored, &expected_mirrored, sizeof expected), 0)
             << "atan2(" << ys[lane] << ", " << -xs[lane] << ")";
       }
       const double expected_root = std::sqrt(std::fabs(xs[lane]));
       if (!std::isnan(expected_root)) {
-        EXPECT_EQ(root.v[lane], expected_root) << xs[lane];
+        EXPECT_EQ(root[lane], expected_root) << xs[lane];
       }
     }
   }
@@ -183,7 +183,7 @@ TEST(FastMath, LaneFloorOfSmallValues) {
     double in[hapsyn::kBlockLanes];
     for (int lane = 0; lane < hapsyn::kBlockLanes; ++lane) in[lane] = xs[std::min(first + static_cast<std::size_t>(lane), xs.size() - 1)];
     const hapsyn::Lanes f = hapsyn::floor_small(hapsyn::Lanes::load(in));
-    for (int lane = 0; lane < hapsyn::kBlockLanes; ++lane) EXPECT_EQ(f.v[lane], std::floor(in[lane])) << in[lane];
+    for (int lane = 0; lane < hapsyn::kBlockLanes; ++lane) EXPECT_EQ(f[lane], std::floor(in[lane])) << in[lane];
   }
 }
 

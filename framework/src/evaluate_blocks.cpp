@@ -99,10 +99,10 @@ bool Evaluator::block_moves(std::size_t i, const double* v, double current, int 
     return false;
   }
   // y = v + (v - v) is v where v is finite and NaN elsewhere, and a NaN is never strictly
-  // worse. all_greater / all_less compare pairs of lanes (the baseline instruction set's
-  // vectors): the scan ran once per block and cost a sixth of an unpruned five-bar grid.
-  const Lanes x = Lanes::load(v);
-  const Lanes y = x + (x - x);
+  // worse. LanesSse2: this file is compiled for the baseline instruction set, whose vectors
+  // hold pairs of lanes (a 64-byte Lanes would be compared lane by lane there).
+  const LanesSse2 x = LanesSse2::load(v);
+  const LanesSse2 y = x + (x - x);
   return !(min ? all_greater(y, current) : all_less(y, current));
 }
 

@@ -298,9 +298,14 @@ class Haptic6RModel final : public MechanismModel {
   void solve_sample(const double* pose, Needs needs, SampleQuantities& out) const;
   SampleStatus configuration_impl(const double* pose, Vector6d& q, JointTrig& trig) const;
   SampleStatus configure(const double* pose, Vector6d& q, JointTrig& trig) const;  // inlined into both
-  void solve_block_impl(const PoseBlock& poses, Needs needs, QuantityBlock& out) const;
-  void quantities_block_impl(const Vector6d* q, int count, Needs needs, QuantityBlock& out) const;
-  void fill_block(const Lanes* cosine, const Lanes* sine, const Lanes& reachable, Needs needs, QuantityBlock& out) const;  // inlined into both
+  // The block kernels on lanes type L, inlined into each instruction set's entry
+  // (hapsyn/accel/vector_dispatch.hpp); defined in haptic6r_block.cpp.
+  template <class L>
+  void solve_block_lanes(const PoseBlock& poses, Needs needs, QuantityBlock& out) const;
+  template <class L>
+  void quantities_block_lanes(const Vector6d* q, int count, Needs needs, QuantityBlock& out) const;
+  template <class L>
+  void fill_block(const L* cosine, const L* sine, const L& reachable, Needs needs, QuantityBlock& out) const;
   int inverse_kinematics_impl(const Eigen::Isometry3d& target, std::array<Vector6d, 8>& solutions,
                               std::array<JointTrig, 8>* trig) const;
   void quantities_impl(const Vector6d& q, Matrix6d* jacobian, Matrix6d* inertia, Vector6d* gravity) const;

@@ -20,7 +20,7 @@ namespace hapsyn::plugins::haptic6r_chain {
 // Plain arrays, not Eigen 3-vectors: the per-sample kernels are scalar code with many
 // live values, and Eigen's 2-wide packing of 3-vectors spilled halves to the stack and read
 // them back as pairs (store-forwarding stalls that cost more than the arithmetic).
-// T = double for one sample, T = hapsyn::Lanes for a block of samples (hapsyn/accel/lanes.hpp): the
+// T = double for one sample, T = a lanes type (hapsyn::LanesOf) for a block of samples (hapsyn/accel/lanes.hpp): the
 // kernels below are templates on it, one source for the per-sample and the block path.
 template <typename T>
 struct ChainOf {
@@ -29,7 +29,8 @@ struct ChainOf {
 using Chain = ChainOf<double>;
 
 [[gnu::always_inline]] inline void assign(double& t, double value) { t = value; }
-[[gnu::always_inline]] inline void assign(Lanes& t, double value) { t = Lanes::splat(value); }
+template <int B, int N>
+[[gnu::always_inline]] inline void assign(LanesOf<B, N>& t, double value) { t = LanesOf<B, N>::splat(value); }
 
 // The structure read_haptic6r_dh() admits (docs/design.md section 4.4): alpha = (0, 0, 90, 0, 90,
 // 0) deg, a = (l1, l2, 0, l4, 0, 0), d = (0, 0, -l3, 0, 0, l5). The kernels below multiply none of

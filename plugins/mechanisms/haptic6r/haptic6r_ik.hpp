@@ -41,24 +41,31 @@ constexpr double kBoundaryTolerance = 1e-12;
 [[gnu::always_inline]] inline double where_greater(double x, double y, double a, double b) { return x > y ? a : b; }
 [[gnu::always_inline]] inline double where_equal(double x, double y, double a, double b) { return x == y ? a : b; }
 [[gnu::always_inline]] inline double magnitude(double a) { return std::fabs(a); }
-[[gnu::always_inline]] inline Lanes magnitude(const Lanes& a) { return abs(a); }
+template <int B, int N>
+[[gnu::always_inline]] inline LanesOf<B, N> magnitude(const LanesOf<B, N>& a) { return abs(a); }
 [[gnu::always_inline]] inline double root(double a) { return std::sqrt(a); }
-[[gnu::always_inline]] inline Lanes root(const Lanes& a) { return hapsyn::sqrt(a); }
+template <int B, int N>
+[[gnu::always_inline]] inline LanesOf<B, N> root(const LanesOf<B, N>& a) { return hapsyn::sqrt(a); }
 [[gnu::always_inline]] inline double angle_of(double y, double x) { return fast::atan2(y, x); }
-[[gnu::always_inline]] inline Lanes angle_of(const Lanes& y, const Lanes& x) { return hapsyn::atan2(y, x); }
+template <int B, int N>
+[[gnu::always_inline]] inline LanesOf<B, N> angle_of(const LanesOf<B, N>& y, const LanesOf<B, N>& x) { return hapsyn::atan2(y, x); }
 /// angle_of(y, x) and angle_of(y, -x); the lanes share the work of the two (the same values).
 [[gnu::always_inline]] inline void angles_of(double y, double x, double& angle, double& mirrored) {
   angle = fast::atan2(y, x);
   mirrored = fast::atan2(y, -x);
 }
-[[gnu::always_inline]] inline void angles_of(const Lanes& y, const Lanes& x, Lanes& angle, Lanes& mirrored) {
+template <int B, int N>
+[[gnu::always_inline]] inline void angles_of(const LanesOf<B, N>& y, const LanesOf<B, N>& x, LanesOf<B, N>& angle,
+                                          LanesOf<B, N>& mirrored) {
   atan2_and_mirrored(y, x, angle, mirrored);
 }
 [[gnu::always_inline]] inline double round_down(double a) { return std::floor(a); }
-[[gnu::always_inline]] inline Lanes round_down(const Lanes& a) { return floor_small(a); }  // |a| < 2^51 here
+template <int B, int N>
+[[gnu::always_inline]] inline LanesOf<B, N> round_down(const LanesOf<B, N>& a) { return floor_small(a); }  // |a| < 2^51 here
 /// Whether any lane holds a non-zero truth value.
 [[gnu::always_inline]] inline bool any(double truth) { return truth != 0.0; }
-[[gnu::always_inline]] inline bool any(const Lanes& truth) { return any_nonzero(truth); }
+template <int B, int N>
+[[gnu::always_inline]] inline bool any(const LanesOf<B, N>& truth) { return any_nonzero(truth); }
 template <typename T>
 [[gnu::always_inline]] inline T splat(double value) {
   if constexpr (std::is_same_v<T, double>) {
@@ -471,7 +478,7 @@ template <typename T>
   out.status = singular ? SampleStatus::kSingular : SampleStatus::kReachable;
 }
 
-// ---- Step 4 and after for a block (T = Lanes): what configure_branches() decides for each
+// ---- Step 4 and after for a block (T = a lanes type): what configure_branches() decides for each
 // lane, as lane-wise selections (KERNELS.md section 14.4). The eight slots share their
 // angles (theta1 and theta2 come from two planar solutions and two elbows, theta4 from two
 // branches, theta5 and theta6 from two branches and two h signs; only theta3 is the slot's
@@ -483,31 +490,34 @@ template <typename T>
 /// pass upper (with tolerance). admissible()'s loops become a fixed number of conditional turns
 /// (IkModel::turns_up, turns_down, enough for any wrapped angle): each is the loop's addition
 /// where a lane still needs it and leaves the other lanes unchanged.
-[[gnu::always_inline]] inline Lanes admissible_lanes(const Lanes& q, const IkModel& m, std::size_t i) {
+template <class L>
+[[gnu::always_inline]] inline L admissible_lanes(const L& q, const IkModel& m, std::size_t i) {
   constexpr double tol = kHaptic6RAngleTolerance;
-  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
+  const L zero = L::splat(0.0), one = L::splat(1.0);
   if (m.full_turn[i]) return where_equal(q, q, one, zero);  // q in [-pi, pi] is inside unless NaN
-  const Lanes lower = Lanes::splat(m.lower[i]), upper = Lanes::splat(m.upper[i]);
+  const L lower = L::splat(m.lower[i]), upper = L::splat(m.upper[i]);
   // Written with < , > and == only: GCC 12 compiles a lane-wise <= or >= of doubles as one scalar
   // comparison per lane. A NaN is not inside (the last test), as in admissible().
-  const Lanes inside = where_less(q, lower, zero, where_greater(q, upper, zero, where_equal(q, q, one, zero)));
+  const L inside = where_less(q, lower, zero, where_greater(q, upper, zero, where_equal(q, q, one, zero)));
   if (!any_zero(inside)) return inside;  // the common case
-  const Lanes low = Lanes::splat(m.lower[i] - tol), high = Lanes::splat(m.lower[i] + 2.0 * kPi - tol);
-  Lanes v = q;
+  const L low = L::splat(m.lower[i] - tol), high = L::splat(m.lower[i] + 2.0 * kPi - tol);
+  L v = q;
   for (int t = 0; t < m.turns_up[i]; ++t) v = where_less(v, low, v + 2.0 * kPi, v);
   for (int t = 0; t < m.turns_down[i]; ++t) v = where_greater(v, high, v - 2.0 * kPi, v);
   v = where_less(v, low, v + 2.0 * kPi, v);
-  const Lanes below_upper = where_greater(v, Lanes::splat(m.upper[i] + tol), zero, where_equal(v, v, one, zero));
+  const L below_upper = where_greater(v, L::splat(m.upper[i] + tol), zero, where_equal(v, v, one, zero));
   return where_equal(inside, one, one, below_upper);
 }
 
 /// One joint's wrapped angle q = wrap(theta - offset), its admissibility and its wrapped
 /// difference to home, for every lane.
+template <class L>
 struct JointLanes {
-  Lanes q, admissible, from_home;
+  L q, admissible, from_home;
 };
 
-[[gnu::always_inline]] inline void joint_lanes(const Lanes& theta, const IkModel& m, std::size_t i, JointLanes& out) {
+template <class L>
+[[gnu::always_inline]] inline void joint_lanes(const L& theta, const IkModel& m, std::size_t i, JointLanes<L>& out) {
   out.q = joint_angle(theta, m, i);
   out.admissible = admissible_lanes(out.q, m, i);
   out.from_home = from_home(out.q, m, i);
@@ -517,36 +527,38 @@ struct JointLanes {
 /// and elbow b2 (the slots with hs ^ b4 = k), joint 4 of branch b4, joints 5 and 6 of h sign hs
 /// and branch b4; theta1 and theta2 unwrapped (theta3 is each slot's own); valid[k] is 1 where
 /// planar solution k's slots are solutions.
+template <class L>
 struct SharedJoints {
-  JointLanes j1[2][2], j2[2][2], j4[2], j5[2][2], j6[2][2];
-  Lanes theta1[2][2], theta2[2][2], valid[2];
+  JointLanes<L> j1[2][2], j2[2][2], j4[2], j5[2][2], j6[2][2];
+  L theta1[2][2], theta2[2][2], valid[2];
 };
 
-[[gnu::always_inline]] inline void shared_joints(const Branches<Lanes>& b, const IkModel& m, const Lanes& solvable,
-                                                 SharedJoints& out) {
+template <class L>
+[[gnu::always_inline]] inline void shared_joints(const Branches<L>& b, const IkModel& m, const L& solvable,
+                                                 SharedJoints<L>& out) {
   constexpr double tol = kHaptic6RAngleTolerance;
-  const Lanes zero = Lanes::splat(0.0);
+  const L zero = L::splat(0.0);
   for (int k = 0; k < 2; ++k) {
-    const PlanarSolution<Lanes>& p = b.planar[k];
+    const PlanarSolution<L>& p = b.planar[k];
     out.valid[k] = solvable * b.g.ok * p.valid;
     for (int b2 = 0; b2 < 2; ++b2) {  // assemble()'s angles of joints 1 and 2
       out.theta2[k][b2] = b2 == 0 ? p.theta2 : -p.theta2;
       out.theta1[k][b2] = b2 == 0 ? p.phi - p.beta : p.phi + p.beta;
       joint_lanes(out.theta1[k][b2], m, 0, out.j1[k][b2]);
-      JointLanes& j2 = out.j2[k][b2];
+      JointLanes<L>& j2 = out.j2[k][b2];
       joint_lanes(out.theta2[k][b2], m, 1, j2);
       if (m.selection == Haptic6RSelection::kElbowLeft) {  // admissible()'s elbow side
-        j2.admissible = where_less(j2.q, Lanes::splat(-tol), zero, j2.admissible);
+        j2.admissible = where_less(j2.q, L::splat(-tol), zero, j2.admissible);
       } else if (m.selection == Haptic6RSelection::kElbowRight) {
-        j2.admissible = where_greater(j2.q, Lanes::splat(tol), zero, j2.admissible);
+        j2.admissible = where_greater(j2.q, L::splat(tol), zero, j2.admissible);
       }
     }
   }
   for (int b4 = 0; b4 < 2; ++b4) joint_lanes(b.theta4_branch[b4], m, 3, out.j4[b4]);
   for (int hs = 0; hs < 2; ++hs) {
     for (int b4 = 0; b4 < 2; ++b4) {  // assemble()'s theta5 and theta6
-      const Lanes theta5 = hs == 0 ? b.wrist.theta5[b4] : kPi - b.wrist.theta5[1 - b4];
-      const Lanes theta6 = hs == 0 ? b.wrist.theta6[b4] : b.wrist.theta6[1 - b4] + kPi;
+      const L theta5 = hs == 0 ? b.wrist.theta5[b4] : kPi - b.wrist.theta5[1 - b4];
+      const L theta6 = hs == 0 ? b.wrist.theta6[b4] : b.wrist.theta6[1 - b4] + kPi;
       joint_lanes(theta5, m, 4, out.j5[hs][b4]);
       joint_lanes(theta6, m, 5, out.j6[hs][b4]);
     }
@@ -555,59 +567,61 @@ struct SharedJoints {
 
 /// select() for every lane: the slot (as a number, -1 for none) of the admissible valid slot
 /// closest to home, the first on ties (a strict < in slot order).
-[[gnu::always_inline]] inline Lanes select_lanes(const Branches<Lanes>& b, const IkModel& m, const SharedJoints& j) {
-  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
-  Lanes best = Lanes::splat(-1.0), best_distance = Lanes::splat(INFINITY);
+template <class L>
+[[gnu::always_inline]] inline L select_lanes(const Branches<L>& b, const IkModel& m, const SharedJoints<L>& j) {
+  const L zero = L::splat(0.0), one = L::splat(1.0);
+  L best = L::splat(-1.0), best_distance = L::splat(INFINITY);
   for (int slot = 0; slot < 8; ++slot) {
     const int hs = slot >> 2, b4 = (slot >> 1) & 1, b2 = slot & 1, k = hs ^ b4;
     if (!any_nonzero(j.valid[k])) continue;
-    const Lanes yaw = hs == 0 ? b.yaw0 : b.yaw0 + kPi;
-    JointLanes j3;
+    const L yaw = hs == 0 ? b.yaw0 : b.yaw0 + kPi;
+    JointLanes<L> j3;
     joint_lanes(yaw - j.theta1[k][b2] - j.theta2[k][b2], m, 2, j3);
-    const JointLanes* joint[6] = {&j.j1[k][b2], &j.j2[k][b2], &j3, &j.j4[b4], &j.j5[hs][b4], &j.j6[hs][b4]};
-    Lanes candidate = j.valid[k], distance = zero;
+    const JointLanes<L>* joint[6] = {&j.j1[k][b2], &j.j2[k][b2], &j3, &j.j4[b4], &j.j5[hs][b4], &j.j6[hs][b4]};
+    L candidate = j.valid[k], distance = zero;
     for (int i = 0; i < 6; ++i) {
       candidate = candidate * joint[i]->admissible;
       distance += joint[i]->from_home * joint[i]->from_home;
     }
-    const Lanes take = where_less(distance, best_distance, candidate, zero);
+    const L take = where_less(distance, best_distance, candidate, zero);
     best_distance = where_equal(take, one, distance, best_distance);
-    best = where_equal(take, one, Lanes::splat(slot), best);
+    best = where_equal(take, one, L::splat(slot), best);
   }
   return best;
 }
 
 /// slot_trig() for every lane's slot `slot` (0..7; a lane without a slot gets slot 0's values):
 /// the same expressions on the inputs the slot's bits pick.
-[[gnu::always_inline]] inline void slot_trig_lanes(const Branches<Lanes>& b, const Lanes& slot, Lanes (&c)[6],
-                                                   Lanes (&s)[6]) {
-  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
-  const Lanes hs = where_greater(slot, Lanes::splat(3.5), one, zero);
-  const Lanes b4 = where_greater(slot - 4.0 * hs, Lanes::splat(1.5), one, zero);
-  const Lanes b2 = slot - 4.0 * hs - 2.0 * b4;
-  const Lanes k = where_equal(hs, b4, zero, one);  // hs ^ b4
-  const PlanarSolution<Lanes>&p0 = b.planar[0], &p1 = b.planar[1];
-  const Lanes cos_phi = pick(k, p1.cos_phi, p0.cos_phi), sin_phi = pick(k, p1.sin_phi, p0.sin_phi);
-  const Lanes cos_beta = pick(k, p1.cos_beta, p0.cos_beta), sin_beta = pick(k, p1.sin_beta, p0.sin_beta);
-  const Lanes c2 = pick(k, p1.c2, p0.c2), s2 = pick(k, p1.s2, p0.s2);
-  const Lanes sb = pick(b2, sin_beta, -sin_beta);
+template <class L>
+[[gnu::always_inline]] inline void slot_trig_lanes(const Branches<L>& b, const L& slot, L (&c)[6],
+                                                   L (&s)[6]) {
+  const L zero = L::splat(0.0), one = L::splat(1.0);
+  const L hs = where_greater(slot, L::splat(3.5), one, zero);
+  const L b4 = where_greater(slot - 4.0 * hs, L::splat(1.5), one, zero);
+  const L b2 = slot - 4.0 * hs - 2.0 * b4;
+  const L k = where_equal(hs, b4, zero, one);  // hs ^ b4
+  const PlanarSolution<L>&p0 = b.planar[0], &p1 = b.planar[1];
+  const L cos_phi = pick(k, p1.cos_phi, p0.cos_phi), sin_phi = pick(k, p1.sin_phi, p0.sin_phi);
+  const L cos_beta = pick(k, p1.cos_beta, p0.cos_beta), sin_beta = pick(k, p1.sin_beta, p0.sin_beta);
+  const L c2 = pick(k, p1.c2, p0.c2), s2 = pick(k, p1.s2, p0.s2);
+  const L sb = pick(b2, sin_beta, -sin_beta);
   c[0] = cos_phi * cos_beta - sin_phi * sb;
   s[0] = sin_phi * cos_beta + cos_phi * sb;
   c[1] = c2;
   s[1] = pick(b2, -s2, s2);
-  const Lanes c12 = c[0] * c[1] - s[0] * s[1], s12 = s[0] * c[1] + c[0] * s[1];
-  const Lanes sign = pick(hs, Lanes::splat(-1.0), one);
-  const Lanes cy = -sign * b.g.hy, sy = sign * b.g.hx;
+  const L c12 = c[0] * c[1] - s[0] * s[1], s12 = s[0] * c[1] + c[0] * s[1];
+  const L sign = pick(hs, L::splat(-1.0), one);
+  const L cy = -sign * b.g.hy, sy = sign * b.g.hx;
   c[2] = cy * c12 + sy * s12;
   s[2] = sy * c12 - cy * s12;
   c[3] = pick(b4, -b.g.c4_abs, b.g.c4_abs);
   s[3] = b.g.s4;
   // hs = 0 takes branch b4's wrist angles, hs = 1 the other branch's (pi - theta5, theta6 + pi).
-  const WristAngles<Lanes>& w = b.wrist;
-  const Lanes cos5_same = pick(b4, w.cos5[1], w.cos5[0]), cos5_other = pick(b4, w.cos5[0], w.cos5[1]);
-  const Lanes sin5_same = pick(b4, w.sin5[1], w.sin5[0]), sin5_other = pick(b4, w.sin5[0], w.sin5[1]);
-  const Lanes cos6_same = pick(b4, w.cos6[1], w.cos6[0]), cos6_other = pick(b4, w.cos6[0], w.cos6[1]);
-  const Lanes sin6_same = pick(b4, w.sin6[1], w.sin6[0]), sin6_other = pick(b4, w.sin6[0], w.sin6[1]);
+  const WristAngles<L>& w = b.wrist;
+  const L cos5_same = pick(b4, w.cos5[1], w.cos5[0]), cos5_other = pick(b4, w.cos5[0], w.cos5[1]);
+  const L sin5_same = pick(b4, w.sin5[1], w.sin5[0]), sin5_other = pick(b4, w.sin5[0], w.sin5[1]);
+  const L cos6_same = pick(b4, w.cos6[1], w.cos6[0]), cos6_other = pick(b4, w.cos6[0], w.cos6[1]);
+  const L sin6_same = pick(b4, w.sin6[1], w.sin6[0]), sin6_other = pick(b4, w.sin6[0], w.sin6[1]);
   c[4] = pick(hs, -cos5_other, cos5_same);
   s[4] = pick(hs, sin5_other, sin5_same);
   c[5] = pick(hs, -cos6_other, cos6_same);
@@ -616,31 +630,33 @@ struct SharedJoints {
 
 /// What the block kernel needs of each lane's outcome: the status, and the chosen
 /// configuration's DH-angle cosines c and sines s where it is reachable (1 and 0 elsewhere).
+template <class L>
 struct LaneOutcomes {
   alignas(64) std::int32_t status[kBlockLanes];  // SampleStatus values
-  Lanes reachable;  // 1 where the status is kReachable, else 0
-  Lanes c[6], s[6];
+  L reachable;  // 1 where the status is kReachable, else 0
+  L c[6], s[6];
 };
 
 /// configure_branches() for every lane of a block at once: the same statuses and, for reachable
 /// lanes, the same cosines and sines (the same expressions in the same order). `solvable` is 1
 /// for lanes whose pose solve() takes to the IK (finite position, quaternion of norm > 1e-9),
 /// 0 for lanes it settles as unreachable before.
-[[gnu::always_inline]] inline void configure_lanes(const Branches<Lanes>& b, const IkModel& m, const Lanes& solvable,
-                                                   LaneOutcomes& out) {
-  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
-  SharedJoints joints;
+template <class L>
+[[gnu::always_inline]] inline void configure_lanes(const Branches<L>& b, const IkModel& m, const L& solvable,
+                                                   LaneOutcomes<L>& out) {
+  const L zero = L::splat(0.0), one = L::splat(1.0);
+  SharedJoints<L> joints;
   shared_joints(b, m, solvable, joints);
-  const Lanes best = select_lanes(b, m, joints);
+  const L best = select_lanes(b, m, joints);
   slot_trig_lanes(b, best, out.c, out.s);
   // The classification, and the zero configuration (1, 0) for lanes that are not reachable.
-  const Lanes below = Lanes::splat(m.singularity_tolerance);
-  const Lanes wrist_norm = root(b.target.r[0][2] * b.target.r[0][2] + b.target.r[1][2] * b.target.r[1][2]);
-  const Lanes singular = where_less(abs(out.s[1]), below, one,
+  const L below = L::splat(m.singularity_tolerance);
+  const L wrist_norm = root(b.target.r[0][2] * b.target.r[0][2] + b.target.r[1][2] * b.target.r[1][2]);
+  const L singular = where_less(abs(out.s[1]), below, one,
                                     where_less(abs(out.c[3]), below, one, where_less(wrist_norm, below, one, zero)));
-  const Lanes found = where_equal(joints.valid[0] + joints.valid[1], zero, zero, one);
-  const Lanes chosen = where_less(best, zero, zero, one);
-  const Lanes reachable = chosen * (one - singular);
+  const L found = where_equal(joints.valid[0] + joints.valid[1], zero, zero, one);
+  const L chosen = where_less(best, zero, zero, one);
+  const L reachable = chosen * (one - singular);
   out.reachable = reachable;
   for (int i = 0; i < 6; ++i) {
     out.c[i] = pick(reachable, out.c[i], one);
@@ -648,14 +664,12 @@ struct LaneOutcomes {
   }
   // The status codes as lane selections, converted to integers at once (reading the truth values
   // lane by lane cost a store and a reload per lane).
-  const Lanes code = where_equal(
-      found, zero, Lanes::splat(static_cast<double>(SampleStatus::kUnreachable)),
-      where_equal(chosen, zero, Lanes::splat(static_cast<double>(SampleStatus::kInvalid)),
-                  where_equal(singular, zero, Lanes::splat(static_cast<double>(SampleStatus::kReachable)),
-                              Lanes::splat(static_cast<double>(SampleStatus::kSingular)))));
-  typedef std::int32_t Codes __attribute__((vector_size(kBlockLanes * sizeof(std::int32_t))));
-  const Codes codes = __builtin_convertvector(code.v, Codes);
-  std::memcpy(out.status, &codes, sizeof codes);
+  const L code = where_equal(
+      found, zero, L::splat(static_cast<double>(SampleStatus::kUnreachable)),
+      where_equal(chosen, zero, L::splat(static_cast<double>(SampleStatus::kInvalid)),
+                  where_equal(singular, zero, L::splat(static_cast<double>(SampleStatus::kReachable)),
+                              L::splat(static_cast<double>(SampleStatus::kSingular)))));
+  to_int32(code, out.status);
 }
 
 /// IK, selection and classification of a pose whose position is finite and whose quaternion has

@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include "vector_targets.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -690,7 +692,7 @@ PoseBlock pose_block(const std::vector<std::array<double, 7>>& poses, std::size_
 }
 }  // namespace
 
-TEST(Haptic6R, BlockKernelEqualsSolveLaneByLane) {
+void block_kernel_equals_solve_lane_by_lane_on_the_current_target() {
   // Poses of random configurations (reachable), their singular and boundary neighbours, poses
   // out of reach and a degenerate quaternion, in blocks of every fill (1..8 lanes).
   std::mt19937 rng(17);
@@ -745,6 +747,16 @@ TEST(Haptic6R, BlockKernelEqualsSolveLaneByLane) {
   EXPECT_GT(other, 50);
 }
 
+// On every vector target this machine runs (hapsyn/accel/vector_dispatch.hpp).
+TEST(Haptic6R, BlockKernelEqualsSolveLaneByLane) {
+  for (const hapsyn::VectorTarget target : hapsyn::testing::available_vector_targets()) {
+    const hapsyn::testing::ForcedVectorTarget forced(target);
+    SCOPED_TRACE(hapsyn::vector_target_name(target));
+    block_kernel_equals_solve_lane_by_lane_on_the_current_target();
+    if (HasFatalFailure()) return;
+  }
+}
+
 // wrap_near() is wrap() for angles in [-3 pi, 3 pi) (the range the IK gives it): bit for bit
 // on random angles, at the neighbours of every multiple of pi in the range, and for lanes.
 TEST(Haptic6RWrap, NearWrapEqualsWrapInItsRange) {
@@ -768,7 +780,7 @@ TEST(Haptic6RWrap, NearWrapEqualsWrapInItsRange) {
   }
   for (std::size_t first = 0; first + kBlockLanes <= angles.size(); first += kBlockLanes) {
     const hapsyn::Lanes lanes = ik::wrap_near(hapsyn::Lanes::load(angles.data() + first));
-    for (int lane = 0; lane < kBlockLanes; ++lane) ASSERT_EQ(lanes.v[lane], ik::wrap(angles[first + static_cast<std::size_t>(lane)]));
+    for (int lane = 0; lane < kBlockLanes; ++lane) ASSERT_EQ(lanes[lane], ik::wrap(angles[first + static_cast<std::size_t>(lane)]));
   }
   // Outside the range it would not be wrap(): the selection guards its use (IkModel::near_offset).
   EXPECT_NE(ik::wrap_near(3.5 * kPi), ik::wrap(3.5 * kPi));
@@ -844,7 +856,7 @@ TEST(Haptic6R, BlockStatusesAndQuantitiesEqualSolveUnderEveryRule) {
   EXPECT_GT(seen[SampleStatus::kInvalid], 500);
 }
 
-TEST(Haptic6R, QuantitiesBlockEqualsQuantitiesLaneByLane) {
+void quantities_block_equals_quantities_lane_by_lane_on_the_current_target() {
   std::mt19937 rng(23);
   Fixture f(random_design(rng));
   const Needs needs = kNeedJacobian | kNeedInertia | kNeedGravity | kNeedActuatorLimits;
@@ -873,5 +885,15 @@ TEST(Haptic6R, QuantitiesBlockEqualsQuantitiesLaneByLane) {
     const std::string message = hapsyn::test::error_of([&] { f.model.quantities_block(qs.data(), bad, needs, *out); });
     EXPECT_NE(message.find("haptic6r: quantities_block: count = " + std::to_string(bad) + ": must be 1..8"), std::string::npos)
         << message;
+  }
+}
+
+// On every vector target this machine runs (hapsyn/accel/vector_dispatch.hpp).
+TEST(Haptic6R, QuantitiesBlockEqualsQuantitiesLaneByLane) {
+  for (const hapsyn::VectorTarget target : hapsyn::testing::available_vector_targets()) {
+    const hapsyn::testing::ForcedVectorTarget forced(target);
+    SCOPED_TRACE(hapsyn::vector_target_name(target));
+    quantities_block_equals_quantities_lane_by_lane_on_the_current_target();
+    if (HasFatalFailure()) return;
   }
 }

@@ -125,11 +125,13 @@ class Coverage final : public Metric, public MetricAcceleration {
  private:
   // local()'s body, compiled for AVX2/FMA and baseline CPUs (see hapsyn/accel/multiversion.hpp).
   void local_sample(const SampleQuantities& q, double* out) const;
-  // local_block()'s body, compiled for AVX-512, AVX2/FMA and baseline CPUs.
-  void local_block_impl(const QuantityBlock& q, double* out) const;
-  template <int Cols>  // inlined into local_block_impl (coverage_block.cpp)
-  void velocity_acceleration(const QuantityBlock& q, const Lanes (&jacobian)[6][6], const Lanes* gravity,
-                             const Lanes& reachable, double* out, int& k) const;
+  // local_block()'s body on lanes type L, inlined into each instruction set's entry
+  // (hapsyn/accel/vector_dispatch.hpp; coverage_block.cpp).
+  template <class L>
+  void local_block_lanes(const QuantityBlock& q, double* out) const;
+  template <int Cols, class L>  // inlined into local_block_lanes
+  void velocity_acceleration(const QuantityBlock& q, const L (&jacobian)[6][6], const L* gravity, const L& reachable,
+                             double* out, int& k) const;
 
   CoverageOptions options_;
   // The selected terms (options_.terms as flags: local() runs per sample).

@@ -5,7 +5,7 @@
 
 #include <hapsyn/error.hpp>
 #include <hapsyn/accel/lanes.hpp>
-#include <hapsyn/accel/multiversion.hpp>
+#include <hapsyn/accel/vector_dispatch.hpp>
 
 #include <cstdint>
 #include <limits>
@@ -28,9 +28,10 @@ const double* lane_attribute(const QuantityBlock& q, int index, int lane, const 
 }
 
 // Entry `e` of each lane's array, as lane vectors.
-[[gnu::always_inline]] inline Lanes gather(const double* const (&rows)[kBlockLanes], int e) {
-  Lanes r;
-  for (int lane = 0; lane < kBlockLanes; ++lane) r.v[lane] = rows[lane][e];
+template <class L>
+[[gnu::always_inline]] inline L gather(const double* const (&rows)[kBlockLanes], int e) {
+  L r;
+  for (int lane = 0; lane < kBlockLanes; ++lane) r.set(lane, rows[lane][e]);
   return r;
 }
 
@@ -38,27 +39,27 @@ const double* lane_attribute(const QuantityBlock& q, int index, int lane, const 
 // entry from the evaluator's block copy when it has one, else gathered from each lane's row one
 // entry of all lanes at a time (the transpose the other way round, one lane's 36 entries at a
 // time, cost a fifth of the whole objective). The errors are local()'s.
-template <int Cols>
+template <class L, int Cols>
 [[gnu::always_inline]] inline void load_attribute(const QuantityBlock& q, int index, const char* name, const char* term,
-                                                  Lanes (&rhs)[6][Cols], int column) {
+                                                  L (&rhs)[6][Cols], int column) {
   if (const double* lanes = q.attribute_lanes(index); lanes && q.attributes[index]->cols() == 36) {
     for (int r = 0; r < 6; ++r) {
-      for (int c = 0; c < 6; ++c) rhs[r][column + c] = Lanes::load(lanes + (r * 6 + c) * kBlockLanes);
+      for (int c = 0; c < 6; ++c) rhs[r][column + c] = L::load(lanes + (r * 6 + c) * kBlockLanes);
     }
     return;
   }
   const double* rows[kBlockLanes];
   for (int lane = 0; lane < kBlockLanes; ++lane) rows[lane] = lane_attribute(q, index, lane, name, term);
   for (int r = 0; r < 6; ++r) {
-    for (int c = 0; c < 6; ++c) rhs[r][column + c] = gather(rows, r * 6 + c);
+    for (int c = 0; c < 6; ++c) rhs[r][column + c] = gather<L>(rows, r * 6 + c);
   }
 }
 
 // The set of the lanes' row indices (each lane holds a small whole number) as bits: bit r is set
-// when some lane holds r. One conversion, one shift and or_of_lanes(), where reading the lanes
-// one by one cost a conversion and a shift per lane.
-[[gnu::always_inline]] inline unsigned row_bits(const Lanes& row) {
-  return static_cast<unsigned>(or_of_lanes((LaneBits{} + 1) << __builtin_convertvector(row.v, LaneBits)));
+// when some lane holds r.
+template <class L>
+[[gnu::always_inline]] inline unsigned row_bits(const L& row) {
+  return static_cast<unsigned>(bits_of_small_integers(row));
 }
 
 // Solves J X = B in place for every lane (B: 6 x Cols right-hand sides). \return per lane 1
@@ -66,18 +67,18 @@ template <int Cols>
 // J is factored first (its row swaps, multipliers and inverse pivots kept), then each column of
 // B is solved on its own: each column sees local()'s operations in local()'s order, and its six
 // values stay in registers instead of the whole of B spilling during the factorization.
-template <int Cols>
-[[gnu::always_inline]] inline Lanes eliminate_lanes(Lanes (&a)[6][6], Lanes (&b)[6][Cols]) {
-  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
-  Lanes regular = one;
-  Lanes pivot_row[6], inverse_pivot[6], factor[6][6];
+template <class L, int Cols>
+[[gnu::always_inline]] inline L eliminate_lanes(L (&a)[6][6], L (&b)[6][Cols]) {
+  const L zero = L::splat(0.0), one = L::splat(1.0);
+  L regular = one;
+  L pivot_row[6], inverse_pivot[6], factor[6][6];
   unsigned swapped[6] = {};  // bit i of swapped[k]: row i is some lane's pivot at step k
     for (int k = 0; k < 6; ++k) {
     // The first row of largest |a(i, k)|, i >= k, per lane (local()'s strict comparison).
-    Lanes best = abs(a[k][k]), row = Lanes::splat(k);
+    L best = abs(a[k][k]), row = L::splat(k);
         for (int i = k + 1; i < 6; ++i) {
-      const Lanes candidate = abs(a[i][k]);
-      row = where_greater(candidate, best, Lanes::splat(i), row);
+      const L candidate = abs(a[i][k]);
+      row = where_greater(candidate, best, L::splat(i), row);
       best = max(candidate, best);
     }
     pivot_row[k] = row;
@@ -85,9 +86,9 @@ template <int Cols>
     swapped[k] = row_bits(row);
     for (int i = k + 1; i < 6; ++i) {  // swap rows k and the pivot row, lane by lane
       if (!(swapped[k] >> i & 1u)) continue;  // most rows are no lane's pivot: skip their blends
-      const Lanes here = Lanes::splat(i);
+      const L here = L::splat(i);
             for (int c = k; c < 6; ++c) {
-        const Lanes t = a[k][c];
+        const L t = a[k][c];
         a[k][c] = where_equal(row, here, a[i][c], t);
         a[i][c] = where_equal(row, here, t, a[i][c]);
       }
@@ -100,7 +101,7 @@ template <int Cols>
     }
   }
   for (int j = 0; j < Cols; ++j) {
-    Lanes x[6];
+    L x[6];
     #pragma GCC unroll 6
     for (int r = 0; r < 6; ++r) x[r] = b[r][j];
     #pragma GCC unroll 6
@@ -108,7 +109,7 @@ template <int Cols>
       #pragma GCC unroll 6
       for (int i = k + 1; i < 6; ++i) {
         if (!(swapped[k] >> i & 1u)) continue;
-        const Lanes here = Lanes::splat(i), t = x[k];
+        const L here = L::splat(i), t = x[k];
         x[k] = where_equal(pivot_row[k], here, x[i], t);
         x[i] = where_equal(pivot_row[k], here, t, x[i]);
       }
@@ -129,35 +130,35 @@ template <int Cols>
 
 // local()'s min(1, min_i limit_i / (max_j |M_ij| + |extra_i|)) per lane, 0 for a lane with a
 // non-finite entry. `m(i, j)` gives entry (i, j) of the lane matrix.
-template <typename Entry>
-[[gnu::always_inline]] inline Lanes ratio_eta_lanes(const Entry& m, const double* limit, const Lanes* extra) {
-  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
+template <class L, typename Entry>
+[[gnu::always_inline]] inline L ratio_eta_lanes(const Entry& m, const double* limit, const L* extra) {
+  const L zero = L::splat(0.0), one = L::splat(1.0);
   // 0 * x is 0 for finite x and NaN for an infinite or NaN x: one sum marks a lane with any
   // non-finite entry, without a comparison per entry.
-  Lanes eta = one, poison = zero;
+  L eta = one, poison = zero;
   for (int i = 0; i < 6; ++i) {
-    Lanes need = abs(m(i, 0));
+    L need = abs(m(i, 0));
     poison += need * 0.0;
     for (int j = 1; j < 6; ++j) {
-      const Lanes e = abs(m(i, j));
+      const L e = abs(m(i, j));
       poison += e * 0.0;
       need = max(e, need);
     }
     if (extra) need += abs(extra[i]);
     poison += need * 0.0;
-    const Lanes bound = Lanes::splat(limit[i]);
+    const L bound = L::splat(limit[i]);
     eta = where_greater(need * eta, bound, bound / where_equal(need, zero, one, need), eta);
   }
   return where_equal(poison, zero, eta, zero);
 }
 
 // out = H x per lane (H: the block's inertia, x: 6 x 6 lanes), summed over k in order.
-template <typename Entry>
-[[gnu::always_inline]] inline void inertia_times(const QuantityBlock& q, const Entry& x, Lanes (&out)[6][6]) {
+template <class L, typename Entry>
+[[gnu::always_inline]] inline void inertia_times(const QuantityBlock& q, const Entry& x, L (&out)[6][6]) {
   for (int r = 0; r < 6; ++r) {
     for (int c = 0; c < 6; ++c) {
-      Lanes sum = Lanes::load(q.inertia[r * 6]) * x(0, c);
-      for (int j = 1; j < 6; ++j) sum += Lanes::load(q.inertia[r * 6 + j]) * x(j, c);
+      L sum = L::load(q.inertia[r * 6]) * x(0, c);
+      for (int j = 1; j < 6; ++j) sum += L::load(q.inertia[r * 6 + j]) * x(j, c);
       out[r][c] = sum;
     }
   }
@@ -167,37 +168,37 @@ template <typename Entry>
 
 // The velocity and acceleration terms of the block into out (local k onwards): M_v in columns
 // 0..5 when the velocity term is selected, M_a in the next 6 when the acceleration term is.
-template <int Cols>
-[[gnu::always_inline]] inline void Coverage::velocity_acceleration(const QuantityBlock& q, const Lanes (&jacobian)[6][6],
-                                                                  const Lanes* gravity, const Lanes& reachable,
+template <int Cols, class L>
+[[gnu::always_inline]] inline void Coverage::velocity_acceleration(const QuantityBlock& q, const L (&jacobian)[6][6],
+                                                                  const L* gravity, const L& reachable,
                                                                   double* out, int& k) const {
-  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
+  const L zero = L::splat(0.0), one = L::splat(1.0);
   const int m_a_column = velocity_ ? 6 : 0;
-  Lanes a[6][6], rhs[6][Cols];
+  L a[6][6], rhs[6][Cols];
   for (int r = 0; r < 6; ++r) {
     for (int c = 0; c < 6; ++c) a[r][c] = jacobian[r][c];
   }
   if (velocity_) load_attribute(q, 0, "M_v", "velocity", rhs, 0);
   if (acceleration_) load_attribute(q, velocity_ ? 1 : 0, "M_a", "acceleration", rhs, m_a_column);
-  const Lanes use = eliminate_lanes(a, rhs) * reachable;
+  const L use = eliminate_lanes(a, rhs) * reachable;
   if (velocity_) {
-    const auto velocity = [&](int i, int j) -> const Lanes& { return rhs[i][j]; };
-    where_equal(use, one, ratio_eta_lanes(velocity, q.max_velocity, nullptr), zero).store(out + kBlockLanes * k++);
+    const auto velocity = [&](int i, int j) -> const L& { return rhs[i][j]; };
+    where_equal(use, one, ratio_eta_lanes<L>(velocity, q.max_velocity, nullptr), zero).store(out + kBlockLanes * k++);
   }
   if (acceleration_) {
-    Lanes torque[6][6];  // H J^-1 M_a
-    inertia_times(q, [&](int j, int c) -> const Lanes& { return rhs[j][m_a_column + c]; }, torque);
-    const auto entry = [&](int i, int j) -> const Lanes& { return torque[i][j]; };
-    where_equal(use, one, ratio_eta_lanes(entry, q.max_torque, gravity), zero).store(out + kBlockLanes * k++);
+    L torque[6][6];  // H J^-1 M_a
+    inertia_times(q, [&](int j, int c) -> const L& { return rhs[j][m_a_column + c]; }, torque);
+    const auto entry = [&](int i, int j) -> const L& { return torque[i][j]; };
+    where_equal(use, one, ratio_eta_lanes<L>(entry, q.max_torque, gravity), zero).store(out + kBlockLanes * k++);
   }
 }
 
-HAPSYN_MULTIVERSION_WIDE
-void Coverage::local_block_impl(const QuantityBlock& q, double* out) const {
-  const Lanes zero = Lanes::splat(0.0), one = Lanes::splat(1.0);
-  Lanes reachable;  // 1 or 0
+template <class L>
+[[gnu::always_inline]] inline void Coverage::local_block_lanes(const QuantityBlock& q, double* out) const {
+  const L zero = L::splat(0.0), one = L::splat(1.0);
+  L reachable;  // 1 or 0
   for (int lane = 0; lane < kBlockLanes; ++lane) {
-    reachable.v[lane] = q.lane_status(lane) == SampleStatus::kReachable ? 1.0 : 0.0;
+    reachable.set(lane, q.lane_status(lane) == SampleStatus::kReachable ? 1.0 : 0.0);
   }
   one.store(out);
   reachable.store(out + kBlockLanes);
@@ -213,10 +214,10 @@ void Coverage::local_block_impl(const QuantityBlock& q, double* out) const {
     }
     return;
   }
-  Lanes jacobian[6][6], gravity[6];
+  L jacobian[6][6], gravity[6];
   for (int r = 0; r < 6; ++r) {
-    for (int c = 0; c < 6; ++c) jacobian[r][c] = Lanes::load(q.jacobian[r * 6 + c]);
-    gravity[r] = (acceleration_ || force_) ? Lanes::load(q.gravity[r]) : zero;
+    for (int c = 0; c < 6; ++c) jacobian[r][c] = L::load(q.jacobian[r * 6 + c]);
+    gravity[r] = (acceleration_ || force_) ? L::load(q.gravity[r]) : zero;
   }
   int k = 2;
   // One elimination of J serves both terms ([M_v | M_a], as local() does it); a single term
@@ -228,32 +229,34 @@ void Coverage::local_block_impl(const QuantityBlock& q, double* out) const {
   }
   if (force_) {
     // C = J^T diag(m_max I, f_max I): entry (i, j) is J(j, i) scaled by column j's bound.
-    Lanes c[6][6];
+    L c[6][6];
     for (int i = 0; i < 6; ++i) {
       for (int j = 0; j < 6; ++j) c[i][j] = jacobian[j][i] * (j < 3 ? options_.m_max : options_.f_max);
     }
-    const auto entry = [&](int i, int j) -> const Lanes& { return c[i][j]; };
-    where_equal(reachable, one, ratio_eta_lanes(entry, q.max_torque, gravity), zero).store(out + kBlockLanes * k++);
+    const auto entry = [&](int i, int j) -> const L& { return c[i][j]; };
+    where_equal(reachable, one, ratio_eta_lanes<L>(entry, q.max_torque, gravity), zero).store(out + kBlockLanes * k++);
   }
 }
 
-void Coverage::local_block(const QuantityBlock& q, double* out) const { local_block_impl(q, out); }
+void Coverage::local_block(const QuantityBlock& q, double* out) const {
+  with_vector_lanes([&](auto tag) HAPSYN_KERNEL_BODY { local_block_lanes<typename decltype(tag)::type>(q, out); });
+}
 
 namespace {
 // x = J^-1 x, or H J^-1 x with `times_inertia`, for every lane.
-HAPSYN_MULTIVERSION_WIDE
-void solve_jacobian_lanes(const QuantityBlock& q, double (*x)[kBlockLanes], double* regular, bool times_inertia) {
-  Lanes a[6][6], b[6][6];
+template <class L>
+[[gnu::always_inline]] inline void solve_jacobian_lanes(const QuantityBlock& q, double (*x)[kBlockLanes], double* regular, bool times_inertia) {
+  L a[6][6], b[6][6];
   for (int r = 0; r < 6; ++r) {
     for (int c = 0; c < 6; ++c) {
-      a[r][c] = Lanes::load(q.jacobian[r * 6 + c]);
-      b[r][c] = Lanes::load(x[r * 6 + c]);
+      a[r][c] = L::load(q.jacobian[r * 6 + c]);
+      b[r][c] = L::load(x[r * 6 + c]);
     }
   }
   eliminate_lanes(a, b).store(regular);
   if (times_inertia) {
-    Lanes product[6][6];
-    inertia_times(q, [&](int j, int c) -> const Lanes& { return b[j][c]; }, product);
+    L product[6][6];
+    inertia_times(q, [&](int j, int c) -> const L& { return b[j][c]; }, product);
     for (int r = 0; r < 6; ++r) {
       for (int c = 0; c < 6; ++c) b[r][c] = product[r][c];
     }
@@ -265,11 +268,15 @@ void solve_jacobian_lanes(const QuantityBlock& q, double (*x)[kBlockLanes], doub
 }  // namespace
 
 void Coverage::solve_jacobian_block(const QuantityBlock& q, double (*x)[kBlockLanes], double* regular) {
-  solve_jacobian_lanes(q, x, regular, false);
+  with_vector_lanes([&](auto tag) HAPSYN_KERNEL_BODY {
+    solve_jacobian_lanes<typename decltype(tag)::type>(q, x, regular, false);
+  });
 }
 
 void Coverage::acceleration_torque_block(const QuantityBlock& q, double (*x)[kBlockLanes], double* regular) {
-  solve_jacobian_lanes(q, x, regular, true);
+  with_vector_lanes([&](auto tag) HAPSYN_KERNEL_BODY {
+    solve_jacobian_lanes<typename decltype(tag)::type>(q, x, regular, true);
+  });
 }
 
 }  // namespace hapsyn::plugins

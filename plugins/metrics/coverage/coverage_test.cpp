@@ -13,6 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include "vector_targets.hpp"
+
 #include <Eigen/LU>
 #include <atomic>
 #include <cmath>
@@ -351,7 +353,7 @@ TEST(Coverage, EvaluatorHandsEachMetricItsAttributeRowsInDeclaredOrder) {
   EXPECT_EQ(q.attribute_row(0), nullptr);
 }
 
-TEST(Coverage, BlockLocalsEqualLocalLaneByLane) {
+void block_locals_equal_local_lane_by_lane_on_the_current_target() {
   // Random J, H, g, limits and M_v, M_a per lane; among them a J with a zero column (a zero pivot:
   // the elimination gives up), a nearly singular J (large but finite solutions), rows needing the
   // pivot swap, and lanes that are not reachable.
@@ -445,6 +447,16 @@ TEST(Coverage, BlockLocalsEqualLocalLaneByLane) {
   }
 }
 
+// On every vector target this machine runs (hapsyn/accel/vector_dispatch.hpp).
+TEST(Coverage, BlockLocalsEqualLocalLaneByLane) {
+  for (const hapsyn::VectorTarget target : hapsyn::testing::available_vector_targets()) {
+    const hapsyn::testing::ForcedVectorTarget forced(target);
+    SCOPED_TRACE(hapsyn::vector_target_name(target));
+    block_locals_equal_local_lane_by_lane_on_the_current_target();
+    if (HasFatalFailure()) return;
+  }
+}
+
 TEST(Coverage, BlockLocalsNameAMissingAttribute) {
   auto block = std::make_unique<QuantityBlock>();
   block->jacobian_rows = block->jacobian_cols = 6;
@@ -457,7 +469,7 @@ TEST(Coverage, BlockLocalsNameAMissingAttribute) {
   EXPECT_NE(shape.find("coverage: the mechanism's Jacobian is 3x6"), std::string::npos) << shape;
 }
 
-TEST(Coverage, BlockSolvesEqualTheScalarSolveLaneByLane) {
+void block_solves_equal_the_scalar_solve_lane_by_lane_on_the_current_target() {
   std::mt19937 rng(8);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   auto block = std::make_unique<QuantityBlock>();
@@ -494,5 +506,15 @@ TEST(Coverage, BlockSolvesEqualTheScalarSolveLaneByLane) {
         EXPECT_NEAR(x[e][lane], want, 1e-12 * std::max(1.0, std::abs(want))) << "lane " << lane << ", entry " << e;
       }
     }
+  }
+}
+
+// On every vector target this machine runs (hapsyn/accel/vector_dispatch.hpp).
+TEST(Coverage, BlockSolvesEqualTheScalarSolveLaneByLane) {
+  for (const hapsyn::VectorTarget target : hapsyn::testing::available_vector_targets()) {
+    const hapsyn::testing::ForcedVectorTarget forced(target);
+    SCOPED_TRACE(hapsyn::vector_target_name(target));
+    block_solves_equal_the_scalar_solve_lane_by_lane_on_the_current_target();
+    if (HasFatalFailure()) return;
   }
 }

@@ -5,6 +5,9 @@
 /// or a private non-virtual member). Public entry points and virtual overrides are plain
 /// functions that call it: GCC cannot multiversion virtual functions, clang exports no plain
 /// symbol for a multiversioned one and refuses to multiversion a function already called.
+/// Block kernels (and anything that gains from AVX-512) use hapsyn::with_vector_lanes instead
+/// (hapsyn/accel/vector_dispatch.hpp): a lanes type per instruction set, AVX-512 included.
+///
 /// The function is compiled twice, for x86-64-v3 (AVX2 + FMA) and for baseline
 /// x86-64, and the loader picks the version the CPU runs (GCC/Clang target_clones, an ifunc).
 ///
@@ -31,11 +34,9 @@
 
 #if defined(__x86_64__) && defined(__linux__) && (defined(__GNUC__) || defined(__clang__)) && \
     !defined(HAPSYN_NO_MULTIVERSION) && !defined(HAPSYN_SANITIZED_BUILD)
+/// Defined when this build compiles hot functions for several instruction sets (see above).
+#define HAPSYN_MULTIVERSION_ENABLED 1
 #define HAPSYN_MULTIVERSION __attribute__((target_clones("arch=x86-64-v3", "default")))
-/// HAPSYN_MULTIVERSION_WIDE: as HAPSYN_MULTIVERSION, plus an x86-64-v4 (AVX-512) version, for
-/// the block kernels whose lane loops the compiler vectorises (hapsyn/accel/sample_block.hpp).
-#define HAPSYN_MULTIVERSION_WIDE __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
 #define HAPSYN_MULTIVERSION
-#define HAPSYN_MULTIVERSION_WIDE
 #endif
