@@ -1,0 +1,135 @@
+// The 6R whose axes 5 and 6 meet (six_r_ik.hpp): a 1-D search over q1. For each q1 the point
+// where axes 5 and 6 meet gives (q2, q3, q4) by SP5; the error e(q1) of each branch is zero
+// where the rest of the orientation can be reached by q5 and q6 (IK-Geo section V, the 1-D
+// search cases).
+#include "shared/closed_form_ik/families.hpp"
+#include "shared/closed_form_ik/subproblems.hpp"
+
+#include <cmath>
+
+namespace hapsyn::plugins::closed_form_ik::detail {
+
+namespace {
+
+struct Branch {
+  double q2 = 0, q3 = 0, q4 = 0, e = 0;
+};
+
+struct Sample {
+  double q1 = 0;
+  std::array<Branch, 4> branch{};
+  int count = 0;
+};
+
+// What does not change with q1 for one target.
+struct Problem {
+  const PoeChain& c;
+  Eigen::Matrix3d r06;
+  Eigen::Vector3d pw;    // the point where axes 5 and 6 meet, now
+  Eigen::Vector3d p3w;   // from joint 4 to that point at q = 0
+  double cos56;          // h5 . h6
+};
+
+double wrapped(double a) { return std::remainder(a, 2 * M_PI); }
+
+double distance2(const Branch& a, const Branch& b) {
+  const double d2 = wrapped(a.q2 - b.q2), d3 = wrapped(a.q3 - b.q3), d4 = wrapped(a.q4 - b.q4);
+  return d2 * d2 + d3 * d3 + d4 * d4;
+}
+
+// R(h2, -q2) d - p_34... : R(h1, -q1) (p_w - p_01) - p_12 = R(h2, q2) (p_23 + R(h3, q3) (p_34 + R(h4, q4) p_4w)),
+// i.e. SP5 with p0 = -p_23, k1 = h2 (theta1 = -q2), p1 = R(h1, -q1) (p_w - p_01) - p_12.
+Sample evaluate(const Problem& pr, double q1) {
+  const auto& h = pr.c.h;
+  const auto& p = pr.c.p;
+  Sample s;
+  s.q1 = q1;
+  const Eigen::Matrix3d r1 = rot(h[0], q1);
+  const Eigen::Vector3d d = r1.transpose() * (pr.pw - p[0]) - p[1];
+  const Angles3 a = sp5(-p[2], d, p[3], pr.p3w, h[1], h[2], h[3]);
+  if (a.least_squares) return s;
+  for (int i = 0; i < a.count; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    Branch& b = s.branch[static_cast<std::size_t>(s.count++)];
+    b.q2 = -a.theta1[k], b.q3 = a.theta2[k], b.q4 = a.theta3[k];
+    const Eigen::Matrix3d r04 = r1 * rot(h[1], b.q2) * rot(h[2], b.q3) * rot(h[3], b.q4);
+    b.e = h[4].dot(r04.transpose() * pr.r06 * h[5]) - pr.cos56;
+  }
+  return s;
+}
+
+// The branch of s nearest to ref (count > 0).
+const Branch& nearest(const Sample& s, const Branch& ref) {
+  int best = 0;
+  for (int i = 1; i < s.count; ++i) {
+    if (distance2(s.branch[static_cast<std::size_t>(i)], ref) < distance2(s.branch[static_cast<std::size_t>(best)], ref)) best = i;
+  }
+  return s.branch[static_cast<std::size_t>(best)];
+}
+
+Branch interpolate(const Branch& a, const Branch& b, double t) {
+  Branch m;
+  m.q2 = a.q2 + t * wrapped(b.q2 - a.q2);
+  m.q3 = a.q3 + t * wrapped(b.q3 - a.q3);
+  m.q4 = a.q4 + t * wrapped(b.q4 - a.q4);
+  return m;
+}
+
+// A root of one branch's e in [x0, x1] (opposite signs at the ends) by the Illinois method; the
+// branch is followed by the nearest solution to the interpolation of its ends.
+void refine(const Problem& pr, double x0, Branch b0, double x1, Branch b1, IkScratch& out) {
+  double fa = b0.e, fb = b1.e;
+  Branch root = std::abs(fa) < std::abs(fb) ? b0 : b1;
+  double x = std::abs(fa) < std::abs(fb) ? x0 : x1;
+  for (int it = 0; it < 60 && std::abs(x1 - x0) > 1e-12 && fb != 0.0; ++it) {
+    x = x1 - fb * (x1 - x0) / (fb - fa);
+    const Sample s = evaluate(pr, x);
+    if (s.count == 0) break;
+    const Branch& m = nearest(s, interpolate(b0, b1, (x - x0) / (x1 - x0)));
+    root = m;
+    if (m.e * fb < 0) {
+      x0 = x1, fa = fb, b0 = b1;
+    } else {
+      fa /= 2;
+    }
+    x1 = x, fb = m.e, b1 = m;
+    if (m.e == 0.0) break;
+  }
+  const auto& h = pr.c.h;
+  const Eigen::Matrix3d r04 = rot(h[0], x) * rot(h[1], root.q2) * rot(h[2], root.q3) * rot(h[3], root.q4);
+  const Eigen::Matrix3d r46 = r04.transpose() * pr.r06;  // R(h5, q5) R(h6, q6)
+  Vector6d q;
+  q << x, root.q2, root.q3, root.q4, sp1(h[5], r46 * h[5], h[4]).theta[0],
+      sp1(h[4], r46.transpose() * h[4], h[5]).theta[0];
+  push(out, q);
+}
+
+// Sign changes between matched branches of two neighbouring samples.
+void brackets(const Problem& pr, const Sample& a, const Sample& b, IkScratch& out) {
+  for (int i = 0; i < a.count; ++i) {
+    const Branch& ba = a.branch[static_cast<std::size_t>(i)];
+    if (b.count == 0) return;
+    const Branch& bb = nearest(b, ba);
+    if ((ba.e < 0) != (bb.e < 0) || ba.e == 0.0) refine(pr, a.q1, ba, b.q1, bb, out);
+  }
+}
+
+}  // namespace
+
+void search_1d_candidates(const PoeChain& c, const Eigen::Vector3d& point, const Eigen::Isometry3d& target,
+                          int samples, IkScratch& s) {
+  const Eigen::Matrix3d r06 = target.linear() * c.r_tool.transpose();
+  const Eigen::Vector3d tool0 = c.joint_point(5) + c.p[6];
+  const Problem pr{c, r06, target.translation() - r06 * (tool0 - point), point - c.joint_point(3), c.h[4].dot(c.h[5])};
+  const double step = 2 * M_PI / samples;
+  const Sample first = evaluate(pr, -M_PI);
+  Sample prev = first;
+  for (int k = 1; k <= samples; ++k) {
+    Sample cur = k < samples ? evaluate(pr, -M_PI + k * step) : first;
+    cur.q1 = -M_PI + k * step;  // the last interval ends at pi, the first sample's angle + 2 pi
+    brackets(pr, prev, cur, s);
+    prev = cur;
+  }
+}
+
+}  // namespace hapsyn::plugins::closed_form_ik::detail

@@ -1,0 +1,318 @@
+// The IK-Geo subproblems (Elias & Wen 2022), from the paper's geometry. The common step: a
+// rotation of p about k is affine in x = (sin theta, cos theta),
+//   R(k, theta) p = k (k . p) + A x,  A = [k x p, p - k (k . p)],
+// so each scalar equation of the subproblems is a . x = b on the unit circle (SP1, SP3, SP4),
+// or a pair of such equations in two angles (SP5, SP6: solve_two_circles).
+#include "shared/closed_form_ik/subproblems.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+
+namespace hapsyn::plugins::closed_form_ik {
+
+namespace {
+
+// A of the file comment: R(k, theta) p = k (k . p) + A (sin theta, cos theta).
+Eigen::Matrix<double, 3, 2> rotation_basis(const Eigen::Vector3d& k, const Eigen::Vector3d& p) {
+  Eigen::Matrix<double, 3, 2> a;
+  a.col(0) = k.cross(p);
+  a.col(1) = p - k * k.dot(p);
+  return a;
+}
+
+double angle_of(const Eigen::Vector2d& x) { return std::atan2(x(0), x(1)); }
+
+// theta with a . (sin theta, cos theta) = b: the line a . x = b meets the unit circle in 0, 1 or 2
+// points; with none, the point of the circle nearest to the line (least squares in |a . x - b|).
+Angles1 solve_unit(const Eigen::Vector2d& a, double b, double scale) {
+  Angles1 out;
+  const double na2 = a.squaredNorm();
+  if (std::sqrt(na2) <= kDegenerateTolerance * std::max(scale, 1e-300)) {
+    out.degenerate = true;
+    out.count = 1;
+    out.theta[0] = 0.0;
+    out.least_squares = std::abs(b) > 1e-9 * std::max(scale, 1e-300);
+    return out;
+  }
+  const Eigen::Vector2d x_ls = a * (b / na2);
+  const double r2 = x_ls.squaredNorm();
+  if (r2 > 1.0) {
+    out.least_squares = true;
+    out.count = 1;
+    out.theta[0] = angle_of(x_ls);
+    return out;
+  }
+  const double xi = std::sqrt(1.0 - r2);
+  const Eigen::Vector2d perp = Eigen::Vector2d(a(1), -a(0)) / std::sqrt(na2);
+  out.count = 2;
+  out.theta[0] = angle_of(x_ls + xi * perp);
+  out.theta[1] = angle_of(x_ls - xi * perp);
+  return out;
+}
+
+// f(theta) = a2 cos 2t + b2 sin 2t + c1 cos t + d1 sin t + e0, the |x1| = 1 condition of the
+// quartic route, and its derivative.
+struct TrigQuadratic {
+  double a2, b2, c1, d1, e0;
+  double value(double t) const {
+    return a2 * std::cos(2 * t) + b2 * std::sin(2 * t) + c1 * std::cos(t) + d1 * std::sin(t) + e0;
+  }
+  double slope(double t) const {
+    return -2 * a2 * std::sin(2 * t) + 2 * b2 * std::cos(2 * t) - c1 * std::sin(t) + d1 * std::cos(t);
+  }
+  double scale() const { return std::abs(a2) + std::abs(b2) + std::abs(c1) + std::abs(d1) + std::abs(e0); }
+};
+
+// Newton on f from theta; stops at a zero or when a step does not help.
+double polish(const TrigQuadratic& f, double theta) {
+  double v = f.value(theta);
+  for (int it = 0; it < 8 && v != 0.0; ++it) {
+    const double s = f.slope(theta);
+    if (s == 0.0) break;
+    const double next = theta - v / s;
+    const double nv = f.value(next);
+    if (!(std::abs(nv) < std::abs(v))) break;
+    theta = next;
+    v = nv;
+  }
+  return theta;
+}
+
+// Roots theta of f: f is a degree-2 trigonometric polynomial, z^2 f in z = exp(i theta) a quartic
+// with complex coefficients whose roots on the unit circle are the solutions (no tangent
+// half-angle, so theta = pi is not special). A vanishing quartic term leaves degree 1 (solve_unit).
+Angles1 trig_quadratic_roots(const TrigQuadratic& f, std::array<double, 4>& theta, int& count) {
+  Angles1 status;
+  count = 0;
+  const double scale = f.scale();
+  if (std::hypot(f.a2, f.b2) <= 1e-12 * scale) {
+    const Angles1 lin = solve_unit(Eigen::Vector2d(f.d1, f.c1), -f.e0, scale);
+    for (int i = 0; i < lin.count; ++i) theta[static_cast<std::size_t>(count++)] = lin.theta[static_cast<std::size_t>(i)];
+    return lin;
+  }
+  using C = std::complex<double>;
+  const C a4(f.a2 / 2, -f.b2 / 2), a3(f.c1 / 2, -f.d1 / 2), a2(f.e0, 0.0), a1(f.c1 / 2, f.d1 / 2),
+      a0(f.a2 / 2, f.b2 / 2);
+  Eigen::Matrix4cd companion = Eigen::Matrix4cd::Zero();
+  companion(0, 0) = -a3 / a4;
+  companion(0, 1) = -a2 / a4;
+  companion(0, 2) = -a1 / a4;
+  companion(0, 3) = -a0 / a4;
+  companion(1, 0) = companion(2, 1) = companion(3, 2) = 1.0;
+  const Eigen::ComplexEigenSolver<Eigen::Matrix4cd> eig(companion, false);
+  const Eigen::Vector4cd& z = eig.eigenvalues();
+  double best_off = INFINITY;
+  int best = 0;
+  for (int i = 0; i < 4; ++i) {
+    const double off = std::abs(std::abs(z(i)) - 1.0);
+    if (off < best_off) best_off = off, best = i;
+    if (off > 1e-3) continue;
+    const double t = polish(f, std::arg(z(i)));
+    if (off < 1e-6 || std::abs(f.value(t)) <= 1e-10 * scale) theta[static_cast<std::size_t>(count++)] = t;
+  }
+  if (count == 0) {
+    status.least_squares = true;
+    theta[0] = std::arg(z(best));
+    count = 1;
+  }
+  return status;
+}
+
+Angles2 swapped(const Angles2& a) {
+  Angles2 b = a;
+  b.theta1 = a.theta2;
+  b.theta2 = a.theta1;
+  return b;
+}
+
+// Both matrices (nearly) rank one: w^T M1 = 0 for w normal to M1's column space, so
+// w . (M2 x2) = w . c gives theta2, then u . (M1 x1) = u . (c - M2 x2) theta1.
+Angles2 rank_one_route(const Eigen::Matrix2d& m1, const Eigen::Matrix2d& m2, const Eigen::Vector2d& c, double scale) {
+  Angles2 out;
+  const Eigen::Vector2d col = m1.col(0).squaredNorm() >= m1.col(1).squaredNorm() ? m1.col(0) : m1.col(1);
+  if (col.norm() <= kDegenerateTolerance * scale) {  // x1 free: solve the larger row of M2 x2 = c
+    out.degenerate = true;
+    const int r = m2.row(0).squaredNorm() >= m2.row(1).squaredNorm() ? 0 : 1;
+    const Angles1 t2 = solve_unit(m2.row(r).transpose(), c(r), scale);
+    out.least_squares = t2.least_squares;
+    for (int i = 0; i < t2.count; ++i) {
+      out.theta1[static_cast<std::size_t>(i)] = 0.0;
+      out.theta2[static_cast<std::size_t>(i)] = t2.theta[static_cast<std::size_t>(i)];
+    }
+    out.count = t2.count;
+    return out;
+  }
+  const Eigen::Vector2d u = col.normalized();
+  const Eigen::Vector2d w(-u(1), u(0));
+  const Angles1 t2 = solve_unit(m2.transpose() * w, w.dot(c), scale);
+  out.least_squares = t2.least_squares;
+  out.degenerate = t2.degenerate;
+  for (int i = 0; i < t2.count; ++i) {
+    const double th2 = t2.theta[static_cast<std::size_t>(i)];
+    const Eigen::Vector2d x2(std::sin(th2), std::cos(th2));
+    const Angles1 t1 = solve_unit(m1.transpose() * u, u.dot(c - m2 * x2), scale);
+    out.least_squares = out.least_squares || t1.least_squares;
+    out.degenerate = out.degenerate || t1.degenerate;
+    for (int j = 0; j < t1.count && out.count < 4; ++j) {
+      out.theta1[static_cast<std::size_t>(out.count)] = t1.theta[static_cast<std::size_t>(j)];
+      out.theta2[static_cast<std::size_t>(out.count)] = th2;
+      ++out.count;
+    }
+  }
+  return out;
+}
+
+// M1 well conditioned: x1 = e - B x2 with e = M1^-1 c, B = M1^-1 M2, and |x1|^2 = 1 is
+// x2^T P x2 - 2 g . x2 + e . e - 1 = 0 (P = B^T B, g = B^T e), a degree-2 trigonometric
+// polynomial in theta2 (s^2 = (1 - cos 2t) / 2, c^2 = (1 + cos 2t) / 2, 2 s c = sin 2t).
+Angles2 quartic_route(const Eigen::Matrix2d& m1, const Eigen::Matrix2d& m2, const Eigen::Vector2d& c) {
+  const Eigen::Matrix2d inv = m1.inverse();
+  const Eigen::Vector2d e = inv * c;
+  const Eigen::Matrix2d b = inv * m2;
+  const Eigen::Matrix2d p = b.transpose() * b;
+  const Eigen::Vector2d g = b.transpose() * e;
+  const TrigQuadratic f{(p(1, 1) - p(0, 0)) / 2, p(0, 1), -2 * g(1), -2 * g(0), (p(0, 0) + p(1, 1)) / 2 + e.squaredNorm() - 1.0};
+  Angles2 out;
+  std::array<double, 4> theta2{};
+  int count = 0;
+  const Angles1 status = trig_quadratic_roots(f, theta2, count);
+  out.least_squares = status.least_squares;
+  out.degenerate = status.degenerate;
+  for (int i = 0; i < count; ++i) {
+    const double th2 = theta2[static_cast<std::size_t>(i)];
+    const Eigen::Vector2d x1 = e - b * Eigen::Vector2d(std::sin(th2), std::cos(th2));
+    out.theta1[static_cast<std::size_t>(i)] = angle_of(x1);
+    out.theta2[static_cast<std::size_t>(i)] = th2;
+  }
+  out.count = count;
+  return out;
+}
+
+}  // namespace
+
+Eigen::Matrix3d rot(const Eigen::Vector3d& k, double theta) {
+  return Eigen::AngleAxisd(theta, k).toRotationMatrix();
+}
+
+Angles1 sp1(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, const Eigen::Vector3d& k) {
+  const Eigen::Vector2d x = rotation_basis(k, p1).transpose() * p2;
+  const double scale = p1.norm() + p2.norm();
+  Angles1 out;
+  out.count = 1;
+  if (x.norm() <= kDegenerateTolerance * std::max(scale * scale, 1e-300)) {
+    out.degenerate = true;
+    out.theta[0] = 0.0;
+  } else {
+    out.theta[0] = angle_of(x);
+  }
+  const double tol = 1e-9 * std::max(scale, 1e-300);
+  out.least_squares = std::abs(k.dot(p1) - k.dot(p2)) > tol || std::abs(p1.norm() - p2.norm()) > tol;
+  return out;
+}
+
+Angles1 sp4(const Eigen::Vector3d& h, const Eigen::Vector3d& p, const Eigen::Vector3d& k, double d) {
+  const Eigen::Vector2d a = rotation_basis(k, p).transpose() * h;
+  return solve_unit(a, d - h.dot(k) * k.dot(p), h.norm() * p.norm() + std::abs(d));
+}
+
+Angles1 sp3(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, const Eigen::Vector3d& k, double d) {
+  return sp4(p2, p1, k, (p1.squaredNorm() + p2.squaredNorm() - d * d) / 2);
+}
+
+Angles2 sp2(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, const Eigen::Vector3d& k1,
+            const Eigen::Vector3d& k2) {
+  Angles2 out;
+  const double n1 = p1.norm(), n2 = p2.norm();
+  if (k1.cross(k2).norm() <= kDegenerateTolerance || n1 == 0.0 || n2 == 0.0) {
+    const Angles1 t = sp1(p1, p2, k1);
+    out.degenerate = true;
+    out.least_squares = t.least_squares;
+    out.count = 1;
+    out.theta1[0] = t.theta[0];
+    out.theta2[0] = 0.0;
+    return out;
+  }
+  const Angles1 t1 = sp4(k2, p1 / n1, k1, k2.dot(p2 / n2));
+  out.least_squares = t1.least_squares || std::abs(n1 - n2) > 1e-9 * (n1 + n2);
+  out.degenerate = t1.degenerate;
+  for (int i = 0; i < t1.count; ++i) {
+    const double th1 = t1.theta[static_cast<std::size_t>(i)];
+    const Angles1 t2 = sp1(p2, rot(k1, th1) * p1, k2);
+    out.degenerate = out.degenerate || t2.degenerate;
+    out.theta1[static_cast<std::size_t>(i)] = th1;
+    out.theta2[static_cast<std::size_t>(i)] = t2.theta[0];
+  }
+  out.count = t1.count;
+  return out;
+}
+
+Angles2 solve_two_circles(const Eigen::Matrix2d& m1_in, const Eigen::Matrix2d& m2_in, const Eigen::Vector2d& c_in) {
+  // Each equation scaled to unit size, so the rank tests compare like with like (SP5's first
+  // equation is in length^2, its second in length).
+  Eigen::Matrix2d m1 = m1_in, m2 = m2_in;
+  Eigen::Vector2d c = c_in;
+  for (int r = 0; r < 2; ++r) {
+    const double s = std::max({m1.row(r).norm(), m2.row(r).norm(), std::abs(c(r))});
+    if (s > 0.0) m1.row(r) /= s, m2.row(r) /= s, c(r) /= s;
+  }
+  const double n1 = m1.squaredNorm(), n2 = m2.squaredNorm();
+  const double r1 = n1 > 0.0 ? std::abs(m1.determinant()) / n1 : 0.0;
+  const double r2 = n2 > 0.0 ? std::abs(m2.determinant()) / n2 : 0.0;
+  constexpr double kRankTolerance = 1e-9;  // |det| / |M|_F^2, at most 1/2
+  if (std::max(r1, r2) > kRankTolerance) {
+    return r1 >= r2 ? quartic_route(m1, m2, c) : swapped(quartic_route(m2, m1, c));
+  }
+  if (n1 >= n2) return rank_one_route(m1, m2, c, 1.0);
+  return swapped(rank_one_route(m2, m1, c, 1.0));
+}
+
+Angles3 sp5(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
+            const Eigen::Vector3d& p3, const Eigen::Vector3d& k1, const Eigen::Vector3d& k2,
+            const Eigen::Vector3d& k3) {
+  // |p0 + R1 p1|^2 = |p2 + R3 p3|^2 and k2 . (p0 + R1 p1) = k2 . (p2 + R3 p3).
+  const Eigen::Matrix<double, 3, 2> a1 = rotation_basis(k1, p1), a3 = rotation_basis(k3, p3);
+  Eigen::Matrix2d m1, m3;
+  m1.row(0) = 2 * (a1.transpose() * p0).transpose();
+  m1.row(1) = (a1.transpose() * k2).transpose();
+  m3.row(0) = -2 * (a3.transpose() * p2).transpose();
+  m3.row(1) = -(a3.transpose() * k2).transpose();
+  const Eigen::Vector2d c(
+      p2.squaredNorm() + p3.squaredNorm() + 2 * p2.dot(k3) * k3.dot(p3) - p0.squaredNorm() - p1.squaredNorm() -
+          2 * p0.dot(k1) * k1.dot(p1),
+      k2.dot(p2) + k2.dot(k3) * k3.dot(p3) - k2.dot(p0) - k2.dot(k1) * k1.dot(p1));
+  const Angles2 t13 = solve_two_circles(m1, m3, c);
+  Angles3 out;
+  out.least_squares = t13.least_squares;
+  out.degenerate = t13.degenerate;
+  for (int i = 0; i < t13.count; ++i) {
+    const std::size_t s = static_cast<std::size_t>(i);
+    const Eigen::Vector3d left = p0 + rot(k1, t13.theta1[s]) * p1;
+    const Eigen::Vector3d right = p2 + rot(k3, t13.theta2[s]) * p3;
+    const Angles1 t2 = sp1(right, left, k2);
+    out.least_squares = out.least_squares || t2.least_squares;
+    out.degenerate = out.degenerate || t2.degenerate;
+    out.theta1[s] = t13.theta1[s];
+    out.theta2[s] = t2.theta[0];
+    out.theta3[s] = t13.theta2[s];
+  }
+  out.count = t13.count;
+  return out;
+}
+
+Angles2 sp6(const std::array<Eigen::Vector3d, 4>& h, const std::array<Eigen::Vector3d, 4>& k,
+            const std::array<Eigen::Vector3d, 4>& p, double d1, double d2) {
+  Eigen::Matrix2d m1, m2;
+  m1.row(0) = (rotation_basis(k[0], p[0]).transpose() * h[0]).transpose();
+  m2.row(0) = (rotation_basis(k[1], p[1]).transpose() * h[1]).transpose();
+  m1.row(1) = (rotation_basis(k[2], p[2]).transpose() * h[2]).transpose();
+  m2.row(1) = (rotation_basis(k[3], p[3]).transpose() * h[3]).transpose();
+  const Eigen::Vector2d c(d1 - h[0].dot(k[0]) * k[0].dot(p[0]) - h[1].dot(k[1]) * k[1].dot(p[1]),
+                          d2 - h[2].dot(k[2]) * k[2].dot(p[2]) - h[3].dot(k[3]) * k[3].dot(p[3]));
+  return solve_two_circles(m1, m2, c);
+}
+
+}  // namespace hapsyn::plugins::closed_form_ik
