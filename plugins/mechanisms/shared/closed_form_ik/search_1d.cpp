@@ -5,6 +5,8 @@
 #include "shared/closed_form_ik/families.hpp"
 #include "shared/closed_form_ik/subproblems.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace hapsyn::plugins::closed_form_ik::detail {
@@ -97,20 +99,90 @@ void refine(const Problem& pr, double x0, Branch b0, double x1, Branch b1, IkScr
   }
   const auto& h = pr.c.h;
   const Eigen::Matrix3d r04 = rot(h[0], x) * rot(h[1], root.q2) * rot(h[2], root.q3) * rot(h[3], root.q4);
-  const Eigen::Matrix3d r46 = r04.transpose() * pr.r06;  // R(h5, q5) R(h6, q6)
+  // R(h5, q5) R(h6, q6) = R_04^T R_06 =: r46: R(h5, q5) h6 = r46 h6 and R(h6, -q6) h5 = r46^T h5.
+  const Eigen::Matrix3d r46 = r04.transpose() * pr.r06;
   Vector6d q;
   q << x, root.q2, root.q3, root.q4, sp1(h[5], r46 * h[5], h[4]).theta[0],
-      sp1(h[4], r46.transpose() * h[4], h[5]).theta[0];
+      -sp1(h[4], r46.transpose() * h[4], h[5]).theta[0];
   push(out, q);
 }
 
-// Sign changes between matched branches of two neighbouring samples.
-void brackets(const Problem& pr, const Sample& a, const Sample& b, IkScratch& out) {
-  for (int i = 0; i < a.count; ++i) {
-    const Branch& ba = a.branch[static_cast<std::size_t>(i)];
-    if (b.count == 0) return;
-    const Branch& bb = nearest(b, ba);
-    if ((ba.e < 0) != (bb.e < 0) || ba.e == 0.0) refine(pr, a.q1, ba, b.q1, bb, out);
+// The last sample in (a.q1, b.q1) that still has a's branch count (bisection; a has more
+// branches than b): where a pair of branches meets and ends (a fold of the 3R position problem).
+Sample fold(const Problem& pr, const Sample& a, const Sample& b) {
+  Sample lo = a;
+  double hi = b.q1;
+  for (int it = 0; it < 12; ++it) {
+    const Sample mid = evaluate(pr, 0.5 * (lo.q1 + hi));
+    if (mid.count >= a.count) {
+      lo = mid;
+    } else {
+      hi = mid.q1;
+    }
+  }
+  return lo;
+}
+
+// Two close roots between samples (e rises to cross zero and falls back within one or two
+// steps): the parabola through the branch's e at three neighbouring samples predicts a vertex
+// beyond zero; e at the vertex then brackets a root on each side.
+void touching(const Problem& pr, const Sample& before, const Sample& a, const Branch& ba, const Sample& b,
+              const Branch& bb, IkScratch& out) {
+  const Branch& bz = nearest(before, ba);
+  const double slope = (bb.e - bz.e) / 2, curvature = (bb.e + bz.e) / 2 - ba.e;
+  if (curvature == 0.0 || (curvature < 0) != (ba.e < 0)) return;  // curving away from zero
+  const double t = -slope / (2 * curvature);
+  if (t < -1.0 || t > 1.0 || ((ba.e - slope * slope / (4 * curvature)) < 0) == (ba.e < 0)) return;
+  const double step = b.q1 - a.q1;
+  const Sample v = evaluate(pr, a.q1 + t * step);
+  if (v.count == 0) return;
+  const Branch& bv = nearest(v, t >= 0 ? interpolate(ba, bb, t) : interpolate(ba, bz, -t));
+  if ((bv.e < 0) == (ba.e < 0)) return;
+  if (t >= 0) {
+    refine(pr, a.q1, ba, v.q1, bv, out);
+    refine(pr, v.q1, bv, b.q1, bb, out);
+  } else {
+    refine(pr, before.q1, bz, v.q1, bv, out);
+    refine(pr, v.q1, bv, a.q1, ba, out);
+  }
+}
+
+// Roots between neighbouring samples a and b. Branches are matched greedily, nearest pairs
+// first; a matched pair whose e changes sign brackets a root. Branches left unmatched end (or
+// begin) in pairs at a fold between the samples, where e is continuous from one to the other:
+// when a pair's e differ in sign, the root lies between the sample and the fold, on the branch
+// whose sign differs from the fold's.
+void brackets(const Problem& pr, const Sample& before, const Sample& a, const Sample& b, IkScratch& out) {
+  std::array<bool, 4> used_a{}, used_b{};
+  for (int pairs = std::min(a.count, b.count); pairs > 0; --pairs) {
+    int bi = -1, bj = -1;
+    double best = INFINITY;
+    for (int i = 0; i < a.count; ++i) {
+      for (int j = 0; j < b.count; ++j) {
+        if (used_a[static_cast<std::size_t>(i)] || used_b[static_cast<std::size_t>(j)]) continue;
+        const double d = distance2(a.branch[static_cast<std::size_t>(i)], b.branch[static_cast<std::size_t>(j)]);
+        if (d < best) best = d, bi = i, bj = j;
+      }
+    }
+    used_a[static_cast<std::size_t>(bi)] = used_b[static_cast<std::size_t>(bj)] = true;
+    const Branch& ba = a.branch[static_cast<std::size_t>(bi)];
+    const Branch& bb = b.branch[static_cast<std::size_t>(bj)];
+    if ((ba.e < 0) != (bb.e < 0) || ba.e == 0.0) {
+      refine(pr, a.q1, ba, b.q1, bb, out);
+    } else if (before.count > 0) {
+      touching(pr, before, a, ba, b, bb, out);
+    }
+  }
+  if (a.count == b.count) return;
+  const bool ending = a.count > b.count;
+  const Sample& side = ending ? a : b;
+  const std::array<bool, 4>& used = ending ? used_a : used_b;
+  const Sample f = ending ? fold(pr, a, b) : fold(pr, b, a);
+  for (int i = 0; i < side.count; ++i) {
+    if (used[static_cast<std::size_t>(i)]) continue;
+    const Branch& start = side.branch[static_cast<std::size_t>(i)];
+    const Branch& end = nearest(f, start);
+    if ((start.e < 0) != (end.e < 0)) refine(pr, side.q1, start, f.q1, end, out);
   }
 }
 
@@ -123,11 +195,12 @@ void search_1d_candidates(const PoeChain& c, const Eigen::Vector3d& point, const
   const Problem pr{c, r06, target.translation() - r06 * (tool0 - point), point - c.joint_point(3), c.h[4].dot(c.h[5])};
   const double step = 2 * M_PI / samples;
   const Sample first = evaluate(pr, -M_PI);
-  Sample prev = first;
+  Sample before = evaluate(pr, -M_PI - step), prev = first;
   for (int k = 1; k <= samples; ++k) {
     Sample cur = k < samples ? evaluate(pr, -M_PI + k * step) : first;
     cur.q1 = -M_PI + k * step;  // the last interval ends at pi, the first sample's angle + 2 pi
-    brackets(pr, prev, cur, s);
+    brackets(pr, before, prev, cur, s);
+    before = prev;
     prev = cur;
   }
 }

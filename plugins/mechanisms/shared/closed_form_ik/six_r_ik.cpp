@@ -7,6 +7,7 @@
 
 #include <Eigen/LU>
 
+#include <algorithm>
 #include <cmath>
 
 namespace hapsyn::plugins::closed_form_ik {
@@ -39,9 +40,6 @@ ClosedFormIk6R::ClosedFormIk6R(const PoeChain& chain, const IkOptions& options)
   work_ = geometry_.reversed ? chain.reversed() : chain;
   const ChainGeometry work_geometry = classify(work_, options.geometry_tolerance);
   point_ = geometry_.family == IkFamily::kSphericalWrist ? work_geometry.wrist_point : work_geometry.point[4];
-  size_ = 0.0;
-  for (int i = 0; i <= 6; ++i) size_ += chain.p[static_cast<std::size_t>(i)].norm();
-  size_ = std::max(size_, 1.0);
 }
 
 void ClosedFormIk6R::candidates(const Eigen::Isometry3d& target, IkScratch& scratch) const {
@@ -78,11 +76,9 @@ bool ClosedFormIk6R::polish(const Eigen::Isometry3d& target, Vector6d& q) const 
     const Eigen::AngleAxisd rotation(target.linear() * pose.linear().transpose());
     error.head<3>() = rotation.angle() * rotation.axis();
     error.tail<3>() = target.translation() - pose.translation();
-    const bool accurate = error.head<3>().norm() <= 1e-3 * options_.accept_tolerance &&
-                          error.tail<3>().norm() <= 1e-3 * options_.accept_tolerance * size_;
-    if (step >= options_.newton_steps || accurate) {
-      return error.head<3>().norm() <= options_.accept_tolerance &&
-             error.tail<3>().norm() <= options_.accept_tolerance * size_;
+    const double worst = std::max(error.head<3>().norm(), error.tail<3>().norm());
+    if (step >= options_.newton_steps || worst <= 1e-4 * options_.accept_tolerance) {
+      return worst <= options_.accept_tolerance;
     }
     const Eigen::Matrix<double, 6, 6> j6 = jacobian.leftCols<6>();
     q += j6.partialPivLu().solve(error);

@@ -22,8 +22,8 @@
 ///   axes, IK-Geo's 2-D search): the constructor refuses it.
 ///
 /// Every candidate is polished by Newton steps on the full pose (6 x 6 Jacobian, at most
-/// `newton_steps`) and kept when it reproduces the target to `accept_tolerance` (rad, and m
-/// relative to the chain's size); duplicates (all angles within 1e-9 rad) are merged; angles are
+/// `newton_steps`, fewer once the error is below accept_tolerance / 1e4) and kept when it
+/// reproduces the target to `accept_tolerance` (rotation angle [rad] and position [m]); duplicates (all angles within 1e-9 rad) are merged; angles are
 /// wrapped into (-pi, pi], or into [lower, upper] when limits are given (a solution outside its
 /// limits after shifts by 2 pi is dropped). Near singular configurations a subproblem may be
 /// degenerate (a continuum of solutions): one representative is returned.
@@ -48,8 +48,8 @@ constexpr int kMaxSolutions = 16;
 /// Options of ClosedFormIk6R.
 struct IkOptions {
   int search_samples = 72;          ///< samples of q1 in the 1-D search (>= 8)
-  int newton_steps = 3;             ///< polishing steps per candidate (0 = none)
-  double accept_tolerance = 1e-9;   ///< pose error a solution may keep [rad; m per m of chain size]
+  int newton_steps = 4;             ///< polishing steps per candidate (0 = none)
+  double accept_tolerance = 1e-10;  ///< pose error a solution may keep [rad and m]
   double geometry_tolerance = 1e-9;  ///< classify()'s tolerance
   bool use_limits = false;          ///< wrap into [lower, upper] and drop solutions outside
   std::array<double, 6> lower{}, upper{};  ///< joint limits [rad] when use_limits
@@ -92,7 +92,6 @@ class ClosedFormIk6R {
   ChainGeometry geometry_;
   Eigen::Vector3d point_ = Eigen::Vector3d::Zero();  // wrist point / 5x6 intersection on work_
   IkOptions options_;
-  double size_ = 1.0;  // sum of |p_i| (at least 1 m): the length scale of accept_tolerance
 };
 
 }  // namespace hapsyn::plugins::closed_form_ik

@@ -5,12 +5,10 @@
 // or a pair of such equations in two angles (SP5, SP6: solve_two_circles).
 #include "shared/closed_form_ik/subproblems.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
-#include <complex>
 
 namespace hapsyn::plugins::closed_form_ik {
 
@@ -70,7 +68,7 @@ struct TrigQuadratic {
 // Newton on f from theta; stops at a zero or when a step does not help.
 double polish(const TrigQuadratic& f, double theta) {
   double v = f.value(theta);
-  for (int it = 0; it < 8 && v != 0.0; ++it) {
+  for (int it = 0; it < 40 && v != 0.0; ++it) {  // linear near a double root: more steps
     const double s = f.slope(theta);
     if (s == 0.0) break;
     const double next = theta - v / s;
@@ -82,9 +80,48 @@ double polish(const TrigQuadratic& f, double theta) {
   return theta;
 }
 
-// Roots theta of f: f is a degree-2 trigonometric polynomial, z^2 f in z = exp(i theta) a quartic
-// with complex coefficients whose roots on the unit circle are the solutions (no tangent
-// half-angle, so theta = pi is not special). A vanishing quartic term leaves degree 1 (solve_unit).
+// A real root of the cubic m^3 + b m^2 + c m + d (the largest, by the trigonometric or Cardano
+// form, Newton polished).
+double cubic_largest_root(double b, double c, double d) {
+  const double q = (3 * c - b * b) / 9, r = (9 * b * c - 27 * d - 2 * b * b * b) / 54;
+  const double disc = q * q * q + r * r;
+  double m;
+  if (disc <= 0.0) {  // three real roots
+    const double sq = std::sqrt(-q);
+    const double phi = std::acos(std::clamp(r / (sq * sq * sq), -1.0, 1.0));
+    m = 2 * sq * std::cos(phi / 3) - b / 3;
+  } else {
+    const double s = std::cbrt(r + std::sqrt(disc)), t = std::cbrt(r - std::sqrt(disc));
+    m = s + t - b / 3;
+  }
+  for (int it = 0; it < 3; ++it) {
+    const double f = ((m + b) * m + c) * m + d, df = (3 * m + 2 * b) * m + c;
+    if (df == 0.0) break;
+    m -= f / df;
+  }
+  return m;
+}
+
+// Roots of y^2 + s y + t; a (nearly) negative discriminant gives the real part as a candidate
+// (flagged by near = true) for the caller to polish and test.
+void quadratic_roots(double s, double t, std::array<double, 4>& y, std::array<bool, 4>& near, int& count) {
+  const double disc = s * s / 4 - t;
+  if (disc >= 0.0) {
+    const double sq = std::sqrt(disc);
+    y[static_cast<std::size_t>(count)] = -s / 2 + sq, near[static_cast<std::size_t>(count++)] = false;
+    y[static_cast<std::size_t>(count)] = -s / 2 - sq, near[static_cast<std::size_t>(count++)] = false;
+  } else {
+    y[static_cast<std::size_t>(count)] = -s / 2, near[static_cast<std::size_t>(count++)] = true;
+  }
+}
+
+// Roots theta of f, a degree-2 trigonometric polynomial. Shifted by phi (so that f(phi + pi),
+// the quartic's leading coefficient, is the largest of four trial values) and written in
+// t = tan((theta - phi) / 2), (1 + t^2)^2 f is the quartic
+//   (A - C + E) t^4 + (2D - 4B) t^3 + (2E - 6A) t^2 + (4B + 2D) t + (A + C + E)
+// (A, B, C, D, E the coefficients of cos 2u, sin 2u, cos u, sin u, 1 in u = theta - phi), solved
+// by Ferrari's method; each root is Newton polished on f. A vanishing 2-theta part leaves
+// degree 1 (solve_unit). No real root: the best candidate, flagged least squares.
 Angles1 trig_quadratic_roots(const TrigQuadratic& f, std::array<double, 4>& theta, int& count) {
   Angles1 status;
   count = 0;
@@ -94,29 +131,59 @@ Angles1 trig_quadratic_roots(const TrigQuadratic& f, std::array<double, 4>& thet
     for (int i = 0; i < lin.count; ++i) theta[static_cast<std::size_t>(count++)] = lin.theta[static_cast<std::size_t>(i)];
     return lin;
   }
-  using C = std::complex<double>;
-  const C a4(f.a2 / 2, -f.b2 / 2), a3(f.c1 / 2, -f.d1 / 2), a2(f.e0, 0.0), a1(f.c1 / 2, f.d1 / 2),
-      a0(f.a2 / 2, f.b2 / 2);
-  Eigen::Matrix4cd companion = Eigen::Matrix4cd::Zero();
-  companion(0, 0) = -a3 / a4;
-  companion(0, 1) = -a2 / a4;
-  companion(0, 2) = -a1 / a4;
-  companion(0, 3) = -a0 / a4;
-  companion(1, 0) = companion(2, 1) = companion(3, 2) = 1.0;
-  const Eigen::ComplexEigenSolver<Eigen::Matrix4cd> eig(companion, false);
-  const Eigen::Vector4cd& z = eig.eigenvalues();
-  double best_off = INFINITY;
-  int best = 0;
-  for (int i = 0; i < 4; ++i) {
-    const double off = std::abs(std::abs(z(i)) - 1.0);
-    if (off < best_off) best_off = off, best = i;
-    if (off > 1e-3) continue;
-    const double t = polish(f, std::arg(z(i)));
-    if (off < 1e-6 || std::abs(f.value(t)) <= 1e-10 * scale) theta[static_cast<std::size_t>(count++)] = t;
+  double phi = 0.0, lead = 0.0;
+  for (double trial : {0.0, M_PI / 2, M_PI / 4, -M_PI / 4}) {
+    const double v = f.value(trial + M_PI);
+    if (std::abs(v) > std::abs(lead)) lead = v, phi = trial;
+  }
+  // The coefficients in u = theta - phi: cos 2theta = cos 2u cos 2phi - sin 2u sin 2phi, etc.
+  const double c2 = std::cos(2 * phi), s2 = std::sin(2 * phi), c1 = std::cos(phi), s1 = std::sin(phi);
+  const double A = f.a2 * c2 + f.b2 * s2, B = f.b2 * c2 - f.a2 * s2;
+  const double C = f.c1 * c1 + f.d1 * s1, D = f.d1 * c1 - f.c1 * s1, E = f.e0;
+  const double a4 = A - C + E;
+  const double a = (2 * D - 4 * B) / a4, b = (2 * E - 6 * A) / a4, c = (4 * B + 2 * D) / a4, d = (A + C + E) / a4;
+  // Depressed quartic y^4 + p y^2 + q y + r (t = y - a / 4).
+  const double p = b - 3 * a * a / 8, q = c - a * b / 2 + a * a * a / 8,
+               r = d - a * c / 4 + a * a * b / 16 - 3 * a * a * a * a / 256;
+  std::array<double, 4> y{};
+  std::array<bool, 4> near{};
+  int n = 0;
+  if (std::abs(q) <= 1e-14 * (1.0 + std::abs(p) * std::sqrt(std::abs(p)) + std::abs(r))) {  // biquadratic
+    std::array<double, 4> z{};
+    std::array<bool, 4> zn{};
+    int m = 0;
+    quadratic_roots(p, r, z, zn, m);
+    for (int i = 0; i < m; ++i) {
+      const double zi = z[static_cast<std::size_t>(i)];
+      if (zi >= 0.0) {
+        y[static_cast<std::size_t>(n)] = std::sqrt(zi), near[static_cast<std::size_t>(n++)] = zn[static_cast<std::size_t>(i)];
+        y[static_cast<std::size_t>(n)] = -std::sqrt(zi), near[static_cast<std::size_t>(n++)] = zn[static_cast<std::size_t>(i)];
+      } else {
+        y[static_cast<std::size_t>(n)] = 0.0, near[static_cast<std::size_t>(n++)] = true;
+      }
+    }
+  } else {
+    // Resolvent: (y^2 + p/2 + m)^2 = 2m y^2 - q y + (m^2 + m p + p^2/4 - r) is a square for
+    // 8 m^3 + 8 p m^2 + (2 p^2 - 8 r) m - q^2 = 0 (m > 0).
+    const double m = std::max(cubic_largest_root(p, p * p / 4 - r, -q * q / 8), 1e-300);
+    const double w = std::sqrt(2 * m);
+    quadratic_roots(w, p / 2 + m - q / (2 * w), y, near, n);
+    quadratic_roots(-w, p / 2 + m + q / (2 * w), y, near, n);
+  }
+  double best_value = INFINITY, best = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double t = polish(f, phi + 2 * std::atan(y[static_cast<std::size_t>(i)] - a / 4));
+    const double v = std::abs(f.value(t));
+    if (v < best_value) best_value = v, best = t;
+    if (v > 1e-10 * scale && near[static_cast<std::size_t>(i)]) continue;
+    if (v > 1e-8 * scale) continue;
+    bool duplicate = false;
+    for (int j = 0; j < count; ++j) duplicate = duplicate || std::abs(std::remainder(theta[static_cast<std::size_t>(j)] - t, 2 * M_PI)) < 1e-13;
+    if (!duplicate) theta[static_cast<std::size_t>(count++)] = std::remainder(t, 2 * M_PI);
   }
   if (count == 0) {
     status.least_squares = true;
-    theta[0] = std::arg(z(best));
+    theta[0] = std::remainder(best, 2 * M_PI);
     count = 1;
   }
   return status;
@@ -166,6 +233,26 @@ Angles2 rank_one_route(const Eigen::Matrix2d& m1, const Eigen::Matrix2d& m2, con
   return out;
 }
 
+// Newton steps on M1 x1(t1) + M2 x2(t2) = c (x' = (cos t, -sin t)): the elimination rounds
+// x1's length; two steps restore the system's own accuracy (kept only when they help).
+void newton_pair(const Eigen::Matrix2d& m1, const Eigen::Matrix2d& m2, const Eigen::Vector2d& c, double& t1, double& t2) {
+  auto residual = [&](double a, double b) {
+    return Eigen::Vector2d(m1 * Eigen::Vector2d(std::sin(a), std::cos(a)) + m2 * Eigen::Vector2d(std::sin(b), std::cos(b)) - c);
+  };
+  Eigen::Vector2d r = residual(t1, t2);
+  for (int it = 0; it < 2; ++it) {
+    Eigen::Matrix2d j;
+    j.col(0) = m1 * Eigen::Vector2d(std::cos(t1), -std::sin(t1));
+    j.col(1) = m2 * Eigen::Vector2d(std::cos(t2), -std::sin(t2));
+    const double det = j.determinant();
+    if (std::abs(det) <= 1e-12 * j.squaredNorm()) return;
+    const Eigen::Vector2d step = j.inverse() * r;
+    const Eigen::Vector2d next = residual(t1 - step(0), t2 - step(1));
+    if (!(next.norm() < r.norm())) return;
+    t1 -= step(0), t2 -= step(1), r = next;
+  }
+}
+
 // M1 well conditioned: x1 = e - B x2 with e = M1^-1 c, B = M1^-1 M2, and |x1|^2 = 1 is
 // x2^T P x2 - 2 g . x2 + e . e - 1 = 0 (P = B^T B, g = B^T e), a degree-2 trigonometric
 // polynomial in theta2 (s^2 = (1 - cos 2t) / 2, c^2 = (1 + cos 2t) / 2, 2 s c = sin 2t).
@@ -187,6 +274,7 @@ Angles2 quartic_route(const Eigen::Matrix2d& m1, const Eigen::Matrix2d& m2, cons
     const Eigen::Vector2d x1 = e - b * Eigen::Vector2d(std::sin(th2), std::cos(th2));
     out.theta1[static_cast<std::size_t>(i)] = angle_of(x1);
     out.theta2[static_cast<std::size_t>(i)] = th2;
+    newton_pair(m1, m2, c, out.theta1[static_cast<std::size_t>(i)], out.theta2[static_cast<std::size_t>(i)]);
   }
   out.count = count;
   return out;

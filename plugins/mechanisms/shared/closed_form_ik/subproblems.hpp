@@ -91,10 +91,11 @@ Angles2 sp6(const std::array<Eigen::Vector3d, 4>& h, const std::array<Eigen::Vec
 /// The core of SP5 and SP6: unit 2-vectors x1 = (sin theta1, cos theta1), x2 = (sin theta2,
 /// cos theta2) with M1 x1 + M2 x2 = c; up to 4 pairs. When M1 (or M2) is well conditioned, x1 is
 /// eliminated and |x1| = 1 becomes a trigonometric polynomial of degree 2 in theta2, solved as a
-/// quartic in z = exp(i theta2) (companion matrix eigenvalues, roots on the unit circle, Newton
-/// polished). When both are (nearly) rank one, a combination of the rows free of x1 gives theta2
-/// by SP4, then theta1 by SP4. least_squares: no root on the unit circle (the nearest one is
-/// returned); degenerate: M1 (or M2) zero or both rank one along the same row direction.
+/// quartic in the tangent of the half angle (shifted so that no root lies at the half angle's
+/// pole) by Ferrari's method, each root Newton polished. When both are (nearly) rank one, a
+/// combination of the rows free of x1 gives theta2 by SP4, then theta1 by SP4. least_squares: no
+/// real root (the angle where the polynomial is smallest in magnitude among the candidates is
+/// returned); degenerate: M1 (or M2) zero, or both rank one along the same row direction.
 Angles2 solve_two_circles(const Eigen::Matrix2d& m1, const Eigen::Matrix2d& m2, const Eigen::Vector2d& c);
 
 }  // namespace hapsyn::plugins::closed_form_ik
