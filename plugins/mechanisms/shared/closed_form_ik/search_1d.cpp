@@ -32,7 +32,7 @@ struct Problem {
   double cos56;          // h5 . h6
 };
 
-double wrapped(double a) { return std::remainder(a, 2 * M_PI); }
+double wrapped(double a) { return a - 2 * M_PI * std::nearbyint(a / (2 * M_PI)); }
 
 double distance2(const Branch& a, const Branch& b) {
   const double d2 = wrapped(a.q2 - b.q2), d3 = wrapped(a.q3 - b.q3), d4 = wrapped(a.q4 - b.q4);
@@ -77,13 +77,24 @@ Branch interpolate(const Branch& a, const Branch& b, double t) {
   return m;
 }
 
+// The candidate at (q1, branch): (q5, q6) from the orientation left by joints 1 to 4.
+void finish(const Problem& pr, double q1, const Branch& b, IkScratch& out) {
+  const auto& h = pr.c.h;
+  const Eigen::Matrix3d r04 = rot(h[0], q1) * rot(h[1], b.q2) * rot(h[2], b.q3) * rot(h[3], b.q4);
+  // R(h5, q5) R(h6, q6) = R_04^T R_06 =: r46: R(h5, q5) h6 = r46 h6 and R(h6, -q6) h5 = r46^T h5.
+  const Eigen::Matrix3d r46 = r04.transpose() * pr.r06;
+  Vector6d q;
+  q << q1, b.q2, b.q3, b.q4, sp1(h[5], r46 * h[5], h[4]).theta[0], -sp1(h[4], r46.transpose() * h[4], h[5]).theta[0];
+  push(out, q);
+}
+
 // A root of one branch's e in [x0, x1] (opposite signs at the ends) by the Illinois method; the
 // branch is followed by the nearest solution to the interpolation of its ends.
 void refine(const Problem& pr, double x0, Branch b0, double x1, Branch b1, IkScratch& out) {
   double fa = b0.e, fb = b1.e;
   Branch root = std::abs(fa) < std::abs(fb) ? b0 : b1;
   double x = std::abs(fa) < std::abs(fb) ? x0 : x1;
-  for (int it = 0; it < 60 && std::abs(x1 - x0) > 1e-12 && fb != 0.0; ++it) {
+  for (int it = 0; it < 60 && std::abs(x1 - x0) > 1e-8 && std::abs(fb) > 1e-10; ++it) {
     x = x1 - fb * (x1 - x0) / (fb - fa);
     const Sample s = evaluate(pr, x);
     if (s.count == 0) break;
@@ -97,30 +108,7 @@ void refine(const Problem& pr, double x0, Branch b0, double x1, Branch b1, IkScr
     x1 = x, fb = m.e, b1 = m;
     if (m.e == 0.0) break;
   }
-  const auto& h = pr.c.h;
-  const Eigen::Matrix3d r04 = rot(h[0], x) * rot(h[1], root.q2) * rot(h[2], root.q3) * rot(h[3], root.q4);
-  // R(h5, q5) R(h6, q6) = R_04^T R_06 =: r46: R(h5, q5) h6 = r46 h6 and R(h6, -q6) h5 = r46^T h5.
-  const Eigen::Matrix3d r46 = r04.transpose() * pr.r06;
-  Vector6d q;
-  q << x, root.q2, root.q3, root.q4, sp1(h[5], r46 * h[5], h[4]).theta[0],
-      -sp1(h[4], r46.transpose() * h[4], h[5]).theta[0];
-  push(out, q);
-}
-
-// The last sample in (a.q1, b.q1) that still has a's branch count (bisection; a has more
-// branches than b): where a pair of branches meets and ends (a fold of the 3R position problem).
-Sample fold(const Problem& pr, const Sample& a, const Sample& b) {
-  Sample lo = a;
-  double hi = b.q1;
-  for (int it = 0; it < 12; ++it) {
-    const Sample mid = evaluate(pr, 0.5 * (lo.q1 + hi));
-    if (mid.count >= a.count) {
-      lo = mid;
-    } else {
-      hi = mid.q1;
-    }
-  }
-  return lo;
+  finish(pr, x, root, out);
 }
 
 // Two close roots between samples (e rises to cross zero and falls back within one or two
@@ -147,42 +135,71 @@ void touching(const Problem& pr, const Sample& before, const Sample& a, const Br
   }
 }
 
-// Roots between neighbouring samples a and b. Branches are matched greedily, nearest pairs
-// first; a matched pair whose e changes sign brackets a root. Branches left unmatched end (or
-// begin) in pairs at a fold between the samples, where e is continuous from one to the other:
-// when a pair's e differ in sign, the root lies between the sample and the fold, on the branch
-// whose sign differs from the fold's.
-void brackets(const Problem& pr, const Sample& before, const Sample& a, const Sample& b, IkScratch& out) {
-  std::array<bool, 4> used_a{}, used_b{};
+// Branches of neighbouring samples are matched greedily, nearest pairs first, up to this squared
+// distance in (q2, q3, q4) [rad^2]; a branch left unmatched begins or ends between the samples
+// (at a fold of the 3R position problem, where two branches meet) or jumps.
+constexpr double kMatch2 = 0.25;
+// Intervals with unmatched branches are halved up to this many times (1/64 of a sample step).
+constexpr int kDepth = 6;
+
+struct Matching {
+  std::array<int, 4> partner{-1, -1, -1, -1};  // partner[i]: b's branch matched to a's branch i
+  std::array<bool, 4> used_b{};
+  bool complete = true;  // every branch of both samples matched
+};
+
+Matching match(const Sample& a, const Sample& b) {
+  Matching m;
   for (int pairs = std::min(a.count, b.count); pairs > 0; --pairs) {
     int bi = -1, bj = -1;
-    double best = INFINITY;
+    double best = kMatch2;
     for (int i = 0; i < a.count; ++i) {
       for (int j = 0; j < b.count; ++j) {
-        if (used_a[static_cast<std::size_t>(i)] || used_b[static_cast<std::size_t>(j)]) continue;
+        if (m.partner[static_cast<std::size_t>(i)] >= 0 || m.used_b[static_cast<std::size_t>(j)]) continue;
         const double d = distance2(a.branch[static_cast<std::size_t>(i)], b.branch[static_cast<std::size_t>(j)]);
-        if (d < best) best = d, bi = i, bj = j;
+        if (d <= best) best = d, bi = i, bj = j;
       }
     }
-    used_a[static_cast<std::size_t>(bi)] = used_b[static_cast<std::size_t>(bj)] = true;
-    const Branch& ba = a.branch[static_cast<std::size_t>(bi)];
-    const Branch& bb = b.branch[static_cast<std::size_t>(bj)];
+    if (bi < 0) break;
+    m.partner[static_cast<std::size_t>(bi)] = bj;
+    m.used_b[static_cast<std::size_t>(bj)] = true;
+  }
+  for (int i = 0; i < a.count; ++i) m.complete = m.complete && m.partner[static_cast<std::size_t>(i)] >= 0;
+  for (int j = 0; j < b.count; ++j) m.complete = m.complete && m.used_b[static_cast<std::size_t>(j)];
+  return m;
+}
+
+// Roots between neighbouring samples a and b (before: the sample one step before a, or an empty
+// one). An interval where a branch is left unmatched is halved (kDepth times at most); a matched
+// pair whose e changes sign brackets a root (refine), one whose e nears zero and turns back may
+// hide two (touching). At the last halving, the unmatched branches are close to their fold,
+// where e is continuous from one branch of the pair to the other and a root near it is within
+// reach of the Newton polish: they become candidates themselves.
+void scan(const Problem& pr, const Sample& before, const Sample& a, const Sample& b, int depth, IkScratch& out) {
+  const Matching m = match(a, b);
+  if (!m.complete && depth > 0) {
+    const Sample mid = evaluate(pr, 0.5 * (a.q1 + b.q1));
+    const Sample none;
+    scan(pr, none, a, mid, depth - 1, out);
+    scan(pr, none, mid, b, depth - 1, out);
+    return;
+  }
+  for (int i = 0; i < a.count; ++i) {
+    const Branch& ba = a.branch[static_cast<std::size_t>(i)];
+    const int j = m.partner[static_cast<std::size_t>(i)];
+    if (j < 0) {
+      finish(pr, a.q1, ba, out);
+      continue;
+    }
+    const Branch& bb = b.branch[static_cast<std::size_t>(j)];
     if ((ba.e < 0) != (bb.e < 0) || ba.e == 0.0) {
       refine(pr, a.q1, ba, b.q1, bb, out);
     } else if (before.count > 0) {
       touching(pr, before, a, ba, b, bb, out);
     }
   }
-  if (a.count == b.count) return;
-  const bool ending = a.count > b.count;
-  const Sample& side = ending ? a : b;
-  const std::array<bool, 4>& used = ending ? used_a : used_b;
-  const Sample f = ending ? fold(pr, a, b) : fold(pr, b, a);
-  for (int i = 0; i < side.count; ++i) {
-    if (used[static_cast<std::size_t>(i)]) continue;
-    const Branch& start = side.branch[static_cast<std::size_t>(i)];
-    const Branch& end = nearest(f, start);
-    if ((start.e < 0) != (end.e < 0)) refine(pr, side.q1, start, f.q1, end, out);
+  for (int j = 0; j < b.count; ++j) {
+    if (!m.used_b[static_cast<std::size_t>(j)]) finish(pr, b.q1, b.branch[static_cast<std::size_t>(j)], out);
   }
 }
 
@@ -199,7 +216,7 @@ void search_1d_candidates(const PoeChain& c, const Eigen::Vector3d& point, const
   for (int k = 1; k <= samples; ++k) {
     Sample cur = k < samples ? evaluate(pr, -M_PI + k * step) : first;
     cur.q1 = -M_PI + k * step;  // the last interval ends at pi, the first sample's angle + 2 pi
-    brackets(pr, before, prev, cur, s);
+    scan(pr, before, prev, cur, kDepth, s);
     before = prev;
     prev = cur;
   }

@@ -13,11 +13,15 @@
 /// - one intersecting pair 5 x 6 (or, reversed, 1 x 2), e.g. offset wrists: a 1-D search over
 ///   q1. For each q1 the point where axes 5 and 6 meet fixes (q2, q3, q4) by SP5 (up to 4
 ///   branches); the remaining error e(q1) = h5 . R_04^T R_06 h6 - h5 . h6 (the angle between axes
-///   5 and 6 must match) is sampled at `search_samples` values of q1 evenly over [-pi, pi), branches
-///   matched between neighbouring samples by nearest (q2, q3, q4), every sign change of a branch
-///   refined by the Illinois method (regula falsi) to 1e-12 rad, then (q5, q6) by SP1. Roots where
-///   e touches zero without changing sign, or where a branch appears or ends between two samples,
-///   can be missed (more samples make that rarer); the tests report how often.
+///   5 and 6 must match) is sampled at `search_samples` values of q1 evenly over [-pi, pi).
+///   Branches of neighbouring samples are matched greedily by nearest (q2, q3, q4); an interval
+///   where a branch is left unmatched (a fold, where two branches meet and end) is halved up to 6
+///   times and the unmatched branches at the last halving become candidates; every sign change
+///   of a matched branch is refined by the Illinois method (regula falsi) to 1e-8 rad, and a branch
+///   whose e nears zero and turns back is tested at the vertex of its parabola (two close roots);
+///   then (q5, q6) by SP1. Roots can still be missed where e only touches zero or near singular
+///   configurations: the tests measure about 2 % of generating configurations missed on random
+///   poses (0.1 % of those whose Jacobian's smallest singular value is >= 0.03).
 /// - anything else (in particular the general 6R without intersecting or parallel consecutive
 ///   axes, IK-Geo's 2-D search): the constructor refuses it.
 ///

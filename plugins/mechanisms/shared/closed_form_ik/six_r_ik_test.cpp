@@ -51,8 +51,11 @@ double smallest_singular_value(const PoeChain& c, const Vector6d& q) {
   return Eigen::JacobiSVD<Eigen::Matrix<double, 6, 6>>(j6).singularValues()(5);
 }
 
+constexpr double kWellConditioned = 3e-2;  // the 1-D search's misses are counted apart above it
+
 struct RoundTrip {
   int tried = 0, skipped = 0, missed = 0, solutions = 0;
+  int well = 0, well_missed = 0;  // configurations with smallest singular value >= kWellConditioned
 };
 
 // FK -> IK on `trials` random configurations; every solution is checked, the generating one sought.
@@ -64,10 +67,13 @@ RoundTrip round_trip(const ClosedFormIk6R& ik, int trials, unsigned seed) {
   for (int t = 0; t < trials; ++t) {
     const Vector6d q = random_q(rng);
     ++r.tried;
-    if (smallest_singular_value(ik.chain(), q) < kSingular) {
+    const double sigma = smallest_singular_value(ik.chain(), q);
+    if (sigma < kSingular) {
       ++r.skipped;
       continue;
     }
+    const bool well = sigma >= kWellConditioned;
+    r.well += well;
     const Eigen::Isometry3d target = ik.chain().forward(q.data());
     ik.solve(target, scratch, out);
     bool found = false;
@@ -77,12 +83,12 @@ RoundTrip round_trip(const ClosedFormIk6R& ik, int trials, unsigned seed) {
       found = found || q_distance(s, q) < 1e-6;
     }
     r.solutions += out.count;
-    if (!found) ++r.missed;
+    if (!found) ++r.missed, r.well_missed += well;
   }
-  std::printf("[ stats    ] %s: %d configurations, %d skipped as singular, %d generating configurations missed, "
-              "%.2f solutions per pose\n",
-              ik.geometry().describe().c_str(), r.tried, r.skipped, r.missed,
-              static_cast<double>(r.solutions) / std::max(1, r.tried - r.skipped));
+  std::printf("[ stats    ] %s: %d configurations, %d skipped as singular (sigma_min < %g), %d generating "
+              "configurations missed (%d of the %d with sigma_min >= %g), %.2f solutions per pose\n",
+              ik.geometry().describe().c_str(), r.tried, r.skipped, kSingular, r.missed, r.well_missed, r.well,
+              kWellConditioned, static_cast<double>(r.solutions) / std::max(1, r.tried - r.skipped));
   ::testing::Test::RecordProperty("skipped", r.skipped);
   ::testing::Test::RecordProperty("missed", r.missed);
   return r;
@@ -117,7 +123,9 @@ TEST(ClosedFormIk6R, OffsetWristSearchFindsTheGeneratingConfiguration) {
   const ClosedFormIk6R ik(offset_wrist().poe());
   EXPECT_EQ(ik.geometry().family, IkFamily::kSearch1d);
   const RoundTrip r = round_trip(ik, 2000, 15);
-  EXPECT_LE(r.missed, (r.tried - r.skipped) / 100);  // the search may miss roots (six_r_ik.hpp)
+  // The search may miss roots (six_r_ik.hpp), nearly only close to singular configurations.
+  EXPECT_LE(r.missed, 3 * (r.tried - r.skipped) / 100);
+  EXPECT_LE(r.well_missed, r.well / 200);
   EXPECT_LT(r.skipped, r.tried / 10);
 }
 
@@ -125,7 +133,8 @@ TEST(ClosedFormIk6R, HapticSixRSearchFindsTheGeneratingConfiguration) {
   const ClosedFormIk6R ik(haptic6r().poe());
   EXPECT_EQ(ik.geometry().family, IkFamily::kSearch1d);
   const RoundTrip r = round_trip(ik, 2000, 16);
-  EXPECT_LE(r.missed, (r.tried - r.skipped) / 100);
+  EXPECT_LE(r.missed, 3 * (r.tried - r.skipped) / 100);
+  EXPECT_LE(r.well_missed, r.well / 200);
 }
 
 TEST(ClosedFormIk6R, JointLimitsKeepOnlySolutionsInside) {

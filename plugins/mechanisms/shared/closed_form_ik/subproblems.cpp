@@ -53,29 +53,39 @@ Angles1 solve_unit(const Eigen::Vector2d& a, double b, double scale) {
 }
 
 // f(theta) = a2 cos 2t + b2 sin 2t + c1 cos t + d1 sin t + e0, the |x1| = 1 condition of the
-// quartic route, and its derivative.
+// quartic route, and its derivative (one sin/cos pair per evaluation).
 struct TrigQuadratic {
   double a2, b2, c1, d1, e0;
   double value(double t) const {
-    return a2 * std::cos(2 * t) + b2 * std::sin(2 * t) + c1 * std::cos(t) + d1 * std::sin(t) + e0;
+    const double c = std::cos(t), s = std::sin(t);
+    return a2 * (c * c - s * s) + b2 * 2 * s * c + c1 * c + d1 * s + e0;
   }
-  double slope(double t) const {
-    return -2 * a2 * std::sin(2 * t) + 2 * b2 * std::cos(2 * t) - c1 * std::sin(t) + d1 * std::cos(t);
+  void value_slope(double t, double& v, double& dv) const {
+    const double c = std::cos(t), s = std::sin(t), c2 = c * c - s * s, s2 = 2 * s * c;
+    v = a2 * c2 + b2 * s2 + c1 * c + d1 * s + e0;
+    dv = -2 * a2 * s2 + 2 * b2 * c2 - c1 * s + d1 * c;
   }
   double scale() const { return std::abs(a2) + std::abs(b2) + std::abs(c1) + std::abs(d1) + std::abs(e0); }
 };
 
-// Newton on f from theta; stops at a zero or when a step does not help.
+// Angle a - b wrapped into [-pi, pi] (cheaper than std::remainder).
+double wrapped_difference(double a, double b) {
+  const double d = a - b;
+  return d - 2 * M_PI * std::nearbyint(d / (2 * M_PI));
+}
+
+// Newton on f from theta; stops at rounding level, or when a step does not help (linear
+// convergence near a double root: up to 40 steps there).
 double polish(const TrigQuadratic& f, double theta) {
-  double v = f.value(theta);
-  for (int it = 0; it < 40 && v != 0.0; ++it) {  // linear near a double root: more steps
-    const double s = f.slope(theta);
-    if (s == 0.0) break;
+  const double floor = 1e-15 * f.scale();
+  double v, s;
+  f.value_slope(theta, v, s);
+  for (int it = 0; it < 40 && std::abs(v) > floor && s != 0.0; ++it) {
     const double next = theta - v / s;
-    const double nv = f.value(next);
+    double nv, ns;
+    f.value_slope(next, nv, ns);
     if (!(std::abs(nv) < std::abs(v))) break;
-    theta = next;
-    v = nv;
+    theta = next, v = nv, s = ns;
   }
   return theta;
 }
@@ -131,10 +141,14 @@ Angles1 trig_quadratic_roots(const TrigQuadratic& f, std::array<double, 4>& thet
     for (int i = 0; i < lin.count; ++i) theta[static_cast<std::size_t>(count++)] = lin.theta[static_cast<std::size_t>(i)];
     return lin;
   }
-  double phi = 0.0, lead = 0.0;
-  for (double trial : {0.0, M_PI / 2, M_PI / 4, -M_PI / 4}) {
-    const double v = f.value(trial + M_PI);
-    if (std::abs(v) > std::abs(lead)) lead = v, phi = trial;
+  // f(phi + pi) for phi = 0, pi/2, pi/4, -pi/4, written out.
+  const double h = std::sqrt(0.5);
+  const std::array<double, 4> trial{0.0, M_PI / 2, M_PI / 4, -M_PI / 4};
+  const std::array<double, 4> lead{f.a2 - f.c1 + f.e0, -f.a2 - f.d1 + f.e0, f.b2 - h * (f.c1 + f.d1) + f.e0,
+                                   -f.b2 - h * (f.c1 - f.d1) + f.e0};
+  double phi = 0.0, largest = -1.0;
+  for (std::size_t i = 0; i < 4; ++i) {
+    if (std::abs(lead[i]) > largest) largest = std::abs(lead[i]), phi = trial[i];
   }
   // The coefficients in u = theta - phi: cos 2theta = cos 2u cos 2phi - sin 2u sin 2phi, etc.
   const double c2 = std::cos(2 * phi), s2 = std::sin(2 * phi), c1 = std::cos(phi), s1 = std::sin(phi);
@@ -178,12 +192,12 @@ Angles1 trig_quadratic_roots(const TrigQuadratic& f, std::array<double, 4>& thet
     if (v > 1e-10 * scale && near[static_cast<std::size_t>(i)]) continue;
     if (v > 1e-8 * scale) continue;
     bool duplicate = false;
-    for (int j = 0; j < count; ++j) duplicate = duplicate || std::abs(std::remainder(theta[static_cast<std::size_t>(j)] - t, 2 * M_PI)) < 1e-13;
-    if (!duplicate) theta[static_cast<std::size_t>(count++)] = std::remainder(t, 2 * M_PI);
+    for (int j = 0; j < count; ++j) duplicate = duplicate || std::abs(wrapped_difference(theta[static_cast<std::size_t>(j)], t)) < 1e-13;
+    if (!duplicate) theta[static_cast<std::size_t>(count++)] = wrapped_difference(t, 0.0);
   }
   if (count == 0) {
     status.least_squares = true;
-    theta[0] = std::remainder(best, 2 * M_PI);
+    theta[0] = wrapped_difference(best, 0.0);
     count = 1;
   }
   return status;
@@ -240,7 +254,8 @@ void newton_pair(const Eigen::Matrix2d& m1, const Eigen::Matrix2d& m2, const Eig
     return Eigen::Vector2d(m1 * Eigen::Vector2d(std::sin(a), std::cos(a)) + m2 * Eigen::Vector2d(std::sin(b), std::cos(b)) - c);
   };
   Eigen::Vector2d r = residual(t1, t2);
-  for (int it = 0; it < 2; ++it) {
+  const double floor = 1e-15 * (m1.norm() + m2.norm() + c.norm());
+  for (int it = 0; it < 2 && r.norm() > floor; ++it) {
     Eigen::Matrix2d j;
     j.col(0) = m1 * Eigen::Vector2d(std::cos(t1), -std::sin(t1));
     j.col(1) = m2 * Eigen::Vector2d(std::cos(t2), -std::sin(t2));
