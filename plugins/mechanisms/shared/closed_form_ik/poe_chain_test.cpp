@@ -44,7 +44,7 @@ std::string error_of(const std::function<void()>& fn) {
   return "no error";
 }
 
-TEST(PoeChain, ForwardMatchesTheLocalFrames) {
+TEST(ClosedFormIkPoeChain, ForwardMatchesTheLocalFrames) {
   std::mt19937 rng(1);
   for (const LocalFrames& f : {ur5(), puma(), offset_wrist(), haptic6r()}) {
     const PoeChain c = f.poe();
@@ -56,7 +56,7 @@ TEST(PoeChain, ForwardMatchesTheLocalFrames) {
   }
 }
 
-TEST(PoeChain, JacobianMatchesFiniteDifferences) {
+TEST(ClosedFormIkPoeChain, JacobianMatchesFiniteDifferences) {
   std::mt19937 rng(2);
   const PoeChain c = offset_wrist().poe();
   for (int t = 0; t < 50; ++t) {
@@ -101,7 +101,7 @@ KDL::Chain kdl_chain(const LocalFrames& f) {
   return k;
 }
 
-TEST(PoeChain, ForwardAndJacobianMatchKdl) {
+TEST(ClosedFormIkPoeChain, ForwardAndJacobianMatchKdl) {
   std::mt19937 rng(3);
   for (const LocalFrames& f : {ur5(), puma(), offset_wrist(), haptic6r()}) {
     const PoeChain c = f.poe();
@@ -132,7 +132,7 @@ TEST(PoeChain, ForwardAndJacobianMatchKdl) {
 }
 #endif
 
-TEST(PoeChain, ReversedChainGivesTheInversePose) {
+TEST(ClosedFormIkPoeChain, ReversedChainGivesTheInversePose) {
   std::mt19937 rng(4);
   for (const LocalFrames& f : {ur5(), puma(), offset_wrist()}) {
     const PoeChain c = f.poe(), r = c.reversed();
@@ -144,7 +144,7 @@ TEST(PoeChain, ReversedChainGivesTheInversePose) {
   }
 }
 
-TEST(PoeChain, ClassifiesTheKnownArms) {
+TEST(ClosedFormIkPoeChain, ClassifiesTheKnownArms) {
   const ChainGeometry u = classify(ur5().poe());
   EXPECT_EQ(u.family, IkFamily::kThreeParallel);
   EXPECT_FALSE(u.reversed);
@@ -173,7 +173,7 @@ TEST(PoeChain, ClassifiesTheKnownArms) {
   EXPECT_TRUE(ur.reversed);
 }
 
-TEST(PoeChain, GeneralSixRIsUnsupported) {
+TEST(ClosedFormIkPoeChain, GeneralSixRIsUnsupported) {
   const ChainGeometry g = classify(from_dh({{{0.32, 0.05, 1.4}}, {{0.11, 0.41, 0.25}}, {{-0.06, 0.03, -1.2}},
                                             {{0.37, 0.07, 1.0}}, {{0.09, 0.04, -1.3}}, {{0.08, 0.02, 0.3}}})
                                        .poe());
@@ -181,7 +181,7 @@ TEST(PoeChain, GeneralSixRIsUnsupported) {
   EXPECT_EQ(g.describe(), "6R: no parallel or intersecting consecutive axes; family: none (general 6R: needs a 2-D search, not implemented)");
 }
 
-TEST(PoeChain, FromLocalFramesRefusesBadSizesAndAxes) {
+TEST(ClosedFormIkPoeChain, FromLocalFramesRefusesBadSizesAndAxes) {
   const Eigen::Isometry3d id = Eigen::Isometry3d::Identity();
   EXPECT_EQ(error_of([&] { PoeChain::from_local_frames({id, id}, {Eigen::Vector3d::UnitZ()}, id); }),
             "closed_form_ik: 2 joint origins and 1 axes: need the same number, 1 to 7");

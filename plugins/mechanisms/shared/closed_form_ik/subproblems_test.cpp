@@ -38,7 +38,7 @@ bool contains(const Angles1& s, double theta) {
   return false;
 }
 
-TEST(Subproblems, Sp1RecoversTheKnownAngle) {
+TEST(ClosedFormIkSubproblems, Sp1RecoversTheKnownAngle) {
   Random r;
   for (int t = 0; t < kTrials; ++t) {
     const Vector3d k = r.unit(), p1 = r.vector();
@@ -53,7 +53,7 @@ TEST(Subproblems, Sp1RecoversTheKnownAngle) {
   }
 }
 
-TEST(Subproblems, Sp1LeastSquaresMinimisesTheDistance) {
+TEST(ClosedFormIkSubproblems, Sp1LeastSquaresMinimisesTheDistance) {
   Random r;
   for (int t = 0; t < 200; ++t) {
     const Vector3d k = r.unit(), p1 = r.vector(), p2 = r.vector();
@@ -64,7 +64,7 @@ TEST(Subproblems, Sp1LeastSquaresMinimisesTheDistance) {
   }
 }
 
-TEST(Subproblems, Sp1VectorAlongTheAxisIsDegenerate) {
+TEST(ClosedFormIkSubproblems, Sp1VectorAlongTheAxisIsDegenerate) {
   const Vector3d k = Vector3d::UnitZ();
   const Angles1 s = sp1(2.0 * k, 2.0 * k, k);
   EXPECT_TRUE(s.degenerate);
@@ -76,7 +76,7 @@ TEST(Subproblems, Sp1VectorAlongTheAxisIsDegenerate) {
   EXPECT_TRUE(std::isfinite(zero.theta[0]));
 }
 
-TEST(Subproblems, Sp4RecoversTheKnownAngle) {
+TEST(ClosedFormIkSubproblems, Sp4RecoversTheKnownAngle) {
   Random r;
   for (int t = 0; t < kTrials; ++t) {
     const Vector3d h = r.vector(), p = r.vector(), k = r.unit();
@@ -89,7 +89,7 @@ TEST(Subproblems, Sp4RecoversTheKnownAngle) {
   }
 }
 
-TEST(Subproblems, Sp4OutOfRangeIsLeastSquaresAtTheExtremum) {
+TEST(ClosedFormIkSubproblems, Sp4OutOfRangeIsLeastSquaresAtTheExtremum) {
   Random r;
   for (int t = 0; t < 200; ++t) {
     const Vector3d h = r.vector(), p = r.vector(), k = r.unit();
@@ -102,7 +102,7 @@ TEST(Subproblems, Sp4OutOfRangeIsLeastSquaresAtTheExtremum) {
   }
 }
 
-TEST(Subproblems, Sp4AxisAlongTheVectorIsDegenerate) {
+TEST(ClosedFormIkSubproblems, Sp4AxisAlongTheVectorIsDegenerate) {
   const Vector3d k = Vector3d::UnitX();
   const Angles1 met = sp4(Vector3d(1, 2, 3), 2.0 * k, k, 2.0);
   EXPECT_TRUE(met.degenerate);
@@ -113,7 +113,7 @@ TEST(Subproblems, Sp4AxisAlongTheVectorIsDegenerate) {
   EXPECT_EQ(missed.count, 1);
 }
 
-TEST(Subproblems, Sp3RecoversTheKnownAngle) {
+TEST(ClosedFormIkSubproblems, Sp3RecoversTheKnownAngle) {
   Random r;
   for (int t = 0; t < kTrials; ++t) {
     const Vector3d p1 = r.vector(), p2 = r.vector(), k = r.unit();
@@ -128,14 +128,14 @@ TEST(Subproblems, Sp3RecoversTheKnownAngle) {
   }
 }
 
-TEST(Subproblems, Sp3UnreachableDistanceIsLeastSquares) {
+TEST(ClosedFormIkSubproblems, Sp3UnreachableDistanceIsLeastSquares) {
   const Vector3d k = Vector3d::UnitZ();
   const Angles1 s = sp3(Vector3d(1, 0, 0), Vector3d(0, 0, 0.5), k, 10.0);
   EXPECT_TRUE(s.least_squares);
   EXPECT_EQ(s.count, 1);
 }
 
-TEST(Subproblems, Sp2RecoversTheKnownAngles) {
+TEST(ClosedFormIkSubproblems, Sp2RecoversTheKnownAngles) {
   Random r;
   for (int t = 0; t < kTrials; ++t) {
     const Vector3d k1 = r.unit(), k2 = r.unit(), p2 = r.vector();
@@ -153,7 +153,7 @@ TEST(Subproblems, Sp2RecoversTheKnownAngles) {
   }
 }
 
-TEST(Subproblems, Sp2ParallelAxesAreDegenerate) {
+TEST(ClosedFormIkSubproblems, Sp2ParallelAxesAreDegenerate) {
   const Vector3d k = Vector3d::UnitZ();
   const Angles2 s = sp2(Vector3d(1, 0, 0.3), Vector3d(0, 1, 0.3), k, k);
   EXPECT_TRUE(s.degenerate);
@@ -161,13 +161,13 @@ TEST(Subproblems, Sp2ParallelAxesAreDegenerate) {
   EXPECT_LT((rot(k, s.theta1[0]) * Vector3d(1, 0, 0.3) - rot(k, s.theta2[0]) * Vector3d(0, 1, 0.3)).norm(), 1e-12);
 }
 
-TEST(Subproblems, Sp2DifferentLengthsAreLeastSquares) {
+TEST(ClosedFormIkSubproblems, Sp2DifferentLengthsAreLeastSquares) {
   const Angles2 s = sp2(Vector3d(1, 0, 0), Vector3d(0, 2, 0), Vector3d::UnitZ(), Vector3d::UnitX());
   EXPECT_TRUE(s.least_squares);
   EXPECT_GE(s.count, 1);
 }
 
-TEST(Subproblems, Sp5RecoversTheKnownAngles) {
+TEST(ClosedFormIkSubproblems, Sp5RecoversTheKnownAngles) {
   Random r;
   int checked = 0;
   for (int t = 0; t < kTrials; ++t) {
@@ -192,7 +192,7 @@ TEST(Subproblems, Sp5RecoversTheKnownAngles) {
 }
 
 // The Puma shoulder: k2 || k3 and p0 = 0 make both equations one-angle each (the rank-one route).
-TEST(Subproblems, Sp5RankOneRouteRecoversTheKnownAngles) {
+TEST(ClosedFormIkSubproblems, Sp5RankOneRouteRecoversTheKnownAngles) {
   Random r;
   for (int t = 0; t < 500; ++t) {
     const Vector3d k1 = Vector3d::UnitZ(), k2 = Vector3d::UnitY(), k3 = Vector3d::UnitY();
@@ -214,7 +214,7 @@ TEST(Subproblems, Sp5RankOneRouteRecoversTheKnownAngles) {
   }
 }
 
-TEST(Subproblems, Sp6RecoversTheKnownAngles) {
+TEST(ClosedFormIkSubproblems, Sp6RecoversTheKnownAngles) {
   Random r;
   for (int t = 0; t < kTrials; ++t) {
     const std::array<Vector3d, 4> h{r.vector(), r.vector(), r.vector(), r.vector()};
@@ -241,7 +241,7 @@ TEST(Subproblems, Sp6RecoversTheKnownAngles) {
 // All four solutions: a 2x2 system whose solution count is known (two unit circles, x1 = x2
 // rotated: M1 = I, M2 = -R(phi), c = 0 holds for every theta1 = theta2 - phi... is degenerate;
 // instead, a quartic with four real roots built from four known pairs is checked by count).
-TEST(Subproblems, TwoCirclesFindsUpToFourSolutions) {
+TEST(ClosedFormIkSubproblems, TwoCirclesFindsUpToFourSolutions) {
   Random r;
   int four = 0;
   for (int t = 0; t < kTrials; ++t) {
@@ -262,7 +262,7 @@ TEST(Subproblems, TwoCirclesFindsUpToFourSolutions) {
   EXPECT_GT(four, 0);  // random systems do have four real solutions sometimes
 }
 
-TEST(Subproblems, TwoCirclesZeroMatrixIsDegenerate) {
+TEST(ClosedFormIkSubproblems, TwoCirclesZeroMatrixIsDegenerate) {
   const Angles2 s = solve_two_circles(Eigen::Matrix2d::Zero(), Eigen::Matrix2d::Identity(), Eigen::Vector2d(0.6, 0.8));
   EXPECT_TRUE(s.degenerate);
   ASSERT_GE(s.count, 1);
