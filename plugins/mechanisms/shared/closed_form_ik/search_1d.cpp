@@ -30,7 +30,14 @@ struct Problem {
   Eigen::Vector3d pw;    // the point where axes 5 and 6 meet, now
   Eigen::Vector3d p3w;   // from joint 4 to that point at q = 0
   double cos56;          // h5 . h6
+  Eigen::Vector3d r06_h6;  // axis 6 now
 };
+
+// R(k, theta) v (Rodrigues).
+Eigen::Vector3d rotate(const Eigen::Vector3d& k, double theta, const Eigen::Vector3d& v) {
+  const double c = std::cos(theta), s = std::sin(theta);
+  return v * c + k.cross(v) * s + k * (k.dot(v) * (1 - c));
+}
 
 double wrapped(double a) { return a - 2 * M_PI * std::nearbyint(a / (2 * M_PI)); }
 
@@ -54,8 +61,9 @@ Sample evaluate(const Problem& pr, double q1) {
     const std::size_t k = static_cast<std::size_t>(i);
     Branch& b = s.branch[static_cast<std::size_t>(s.count++)];
     b.q2 = -a.theta1[k], b.q3 = a.theta2[k], b.q4 = a.theta3[k];
-    const Eigen::Matrix3d r04 = r1 * rot(h[1], b.q2) * rot(h[2], b.q3) * rot(h[3], b.q4);
-    b.e = h[4].dot(r04.transpose() * pr.r06 * h[5]) - pr.cos56;
+    // e = (R_04 h5) . (R_06 h6) - h5 . h6, R_04 h5 by rotating the vector (no matrices).
+    const Eigen::Vector3d v = r1 * rotate(h[1], b.q2, rotate(h[2], b.q3, rotate(h[3], b.q4, h[4])));
+    b.e = v.dot(pr.r06_h6) - pr.cos56;
   }
   return s;
 }
@@ -209,7 +217,8 @@ void search_1d_candidates(const PoeChain& c, const Eigen::Vector3d& point, const
                           int samples, IkScratch& s) {
   const Eigen::Matrix3d r06 = target.linear() * c.r_tool.transpose();
   const Eigen::Vector3d tool0 = c.joint_point(5) + c.p[6];
-  const Problem pr{c, r06, target.translation() - r06 * (tool0 - point), point - c.joint_point(3), c.h[4].dot(c.h[5])};
+  const Problem pr{c, r06, target.translation() - r06 * (tool0 - point), point - c.joint_point(3), c.h[4].dot(c.h[5]),
+                   r06 * c.h[5]};
   const double step = 2 * M_PI / samples;
   const Sample first = evaluate(pr, -M_PI);
   Sample before = evaluate(pr, -M_PI - step), prev = first;

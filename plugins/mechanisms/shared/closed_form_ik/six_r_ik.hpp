@@ -68,7 +68,7 @@ struct IkSolutions {
 
 /// Per-thread working memory of ClosedFormIk6R::solve (no heap; large enough to keep off the stack).
 struct IkScratch {
-  std::array<Vector6d, 128> candidate{};  // raw candidates; beyond 128 the rest are dropped
+  std::array<Vector6d, 128> candidate{};  ///< raw candidates (beyond 128 the rest are dropped)
   int count = 0;
 };
 

@@ -393,8 +393,8 @@ Angles3 sp5(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::V
   out.degenerate = t13.degenerate;
   for (int i = 0; i < t13.count; ++i) {
     const std::size_t s = static_cast<std::size_t>(i);
-    const Eigen::Vector3d left = p0 + rot(k1, t13.theta1[s]) * p1;
-    const Eigen::Vector3d right = p2 + rot(k3, t13.theta2[s]) * p3;
+    const Eigen::Vector3d left = p0 + k1 * k1.dot(p1) + a1 * Eigen::Vector2d(std::sin(t13.theta1[s]), std::cos(t13.theta1[s]));
+    const Eigen::Vector3d right = p2 + k3 * k3.dot(p3) + a3 * Eigen::Vector2d(std::sin(t13.theta2[s]), std::cos(t13.theta2[s]));
     const Angles1 t2 = sp1(right, left, k2);
     out.least_squares = out.least_squares || t2.least_squares;
     out.degenerate = out.degenerate || t2.degenerate;
