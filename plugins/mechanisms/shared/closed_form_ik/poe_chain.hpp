@@ -1,7 +1,7 @@
 #pragma once
 /// \file
-/// A revolute chain in product-of-exponentials form, as IK-Geo writes it (Elias & Wen 2022,
-/// section II): at q = 0 every joint frame is parallel to the base frame, joint i turns about
+/// A revolute chain in product-of-exponentials form, as IK-Geo writes it (Elias & Wen 2022):
+/// at q = 0 every joint frame is parallel to the base frame, joint i turns about
 /// the unit axis h_i (base-frame coordinates) and sits at the offset p_{i-1,i} from joint i-1
 /// (from the base origin for i = 1); the tool sits at p_{n,T} from joint n with the fixed
 /// rotation R_{n,T}:

@@ -1,7 +1,7 @@
 // The 6R whose axes 5 and 6 meet (six_r_ik.hpp): a 1-D search over q1. For each q1 the point
 // where axes 5 and 6 meet gives (q2, q3, q4) by SP5; the error e(q1) of each branch is zero
-// where the rest of the orientation can be reached by q5 and q6 (IK-Geo section V, the 1-D
-// search cases).
+// where the rest of the orientation can be reached by q5 and q6 (one of IK-Geo's 1-D search
+// cases).
 #include "shared/closed_form_ik/families.hpp"
 #include "shared/closed_form_ik/subproblems.hpp"
 
@@ -46,8 +46,9 @@ double distance2(const Branch& a, const Branch& b) {
   return d2 * d2 + d3 * d3 + d4 * d4;
 }
 
-// R(h2, -q2) d - p_34... : R(h1, -q1) (p_w - p_01) - p_12 = R(h2, q2) (p_23 + R(h3, q3) (p_34 + R(h4, q4) p_4w)),
-// i.e. SP5 with p0 = -p_23, k1 = h2 (theta1 = -q2), p1 = R(h1, -q1) (p_w - p_01) - p_12.
+// The branches at q1: R(h1, -q1) (p_w - p_01) - p_12 = R(h2, q2) (p_23 + R(h3, q3) (p_34 + R(h4, q4) p_4w)),
+// i.e. SP5 with p0 = -p_23, k1 = h2 (theta1 = -q2), p1 = R(h1, -q1) (p_w - p_01) - p_12, k2 = h3,
+// p2 = p_34, k3 = h4, p3 = p_4w; then each branch's e.
 Sample evaluate(const Problem& pr, double q1) {
   const auto& h = pr.c.h;
   const auto& p = pr.c.p;
