@@ -18,6 +18,9 @@ void spherical_wrist_candidates(const PoeChain& c, const Eigen::Vector3d& wrist,
 /// Axes 2, 3, 4 parallel.
 void three_parallel_candidates(const PoeChain& c, const Eigen::Isometry3d& target, IkScratch& s);
 
+/// Axes 1, 2, 3 parallel and axes 4, 5 parallel.
+void scara_pair_candidates(const PoeChain& c, const Eigen::Isometry3d& target, IkScratch& s);
+
 /// Axes 5 and 6 meet at point (base frame, q = 0); samples of q1 as six_r_ik.hpp describes.
 void search_1d_candidates(const PoeChain& c, const Eigen::Vector3d& point, const Eigen::Isometry3d& target,
                           int samples, IkScratch& s);

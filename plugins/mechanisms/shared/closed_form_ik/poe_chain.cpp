@@ -118,6 +118,10 @@ void choose_family(ChainGeometry& g) {
     g.family = IkFamily::kThreeParallel;
   } else if (g.parallel[2] && g.parallel[3]) {
     g.family = IkFamily::kThreeParallel, g.reversed = true;
+  } else if (g.parallel[0] && g.parallel[1] && g.parallel[3]) {
+    g.family = IkFamily::kScaraPair;
+  } else if (g.parallel[3] && g.parallel[4] && g.parallel[1]) {
+    g.family = IkFamily::kScaraPair, g.reversed = true;
   } else if (g.intersecting[4]) {
     g.family = IkFamily::kSearch1d;
   } else if (g.intersecting[0]) {
@@ -173,6 +177,10 @@ std::string ChainGeometry::describe() const {
       break;
     case IkFamily::kThreeParallel:
       out << (reversed ? "three parallel axes 3-4-5 (UR type, reversed chain)" : "three parallel axes 2-3-4 (UR type)");
+      break;
+    case IkFamily::kScaraPair:
+      out << (reversed ? "three parallel axes 4-5-6 and 2||3 (haptic 6R type, reversed chain)"
+                       : "three parallel axes 1-2-3 and 4||5 (haptic 6R type)");
       break;
     case IkFamily::kSearch1d:
       out << (reversed ? "1-D search over joint 6 (axes 1x2 intersect)" : "1-D search over joint 1 (axes 5x6 intersect)");

@@ -59,6 +59,7 @@ struct PoeChain {
 enum class IkFamily {
   kSphericalWrist,     ///< axes 4, 5, 6 (or, reversed, 1, 2, 3) through one point: SP5 + SP2 + SP1
   kThreeParallel,      ///< axes 2, 3, 4 (or, reversed, 3, 4, 5) parallel (UR type): SP6 + SP1 + SP3
+  kScaraPair,          ///< axes 1, 2, 3 parallel and 4 || 5 (or, reversed, 4, 5, 6 and 2 || 3; haptic 6R type): SP4 + SP1 + SP3
   kSearch1d,           ///< axes 5, 6 (or, reversed, 1, 2) intersect: 1-D search over joint 1 (6), SP5 inside
   kUnsupported,        ///< none of the above (IK-Geo's 2-D search cases; not implemented)
 };

@@ -163,7 +163,9 @@ TEST(ClosedFormIkPoeChain, ClassifiesTheKnownArms) {
 
   const ChainGeometry h = classify(haptic6r().poe());
   EXPECT_EQ(h.three_parallel, 0);
-  EXPECT_EQ(h.family, IkFamily::kSearch1d);
+  EXPECT_EQ(h.family, IkFamily::kScaraPair);
+  EXPECT_EQ(h.describe(), "6R: 1||2, 2||3, 3x4, 4||5, 5x6; three parallel axes 1-2-3; family: three parallel axes 1-2-3 and "
+                          "4||5 (haptic 6R type)");
 
   const ChainGeometry pr = classify(puma().poe().reversed());
   EXPECT_EQ(pr.family, IkFamily::kSphericalWrist);

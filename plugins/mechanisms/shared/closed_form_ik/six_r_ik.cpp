@@ -52,6 +52,9 @@ void ClosedFormIk6R::candidates(const Eigen::Isometry3d& target, IkScratch& scra
     case IkFamily::kThreeParallel:
       detail::three_parallel_candidates(work_, work_target, scratch);
       break;
+    case IkFamily::kScaraPair:
+      detail::scara_pair_candidates(work_, work_target, scratch);
+      break;
     case IkFamily::kSearch1d:
       detail::search_1d_candidates(work_, point_, work_target, options_.search_samples, scratch);
       break;

@@ -10,6 +10,10 @@
 /// - three parallel axes 2, 3, 4 (UR type): the components along the common axis of the tool's
 ///   approach and position give (q1, q5) by SP6 (up to 4), q6 and q2 + q3 + q4 by SP1, q3 by SP3
 ///   and q2 by SP1: up to 8. Axes 3, 4, 5 parallel: the reversed chain.
+/// - axes 1, 2, 3 parallel and axes 4, 5 parallel (the haptic 6R of share/serial_chain, a SCARA
+///   with a wrist): the components along the common axis k of the tool's axis 6 and of its
+///   position give q4 + q5 and q4 by SP4 (up to 2 each), q6 and q1 + q2 + q3 by SP1, q2 by SP3 and
+///   q1 by SP1: up to 8. Axes 4, 5, 6 parallel and 2 || 3: the reversed chain.
 /// - one intersecting pair 5 x 6 (or, reversed, 1 x 2), e.g. offset wrists: a 1-D search over
 ///   q1. For each q1 the point where axes 5 and 6 meet fixes (q2, q3, q4) by SP5 (up to 4
 ///   branches); the remaining error e(q1) = h5 . R_04^T R_06 h6 - h5 . h6 (the angle between axes

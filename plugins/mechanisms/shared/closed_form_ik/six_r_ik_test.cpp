@@ -129,12 +129,15 @@ TEST(ClosedFormIk6R, OffsetWristSearchFindsTheGeneratingConfiguration) {
   EXPECT_LT(r.skipped, r.tried / 10);
 }
 
-TEST(ClosedFormIk6R, HapticSixRSearchFindsTheGeneratingConfiguration) {
+TEST(ClosedFormIk6R, HapticSixRFindsTheGeneratingConfiguration) {
   const ClosedFormIk6R ik(haptic6r().poe());
-  EXPECT_EQ(ik.geometry().family, IkFamily::kSearch1d);
-  const RoundTrip r = round_trip(ik, 2000, 16);
-  EXPECT_LE(r.missed, 3 * (r.tried - r.skipped) / 100);
-  EXPECT_LE(r.well_missed, r.well / 200);
+  EXPECT_EQ(ik.geometry().family, IkFamily::kScaraPair);
+  const RoundTrip r = round_trip(ik, 5000, 16);
+  EXPECT_EQ(r.missed, 0);
+  EXPECT_LT(r.skipped, r.tried / 10);
+  const ClosedFormIk6R reversed(haptic6r().poe().reversed());
+  EXPECT_TRUE(reversed.geometry().reversed);
+  EXPECT_EQ(round_trip(reversed, 1000, 18).missed, 0);
 }
 
 TEST(ClosedFormIk6R, JointLimitsKeepOnlySolutionsInside) {
