@@ -32,9 +32,9 @@ constexpr std::string_view kBodyTooLarge = "request body too large\n";
 Response make_response(http::status status, unsigned version, std::string_view type, std::string_view body) {
   Response res{status, version};
   res.set(http::field::server, "hapsyn view");
-  res.set(http::field::content_type, type);
+  res.set(http::field::content_type, beast::string_view(type.data(), type.size()));
   res.set(http::field::cache_control, "no-store");
-  res.set(http::field::x_content_type_options, "nosniff");
+  res.set("X-Content-Type-Options", "nosniff");
   res.body() = beast::span<const char>(body.data(), body.size());
   res.prepare_payload();
   return res;

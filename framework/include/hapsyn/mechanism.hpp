@@ -52,13 +52,14 @@ class MechanismModel {
   /// singularity is kSingular, never a NaN: the evaluator refuses NaN/inf quantities.
   virtual void solve(const double* pose, Needs needs, MechanismScratch& scratch,
                      SampleQuantities& out) const = 0;
-  /// The mechanism drawn at the configuration solve() picks for sample `sample` of `scene`: one
-  /// or more polylines through its joints, in the frame of the scene's poses [m] (a planar
-  /// mechanism at z = 0), for viewers (`hapsyn view`). Empty when solve() finds the sample
-  /// kUnreachable (a mechanism that has no configuration for a kInvalid sample returns none too). Called once per picture, outside the per-sample loop: may allocate.
+  /// The mechanism drawn at the configuration solve() picks for sample `sample` (an index) of
+  /// `scene`: polylines through its joints, in the frame of the scene's poses [m] (a planar one at
+  /// z = 0), for viewers (`hapsyn view`). Empty when solve() finds the sample kUnreachable (or,
+  /// for a mechanism without a configuration there, kInvalid). Called once per picture, outside
+  /// the per-sample loop, with a `scratch` from Mechanism::make_scratch: may allocate.
   /// Default: one segment "end effector" from the scene frame's origin to the pose's position
   /// (its first three coordinates, missing ones 0), which draws nothing of the links.
-  /// \param scratch this thread's scratch from Mechanism::make_scratch
+  /// solve() is given `scene` and `sample` in SampleQuantities::scene and ::sample.
   virtual std::vector<Segment> segments(const SampleSet& scene, int sample, MechanismScratch& scratch) const;
 };
 
