@@ -73,7 +73,7 @@ def main():
             deadline = time.time() + 30
             state = {}
             while time.time() < deadline:
-                state = driver.execute_script("return window.hapsynView || {}")
+                state = driver.execute_script("return JSON.parse(JSON.stringify(window.hapsynView || {}))")
                 if state.get("ready") or state.get("error"):
                     break
                 time.sleep(0.2)
@@ -82,7 +82,7 @@ def main():
             check(state.get("columns") == local_columns, f"the page's columns = samples.csv's local columns {local_columns}")
             selected = driver.execute_script("return window.hapsynView.select(arguments[0])", chosen)
             time.sleep(0.5)  # a few frames with the new colours
-            state = driver.execute_script("return window.hapsynView")
+            state = driver.execute_script("return JSON.parse(JSON.stringify(window.hapsynView))")
             low, high = state.get("colourRange") or (None, None)
             check(selected and state.get("objective") == chosen, f"objective {state.get('objective')} selected")
             check(low is not None and abs(low - min(cells)) <= 1e-9 * max(1.0, abs(low)) and

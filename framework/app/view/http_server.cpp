@@ -57,6 +57,10 @@ class Session : public std::enable_shared_from_this<Session> {
 
  private:
   void on_read(beast::error_code ec) {
+    if (!ec) {
+      const auto& request = parser_->get();
+      return send(answer(request), request.keep_alive());
+    }
     if (ec == http::error::header_limit) return send(make_response(http::status::request_header_fields_too_large, 11, "text/plain", kHeadTooLarge), false);
     if (ec == http::error::body_limit) return send(make_response(http::status::payload_too_large, 11, "text/plain", kBodyTooLarge), false);
     // The client went away, stalled or sent half a request: nobody to answer.
@@ -64,9 +68,7 @@ class Session : public std::enable_shared_from_this<Session> {
         ec.category() == asio::error::get_system_category() || ec.category() == asio::error::get_misc_category()) {
       return close();
     }
-    if (ec) return send(make_response(http::status::bad_request, 11, "text/plain", kBadRequest), false);
-    const auto& request = parser_->get();
-    send(answer(request), request.keep_alive());
+    send(make_response(http::status::bad_request, 11, "text/plain", kBadRequest), false);
   }
 
   Response answer(const http::request<http::string_body>& request) const {

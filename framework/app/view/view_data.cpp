@@ -84,7 +84,15 @@ Source load_result_dir(const fs::path& dir, const hapsyn::Registry& registry, st
   std::string problem_file = file;
   if (result.contains("shard") && result["shard"].contains("problem_file")) problem_file = result["shard"]["problem_file"];
   const hapsyn::ProblemDirectoryScope scope(problem_file);
-  Source s{hapsyn::load_study(result["problem"], registry, {}, quiet_settings(progress)), {}, "result directory", {}};
+  // The resolved problem holds the loader's notes, which are no keys of a problem file and which
+  // the loader derives again: "aggregation" (several objectives under a single-objective
+  // solver) and each design variable's "unit".
+  Json problem = result["problem"];
+  problem.erase("aggregation");
+  if (problem.contains("design")) {
+    for (auto& entry : problem["design"].items()) entry.value().erase("unit");
+  }
+  Source s{hapsyn::load_study(problem, registry, {}, quiet_settings(progress)), {}, "result directory", {}};
   s.design = design_from_json(*s.study.problem, result["best"]["design"], file + ": best.design");
   const fs::path csv = dir / "samples.csv";
   if (fs::is_regular_file(csv)) s.samples_csv = csv.string();
