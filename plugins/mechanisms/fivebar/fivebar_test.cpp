@@ -299,7 +299,7 @@ TEST(FiveBarKinematics, SegmentsJoinTheActuatedJointsElbowsAndEndEffector) {
   SampleSet scene;
   scene.poses.resize(2, 2);
   scene.poses << 0.01, -0.02, 5.0, 5.0;  // a reachable sample, an unreachable one
-  const std::vector<Segment> drawn = model.segments(scene, 0, scratch);
+  const std::vector<hapsyn::Segment> drawn = model.segments(scene, 0, scratch);
   ASSERT_EQ(drawn.size(), 2u);
   ASSERT_EQ(drawn[0].points.size(), 5u);
   const auto& p = drawn[0].points;  // A1, B1, E, B2, A2 in the scene frame (mechanism frame - (0, r))
