@@ -23,7 +23,8 @@ function(hapsyn_add_view target)
                        "/OrbitControls.js|${js}|${three}/examples/jsm/controls/OrbitControls.js")
   else()
     set(assets "")
-    set(missing "three.js is not installed in ${web}/node_modules: run 'npm ci' there (npm from Debian's npm package) and build again")
+    # Plain text: it becomes a C++ string literal.
+    set(missing "three.js is not installed in ${web}/node_modules: run npm ci there (scripts/setup.sh installs npm) and build again")
     message(WARNING "hapsyn view: ${missing}; the program builds, `hapsyn view` reports it")
   endif()
   set(page ${CMAKE_BINARY_DIR}/web)
@@ -48,7 +49,8 @@ function(hapsyn_add_view target)
     COMMAND ${CMAKE_COMMAND} -DMANIFEST=${manifest} -DOUTPUT=${output} "-DMISSING=${missing}"
             -P ${PROJECT_SOURCE_DIR}/cmake/EmbedWebAssets.cmake
     DEPENDS ${manifest} ${files} ${PROJECT_SOURCE_DIR}/cmake/EmbedWebAssets.cmake
-    COMMENT "Embedding the page of hapsyn view")
+    COMMENT "Embedding the page of hapsyn view"
+    VERBATIM)
   target_sources(${target} PRIVATE app/view/view_command.cpp app/view/view_data.cpp app/view/http_server.cpp ${output})
   target_include_directories(${target} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/app/view)
   target_compile_definitions(${target} PRIVATE HAPSYN_WITH_VIEW=1)
