@@ -59,7 +59,7 @@ class MechanismModel {
   /// the per-sample loop, with a `scratch` from Mechanism::make_scratch: may allocate.
   /// Default: one segment "end effector" from the scene frame's origin to the pose's position
   /// (its first three coordinates, missing ones 0), which draws nothing of the links.
-  /// solve() is given `scene` and `sample` in SampleQuantities::scene and ::sample.
+  /// solve() is given `scene` and `sample` in SampleQuantities::scene and SampleQuantities::sample.
   virtual std::vector<Segment> segments(const SampleSet& scene, int sample, MechanismScratch& scratch) const;
 };
 
