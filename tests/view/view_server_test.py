@@ -19,6 +19,7 @@ import time
 from view_process import ViewProcess, read_csv_columns
 
 failures = []
+HOST = b""  # b"Host: 127.0.0.1:PORT\r\n", set in main()
 
 
 def check(condition, what):
@@ -93,22 +94,29 @@ def check_refusals(port):
         status, _, body = get(port, path)
         check(status == 404 and b"root:" not in body, f"GET {path} -> 404 ({status})")
     for target in (b"/../../etc/passwd", b"/%2e%2e/%2e%2e/etc/passwd", b"/..%2f..%2fetc%2fpasswd", b"/app.js/../../../etc/passwd"):
-        status, answer = raw(port, b"GET " + target + b" HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n")
+        status, answer = raw(port, b"GET " + target + b" HTTP/1.1\r\n" + HOST + b"Connection: close\r\n\r\n")
         check(status == 404 and b"root:" not in answer, f"path traversal {target.decode()} -> 404 ({status})")
-    status, _ = raw(port, b"GET / HTTP/1.1\r\nHost: x\r\nX-Big: " + b"a" * 20000 + b"\r\nConnection: close\r\n\r\n")
+    status, _ = raw(port, b"GET / HTTP/1.1\r\n" + HOST + b"X-Big: " + b"a" * 20000 + b"\r\nConnection: close\r\n\r\n")
     check(status == 431, f"a 20 kB header -> 431 ({status})")
-    status, _ = raw(port, b"GET / HTTP/1.1\r\nHost: x\r\nContent-Length: 100000\r\nConnection: close\r\n\r\n" + b"a" * 4096)
+    status, _ = raw(port, b"GET / HTTP/1.1\r\n" + HOST + b"Content-Length: 100000\r\nConnection: close\r\n\r\n" + b"a" * 4096)
     check(status == 413, f"a 100 kB body -> 413 ({status})")
     status, _ = raw(port, b"GARBAGE\r\n\r\n")
     check(status == 400, f"a malformed request line -> 400 ({status})")
-    status, _ = raw(port, b"GET / HTTP/1.1\r\nHost x\r\n\r\n")
+    status, _ = raw(port, b"GET / HTTP/1.1\r\nHost 127.0.0.1\r\n\r\n")
     check(status == 400, f"a malformed header -> 400 ({status})")
+
+
+def check_hosts(port):
+    for host, want in ((f"localhost:{port}", 200), (f"127.0.0.1:{port}", 200), ("evil.example", 403),
+                       (f"evil.example:{port}", 403), ("127.0.0.1", 403), ("", 403)):
+        status, _, _ = get(port, "/api/study", headers={"Host": host})
+        check(status == want, f"Host '{host}' -> {want} ({status})")
 
 
 def check_bad_clients(port):
     # Half a request, then gone; a client that connects and says nothing, held open meanwhile.
     raw(port, b"GET /api/sam", read=False)
-    raw(port, b"GET / HTTP/1.1\r\nHost: x\r\nContent-Length: 50\r\n\r\nabc", read=False)
+    raw(port, b"GET / HTTP/1.1\r\n" + HOST + b"Content-Length: 50\r\n\r\nabc", read=False)
     silent = socket.create_connection(("127.0.0.1", port))
     slow = socket.create_connection(("127.0.0.1", port))
     slow.sendall(b"GET / HTTP/1.1\r\n")
@@ -167,6 +175,40 @@ def check_result_dir(hapsyn, problem, work):
     return columns, rows
 
 
+def check_result_dir_errors(hapsyn, work):
+    """A result directory view cannot show: each refused with exit 1 and a message naming why."""
+    good = os.path.join(work, "run")
+    result = json.load(open(os.path.join(good, "result.json")))
+    csv_lines = open(os.path.join(good, "samples.csv")).read().splitlines(keepends=True)
+
+    def variant(name, result_doc=None, csv=None):
+        folder = os.path.join(work, "bad-" + name)
+        shutil.rmtree(folder, ignore_errors=True)
+        os.makedirs(folder)
+        if result_doc is not None:
+            json.dump(result_doc, open(os.path.join(folder, "result.json"), "w"))
+        if csv is not None:
+            open(os.path.join(folder, "samples.csv"), "w").write("".join(csv))
+        return folder
+
+    without_best = {k: v for k, v in result.items() if k != "best"}
+    without_problem = {k: v for k, v in result.items() if k != "problem"}
+    renamed = [csv_lines[0].replace("gdi.sigma_max_M", "gdi.other")] + csv_lines[1:]
+    short_row = csv_lines[:5] + [csv_lines[5].rsplit(",", 1)[0] + "\n"] + csv_lines[6:]
+    rows = len(csv_lines) - 1
+    cases = (
+        (variant("empty"), "is a directory without result.json: give a problem file or a result directory"),
+        (variant("no-best", without_best), 'no "best.design" (status'),
+        (variant("no-problem", without_problem), 'no "problem" object: not a result.json that hapsyn run wrote'),
+        (variant("rows", result, csv_lines[:-1]), f"{rows - 1} rows, the scene has {rows} samples"),
+        (variant("column", result, renamed), 'no column "gdi.sigma_max_M"'),
+        (variant("cells", result, short_row), "row 5 has"),
+    )
+    for folder, message in cases:
+        r = subprocess.run([hapsyn, "view", folder, "--port", "0"], capture_output=True, text=True, timeout=60)
+        check(r.returncode == 1 and message in r.stderr, f"{os.path.basename(folder)}: exit 1, '{message}' ({r.stderr.strip()})")
+
+
 def check_errors(hapsyn, problem):
     r = subprocess.run([hapsyn, "view", problem, "--host", "not-an-address", "--port", "0"], capture_output=True, text=True, timeout=120)
     check(r.returncode == 1 and "--host not-an-address: not an IP address" in r.stderr, f"--host not-an-address: exit 1 ({r.stderr.strip()})")
@@ -189,7 +231,10 @@ def main():
         check(view.url.startswith("http://127.0.0.1:"), f"prints the URL on loopback: {view.url}")
         addresses = listening_addresses(view.port)
         check(addresses == ["0100007F"], f"listens on 127.0.0.1 only by default: {addresses}")
+        global HOST
+        HOST = f"Host: 127.0.0.1:{view.port}\r\n".encode()
         check_routes(view.port, rows)
+        check_hosts(view.port)
         check_refusals(view.port)
         check_bad_clients(view.port)
         _, _, body = get(view.port, "/api/study")
@@ -212,6 +257,7 @@ def main():
         code, _ = view.stop(signal.SIGTERM)
         check(code == 0, f"SIGTERM: exit 0 ({code})")
     check_errors(hapsyn, problem)
+    check_result_dir_errors(hapsyn, work)
     print(f"{len(failures)} failure(s)")
     return 1 if failures else 0
 

@@ -28,6 +28,16 @@ constexpr std::string_view kNotAllowed = "method not allowed: only GET\n";
 constexpr std::string_view kBadRequest = "bad request\n";
 constexpr std::string_view kHeadTooLarge = "request header too large\n";
 constexpr std::string_view kBodyTooLarge = "request body too large\n";
+constexpr std::string_view kForeignHost = "forbidden: the Host header must name this machine's loopback\n";
+
+// Whether `host` (a Host header) names the loopback at `port`.
+bool loopback_host(std::string_view host, unsigned short port) {
+  const std::string suffix = ":" + std::to_string(port);
+  for (const char* name : {"127.0.0.1", "localhost", "[::1]"}) {
+    if (host == std::string(name) + suffix || (port == 80 && host == name)) return true;
+  }
+  return false;
+}
 
 Response make_response(http::status status, unsigned version, std::string_view type, std::string_view body) {
   Response res{status, version};
@@ -43,8 +53,8 @@ Response make_response(http::status status, unsigned version, std::string_view t
 // One client connection: requests read one at a time, each answered from the route table.
 class Session : public std::enable_shared_from_this<Session> {
  public:
-  Session(tcp::socket socket, const Routes& routes, const ServerSettings& settings)
-      : stream_(std::move(socket)), routes_(routes), settings_(settings) {}
+  Session(tcp::socket socket, const Routes& routes, const ServerSettings& settings, unsigned short port)
+      : stream_(std::move(socket)), routes_(routes), settings_(settings), port_(port) {}
 
   void read() {
     parser_.emplace();
@@ -78,6 +88,10 @@ class Session : public std::enable_shared_from_this<Session> {
       res.set(http::field::allow, "GET");
       return res;
     }
+    const auto host = request[http::field::host];
+    if (settings_.loopback_hosts_only && !loopback_host(std::string_view(host.data(), host.size()), port_)) {
+      return make_response(http::status::forbidden, version, "text/plain", kForeignHost);
+    }
     // Only the exact targets of the table: the request's path is compared, never opened.
     const std::string_view target(request.target().data(), request.target().size());
     const auto route = routes_.find(std::string(target.substr(0, target.find('?'))));
@@ -107,6 +121,7 @@ class Session : public std::enable_shared_from_this<Session> {
   std::optional<Response> response_;
   const Routes& routes_;
   const ServerSettings& settings_;
+  unsigned short port_;  // the server's, for the Host check
 };
 
 }  // namespace
@@ -117,13 +132,14 @@ struct ViewServer::Impl {
   void accept() {
     acceptor.async_accept([this](beast::error_code ec, tcp::socket socket) {
       if (!acceptor.is_open()) return;
-      if (!ec) std::make_shared<Session>(std::move(socket), routes, settings)->read();
+      if (!ec) std::make_shared<Session>(std::move(socket), routes, settings, port)->read();
       accept();  // an error on one connection (a reset before accept) stops no other
     });
   }
 
   Routes routes;
   ServerSettings settings;
+  unsigned short port = 0;  // bound
   asio::io_context context{1};
   tcp::acceptor acceptor;
   asio::signal_set signals;
@@ -140,6 +156,7 @@ ViewServer::ViewServer(Routes routes, const ServerSettings& settings)
   if (!ec) a.set_option(asio::socket_base::reuse_address(true), ec);
   if (!ec) a.bind(endpoint, ec);
   if (!ec) a.listen(asio::socket_base::max_listen_connections, ec);
+  if (!ec) impl_->port = a.local_endpoint(ec).port();
   if (ec) {
     throw hapsyn::Error("view", "cannot listen on " + settings.host + " port " + std::to_string(settings.port) + ": " +
                                     ec.message() + (settings.port ? " (choose another with --port, or --port 0)" : ""));
@@ -148,7 +165,7 @@ ViewServer::ViewServer(Routes routes, const ServerSettings& settings)
 
 ViewServer::~ViewServer() = default;
 
-unsigned short ViewServer::port() const { return impl_->acceptor.local_endpoint().port(); }
+unsigned short ViewServer::port() const { return impl_->port; }
 
 void ViewServer::run_until_signal() {
   impl_->signals.async_wait([this](beast::error_code, int) {

@@ -26,11 +26,16 @@ struct ServerSettings {
   std::size_t max_body_bytes = 1024;
   /// A connection that sends no complete request within this time is closed.
   std::chrono::milliseconds timeout{10000};
+  /// Answer only requests whose Host header names this machine's loopback ("127.0.0.1:PORT",
+  /// "localhost:PORT", "[::1]:PORT"), others with 403: a web page the user visits cannot read
+  /// the study through a name of its own that resolves to 127.0.0.1 (DNS rebinding).
+  bool loopback_hosts_only = true;
 };
 
 /// Serves `routes` (exact request targets such as "/" or "/api/study"; a query string is
 /// ignored) to GET requests: 200 with the body, 404 for any other target, 405 for any other
-/// method, 400 for a malformed request, 431/413 for an oversized one. One thread, asynchronous:
+/// method, 400 for a malformed request, 431/413 for an oversized one, 403 for another Host
+/// (ServerSettings::loopback_hosts_only). One thread, asynchronous:
 /// a slow or broken client delays no other. HTTP/1.1 keep-alive is honoured.
 class ViewServer {
  public:

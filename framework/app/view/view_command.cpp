@@ -28,6 +28,8 @@ int view_command(const std::string& path, const std::string& host, int port, con
   ServerSettings settings;
   settings.host = host;
   settings.port = static_cast<unsigned short>(port);
+  // Told to listen beyond loopback, the server answers the names others reach it by.
+  settings.loopback_hosts_only = host == "127.0.0.1" || host == "::1";
   ViewServer server(std::move(routes), settings);
   const bool v6 = host.find(':') != std::string::npos;
   std::cout << "hapsyn view: serving " << data.name << " at http://" << (v6 ? "[" + host + "]" : host) << ":"
