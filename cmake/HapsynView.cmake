@@ -51,7 +51,8 @@ function(hapsyn_add_view target)
     DEPENDS ${manifest} ${files} ${PROJECT_SOURCE_DIR}/cmake/EmbedWebAssets.cmake
     COMMENT "Embedding the page of hapsyn view"
     VERBATIM)
-  target_sources(${target} PRIVATE app/view/view_command.cpp app/view/view_data.cpp app/view/http_server.cpp ${output})
+  target_sources(${target} PRIVATE app/view/view_command.cpp app/view/view_data.cpp app/view/view_source.cpp
+    app/view/samples_csv_reader.cpp app/view/http_server.cpp ${output})
   target_include_directories(${target} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/app/view)
   target_compile_definitions(${target} PRIVATE HAPSYN_WITH_VIEW=1)
 endfunction()

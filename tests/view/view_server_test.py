@@ -193,6 +193,8 @@ def check_result_dir_errors(hapsyn, work):
 
     without_best = {k: v for k, v in result.items() if k != "best"}
     without_problem = {k: v for k, v in result.items() if k != "problem"}
+    without_l1 = json.loads(json.dumps(result))
+    del without_l1["best"]["design"]["l1"]
     renamed = [csv_lines[0].replace("gdi.sigma_max_M", "gdi.other")] + csv_lines[1:]
     short_row = csv_lines[:5] + [csv_lines[5].rsplit(",", 1)[0] + "\n"] + csv_lines[6:]
     rows = len(csv_lines) - 1
@@ -200,6 +202,7 @@ def check_result_dir_errors(hapsyn, work):
         (variant("empty"), "is a directory without result.json: give a problem file or a result directory"),
         (variant("no-best", without_best), 'no "best.design" (status'),
         (variant("no-problem", without_problem), 'no "problem" object: not a result.json that hapsyn run wrote'),
+        (variant("no-l1", without_l1), "result.json: best.design.l1: no number for design component l1"),
         (variant("rows", result, csv_lines[:-1]), f"{rows - 1} rows, the scene has {rows} samples"),
         (variant("column", result, renamed), 'no column "gdi.sigma_max_M"'),
         (variant("cells", result, short_row), "row 5 has"),

@@ -1,167 +1,22 @@
 #include "view_data.hpp"
 
-#include <hapsyn/data_file.hpp>
+#include "samples_csv_reader.hpp"
+#include "view_source.hpp"
+
 #include <hapsyn/error.hpp>
 #include <hapsyn/internal/maps.hpp>
-#include <hapsyn/internal/problem_file.hpp>
-#include <hapsyn/internal/study.hpp>
-#include <hapsyn/json_text.hpp>
-#include <hapsyn/read_file.hpp>
 
 #include <boost/filesystem.hpp>
 
+#include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
-#include <sstream>
 
 namespace hapsyn_cli {
 namespace {
 
 namespace fs = boost::filesystem;
 using hapsyn::Json;
-
-constexpr std::uint64_t kMaxResultBytes = std::uint64_t{1} << 30;
-constexpr std::uint64_t kMaxSamplesCsvBytes = std::uint64_t{4} << 30;
-
-// A loaded study with the design to show and where that design came from.
-struct Source {
-  hapsyn::Study study;
-  Eigen::VectorXd design;  // full design vector
-  std::string kind;        // "result directory" or "problem file"
-  std::string samples_csv; // the result's samples.csv, "" when there is none
-};
-
-// The full design from a design object {"l": [..], "r": 0.4} (result.json's best.design).
-Eigen::VectorXd design_from_json(const hapsyn::Problem& problem, const Json& design, const std::string& where) {
-  const auto& components = problem.design_space().components();
-  Eigen::VectorXd full(static_cast<Eigen::Index>(components.size()));
-  for (std::size_t k = 0; k < components.size(); ++k) {
-    const hapsyn::DesignComponent& c = components[k];
-    const auto it = design.find(c.variable);
-    const Json* value = it == design.end() ? nullptr : &*it;
-    if (value && value->is_array()) value = static_cast<std::size_t>(c.index) < value->size() ? &(*value)[c.index] : nullptr;
-    if (!value || !value->is_number()) {
-      throw hapsyn::Error("view", where + "." + c.variable + ": no number for design component " + c.name);
-    }
-    full[static_cast<Eigen::Index>(k)] = value->get<double>();
-  }
-  return full;
-}
-
-// The design `hapsyn run` evaluates with the evaluate solver: the fixed values; free
-// components (another solver's study) at the midpoint of their bounds, integers rounded.
-Eigen::VectorXd midpoint_design(const hapsyn::Problem& problem) {
-  const auto& space = problem.design_space();
-  Eigen::VectorXd free(static_cast<Eigen::Index>(space.free_size()));
-  for (std::size_t k = 0; k < space.free_size(); ++k) {
-    const hapsyn::DesignComponent& c = space.components()[static_cast<std::size_t>(space.free_indices()[k])];
-    const double mid = 0.5 * (c.lower + c.upper);
-    free[static_cast<Eigen::Index>(k)] = c.integer ? std::round(mid) : mid;
-  }
-  return problem.full_design(free.data());
-}
-
-hapsyn::LoadSettings quiet_settings(std::ostream* progress) {
-  hapsyn::LoadSettings settings;
-  settings.progress = progress;
-  return settings;
-}
-
-Source load_result_dir(const fs::path& dir, const hapsyn::Registry& registry, std::ostream* progress) {
-  const std::string file = (dir / "result.json").string();
-  const Json result =
-      hapsyn::parse_json_text(hapsyn::read_regular_file(file, "view", "result", kMaxResultBytes), file, "view");
-  if (!result.contains("problem") || !result["problem"].is_object()) {
-    throw hapsyn::Error("view", file + ": no \"problem\" object: not a result.json that hapsyn run wrote");
-  }
-  if (!result.contains("best") || !result["best"].contains("design")) {
-    throw hapsyn::Error("view", file + ": no \"best.design\" (status " + result.value("status", std::string("?")) +
-                                    "): the study found no design to show");
-  }
-  // The problem's relative paths are relative to its file, which the result names only for a
-  // share; otherwise they are tried against the result's folder, then the current directory.
-  std::string problem_file = file;
-  if (result.contains("shard") && result["shard"].contains("problem_file")) problem_file = result["shard"]["problem_file"];
-  const hapsyn::ProblemDirectoryScope scope(problem_file);
-  // The resolved problem holds the loader's notes, which are no keys of a problem file and which
-  // the loader derives again: "aggregation" (several objectives under a single-objective
-  // solver) and each design variable's "unit".
-  Json problem = result["problem"];
-  problem.erase("aggregation");
-  if (problem.contains("design")) {
-    for (auto& entry : problem["design"].items()) entry.value().erase("unit");
-  }
-  Source s{hapsyn::load_study(problem, registry, {}, quiet_settings(progress)), {}, "result directory", {}};
-  s.design = design_from_json(*s.study.problem, result["best"]["design"], file + ": best.design");
-  const fs::path csv = dir / "samples.csv";
-  if (fs::is_regular_file(csv)) s.samples_csv = csv.string();
-  return s;
-}
-
-Source load_problem_file(const std::string& file, const hapsyn::Registry& registry, std::ostream* progress) {
-  const Json document = hapsyn::read_problem_file(file);
-  const hapsyn::ProblemDirectoryScope scope(file);
-  Source s{hapsyn::load_study(document, registry, {}, quiet_settings(progress)), {}, "problem file", {}};
-  s.design = midpoint_design(*s.study.problem);
-  return s;
-}
-
-std::vector<std::string> split_csv_line(const std::string& line) {
-  std::vector<std::string> cells;
-  std::string cell;
-  std::istringstream in(line);
-  while (std::getline(in, cell, ',')) cells.push_back(cell);
-  if (!line.empty() && line.back() == ',') cells.emplace_back();
-  return cells;
-}
-
-// samples.csv read back into SampleRecords (status and the local-value columns by name).
-hapsyn::SampleRecords read_samples_csv(const std::string& file, const hapsyn::Problem& problem) {
-  std::istringstream in(hapsyn::read_regular_file(file, "view", "samples.csv", kMaxSamplesCsvBytes));
-  std::string line;
-  std::getline(in, line);
-  const std::vector<std::string> header = split_csv_line(line);
-  const std::vector<std::string> locals = hapsyn::local_columns(problem);
-  auto column = [&](const std::string& name) {
-    for (std::size_t c = 0; c < header.size(); ++c) {
-      if (header[c] == name) return c;
-    }
-    throw hapsyn::Error("view", file + ": no column \"" + name + "\" (the study's columns are those hapsyn run writes)");
-  };
-  const std::size_t status = column("status");
-  std::vector<std::size_t> local_at;
-  for (const std::string& l : locals) local_at.push_back(column(l));
-  const int n = problem.samples().size();
-  hapsyn::SampleRecords records;
-  records.status.resize(static_cast<std::size_t>(n));
-  records.has_locals.assign(static_cast<std::size_t>(n), 0);
-  records.locals.setZero(n, static_cast<Eigen::Index>(locals.size()));
-  int row = 0;
-  while (std::getline(in, line)) {
-    if (line.empty()) continue;
-    if (row >= n) throw hapsyn::Error("view", file + ": more rows than the scene's " + std::to_string(n) + " samples");
-    const std::vector<std::string> cells = split_csv_line(line);
-    if (cells.size() != header.size()) {
-      throw hapsyn::Error("view", file + ": row " + std::to_string(row + 1) + " has " + std::to_string(cells.size()) +
-                                      " cells, the header " + std::to_string(header.size()));
-    }
-    records.status[static_cast<std::size_t>(row)] = cells[status];
-    bool all = !locals.empty();
-    for (std::size_t k = 0; k < locals.size(); ++k) {
-      const std::string& cell = cells[local_at[k]];
-      all = all && !cell.empty();
-      records.locals(row, static_cast<Eigen::Index>(k)) = cell.empty() ? 0.0 : std::strtod(cell.c_str(), nullptr);
-    }
-    records.has_locals[static_cast<std::size_t>(row)] = all ? 1 : 0;
-    ++row;
-  }
-  if (row != n) {
-    throw hapsyn::Error("view", file + ": " + std::to_string(row) + " rows, the scene has " + std::to_string(n) +
-                                    " samples (was the study run with other scene options?)");
-  }
-  return records;
-}
 
 Eigen::Vector3d position_of(const hapsyn::SampleSet& samples, int i) {
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
@@ -190,7 +45,7 @@ int drawn_sample(const hapsyn::SampleSet& samples, const hapsyn::SampleRecords& 
   return best;
 }
 
-Json segments_json(const Source& s, int sample) {
+Json segments_json(const ViewSource& s, int sample) {
   Json out = Json::array();
   if (sample < 0) return out;
   const hapsyn::Mechanism& mechanism = s.study.problem->mechanism();
@@ -204,7 +59,7 @@ Json segments_json(const Source& s, int sample) {
   return out;
 }
 
-Json study_json(const Source& s, int sample) {
+Json study_json(const ViewSource& s, int sample) {
   const hapsyn::Json& resolved = s.study.resolved;
   const hapsyn::SampleSet& samples = s.study.problem->samples();
   Json objectives = Json::array();
@@ -267,7 +122,7 @@ Json columns_json(const hapsyn::Problem& problem, const hapsyn::SampleRecords& r
   return columns;
 }
 
-Json samples_json(const Source& s, const hapsyn::SampleRecords& records, const std::string& origin) {
+Json samples_json(const ViewSource& s, const hapsyn::SampleRecords& records, const std::string& origin) {
   const hapsyn::SampleSet& samples = s.study.problem->samples();
   Json positions = Json::array(), status = Json::array();
   for (int i = 0; i < samples.size(); ++i) {
@@ -290,12 +145,12 @@ Json samples_json(const Source& s, const hapsyn::SampleRecords& records, const s
 
 ViewData load_view_data(const std::string& path, const hapsyn::Registry& registry, std::ostream* progress) {
   const fs::path p(path);
-  Source source = [&] {
+  ViewSource source = [&] {
     if (fs::is_directory(p)) {
       if (!fs::is_regular_file(p / "result.json")) {
         throw hapsyn::Error("view", path + " is a directory without result.json: give a problem file or a result directory");
       }
-      return load_result_dir(p, registry, progress);
+      return load_result_dir(path, registry, progress);
     }
     return load_problem_file(path, registry, progress);
   }();
