@@ -212,6 +212,19 @@ def check_result_dir_errors(hapsyn, work):
         check(r.returncode == 1 and message in r.stderr, f"{os.path.basename(folder)}: exit 1, '{message}' ({r.stderr.strip()})")
 
 
+def check_free_design(hapsyn, problem):
+    """A problem file whose design is free (a grid study) is shown at the midpoint of its bounds."""
+    grid_study = os.path.join(os.path.dirname(problem), "fivebar-gii-coarse.json")
+    design = json.load(open(grid_study))["design"]
+    with ViewProcess(hapsyn, grid_study) as view:
+        _, _, body = get(view.port, "/api/study")
+        shown = json.loads(body)["design"]
+        view.stop()
+    want = {k: (v["lower"] + v["upper"]) / 2 for k, v in design.items()}
+    check(shown.keys() == want.keys() and all(math.isclose(shown[k], want[k], rel_tol=1e-12) for k in want),
+          f"a free design at the midpoint of its bounds: {shown}")
+
+
 def check_errors(hapsyn, problem):
     r = subprocess.run([hapsyn, "view", problem, "--host", "not-an-address", "--port", "0"], capture_output=True, text=True, timeout=120)
     check(r.returncode == 1 and "--host not-an-address: not an IP address" in r.stderr, f"--host not-an-address: exit 1 ({r.stderr.strip()})")
@@ -261,6 +274,7 @@ def main():
         check(code == 0, f"SIGTERM: exit 0 ({code})")
     check_errors(hapsyn, problem)
     check_result_dir_errors(hapsyn, work)
+    check_free_design(hapsyn, problem)
     print(f"{len(failures)} failure(s)")
     return 1 if failures else 0
 
