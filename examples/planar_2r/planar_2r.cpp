@@ -63,6 +63,16 @@ void Planar2RModel::solve(const double* pose, hapsyn::Needs needs, hapsyn::Mecha
   if (needs & hapsyn::kNeedJacobian) jacobian(q1, q2, out.jacobian);
 }
 
+std::vector<hapsyn::Segment> Planar2RModel::segments(const hapsyn::SampleSet& scene, int sample,
+                                                    hapsyn::MechanismScratch& scratch) const {
+  hapsyn::SampleQuantities q;
+  solve(scene.pose(sample), hapsyn::kNeedPose, scratch, q);
+  if (q.status == hapsyn::SampleStatus::kUnreachable) return {};
+  const Eigen::Vector3d elbow(l1_ * std::cos(q.q[0]), l1_ * std::sin(q.q[0]), 0.0);
+  const Eigen::Vector3d tip(scene.pose(sample)[0], scene.pose(sample)[1], 0.0);
+  return {hapsyn::Segment{"links", {Eigen::Vector3d::Zero(), elbow, tip}}};
+}
+
 std::unique_ptr<const hapsyn::MechanismModel> Planar2R::build(const double* design) const {
   return std::make_unique<const Planar2RModel>(design[0], design[1], options_);
 }

@@ -55,6 +55,11 @@ class Planar2RModel final : public hapsyn::MechanismModel {
   /// `needs` asks for it, the 2 x 2 Jacobian.
   void solve(const double* pose, hapsyn::Needs needs, hapsyn::MechanismScratch& scratch,
              hapsyn::SampleQuantities& out) const override;
+  /// What `hapsyn view` draws: "links", the polyline base -> elbow -> end effector (z = 0) at
+  /// the configuration solve() picks; empty for an unreachable sample. Optional: without it the
+  /// default draws only the end effector's point.
+  std::vector<hapsyn::Segment> segments(const hapsyn::SampleSet& scene, int sample,
+                                        hapsyn::MechanismScratch& scratch) const override;
 
   /// End effector (x, y) [m] for joint angles (q1, q2) [rad].
   void forward(double q1, double q2, double* xy) const;

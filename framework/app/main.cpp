@@ -1,4 +1,4 @@
-// The hapsyn command-line program: run, validate, plugins, describe, scene.
+// The hapsyn command-line program: run, validate, plugins, describe, scene, view.
 //
 // Exit codes: 0 the command did its work (for `run`: result.json written; the solver's outcome
 // is its "status"), 1 bad input (problem file, options, plugins, output directory) or an output
@@ -25,6 +25,9 @@
 #include "ranks.hpp"
 #include "summary.hpp"
 #include "reference_command.hpp"
+#if HAPSYN_WITH_VIEW
+#include "view_command.hpp"
+#endif
 
 #include <CLI/CLI.hpp>
 
@@ -344,6 +347,8 @@ struct Arguments {
   std::uint64_t sweep_seed = 1;
   bool sweep_progress = false;
   hapsyn::CompareOptions compare;
+  std::string view_host = "127.0.0.1";
+  int view_port = 8080;
 };
 
 struct Commands {
@@ -358,6 +363,7 @@ struct Commands {
   CLI::App* compare = nullptr;
   CLI::App* merge = nullptr;
   CLI::App* reference = nullptr;
+  CLI::App* view = nullptr;
 };
 
 // --seed: a whole number that fits 64 bits. Checked on the text, before CLI11 converts it: a
@@ -424,6 +430,12 @@ void define_study_commands(CLI::App& app, Arguments& a, Commands& c) {
       c.scene->add_option("--threads", a.threads, "Threads for building (sets scene.options.threads when the scene has it)")
           ->check(CLI::NonNegativeNumber);
   c.scene->add_option("--attribute", a.scene_attributes, "Request a per-sample attribute (e.g. M_v, M_a); repeatable");
+
+  c.view = app.add_subcommand("view", "Show a study in the browser: its mechanism, samples and local values (local web server)");
+  c.view->add_option("path", a.file, "Problem file (JSON) or result directory (holding result.json)")->required();
+  c.view->add_option("--port", a.view_port, "TCP port (0: any free port)")->check(CLI::Range(0, 65535))->capture_default_str();
+  c.view->add_option("--host", a.view_host, "Address to listen on (another than loopback exposes the study to the network)")
+      ->capture_default_str();
 }
 
 // `hapsyn reference`: the JSON the documentation's reference pages are generated from
@@ -658,6 +670,13 @@ int dispatch(const Commands& c, Arguments& a, const hapsyn::Registry& registry) 
     }
     if (root) hapsyn::print_compare(summary, std::cout);
     return summary.value("status", "") == "stopped" ? kExitStopped : 0;
+  }
+  if (*c.view) {
+#if HAPSYN_WITH_VIEW
+    return hapsyn_cli::view_command(a.file, a.view_host, a.view_port, registry);
+#else
+    throw hapsyn::Error("view", "this hapsyn was built without the view (configure with -DHAPSYN_WITH_VIEW=ON)");
+#endif
   }
   if (*c.scene) {
     const std::optional<int> threads = c.scene_threads->count() > 0 ? std::optional<int>(a.threads) : std::nullopt;

@@ -6,6 +6,7 @@
 #include <hapsyn/quantities.hpp>
 #include <hapsyn/scene.hpp>
 
+#include <Eigen/Core>
 #include <memory>
 #include <string>
 #include <vector>
@@ -13,6 +14,13 @@
 namespace hapsyn {
 
 class MechanismAcceleration;  // hapsyn/accel/mechanism_acceleration.hpp
+
+/// One polyline of a mechanism's drawing (MechanismModel::segments): straight pieces joining
+/// consecutive points, e.g. the links from the base through the joints to the end effector.
+struct Segment {
+  std::string name;                     ///< what it shows ("links", "left leg", "base"), for a legend
+  std::vector<Eigen::Vector3d> points;  ///< at least two, in the frame of the scene's poses [m]
+};
 
 /// Per-thread scratch a model may use (Pinocchio's Data): made once per thread by
 /// Mechanism::make_scratch, reused for every sample and design that thread evaluates, never
@@ -44,6 +52,15 @@ class MechanismModel {
   /// singularity is kSingular, never a NaN: the evaluator refuses NaN/inf quantities.
   virtual void solve(const double* pose, Needs needs, MechanismScratch& scratch,
                      SampleQuantities& out) const = 0;
+  /// The mechanism drawn at the configuration solve() picks for sample `sample` (an index) of
+  /// `scene`: polylines through its joints, in the frame of the scene's poses [m] (a planar one at
+  /// z = 0), for viewers (`hapsyn view`). Empty when solve() finds the sample kUnreachable (or,
+  /// for a mechanism without a configuration there, kInvalid). Called once per picture, outside
+  /// the per-sample loop, with a `scratch` from Mechanism::make_scratch: may allocate.
+  /// Default: one segment "end effector" from the scene frame's origin to the pose's position
+  /// (its first three coordinates, missing ones 0), which draws nothing of the links.
+  /// solve() is given `scene` and `sample` in SampleQuantities::scene and SampleQuantities::sample.
+  virtual std::vector<Segment> segments(const SampleSet& scene, int sample, MechanismScratch& scratch) const;
 };
 
 

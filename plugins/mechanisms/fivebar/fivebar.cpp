@@ -101,6 +101,19 @@ FiveBarModel::FiveBarModel(const FiveBarDesign& design, const FiveBarOptions& op
   block_ = FiveBarBlockDesign{h0_, design.l1, design.l2, design.r, options.singularity_tolerance, m2_, inertia_a_, inertia_f_};
 }
 
+std::vector<Segment> FiveBarModel::segments(const SampleSet& scene, int sample, MechanismScratch& scratch) const {
+  SampleQuantities q;
+  solve(scene.pose(sample), kNeedPose, scratch, q);
+  if (q.status == SampleStatus::kUnreachable) return {};
+  // Scene frame = mechanism frame shifted by (0, -r): A1 = (-l0/2, -r), A2 = (l0/2, -r).
+  const double l1 = design_.l1, y0 = -design_.r;
+  const Eigen::Vector3d a1(-h0_, y0, 0.0), a2(h0_, y0, 0.0);
+  const Eigen::Vector3d b1 = a1 + l1 * Eigen::Vector3d(std::cos(q.q[0]), std::sin(q.q[0]), 0.0);
+  const Eigen::Vector3d b2 = a2 + l1 * Eigen::Vector3d(std::cos(q.q[3]), std::sin(q.q[3]), 0.0);
+  const Eigen::Vector3d e(scene.pose(sample)[0], scene.pose(sample)[1], 0.0);
+  return {Segment{"links", {a1, b1, e, b2, a2}}, Segment{"base", {a1, a2}}};
+}
+
 void FiveBarModel::solve_block(const PoseBlock& poses, Needs needs, MechanismScratch& scratch,
                                QuantityBlock& out) const {
 #if HAPSYN_HAVE_HIGHWAY

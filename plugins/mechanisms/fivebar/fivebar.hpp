@@ -110,6 +110,10 @@ class FiveBarModel final : public MechanismModel {
   /// when the end effector sits exactly on an actuated joint) and zeroed for unreachable ones.
   void solve(const double* pose, Needs needs, MechanismScratch& scratch,
              SampleQuantities& out) const override;
+  /// Drawn in the scene frame at z = 0 (the mechanism frame shifted by -r in y): "links" A1 -> B1
+  /// -> E -> B2 -> A2 at the configuration solve() computes, and "base" A1 -> A2. Empty for an
+  /// unreachable sample.
+  std::vector<Segment> segments(const SampleSet& scene, int sample, MechanismScratch& scratch) const override;
 
   /// The block path: solve() for kBlockLanes samples at once, without trigonometry
   /// (fivebar_block.hpp). Fills status and J, D, M; never q.

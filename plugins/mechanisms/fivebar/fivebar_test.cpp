@@ -293,6 +293,30 @@ TEST(FiveBarTable2, LiteralPaperWorkspaceOf200MillimetresDoesNotReproduce) {
 // ---------------------------------------------------------------------------------------------
 // Kinematics and dynamics cross-checks.
 
+TEST(FiveBarKinematics, SegmentsJoinTheActuatedJointsElbowsAndEndEffector) {
+  const FiveBarModel model(kBestGdi, options_with());
+  MechanismScratch scratch;
+  SampleSet scene;
+  scene.poses.resize(2, 2);
+  scene.poses << 0.01, -0.02, 5.0, 5.0;  // a reachable sample, an unreachable one
+  const std::vector<hapsyn::Segment> drawn = model.segments(scene, 0, scratch);
+  ASSERT_EQ(drawn.size(), 2u);
+  ASSERT_EQ(drawn[0].points.size(), 5u);
+  const auto& p = drawn[0].points;  // A1, B1, E, B2, A2 in the scene frame (mechanism frame - (0, r))
+  const double h = kBestGdi.l0 / 2, r = kBestGdi.r;
+  EXPECT_LT((p[0] - Eigen::Vector3d(-h, -r, 0)).norm(), 1e-15);
+  EXPECT_LT((p[4] - Eigen::Vector3d(h, -r, 0)).norm(), 1e-15);
+  EXPECT_LT((p[2] - Eigen::Vector3d(0.01, -0.02, 0)).norm(), 1e-15);
+  EXPECT_NEAR((p[1] - p[0]).norm(), kBestGdi.l1, 1e-12);
+  EXPECT_NEAR((p[3] - p[4]).norm(), kBestGdi.l1, 1e-12);
+  EXPECT_NEAR((p[2] - p[1]).norm(), kBestGdi.l2, 1e-12);
+  EXPECT_NEAR((p[2] - p[3]).norm(), kBestGdi.l2, 1e-12);
+  EXPECT_LT(p[1].x(), p[0].x());  // elbow out: the left elbow left of its joint
+  EXPECT_GT(p[3].x(), p[4].x());
+  EXPECT_EQ(drawn[1].name, "base");
+  EXPECT_TRUE(model.segments(scene, 1, scratch).empty());
+}
+
 TEST(FiveBarKinematics, InverseThenForwardKinematicsReturnsTheTarget) {
   unsigned seed = 1;
   for (const FiveBarDesign& design : test_designs()) {

@@ -245,6 +245,10 @@ class Haptic6RModel final : public MechanismModel {
 
   void solve(const double* pose, Needs needs, MechanismScratch& scratch,
              SampleQuantities& out) const override;
+  /// Drawn in B (the scene frame): "links", the polyline o_0 -> (o_0 + d_1 z_0) -> o_1 -> ... ->
+  /// o_6 = E through the DH origins (each row's d along z_{i-1}, then its a along x_i), at the
+  /// configuration solve() picks. Empty for an unreachable or invalid sample.
+  std::vector<Segment> segments(const SampleSet& scene, int sample, MechanismScratch& scratch) const override;
   /// The block kernel (docs/design.md section 14): the IK, selection and classification of every
   /// lane at once with the same outcome as solve() (the same statuses), then the Jacobian,
   /// inertia and gravity torque of every lane at once (haptic6r_block.cpp); agreement with solve() to 1e-12 relative. Serves

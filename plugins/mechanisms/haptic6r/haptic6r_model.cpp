@@ -96,6 +96,24 @@ void Haptic6RModel::rebuild(const double* design, const Haptic6RSetup& setup) {
   }
 }
 
+std::vector<Segment> Haptic6RModel::segments(const SampleSet& scene, int sample, MechanismScratch& /*scratch*/) const {
+  Vector6d q;
+  JointTrig trig;
+  const SampleStatus status = configuration(scene.pose(sample), q, trig);
+  if (status != SampleStatus::kReachable && status != SampleStatus::kSingular) return {};
+  std::array<Eigen::Isometry3d, 7> frame;
+  frames(q, frame);
+  Segment links{"links", {frame[0].translation()}};
+  for (std::size_t i = 1; i < 7; ++i) {
+    // DH row i: d along z_{i-1} first, then a along x_i; a zero length adds no point.
+    const Eigen::Vector3d corner = frame[i - 1].translation() + d_[i - 1] * frame[i - 1].linear().col(2);
+    for (const Eigen::Vector3d& p : {corner, Eigen::Vector3d(frame[i].translation())}) {
+      if ((p - links.points.back()).norm() > 1e-12) links.points.push_back(p);
+    }
+  }
+  return {links};
+}
+
 Eigen::Vector4d Haptic6RModel::dh_row(int i) const {
   const std::size_t k = static_cast<std::size_t>(i);
   return Eigen::Vector4d(offset_[k], d_[k], a_[k], std::atan2(sa_[k], ca_[k]));

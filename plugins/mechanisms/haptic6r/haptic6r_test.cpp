@@ -162,6 +162,43 @@ TEST(Haptic6R, SolveClassifiesAndReproducesThePose) {
   EXPECT_GT(reachable, 450);
 }
 
+TEST(Haptic6R, SegmentsFollowTheDhRowsFromTheBaseToTheTarget) {
+  std::mt19937 rng(11);
+  Fixture f(paper_like_design());
+  auto scratch = std::make_unique<MechanismScratch>();
+  // Independently: the polyline's length is the sum of every row's |d| and |a| (d along z_{i-1},
+  // then a along x_i, at right angles).
+  double length = 0.0;
+  for (int i = 0; i < 6; ++i) length += std::abs(f.model.dh_row(i)(1)) + std::abs(f.model.dh_row(i)(2));
+  int drawn = 0;
+  for (int k = 0; k < 50; ++k) {
+    const Vector6d q = random_q(rng);
+    const auto row = pose_row(f.model.forward(q));
+    SampleSet scene;
+    scene.poses = Eigen::Map<const SampleSet::RowMatrix>(row.data(), 1, 7);
+    SampleQuantities out;
+    f.model.solve(row.data(), kNeedPose, *scratch, out);
+    const std::vector<Segment> segments = f.model.segments(scene, 0, *scratch);
+    if (out.status != SampleStatus::kReachable && out.status != SampleStatus::kSingular) {
+      EXPECT_TRUE(segments.empty());
+      continue;
+    }
+    ++drawn;
+    ASSERT_EQ(segments.size(), 1u);
+    const auto& p = segments[0].points;
+    EXPECT_LT(p.front().norm(), 1e-12);
+    EXPECT_LT((p.back() - Eigen::Vector3d(row[0], row[1], row[2])).norm(), 1e-9);
+    double sum = 0.0;
+    for (std::size_t i = 1; i < p.size(); ++i) sum += (p[i] - p[i - 1]).norm();
+    EXPECT_NEAR(sum, length, 1e-9);
+  }
+  EXPECT_GT(drawn, 40);
+  SampleSet far;
+  far.poses.resize(1, 7);
+  far.poses << 10, 10, 10, 1, 0, 0, 0;
+  EXPECT_TRUE(f.model.segments(far, 0, *scratch).empty());
+}
+
 TEST(Haptic6R, JacobianMatchesFiniteDifferences) {
   std::mt19937 rng(3);
   for (int d = 0; d < 5; ++d) {

@@ -89,6 +89,11 @@ class SerialChainModel final : public MechanismModel {
   SerialChainModel(const double* design, const SerialChainSetup& setup);
 
   void solve(const double* pose, Needs needs, MechanismScratch& scratch, SampleQuantities& out) const override;
+  /// Drawn in the scene frame S: "links", the polyline from the base origin through every joint
+  /// frame's origin to the tip, then to the tool point P when the tool frame moves it, at the
+  /// configuration solve() picks (T_S^B applied to the frames of chain_frames). Empty for an
+  /// unreachable sample or one out of the joint limits.
+  std::vector<Segment> segments(const SampleSet& scene, int sample, MechanismScratch& scratch) const override;
 
   const Chain& chain() const { return chain_; }
   const JointVector& max_velocity() const { return max_velocity_; }  ///< [rad/s or m/s]

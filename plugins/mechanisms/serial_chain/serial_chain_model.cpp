@@ -114,6 +114,26 @@ void SerialChainModel::solve(const double* pose, Needs needs, MechanismScratch& 
   if (needs & kMotion) fill_motion(pose, dimension, goal, s, needs, out);
 }
 
+std::vector<Segment> SerialChainModel::segments(const SampleSet& scene, int sample, MechanismScratch& scratch) const {
+  SampleQuantities q;
+  q.scene = &scene;
+  q.sample = sample;
+  solve(scene.pose(sample), kNeedPose, scratch, q);
+  if (q.status == SampleStatus::kUnreachable || q.status == SampleStatus::kInvalid) return {};
+  ChainFrames frames;
+  chain_frames(chain_, q.q.data(), frames);
+  const Eigen::Isometry3d scene_from_base = setup_->base_from_scene.inverse();
+  Segment links{"links", {scene_from_base.translation()}};
+  for (int i = 0; i < chain_.dof(); ++i) {
+    links.points.push_back(scene_from_base * frames.joint[static_cast<std::size_t>(i)].translation());
+  }
+  links.points.push_back(scene_from_base * frames.tip.translation());
+  // The tool point P (the sample's point) when a tool frame moves it off the tip.
+  const Eigen::Vector3d tool = scene_from_base * (frames.tip * setup_->sample_to_tip.inverse()).translation();
+  if ((tool - links.points.back()).norm() > 1e-12) links.points.push_back(tool);
+  return {links};
+}
+
 DemandedMotion SerialChainModel::demanded_motion(const double* pose, int dimension, const Eigen::Isometry3d& goal,
                                                  const double* twist, const double* twist_rate) const {
   const Eigen::Matrix3d& r = setup_->base_from_scene.linear();

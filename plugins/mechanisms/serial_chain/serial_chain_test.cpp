@@ -179,6 +179,34 @@ TEST(SerialChain, SolvedSamplesReproduceTheTargetThroughBaseAndToolFrames) {
   EXPECT_GE(reached, 45);
 }
 
+TEST(SerialChain, SegmentsRunFromTheBaseThroughTheJointsToTheToolPoint) {
+  Json o = haptic6r_dh_options();
+  o["base_xyz"] = {0.1, -0.2, 0.3};
+  o["tool_xyz"] = {0.0, 0.0, 0.05};
+  const SerialChain m = serial_chain(o);
+  const auto design = nominal_design(m);
+  const auto model = m.build(design.data());
+  const auto& chain = static_cast<const SerialChainModel&>(*model).chain();
+  auto scratch = m.make_scratch();
+  JointVector q(6);
+  q << 0.3, -0.7, 1.1, 0.9, -0.4, 0.6;
+  ChainFrames f;
+  chain_frames(chain, q.data(), f);
+  Eigen::Isometry3d scene_base = Eigen::Isometry3d::Identity(), tip_tool = Eigen::Isometry3d::Identity();
+  scene_base.translation() << 0.1, -0.2, 0.3;
+  tip_tool.translation() << 0, 0, 0.05;
+  const SampleSet scene = one_pose_scene(scene_base * f.tip * tip_tool);
+  const std::vector<Segment> drawn = model->segments(scene, 0, *scratch);
+  ASSERT_EQ(drawn.size(), 1u);
+  const auto& p = drawn[0].points;
+  ASSERT_EQ(p.size(), 9u);  // base, 6 joints, tip, tool point
+  EXPECT_LT((p.front() - Eigen::Vector3d(0.1, -0.2, 0.3)).norm(), 1e-12);
+  EXPECT_LT((p.back() - scene.poses.row(0).head<3>().transpose()).norm(), 1e-9);
+  EXPECT_NEAR((p[8] - p[7]).norm(), 0.05, 1e-9);  // the tool offset
+  const SampleSet far = one_pose_scene(Eigen::Isometry3d(Eigen::Translation3d(10.0, 10.0, 10.0)));
+  EXPECT_TRUE(model->segments(far, 0, *scratch).empty());
+}
+
 TEST(SerialChain, ClassifiesUnreachableSingularAndLimitSamplesNeverNaN) {
   const SerialChain m = serial_chain(haptic6r_dh_options());
   const auto design = nominal_design(m);

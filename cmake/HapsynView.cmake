@@ -1,0 +1,58 @@
+# `hapsyn view` (HAPSYN_WITH_VIEW): its sources, Boost.Beast (headers of libboost-dev), and the
+# page of web/ embedded at build time. three.js comes from npm (web/package-lock.json): when
+# web/node_modules lacks it, configure runs `npm ci` once if npm is there; if that is not possible
+# the build goes on and `hapsyn view` says that its page is not built and how to build it.
+function(hapsyn_add_view target)
+  set(web ${PROJECT_SOURCE_DIR}/web)
+  set(three ${web}/node_modules/three)
+  find_program(HAPSYN_NPM npm)
+  if(NOT EXISTS ${three}/build/three.module.min.js AND HAPSYN_NPM)
+    message(STATUS "hapsyn view: installing three.js from web/package-lock.json (npm ci)")
+    execute_process(COMMAND ${HAPSYN_NPM} ci --no-audit --no-fund --loglevel=error WORKING_DIRECTORY ${web}
+                    RESULT_VARIABLE npm_result OUTPUT_QUIET ERROR_VARIABLE npm_error TIMEOUT 300)
+    if(NOT npm_result EQUAL 0)
+      message(WARNING "hapsyn view: npm ci in ${web} failed (${npm_result}): ${npm_error}")
+    endif()
+  endif()
+  # route|content type|file; three.js and its orbit controls copied next to the page.
+  set(js "text/javascript")  # no ";" in a CMake list: view_command adds the charset
+  set(assets "/|text/html|${web}/index.html" "/app.js|${js}|${web}/app.js")
+  set(missing "")
+  if(EXISTS ${three}/build/three.module.min.js AND EXISTS ${three}/examples/jsm/controls/OrbitControls.js)
+    list(APPEND assets "/three.module.js|${js}|${three}/build/three.module.min.js"
+                       "/OrbitControls.js|${js}|${three}/examples/jsm/controls/OrbitControls.js")
+  else()
+    set(assets "")
+    # Plain text: it becomes a C++ string literal.
+    set(missing "three.js is not installed in ${web}/node_modules: run npm ci there (scripts/setup.sh installs npm) and build again")
+    message(WARNING "hapsyn view: ${missing}; the program builds, `hapsyn view` reports it")
+  endif()
+  set(page ${CMAKE_BINARY_DIR}/web)
+  set(manifest ${page}/manifest.txt)
+  set(files "")
+  set(lines "")
+  foreach(asset IN LISTS assets)
+    string(REPLACE "|" ";" parts "${asset}")
+    list(GET parts 2 source)
+    get_filename_component(name ${source} NAME)
+    # The copy next to the page (build/web/) is what is embedded.
+    configure_file(${source} ${page}/${name} COPYONLY)
+    list(GET parts 0 route)
+    list(GET parts 1 type)
+    string(APPEND lines "${route}|${type}|${page}/${name}\n")
+    list(APPEND files ${page}/${name})
+  endforeach()
+  file(WRITE ${manifest}.new "${lines}")
+  execute_process(COMMAND ${CMAKE_COMMAND} -E copy_if_different ${manifest}.new ${manifest})
+  set(output ${CMAKE_CURRENT_BINARY_DIR}/web_assets.cpp)
+  add_custom_command(OUTPUT ${output}
+    COMMAND ${CMAKE_COMMAND} -DMANIFEST=${manifest} -DOUTPUT=${output} "-DMISSING=${missing}"
+            -P ${PROJECT_SOURCE_DIR}/cmake/EmbedWebAssets.cmake
+    DEPENDS ${manifest} ${files} ${PROJECT_SOURCE_DIR}/cmake/EmbedWebAssets.cmake
+    COMMENT "Embedding the page of hapsyn view"
+    VERBATIM)
+  target_sources(${target} PRIVATE app/view/view_command.cpp app/view/view_data.cpp app/view/view_source.cpp
+    app/view/samples_csv_reader.cpp app/view/http_server.cpp ${output})
+  target_include_directories(${target} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/app/view)
+  target_compile_definitions(${target} PRIVATE HAPSYN_WITH_VIEW=1)
+endfunction()

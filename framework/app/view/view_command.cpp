@@ -1,0 +1,42 @@
+#include "view_command.hpp"
+
+#include "http_server.hpp"
+#include "view_data.hpp"
+#include "web_assets.hpp"
+
+#include <hapsyn/error.hpp>
+
+#include <iostream>
+#include <map>
+
+namespace hapsyn_cli {
+
+int view_command(const std::string& path, const std::string& host, int port, const hapsyn::Registry& registry) {
+  if (const std::string_view missing = web_assets_missing(); !missing.empty()) {
+    throw hapsyn::Error("view", "the page's assets are not built into this hapsyn: " + std::string(missing));
+  }
+  const ViewData data = load_view_data(path, registry, &std::cerr);
+  // The API's documents are made once; the server hands out views of them.
+  const std::string study = data.study.dump();
+  const std::string samples = data.samples.dump();
+  std::map<std::string, Resource> routes;
+  for (const WebAsset& asset : web_assets()) {
+    routes[std::string(asset.route)] = {std::string(asset.content_type) + "; charset=utf-8", asset.body};
+  }
+  routes["/api/study"] = {"application/json", study};
+  routes["/api/samples"] = {"application/json", samples};
+  ServerSettings settings;
+  settings.host = host;
+  settings.port = static_cast<unsigned short>(port);
+  // Told to listen beyond loopback, the server answers the names others reach it by.
+  settings.loopback_hosts_only = host == "127.0.0.1" || host == "::1";
+  ViewServer server(std::move(routes), settings);
+  const bool v6 = host.find(':') != std::string::npos;
+  std::cout << "hapsyn view: serving " << data.name << " at http://" << (v6 ? "[" + host + "]" : host) << ":"
+            << server.port() << "/ (Ctrl-C stops)" << std::endl;
+  server.run_until_signal();
+  std::cout << "hapsyn view: stopped" << std::endl;
+  return 0;
+}
+
+}  // namespace hapsyn_cli
