@@ -123,10 +123,12 @@ TEST(Registry, OptionsAreValidatedAndDefaultsFilled) {
                {"solver.options.prun", "did you mean 'prune'"});
 }
 
-TEST(Registry, Api3PluginIsRefusedNamingBothVersions) {
-  static_assert(HAPSYN_PLUGIN_API_VERSION == 4, "a plugin built for the previous API must be refused");
+TEST(Registry, PluginsOfThePreviousApisAreRefusedNamingBothVersions) {
+  static_assert(HAPSYN_PLUGIN_API_VERSION == 5, "plugins built for the previous APIs must be refused");
+  expect_error([] { broken().find("version4"); },
+               {"hapsyn-version4.so", "plugin API version 4", "this hapsyn has API version 5", "rebuild the plugin"});
   expect_error([] { broken().find("version3"); },
-               {"hapsyn-version3.so", "plugin API version 3", "this hapsyn has API version 4", "rebuild the plugin"});
+               {"hapsyn-version3.so", "plugin API version 3", "this hapsyn has API version 5", "rebuild the plugin"});
 }
 
 TEST(Registry, BadDeclarationNamesTheOptionAndItsRule) {

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Checks the layering of the plugin API (what an author includes and links), from the sources.
 
-  1. HAPSYN_PLUGIN_API_VERSION is 4.
+  1. HAPSYN_PLUGIN_API_VERSION is 5 (4: the two layers; 5: MechanismModel::segments).
   2. No installed header under framework/include/hapsyn/ outside accel/ includes, directly or
      through other hapsyn headers, a vector, dispatch or block header (hapsyn/accel/...), nor a
      private framework header (hapsyn/internal/...).
@@ -47,8 +47,8 @@ def main():
     root = pathlib.Path(sys.argv[1])
     problems = []
     plugin_hpp = (root / "framework/include/hapsyn/plugin.hpp").read_text()
-    if not re.search(r"#define HAPSYN_PLUGIN_API_VERSION 4\b", plugin_hpp):
-        problems.append("plugin.hpp: HAPSYN_PLUGIN_API_VERSION is not 4")
+    if not re.search(r"#define HAPSYN_PLUGIN_API_VERSION 5\b", plugin_hpp):
+        problems.append("plugin.hpp: HAPSYN_PLUGIN_API_VERSION is not 5")
 
     include_dir = root / "framework/include/hapsyn"
     for header in sorted(include_dir.glob("*.hpp")):

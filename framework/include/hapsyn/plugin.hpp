@@ -36,7 +36,9 @@
 ///    (hapsyn/accel/); capabilities in specs structs (MechanismSpecs, MetricSpecs,
 ///    SolverSpecs); MechanismModel::solve_block became MechanismAcceleration::solve_block;
 ///    plugin bases non-copyable; the framework's orchestration headers private.
-#define HAPSYN_PLUGIN_API_VERSION 4
+/// 5: MechanismModel::segments (a mechanism drawn at a sample, for `hapsyn view`): a new virtual,
+///    so a model built for API 4 has another vtable.
+#define HAPSYN_PLUGIN_API_VERSION 5
 
 // Tests build a plugin with another version to exercise the registry's check.
 #ifndef HAPSYN_PLUGIN_BUILT_API_VERSION
