@@ -5,6 +5,7 @@
 #include <hapsyn/schema.hpp>
 
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -311,6 +312,44 @@ TEST(Options, UnsignedIntegerTakesTheWholeRange) {
   expect_error([&] { hapsyn::make_options<Plan>(options); }, {"problem: options.seed = -1: must be >= 0"});
   options["seed"] = 2.5;
   expect_error([&] { hapsyn::make_options<Plan>(options); }, {"problem: options.seed = 2.5: must be an integer"});
+}
+
+// A metric declaring a required key, an optional one, a list of groups, free-form JSON and an
+// unsigned integer (tests/plugins/test_metric.cpp, TEST_PLUGIN_OPTION_KINDS), through the registry.
+const hapsyn::Registry& test_plugins() {
+  static const hapsyn::Registry registry({HAPSYN_TEST_PLUGIN_DIR});
+  return registry;
+}
+
+TEST(Options, PluginWithEveryKindOfOptionIsCreatedThroughTheRegistry) {
+  Json resolved;
+  test_plugins().create_metric("optionkinds", Json{{"label", "a"}}, "objectives[0]", &resolved);
+  EXPECT_EQ(resolved, (Json{{"label", "a"}, {"stages", Json::array()}, {"extra", Json::object()}, {"seed", 1}}));
+  const Json given = {{"label", "a"}, {"limit", 2.0}, {"stages", {{{"kind", "x"}}}}, {"seed", 18446744073709551615ull}};
+  test_plugins().create_metric("optionkinds", given, "objectives[0]", &resolved);
+  EXPECT_EQ(resolved["limit"], 2.0);
+  EXPECT_EQ(resolved["stages"], given["stages"]);
+  EXPECT_EQ(resolved["seed"].dump(), "18446744073709551615");
+  expect_error([] { test_plugins().create_metric("optionkinds", Json::object(), "objectives[0]"); },
+               {"objectives[0].options.label: required key is missing"});
+  expect_error(
+      [] {
+        test_plugins().create_metric("optionkinds", Json{{"label", "a"}, {"stages", {Json::object()}}}, "objectives[0]");
+      },
+      {"objectives[0].options.stages[0].kind: required key is missing"});
+}
+
+TEST(Options, DescribeShowsRequiredAndOptionalKeysAndTheKeysOfListElements) {
+  ::setenv("HAPSYN_PLUGIN_PATH", HAPSYN_TEST_PLUGIN_DIR, 1);
+  const hapsyn::test::Output o = hapsyn::test::hapsyn_cli("describe optionkinds");
+  ::unsetenv("HAPSYN_PLUGIN_PATH");
+  EXPECT_EQ(o.code, 0) << o.out;
+  for (const char* line : {"  label                  string   default (required)        a label\n",
+                           "  limit                  number   default (none)            a limit (default: none)\n",
+                           "  stages[].kind          string   default (required)        what the stage does\n",
+                           "  seed                   integer  default 1                 a seed [>= 0 <= 18446744073709551615]\n"}) {
+    EXPECT_NE(o.out.find(line), std::string::npos) << "missing: " << line << "in:\n" << o.out;
+  }
 }
 
 }  // namespace

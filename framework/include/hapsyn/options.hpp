@@ -164,7 +164,7 @@ class OptionDeclarations {
     /// `required` is the declaration's flag that required() sets.
     Option(Json& schema, bool& required) : schema_(&schema), required_(&required) {}
     /// The problem file must give this key: the enclosing object's schema lists it in "required"
-    /// (a missing key is reported as "<path>.<key>: required key is missing") and the declared
+    /// (a missing key is reported as `<path>.<key>: required key is missing`) and the declared
     /// default is dropped, as it could never apply (pass `{}` as the default of a scalar).
     Option& required() {
       schema_->erase("default");
@@ -459,7 +459,9 @@ class OptionDeclarations {
     if constexpr (std::is_same_v<T, bool>) {
       return Json{{"type", "boolean"}};
     } else if constexpr (std::is_same_v<T, std::uint64_t>) {
-      return Json{{"type", "integer"}, {"minimum", std::uint64_t{0}}, {"maximum", std::numeric_limits<std::uint64_t>::max()}};
+      return Json{{"type", "integer"},
+                  {"minimum", std::uint64_t{0}},
+                  {"maximum", std::numeric_limits<std::uint64_t>::max()}};
     } else if constexpr (std::is_same_v<T, int> || std::is_same_v<T, long long>) {
       return Json{{"type", "integer"}};
     } else if constexpr (std::is_same_v<T, double>) {
