@@ -164,7 +164,7 @@ class OptionDeclarations {
     /// `required` is the declaration's flag that required() sets.
     Option(Json& schema, bool& required) : schema_(&schema), required_(&required) {}
     /// The problem file must give this key: the enclosing object's schema lists it in "required"
-    /// (a missing key is reported as `<path>.<key>: required key is missing`) and the declared
+    /// (a missing key is reported as "solver.options.kind: required key is missing") and the declared
     /// default is dropped, as it could never apply (pass `{}` as the default of a scalar).
     Option& required() {
       schema_->erase("default");
