@@ -143,12 +143,21 @@ void describe_rules(const Json& schema, const std::string& prefix, std::ostream&
   }
 }
 
+// What `describe` shows as an option's default: "(required)" for a key the problem file must
+// give, "(none)" for an optional key that stays absent when left out.
+std::string shown_default(const Json& schema, const std::string& key) {
+  const Json& p = schema["properties"][key];
+  if (p.contains("default")) return p["default"].dump();
+  const Json required = schema.value("required", Json::array());
+  return std::find(required.begin(), required.end(), Json(key)) != required.end() ? "(required)" : "(none)";
+}
+
 void describe_properties(const Json& schema, const std::string& prefix, std::ostream& out) {
   if (!schema.contains("properties")) return;
   for (auto it = schema["properties"].begin(); it != schema["properties"].end(); ++it) {
     const Json& p = it.value();
     out << "  " << std::left << std::setw(22) << (prefix + it.key()) << " " << std::setw(8) << schema_type(p) << " default "
-        << std::setw(10) << (p.contains("default") ? p["default"].dump() : std::string("(required)")) << " "
+        << std::setw(10) << shown_default(schema, it.key()) << " "
         << std::setw(6) << p.value("unit", "") << " " << p.value("description", "");
     std::string rules;
     if (p.contains("minimum")) rules += " >= " + p["minimum"].dump();
@@ -159,6 +168,7 @@ void describe_properties(const Json& schema, const std::string& prefix, std::ost
     if (!rules.empty()) out << " [" << rules.substr(1) << "]";
     out << "\n";
     if (schema_type(p) == "object") describe_properties(p, prefix + it.key() + ".", out);
+    if (schema_type(p) == "array" && p.contains("items")) describe_properties(p["items"], prefix + it.key() + "[].", out);
   }
   describe_rules(schema, prefix, out);
 }

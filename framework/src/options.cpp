@@ -13,11 +13,15 @@ std::shared_ptr<const Solver> find_sub_solver(const PluginArguments& arguments, 
 }
 
 const Json& value_at(const Json& values, const std::string& dotted) {
+  // to_json leaves an unset std::optional out: a rule naming it shows null.
+  static const Json kUnset;
   const Json* v = &values;
   std::string::size_type start = 0;
   while (true) {
     const auto dot = dotted.find('.', start);
-    v = &v->at(dotted.substr(start, dot == std::string::npos ? std::string::npos : dot - start));
+    const auto it = v->find(dotted.substr(start, dot == std::string::npos ? std::string::npos : dot - start));
+    if (it == v->end()) return kUnset;
+    v = &*it;
     if (dot == std::string::npos) return *v;
     start = dot + 1;
   }
@@ -40,6 +44,19 @@ void throw_broken_rule(const PluginArguments& arguments, const std::string& path
   const std::string at = root.empty() ? path : root + "." + path;
   const std::string message = !what.empty() && what.front() == '[' ? at + what : at + " = " + render_value(value) + ": " + what;
   throw Error(in_study ? arguments.plugin : "problem", message);
+}
+
+void check_optional_group(const Json& group, const std::string& name) {
+  // The validator gives an absent object without a default the defaults of its members, so that a
+  // resolved file shows every effective option: an optional group with defaults would never be unset.
+  std::string defaults;
+  for (const auto& p : group.at("properties").items()) {
+    if (p.value().contains("default")) defaults += (defaults.empty() ? "'" : ", '") + p.key() + "'";
+  }
+  if (defaults.empty()) return;
+  throw std::logic_error("optional group '" + name + "': its options " + defaults +
+                         " have defaults, which would fill it when left out; declare it as a group (default {}) or "
+                         "give its options no defaults (required() or std::optional)");
 }
 
 void check_rule_fields(const Json& schema, const std::vector<std::string>& fields, const std::string& text) {

@@ -364,7 +364,9 @@ void Registry::create_sub_solvers(const Json& schema, const Json& resolved, cons
   if (properties == schema.end()) return;
   for (auto it = properties->begin(); it != properties->end(); ++it) {
     const std::string path = relative.empty() ? it.key() : relative + "." + it.key();
-    const Json& value = resolved.at(it.key());
+    const auto found = resolved.find(it.key());
+    if (found == resolved.end()) continue;  // an optional option left out (no default)
+    const Json& value = *found;
     if (it->value("plugin_kind", "") == "solver") {
       arguments.sub_solvers[path] = make_sub_solver(value, arguments.plugin, arguments.json_path + "." + path);
     } else if (it->value("type", "") == "object") {

@@ -1,5 +1,6 @@
-// Loading a study: the framework's schema of a problem file, and load_study, which validates a
-// problem document and builds the plugins, the design space, the scene and the problem.
+// Loading a study: load_study validates a problem document against the framework's schema of a
+// problem file (problem_file_schema.cpp) and builds the plugins, the design space, the scene and
+// the problem.
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/design_space.hpp>
 #include <hapsyn/error.hpp>
@@ -21,46 +22,6 @@
 namespace hapsyn {
 
 namespace {
-
-// The framework's own rules for a problem file, in the same schema language as the plugins'
-// (so its errors read the same way). "design" has variable names as keys and is checked by
-// hand against the mechanism's declared variables.
-const char* const kProblemSchema = R"json({
-  "type": "object",
-  "properties": {
-    "name": {"type": "string", "description": "Study name (used for the default output directory)", "default": "study"},
-    "description": {"type": "string", "description": "Free text", "default": ""},
-    "mechanism": {"type": "object", "required": ["plugin"], "description": "What is designed: a mechanism plugin and its options", "properties": {
-        "plugin": {"type": "string", "description": "Mechanism plugin name"},
-        "options": {"type": "object", "description": "Options of the mechanism plugin", "default": {}}}},
-    "scene": {"type": "object", "required": ["plugin"], "description": "The task-space samples the mechanism must serve: a scene plugin and its options", "properties": {
-        "plugin": {"type": "string", "description": "Scene plugin name"},
-        "options": {"type": "object", "description": "Options of the scene plugin", "default": {}}}},
-    "objectives": {"type": "array", "minItems": 1, "description": "What is optimized: one entry per metric (several for a Pareto study or a weighted sum)", "items": {"type": "object", "required": ["metric"], "properties": {
-        "metric": {"type": "string", "description": "Metric plugin name"},
-        "name": {"type": "string", "description": "Label (default: the metric name)"},
-        "sense": {"type": "string", "enum": ["maximize", "minimize"], "default": "maximize", "description": "Whether larger or smaller values of the metric are better"},
-        "weight": {"type": "number", "minimum": 0, "description": "Weight in a weighted-sum study (>= 0; use sense to minimize)", "default": 1.0},
-        "options": {"type": "object", "description": "Options of the metric plugin", "default": {}}}}},
-    "solver": {"type": "object", "required": ["plugin"], "description": "How the design space is searched: a solver plugin and its options", "properties": {
-        "plugin": {"type": "string", "description": "Solver plugin name"},
-        "options": {"type": "object", "description": "Options of the solver plugin", "default": {}}}},
-    "output": {"type": "object", "default": {}, "description": "What the run writes besides result.json", "properties": {
-        "directory": {"type": "string", "description": "Output directory (default results/<name>)"},
-        "samples_csv": {"type": "boolean", "description": "Write samples.csv for the best design", "default": true},
-        "maps": {"type": "boolean", "description": "Write maps.csv: every objective per workspace position for the best design", "default": true},
-        "plots": {"type": "boolean", "description": "Draw figures with gnuplot, each as PNG and SVG: the position maps (map_<objective>: slices by height for 3-D scenes), a Pareto front (front), the GA's and NSGA-II's convergence (convergence) and, for scenes of recorded motion, one trajectory (timeline)", "default": false},
-        "groups": {"type": "boolean", "description": "For scenes that group their samples (subject, activity, trajectory): every objective per group with the mean and standard deviation across groups, in result.json and groups.csv", "default": true},
-        "timeline": {"type": "string", "description": "With plots: the trajectory drawn in timeline.png (every objective on each sample along time); default the scene's first trajectory"}}},
-    "indicators": {"type": "object", "description": "Front-quality indicators written into result.json", "properties": {
-        "reference_front": {"type": "string", "description": "result.json of a study whose front is the reference (IGD, GD, domination gaps)"},
-        "reference_point": {"type": "array", "items": {"type": "number"}, "description": "Hypervolume reference point, one value per objective (natural units), worse than every front point"}}},
-    "design": {"type": "object", "description": "The mechanism's design variables by name (hapsyn describe MECHANISM lists them), each an object with \"lower\" and \"upper\" (bounds of the search, within the variable's hard limits), \"step\" (grid spacing for grid solvers) or \"value\" (fixes it); a vector variable takes lists. A variable not named keeps its declared default bounds. Checked against the mechanism's declarations, not by this schema"},
-    "seed": {"type": "integer", "minimum": 0, "maximum": 18446744073709551615, "description": "Random seed, an unsigned 64-bit integer (default: drawn and recorded)"},
-    "threads": {"type": "integer", "minimum": 0, "maximum": 1024, "description": "Worker threads (0 = all cores)"}
-  },
-  "required": ["mechanism", "scene", "objectives", "solver"]
-})json";
 
 // Records plugin `name` among the plugins the study uses (each plugin file once).
 void note_plugin(Study& study, const Registry& registry, const std::string& name) {
@@ -312,12 +273,6 @@ void load_indicators(Json& resolved, const Problem& problem, Study& study) {
 }
 
 }  // namespace
-
-// Parsed once: every load validates against the same document.
-const Json& problem_file_schema() {
-  static const Json schema = Json::parse(kProblemSchema);
-  return schema;
-}
 
 Study load_study(const Json& input, const Registry& registry, const std::vector<InProcessMetric>& in_process,
                  const LoadSettings& settings) {

@@ -3,11 +3,38 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <limits>
+#include <optional>
 #include <stdexcept>
+#include <string>
 #include <thread>
+#include <vector>
 
 namespace {
+#ifdef TEST_PLUGIN_OPTION_KINDS
+// The kinds of option besides scalars and groups, loaded and created through the registry.
+struct Stage {
+  std::string kind;
+  static void declare(hapsyn::OptionDeclarations<Stage>& d) {
+    d.add(&Stage::kind, "kind", {}, "what the stage does").required();
+  }
+};
+struct TestOptions {
+  std::string label;
+  std::optional<double> limit;
+  std::vector<Stage> stages;
+  hapsyn::Json extra;
+  std::uint64_t seed{};
+  static void declare(hapsyn::OptionDeclarations<TestOptions>& d) {
+    d.add(&TestOptions::label, "label", {}, "a label").required();
+    d.add(&TestOptions::limit, "limit", "a limit (default: none)");
+    d.add(&TestOptions::stages, "stages", "the stages");
+    d.add(&TestOptions::extra, "extra", "anything");
+    d.add(&TestOptions::seed, "seed", 1, "a seed");
+  }
+};
+#else
 struct TestOptions {
   double x{};
   static void declare(hapsyn::OptionDeclarations<TestOptions>& d) {
@@ -19,6 +46,7 @@ struct TestOptions {
 #endif
   }
 };
+#endif
 
 class TestMetric : public hapsyn::Metric {
  public:

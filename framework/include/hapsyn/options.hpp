@@ -24,8 +24,12 @@
 /// `describe` shows it and it is checked before the constructor runs:
 ///
 ///       d.rule({"step", "side"}, "step <= side", [](const CullingOptions& o) { return o.step <= o.side; });
-/// Member initialisers should be `{}` only: the declared default
-/// is the one default. Every option has a default; a problem file may leave any option out.
+/// Member initialisers should be `{}` only: the declared default is the one default. A problem
+/// file may leave out any option that has a default; besides those, a declaration may make a key
+/// required (Option::required()), optional without a default (a `std::optional<T>` member, left
+/// unset when the key is absent), free-form JSON (a `Json` member), a list of groups (a
+/// `std::vector<Group>` member) or an unsigned 64-bit integer (a `std::uint64_t` member). The
+/// framework's own schema of a problem file is declared with the same calls.
 #include <hapsyn/json.hpp>
 #include <hapsyn/schema.hpp>
 
@@ -33,8 +37,10 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -87,9 +93,29 @@ struct OptionDecl {
   /// Copies the validated value into the member. `prefix` is the option path of the enclosing
   /// group ("" at the top level), used to find sub-solvers.
   std::function<void(O&, const Json&, const PluginArguments&, const std::string& prefix)> fill;
-  /// The member's value as JSON (the inverse of fill; a sub-solver as {"plugin", "options"}).
+  /// The member's value as JSON (the inverse of fill; a sub-solver as {"plugin", "options"}; null
+  /// for an unset std::optional, which to_json leaves out).
   std::function<Json(const O&)> to_json;
+  bool required = false;  ///< listed in the enclosing object's "required" (Option::required())
 };
+
+/// Whether T is a group of options (a struct with a static declare function).
+template <class T, class = void>
+struct IsGroup : std::false_type {};
+template <class T>
+struct IsGroup<T, std::void_t<decltype(&T::declare)>> : std::true_type {};
+
+/// Whether T is a std::vector.
+template <class T>
+struct IsVector : std::false_type {};
+template <class T>
+struct IsVector<std::vector<T>> : std::true_type {};
+
+/// Whether T is a list of groups (a std::vector of a struct with a static declare function).
+template <class T>
+struct IsGroupList : std::false_type {};
+template <class T>
+struct IsGroupList<std::vector<T>> : IsGroup<T> {};
 
 /// One declared cross-field rule of an options struct O.
 template <class O>
@@ -102,7 +128,8 @@ struct RuleDecl {
 
 std::shared_ptr<const Solver> find_sub_solver(const PluginArguments& arguments, const std::string& relative_path);
 
-/// The member at `dotted` ("a" or "a.b") of an options object as OptionDeclarations::to_json gives it.
+/// The member at `dotted` ("a" or "a.b") of an options object as OptionDeclarations::to_json gives it
+/// (null when an optional member on the way is unset).
 const Json& value_at(const Json& values, const std::string& dotted);
 
 /// "must satisfy <text> (<other> = <value>, ...)": the message of a broken rule declared with a predicate.
@@ -113,6 +140,11 @@ std::string broken_rule(const std::string& text, const std::vector<std::string>&
 /// (the registry adds where its options sit), else "problem", as for a schema violation.
 [[noreturn]] void throw_broken_rule(const PluginArguments& arguments, const std::string& path, const Json& value,
                                     const std::string& what);
+
+/// Throws std::logic_error when `group` (the schema of an optional group named `name`) would be
+/// filled from its options' defaults when left out (validate_and_fill fills such an object), so
+/// that it could never stay absent.
+void check_optional_group(const Json& group, const std::string& name);
 
 /// Throws when a rule names a field that `schema` (an options schema) does not declare.
 void check_rule_fields(const Json& schema, const std::vector<std::string>& fields, const std::string& text);
@@ -129,6 +161,16 @@ class OptionDeclarations {
   class Option {
    public:
     explicit Option(Json& schema) : schema_(&schema) {}
+    /// `required` is the declaration's flag that required() sets.
+    Option(Json& schema, bool& required) : schema_(&schema), required_(&required) {}
+    /// The problem file must give this key: the enclosing object's schema lists it in "required"
+    /// (a missing key is reported as "solver.options.kind: required key is missing") and the declared
+    /// default is dropped, as it could never apply (pass `{}` as the default of a scalar).
+    Option& required() {
+      schema_->erase("default");
+      if (required_) *required_ = true;
+      return *this;
+    }
     /// Inclusive bounds (numbers, integers; for lists of numbers: each element).
     Option& range(double lower, double upper) { return minimum(lower).maximum(upper); }
     Option& minimum(double v) { return set(numeric_target(), "minimum", v); }
@@ -172,6 +214,7 @@ class OptionDeclarations {
       return *s;
     }
     Json* schema_;
+    bool* required_ = nullptr;
   };
 
   /// The plugin's description (the schema's top-level "description"; `hapsyn describe`).
@@ -209,6 +252,15 @@ class OptionDeclarations {
   }
   Option& add(long long O::*member, const std::string& name, long long def, const std::string& description) {
     return plain(member, name, "integer", Json(def), description);
+  }
+  /// An unsigned 64-bit integer (e.g. a seed): an integer in [0, 18446744073709551615]; a larger
+  /// or a negative value is refused.
+  Option& add(std::uint64_t O::*member, const std::string& name, std::uint64_t def, const std::string& description) {
+    Option& o = plain(member, name, "integer", Json(def), description);
+    Json& schema = decls_.back().schema;
+    schema["minimum"] = std::uint64_t{0};
+    schema["maximum"] = std::numeric_limits<std::uint64_t>::max();
+    return o;
   }
   Option& add(double O::*member, const std::string& name, double def, const std::string& description) {
     return plain(member, name, "number", Json(def), description);
@@ -251,6 +303,50 @@ class OptionDeclarations {
         },
         [member](const O& o) { return OptionDeclarations<Group>::to_json(o.*member); });
   }
+  /// A list of groups (an array of objects, each declared by Group::declare and filled with its
+  /// defaults), default `[]`. A message about an element names it: "objectives[1].sense = ...".
+  /// Sub-solvers inside the elements are not created. Chain .min_size(n) for a least length (with
+  /// .required() when the default `[]` would break it).
+  template <class Group>
+  Option& add(std::vector<Group> O::*member, const std::string& name, const std::string& description) {
+    static_assert(detail::IsGroup<Group>::value,
+                  "a list without a default is a list of groups (Group::declare); give other lists a default");
+    Json schema{{"type", "array"}, {"items", schema_of_group<Group>()}, {"default", Json::array()},
+                {"description", description}};
+    return push(
+        name, std::move(schema),
+        [member, name](O& o, const Json& v, const PluginArguments& a, const std::string& prefix) {
+          o.*member = value_of<std::vector<Group>>(v, a, join(prefix, name));
+        },
+        [member](const O& o) { return json_of(o.*member); });
+  }
+  /// Free-form JSON (an object the framework does not check, e.g. another plugin's options that
+  /// its own schema checks later), default `{}`.
+  Option& add(Json O::*member, const std::string& name, const std::string& description) {
+    Json schema{{"type", "object"}, {"default", Json::object()}, {"description", description}};
+    return push(
+        name, std::move(schema),
+        [member](O& o, const Json& v, const PluginArguments&, const std::string&) { o.*member = v; },
+        [member](const O& o) { return o.*member; });
+  }
+  /// An optional key without a default: absent in the problem file, it stays absent in the
+  /// resolved options and the member stays std::nullopt. T is any type add() takes (bool, int,
+  /// long long, std::uint64_t, double, std::string, lists of those, a matrix, Json, a group, a
+  /// list of groups); its schema is T's, without "default". An optional group must have no
+  /// option with a default (each is required or optional itself), else the validator would fill it
+  /// from those defaults: refused with std::logic_error when the schema is made.
+  template <class T>
+  Option& add(std::optional<T> O::*member, const std::string& name, const std::string& description) {
+    Json schema = value_schema<T>();
+    if constexpr (detail::IsGroup<T>::value) detail::check_optional_group(schema, name);
+    schema["description"] = description;
+    return push(
+        name, std::move(schema),
+        [member, name](O& o, const Json& v, const PluginArguments& a, const std::string& prefix) {
+          o.*member = value_of<T>(v, a, join(prefix, name));
+        },
+        [member](const O& o) { return (o.*member).has_value() ? json_of(*(o.*member)) : Json(); });
+  }
   /// A sub-solver: `{"plugin": NAME, "options": {...}}`, default `{"plugin": default_plugin,
   /// "options": {}}`. The framework creates it at load (see SubSolver).
   Option& add(SubSolver O::*member, const std::string& name, const std::string& default_plugin,
@@ -277,22 +373,31 @@ class OptionDeclarations {
   static Json schema() { return schema_of_group<O>(); }
 
   /// The values of `options` as a JSON object, one key per declared option (nested groups as
-  /// objects): what a problem file would give to reproduce them (e.g. for a checkpoint's
-  /// fingerprint or a log).
+  /// objects; an unset std::optional left out): what a problem file would give to reproduce them
+  /// (e.g. for a checkpoint's fingerprint or a log).
   static Json to_json(const O& options) {
     Json out = Json::object();
-    for (const auto& d : instance().decls_) out[d.name] = d.to_json(options);
+    for (const auto& d : instance().decls_) {
+      Json value = d.to_json(options);
+      if (!value.is_null()) out[d.name] = std::move(value);
+    }
     return out;
   }
 
   /// O filled from options already validated against schema() (defaults present), its rules
-  /// (those of its groups first) checked.
+  /// (those of its groups first) checked. A key absent without a default (an optional one) leaves
+  /// its member as value-initialised (std::nullopt).
   /// \throws Error naming the first broken rule (see rule())
   static O fill(const Json& resolved, const PluginArguments& arguments, const std::string& prefix = "") {
     O out{};
     for (const auto& d : instance().decls_) {
       const auto it = resolved.find(d.name);
-      d.fill(out, it != resolved.end() ? *it : d.schema.at("default"), arguments, prefix);
+      const auto def = d.schema.find("default");
+      if (it != resolved.end()) {
+        d.fill(out, *it, arguments, prefix);
+      } else if (def != d.schema.end()) {
+        d.fill(out, *def, arguments, prefix);
+      }
     }
     check_rules(out, arguments, prefix);
     return out;
@@ -313,8 +418,13 @@ class OptionDeclarations {
   static Json schema_of_group() {
     const auto& d = OptionDeclarations<Group>::instance();
     Json properties = Json::object();
-    for (const auto& decl : d.decls_) properties[decl.name] = decl.schema;
+    Json required = Json::array();
+    for (const auto& decl : d.decls_) {
+      properties[decl.name] = decl.schema;
+      if (decl.required) required.push_back(decl.name);
+    }
     Json schema{{"type", "object"}, {"additionalProperties", false}, {"properties", properties}};
+    if (!required.empty()) schema["required"] = std::move(required);
     if (!d.description_.empty()) schema["description"] = d.description_;
     if (!d.rules_.empty()) {
       Json rules = Json::array();
@@ -343,6 +453,60 @@ class OptionDeclarations {
   static std::string join(const std::string& prefix, const std::string& name) {
     return prefix.empty() ? name : prefix + "." + name;
   }
+  // The schema of a value of type T, without default or description (see add(std::optional<T>)).
+  template <class T>
+  static Json value_schema() {
+    if constexpr (std::is_same_v<T, bool>) {
+      return Json{{"type", "boolean"}};
+    } else if constexpr (std::is_same_v<T, std::uint64_t>) {
+      return Json{{"type", "integer"},
+                  {"minimum", std::uint64_t{0}},
+                  {"maximum", std::numeric_limits<std::uint64_t>::max()}};
+    } else if constexpr (std::is_same_v<T, int> || std::is_same_v<T, long long>) {
+      return Json{{"type", "integer"}};
+    } else if constexpr (std::is_same_v<T, double>) {
+      return Json{{"type", "number"}};
+    } else if constexpr (std::is_same_v<T, std::string>) {
+      return Json{{"type", "string"}};
+    } else if constexpr (std::is_same_v<T, Json>) {
+      return Json{{"type", "object"}};
+    } else if constexpr (detail::IsVector<T>::value) {
+      return Json{{"type", "array"}, {"items", value_schema<typename T::value_type>()}};
+    } else {
+      static_assert(detail::IsGroup<T>::value, "an optional option's type must be one add() takes");
+      return schema_of_group<T>();
+    }
+  }
+  // A validated value as T; `path` is its option path (for a group's rules and sub-solvers).
+  template <class T>
+  static T value_of(const Json& v, const PluginArguments& arguments, const std::string& path) {
+    if constexpr (std::is_same_v<T, Json>) {
+      return v;
+    } else if constexpr (detail::IsGroup<T>::value) {
+      return OptionDeclarations<T>::fill(v, arguments, path);
+    } else if constexpr (detail::IsGroupList<T>::value) {
+      T out;
+      for (std::size_t i = 0; i < v.size(); ++i) {
+        out.push_back(value_of<typename T::value_type>(v[i], arguments, path + "[" + std::to_string(i) + "]"));
+      }
+      return out;
+    } else {
+      return v.get<T>();
+    }
+  }
+  // The inverse of value_of.
+  template <class T>
+  static Json json_of(const T& value) {
+    if constexpr (detail::IsGroup<T>::value) {
+      return OptionDeclarations<T>::to_json(value);
+    } else if constexpr (detail::IsGroupList<T>::value) {
+      Json out = Json::array();
+      for (const auto& element : value) out.push_back(json_of(element));
+      return out;
+    } else {
+      return Json(value);
+    }
+  }
   template <class T>
   Option& plain(T O::*member, const std::string& name, const char* type, Json def, const std::string& description) {
     Json schema{{"type", type}, {"default", std::move(def)}, {"description", description}};
@@ -362,8 +526,8 @@ class OptionDeclarations {
         [member](const O& o) { return Json(o.*member); });
   }
   Option& push(const std::string& name, Json schema, Fill fill, std::function<Json(const O&)> to_json) {
-    decls_.push_back(detail::OptionDecl<O>{name, std::move(schema), std::move(fill), std::move(to_json)});
-    options_.emplace_back(decls_.back().schema);
+    decls_.push_back(detail::OptionDecl<O>{name, std::move(schema), std::move(fill), std::move(to_json), false});
+    options_.emplace_back(decls_.back().schema, decls_.back().required);
     return options_.back();
   }
 
