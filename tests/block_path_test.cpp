@@ -97,16 +97,7 @@ void evaluations_equal_the_per_sample_path() {
   EXPECT_GT(failed, 100);
 }
 
-// On every vector target this machine runs (hapsyn/accel/vector_dispatch.hpp: gii's block loop
-// is compiled per target).
-TEST(BlockPath, EvaluationsEqualThePerSamplePathWithAndWithoutPruning) {
-  for (const hapsyn::VectorTarget target : hapsyn::testing::available_vector_targets()) {
-    const hapsyn::testing::ForcedVectorTarget forced(target);
-    SCOPED_TRACE(hapsyn::vector_target_name(target));
-    evaluations_equal_the_per_sample_path();
-    if (HasFatalFailure()) return;
-  }
-}
+TEST(BlockPath, EvaluationsEqualThePerSamplePathWithAndWithoutPruning) { evaluations_equal_the_per_sample_path(); }
 
 TEST(BlockPath, SubsetsInAnyOrderEqualThePerSamplePath) {
   const auto problem = fivebar_problem(Json::array({Json{{"metric", "gii"}}, Json{{"metric", "gdi"}}}));

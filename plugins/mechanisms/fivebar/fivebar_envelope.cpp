@@ -1,16 +1,16 @@
 #include "fivebar_envelope.hpp"
 
 #include <hapsyn/accel/fast_math.hpp>
-#include <hapsyn/accel/vector_dispatch.hpp>
+#include <hapsyn/accel/multiversion.hpp>
 
 #include <algorithm>
 #include <cmath>
 
 namespace hapsyn::plugins {
 
-// The helpers below are always inlined into fivebar_envelope's body, which is compiled for
-// AVX-512, AVX2 and the baseline and picked at run time (hapsyn::with_vector_lanes; scalar code,
-// the lanes type unused): out of line they would run the baseline code whatever the machine. Paper-resolution culling on one thread
+// The helpers below are always inlined into fivebar_envelope, which is compiled for AVX-512,
+// AVX2 and the baseline and picked at load time (HAPSYN_MULTIVERSION_WIDE): out of line they
+// would run the baseline code whatever the machine. Paper-resolution culling on one thread
 // (user time, same session): GII 4.5 s to 4.05 s, GDI 5.5 s to 5.3 s.
 namespace {
 
@@ -301,8 +301,10 @@ struct Turned {
   return bound * (1.0 - kRelativeMargin) - 1e-12 * run.inertia_a * top;
 }
 
-// fivebar_envelope()'s body.
-[[gnu::always_inline]] inline bool envelope_of(const FiveBarRun& run, double x, bool effective_mass, SampleEnvelope& out) {
+}  // namespace
+
+HAPSYN_MULTIVERSION_WIDE
+bool fivebar_envelope(const FiveBarRun& run, double x, bool effective_mass, SampleEnvelope& out) {
   if (!(run.y_low > 0.0) || !(run.y_high >= run.y_low)) return false;
   out = SampleEnvelope{};
   // The model solves the left leg with dx = x + h0 and the right one mirrored, dx = h0 - x.
@@ -343,12 +345,5 @@ struct Turned {
   return true;
 }
 
-}  // namespace
-
-bool fivebar_envelope(const FiveBarRun& run, double x, bool effective_mass, SampleEnvelope& out) {
-  bool bounded = false;
-  with_vector_lanes([&](auto) HAPSYN_KERNEL_BODY { bounded = envelope_of(run, x, effective_mass, out); });
-  return bounded;
-}
-
 }  // namespace hapsyn::plugins
+

@@ -12,8 +12,6 @@
 
 #include <gtest/gtest.h>
 
-#include "vector_targets.hpp"
-
 #include <cmath>
 #include <limits>
 #include <random>
@@ -78,7 +76,7 @@ RandomRun random_run(std::mt19937& rng) {
   return run;
 }
 
-void every_design_of_random_runs_obeys_the_bounds_on_the_current_target() {
+TEST(FiveBarEnvelope, EveryDesignOfRandomRunsObeysTheBounds) {
   const FiveBarOptions options = hapsyn::make_options<FiveBarOptions>(Json::object());
   const FiveBar fivebar(options);
   std::mt19937 rng(13);
@@ -116,16 +114,6 @@ void every_design_of_random_runs_obeys_the_bounds_on_the_current_target() {
   EXPECT_GT(informative_gii, 1000);
   EXPECT_GT(informative_gdi, 1000);
   EXPECT_GT(reached, 100000);
-}
-
-// On every vector target this machine runs (hapsyn/accel/vector_dispatch.hpp).
-TEST(FiveBarEnvelope, EveryDesignOfRandomRunsObeysTheBounds) {
-  for (const hapsyn::VectorTarget target : hapsyn::testing::available_vector_targets()) {
-    const hapsyn::testing::ForcedVectorTarget forced(target);
-    SCOPED_TRACE(hapsyn::vector_target_name(target));
-    every_design_of_random_runs_obeys_the_bounds_on_the_current_target();
-    if (HasFatalFailure()) return;
-  }
 }
 
 // Runs of one design (r_lo = r_hi = r) of `trials` random draws: check(trial, envelope, exact)

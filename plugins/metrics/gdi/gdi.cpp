@@ -1,6 +1,6 @@
 #include "gdi.hpp"
 
-#include <hapsyn/accel/vector_dispatch.hpp>
+#include <hapsyn/accel/multiversion.hpp>
 
 #include <Eigen/SVD>
 #include <cmath>
@@ -23,9 +23,9 @@ void Gdi::local(const SampleQuantities& q, double* out) const {
 }
 
 namespace {
-// largest_singular_value()'s 2 x 2 closed form, lane by lane (the loop vectorises, for each
-// instruction set of hapsyn::with_vector_lanes).
-[[gnu::always_inline]] inline void largest_singular_value_2x2_block(const double (*m)[kBlockLanes], double* out) {
+// largest_singular_value()'s 2 x 2 closed form, lane by lane (the loop vectorises).
+HAPSYN_MULTIVERSION_WIDE
+void largest_singular_value_2x2_block(const double (*m)[kBlockLanes], double* out) {
   for (int i = 0; i < kBlockLanes; ++i) {
     const double a = m[0][i], b = m[1][i], c = m[2][i], d = m[3][i];
     const double e = 0.5 * (a + d), f = 0.5 * (a - d), g = 0.5 * (c + b), h = 0.5 * (c - b);
@@ -37,7 +37,7 @@ namespace {
 void Gdi::local_block(const QuantityBlock& q, double* out) const {
   const int n = q.effective_mass_size;
   if (n == 2) {
-    with_vector_lanes([&](auto) HAPSYN_KERNEL_BODY { largest_singular_value_2x2_block(q.effective_mass, out); });
+    largest_singular_value_2x2_block(q.effective_mass, out);
     return;
   }
   TaskMatrix m(n, n);

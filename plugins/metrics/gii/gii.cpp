@@ -2,7 +2,7 @@
 
 #include <hapsyn/error.hpp>
 
-#include <hapsyn/accel/vector_dispatch.hpp>
+#include <hapsyn/accel/multiversion.hpp>
 
 #include <Eigen/SVD>
 #include <algorithm>
@@ -31,9 +31,9 @@ void Gii::singular_values(const TaskJointMatrix& m, double& sigma_min, double& s
 }
 
 namespace {
-// singular_values()'s 2 x 2 closed form, lane by lane (the loop vectorises, for each instruction
-// set of hapsyn::with_vector_lanes).
-[[gnu::always_inline]] inline void singular_values_2x2_block(const double (*m)[kBlockLanes], double* sigma_min, double* sigma_max) {
+// singular_values()'s 2 x 2 closed form, lane by lane (the loop vectorises).
+HAPSYN_MULTIVERSION_WIDE
+void singular_values_2x2_block(const double (*m)[kBlockLanes], double* sigma_min, double* sigma_max) {
   for (int i = 0; i < kBlockLanes; ++i) {
     const double a = m[0][i], b = m[1][i], c = m[2][i], d = m[3][i];
     const double e = 0.5 * (a + d), f = 0.5 * (a - d), g = 0.5 * (c + b), h = 0.5 * (c - b);
@@ -102,7 +102,7 @@ void Gii::local_block(const QuantityBlock& q, double* out) const {
     }
     return;
   }
-  with_vector_lanes([&](auto) HAPSYN_KERNEL_BODY { singular_values_2x2_block(q.jacobian, out, out + kBlockLanes); });
+  singular_values_2x2_block(q.jacobian, out, out + kBlockLanes);
 }
 
 std::vector<LocalValue> Gii::locals() const {
