@@ -303,11 +303,7 @@ void averaging_evaluations_equal_the_per_sample_path() {
 // On every vector target this machine runs: the haptic 6R's and coverage's block kernels are
 // compiled per target (hapsyn/accel/vector_dispatch.hpp), each with its own lanes type.
 TEST(BlockPath, AveragingEvaluationsEqualThePerSamplePath) {
-  for (const hapsyn::VectorTarget target : hapsyn::testing::available_vector_targets()) {
-    const hapsyn::testing::ForcedVectorTarget forced(target);
-    SCOPED_TRACE(hapsyn::vector_target_name(target));
-    averaging_evaluations_equal_the_per_sample_path();
-  }
+  hapsyn::testing::for_each_vector_target(averaging_evaluations_equal_the_per_sample_path);
 }
 
 // The evaluator's block copy of the scene attributes (QuantityBlock::attribute_lanes; the

@@ -3,6 +3,8 @@
 // scope that forces one, so that a test can run a kernel for each instruction set in turn.
 #include <hapsyn/accel/vector_dispatch.hpp>
 
+#include <gtest/gtest.h>
+
 #include <vector>
 
 namespace hapsyn::testing {
@@ -24,5 +26,17 @@ class ForcedVectorTarget {
   ForcedVectorTarget(const ForcedVectorTarget&) = delete;
   ForcedVectorTarget& operator=(const ForcedVectorTarget&) = delete;
 };
+
+/// Runs `check` once per available target, forced, with the target's name in failure messages;
+/// stops after a fatal failure.
+template <class Check>
+void for_each_vector_target(Check&& check) {
+  for (const VectorTarget target : available_vector_targets()) {
+    const ForcedVectorTarget forced(target);
+    SCOPED_TRACE(vector_target_name(target));
+    check();
+    if (::testing::Test::HasFatalFailure()) return;
+  }
+}
 
 }  // namespace hapsyn::testing

@@ -786,12 +786,7 @@ void block_kernel_equals_solve_lane_by_lane_on_the_current_target() {
 
 // On every vector target this machine runs (hapsyn/accel/vector_dispatch.hpp).
 TEST(Haptic6R, BlockKernelEqualsSolveLaneByLane) {
-  for (const hapsyn::VectorTarget target : hapsyn::testing::available_vector_targets()) {
-    const hapsyn::testing::ForcedVectorTarget forced(target);
-    SCOPED_TRACE(hapsyn::vector_target_name(target));
-    block_kernel_equals_solve_lane_by_lane_on_the_current_target();
-    if (HasFatalFailure()) return;
-  }
+  hapsyn::testing::for_each_vector_target(block_kernel_equals_solve_lane_by_lane_on_the_current_target);
 }
 
 // wrap_near() is wrap() for angles in [-3 pi, 3 pi) (the range the IK gives it): bit for bit
@@ -927,10 +922,5 @@ void quantities_block_equals_quantities_lane_by_lane_on_the_current_target() {
 
 // On every vector target this machine runs (hapsyn/accel/vector_dispatch.hpp).
 TEST(Haptic6R, QuantitiesBlockEqualsQuantitiesLaneByLane) {
-  for (const hapsyn::VectorTarget target : hapsyn::testing::available_vector_targets()) {
-    const hapsyn::testing::ForcedVectorTarget forced(target);
-    SCOPED_TRACE(hapsyn::vector_target_name(target));
-    quantities_block_equals_quantities_lane_by_lane_on_the_current_target();
-    if (HasFatalFailure()) return;
-  }
+  hapsyn::testing::for_each_vector_target(quantities_block_equals_quantities_lane_by_lane_on_the_current_target);
 }

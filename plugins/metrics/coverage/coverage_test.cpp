@@ -449,12 +449,7 @@ void block_locals_equal_local_lane_by_lane_on_the_current_target() {
 
 // On every vector target this machine runs (hapsyn/accel/vector_dispatch.hpp).
 TEST(Coverage, BlockLocalsEqualLocalLaneByLane) {
-  for (const hapsyn::VectorTarget target : hapsyn::testing::available_vector_targets()) {
-    const hapsyn::testing::ForcedVectorTarget forced(target);
-    SCOPED_TRACE(hapsyn::vector_target_name(target));
-    block_locals_equal_local_lane_by_lane_on_the_current_target();
-    if (HasFatalFailure()) return;
-  }
+  hapsyn::testing::for_each_vector_target(block_locals_equal_local_lane_by_lane_on_the_current_target);
 }
 
 TEST(Coverage, BlockLocalsNameAMissingAttribute) {
@@ -511,10 +506,5 @@ void block_solves_equal_the_scalar_solve_lane_by_lane_on_the_current_target() {
 
 // On every vector target this machine runs (hapsyn/accel/vector_dispatch.hpp).
 TEST(Coverage, BlockSolvesEqualTheScalarSolveLaneByLane) {
-  for (const hapsyn::VectorTarget target : hapsyn::testing::available_vector_targets()) {
-    const hapsyn::testing::ForcedVectorTarget forced(target);
-    SCOPED_TRACE(hapsyn::vector_target_name(target));
-    block_solves_equal_the_scalar_solve_lane_by_lane_on_the_current_target();
-    if (HasFatalFailure()) return;
-  }
+  hapsyn::testing::for_each_vector_target(block_solves_equal_the_scalar_solve_lane_by_lane_on_the_current_target);
 }
