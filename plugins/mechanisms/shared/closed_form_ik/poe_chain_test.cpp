@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_support.hpp"
+
 #include <functional>
 #include <random>
 #include <string>
@@ -35,14 +37,7 @@ Eigen::Isometry3d local_forward(const LocalFrames& f, const double* q) {
   return t * f.tip;
 }
 
-std::string error_of(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const hapsyn::Error& e) {
-    return e.what();
-  }
-  return "no error";
-}
+using hapsyn::test::error_of;  // tests/test_support.hpp
 
 TEST(ClosedFormIkPoeChain, ForwardMatchesTheLocalFrames) {
   std::mt19937 rng(1);

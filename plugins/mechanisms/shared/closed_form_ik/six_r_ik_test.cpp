@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_support.hpp"
+
 #include <Eigen/SVD>
 
 #include <cstdio>
@@ -185,14 +187,7 @@ TEST(ClosedFormIk6R, UnreachablePoseHasNoSolution) {
   EXPECT_EQ(out.count, 0);
 }
 
-std::string error_of(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const hapsyn::Error& e) {
-    return e.what();
-  }
-  return "no error";
-}
+using hapsyn::test::error_of;  // tests/test_support.hpp
 
 TEST(ClosedFormIk6R, RefusesWhatItCannotSolve) {
   const LocalFrames general = from_dh({{{0.32, 0.05, 1.4}}, {{0.11, 0.41, 0.25}}, {{-0.06, 0.03, -1.2}},
