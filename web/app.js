@@ -1,10 +1,12 @@
 // The page of `hapsyn view`: the study's mechanism at its design, its scene frame and gravity,
 // and the samples as a point cloud coloured by a chosen local value. Its state is on
-// window.hapsynView for tests: {ready, error, pointCount, objective, colourRange, segments}.
+// window.hapsynView for tests: {ready, error, pointCount, objective, colourRange, segments, human}.
 import * as THREE from 'three';
 import { OrbitControls } from '/OrbitControls.js';
+import { humanFigure, figurePoints } from '/figure.js';
 
-const state = { ready: false, error: null, pointCount: 0, objective: null, colourRange: null, segments: 0, columns: [] };
+const state = { ready: false, error: null, pointCount: 0, objective: null, colourRange: null, segments: 0, columns: [],
+                human: null };
 window.hapsynView = state;
 
 // Viridis at five stops: perceptually even, readable in grey.
@@ -136,9 +138,14 @@ async function main() {
   scene.add(points);
   const box = new THREE.Box3().setFromObject(points);
   for (const s of study.segments) for (const p of s.points) box.expandByPoint(new THREE.Vector3(p[0], p[1], p[2]));
+  for (const p of figurePoints(study.figure)) box.expandByPoint(new THREE.Vector3(p[0], p[1], p[2]));
   box.expandByPoint(new THREE.Vector3(0, 0, 0));
   const size = Math.max(box.getSize(new THREE.Vector3()).length(), 1e-3);
   scene.add(mechanism(study, size * 0.006));
+  const human = humanFigure(study.figure);
+  if (human) scene.add(human);
+  // What the page drew of the human, for tests: the arm's joints and the head.
+  state.human = study.figure ? { arm: study.figure.arm, headCentre: study.figure.head_centre, drawn: human !== null } : null;
   scene.add(new THREE.AxesHelper(size * 0.15));
   const g = new THREE.Vector3(...study.gravity).normalize();
   const top = box.max.clone();

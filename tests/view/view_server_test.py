@@ -76,7 +76,8 @@ def listening_addresses(port):
 
 
 def check_routes(port, rows):
-    for path, kind in (("/", "text/html"), ("/app.js", "text/javascript"), ("/three.module.js", "text/javascript"),
+    for path, kind in (("/", "text/html"), ("/app.js", "text/javascript"), ("/figure.js", "text/javascript"),
+                       ("/three.module.js", "text/javascript"),
                        ("/OrbitControls.js", "text/javascript"), ("/api/study", "application/json"),
                        ("/api/samples", "application/json")):
         status, headers, body = get(port, path)

@@ -1,6 +1,7 @@
 #include "view_data.hpp"
 
 #include "samples_csv_reader.hpp"
+#include "view_figure.hpp"
 #include "view_source.hpp"
 
 #include <hapsyn/error.hpp>
@@ -73,6 +74,7 @@ Json study_json(const ViewSource& s, int sample) {
               {"design", s.study.problem->design_to_json(s.design)},
               {"drawn_sample", sample >= 0 ? Json(sample) : Json(nullptr)},
               {"segments", segments_json(s, sample)},
+              {"figure", figure_json(samples, sample)},
               // The mechanisms' convention (haptic6r, serial_chain's default): gravity along -z of
               // the base frame; the scene frame is drawn as the base frame.
               {"gravity", {0.0, 0.0, -1.0}},

@@ -18,9 +18,10 @@ struct ViewData {
 };
 
 /// Loads a problem file or a result directory (one holding result.json) and computes its
-/// ViewData. The design: a result's best design (result.json "best.design"); for a problem
-/// file, every fixed component's value and the midpoint of every free one's bounds (rounded
-/// for integer variables), which is the design `hapsyn run` evaluates for an evaluate-solver
+/// ViewData (/api/study also carries the human of a scene that models one: view_figure.hpp).
+/// The design: a result's best design (result.json "best.design"); for a problem file, every
+/// fixed component's value and the midpoint of every free one's bounds (rounded for integer
+/// variables), which is the design `hapsyn run` evaluates for an evaluate-solver
 /// study. The local values: the result's samples.csv when it has one, else the design evaluated
 /// sample by sample as `hapsyn run` does for samples.csv (record_samples). The drawn sample:
 /// the reachable one nearest the reachable samples' centroid (none drawn when no sample is).

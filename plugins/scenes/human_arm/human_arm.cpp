@@ -1,5 +1,7 @@
 #include "human_arm.hpp"
 
+#include "shared/human_arm_model/human_figure.hpp"
+
 
 #include <hapsyn/error.hpp>
 #include <hapsyn/output_files.hpp>
@@ -385,10 +387,11 @@ AttributeWish requested_attributes(const SceneRequest& request) {
       wish.mv = true;
     } else if (a == "M_a") {
       wish.ma = true;
-    } else if (a != "shoulder_pose" && a != "human_q" && a != "manipulability" && a != "lattice_index") {
+    } else if (a != "shoulder_pose" && a != "human_q" && a != "manipulability" && a != "lattice_index" &&
+               a != "arm_points") {
       throw Error(kName, "per-sample attribute '" + a +
                              "' requested: this scene provides shoulder_pose, human_q, manipulability, lattice_index, "
-                             "M_v, M_a");
+                             "arm_points, M_v, M_a");
     }
   }
   return wish;
@@ -551,14 +554,14 @@ std::string spot_check(const RawScene& cached, const HumanArm& arm, const HumanA
 }
 
 // The samples (end-effector poses in B) and their attributes from the solved lattice.
-SampleSet assemble_samples(const RawScene& raw, const HumanArmSceneOptions& o, const LatticeGeometry& g,
-                           const AttributeWish& wish) {
+SampleSet assemble_samples(const HumanArm& arm, const RawScene& raw, const HumanArmSceneOptions& o,
+                           const LatticeGeometry& g, const AttributeWish& wish) {
   SampleSet set;
   set.coordinates = {"x", "y", "z", "qw", "qx", "qy", "qz"};
   set.unit = "m";
   const Eigen::Index n = static_cast<Eigen::Index>(raw.size());
   set.poses.resize(n, 7);
-  SampleSet::RowMatrix shoulder(n, 7), human_q(n, 7), manip(n, 1), lattice_index(n, 1);
+  SampleSet::RowMatrix shoulder(n, 7), human_q(n, 7), manip(n, 1), lattice_index(n, 1), arm_points_in_b(n, 12);
   const Eigen::Quaterniond q_S_B(o.C_S_B), q_E_P(o.C_E_P);
   for (Eigen::Index i = 0; i < n; ++i) {
     const Eigen::Vector3d p = g.point(raw.lattice[i]);
@@ -570,6 +573,8 @@ SampleSet assemble_samples(const RawScene& raw, const HumanArmSceneOptions& o, c
     if (qb.w() < 0.0) qb.coeffs() = -qb.coeffs();
     set.poses.row(i) << x(0), x(1), x(2), qb.w(), qb.x(), qb.y(), qb.z();
     for (int j = 0; j < 7; ++j) human_q(i, j) = raw.q[static_cast<std::size_t>(i) * 7 + j];
+    const ArmPoints points = arm_points(arm, human_q.row(i).transpose());
+    for (int k = 0; k < 4; ++k) arm_points_in_b.row(i).segment<3>(3 * k) = (o.x_S_B + o.C_S_B * points[k]).transpose();
     manip(i, 0) = raw.manipulability[static_cast<std::size_t>(i)];
     lattice_index(i, 0) = raw.lattice[static_cast<std::size_t>(i)];
   }
@@ -577,6 +582,9 @@ SampleSet assemble_samples(const RawScene& raw, const HumanArmSceneOptions& o, c
   set.attributes["human_q"] = std::move(human_q);
   set.attributes["manipulability"] = std::move(manip);
   set.attributes["lattice_index"] = std::move(lattice_index);
+  // Cheap (one forward pass per sample, after the solve or the cache), so always there, like
+  // human_q: viewers draw the arm with it.
+  set.attributes["arm_points"] = std::move(arm_points_in_b);
   const auto matrix_attribute = [&](const std::vector<double>& values) {
     SampleSet::RowMatrix M(n, 36);
     if (n > 0) std::memcpy(M.data(), values.data(), values.size() * sizeof(double));
@@ -597,6 +605,30 @@ SampleSet assemble_samples(const RawScene& raw, const HumanArmSceneOptions& o, c
   lattice.frame = "S";
   set.lattice = std::move(lattice);
   return set;
+}
+
+// The human for viewers (hapsyn view, report): the arm's per-sample points are the attribute
+// arm_points; the rest of the body is rigid and given once, in B.
+Json figure_info(const HumanArm& arm, const HumanArmSceneOptions& o) {
+  const HumanBodyProxy body = body_proxy(arm);
+  const auto in_b = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d b = o.x_S_B + o.C_S_B * p;
+    return Json::array({b.x(), b.y(), b.z()});
+  };
+  Json lines = Json::array();
+  for (const auto& line : body.lines) {
+    Json points = Json::array();
+    for (const Eigen::Vector3d& p : line) points.push_back(in_b(p));
+    lines.push_back(points);
+  }
+  return {{"arm_attribute", "arm_points"},
+          {"arm_joints", {"shoulder", "elbow", "wrist", "palm"}},
+          {"body_lines", lines},
+          {"head_centre", in_b(body.head_centre)},
+          {"head_radius", body.head_radius},
+          {"body_height", body.height},
+          {"proportions", "Drillis and Contini (Winter, Biomechanics and Motor Control of Human Movement, fig. 4.1), "
+                          "scaled by the arm file's upper arm"}};
 }
 
 }  // namespace
@@ -639,7 +671,7 @@ SampleSet HumanArmScene::build(const SceneRequest& request) const {
     }
   }
 
-  SampleSet set = assemble_samples(raw, o, g, wish);
+  SampleSet set = assemble_samples(arm_, raw, o, g, wish);
   Json info = Json::object();
   info["n_reach"] = static_cast<long long>(raw.size());
   info["lattice_points"] = g.points;
@@ -655,6 +687,7 @@ SampleSet HumanArmScene::build(const SceneRequest& request) const {
   info["cache_status"] = cache_status;
   info["from_cache"] = from_cache;
   info["arm_file"] = o.arm_file;
+  info["figure"] = figure_info(arm_, o);
   set.info = std::move(info);
   return set;
 }

@@ -74,7 +74,7 @@ struct HumanArmOptions {
         "Reachable palm poses of the 7-DOF human arm of Fennel et al. 2022 (section V): a position lattice around "
         "the shoulder x a near-uniform orientation set; per pose the closed-form IK with joint 3 on a grid, the "
         "solution of highest manipulability kept, unreachable poses dropped. Samples are the end-effector targets "
-        "T_E^B = T_S^B T_P^S T_E^P as (x, y, z, qw, qx, qy, qz) [m]; attributes shoulder_pose, human_q, "
+        "T_E^B = T_S^B T_P^S T_E^P as (x, y, z, qw, qx, qy, qz) [m]; attributes shoulder_pose, human_q, arm_points, "
         "manipulability, lattice_index, and on request M_v, M_a (6x6 row-major, base frame). Built scenes are "
         "cached on disk.");
     d.add(&O::arm_file, "arm_file", kHumanArmDefaultArmFile,

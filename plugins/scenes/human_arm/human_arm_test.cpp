@@ -190,6 +190,32 @@ TEST(HumanArm, SceneSamplesAreConsistentReachablePoses) {
   fs::remove_all(dir);
 }
 
+TEST(HumanArm, ArmPointsDrawTheUserHoldingEachSampleUpright) {
+  const fs::path dir = temp_dir("figure");
+  Json options = small_scene(dir);
+  options["cache"] = false;
+  options["x_E_P"] = {0.0, 0.0, 0.0};
+  const HumanArmScene scene(options_of(options));
+  const SampleSet set = scene.build({});
+  const HumanArmSceneOptions& o = scene.options();
+  const auto& points = set.attributes.at("arm_points");
+  ASSERT_EQ(points.cols(), 12);
+  for (int i = 0; i < set.size(); ++i) {
+    // The shoulder is the scene's x_S_B; with x_E^P = 0 the palm is the sample's position.
+    ASSERT_LT((points.row(i).head<3>().transpose() - o.x_S_B).norm(), 1e-15) << i;
+    ASSERT_LT((points.row(i).tail<3>() - set.poses.row(i).head<3>()).norm(), 1e-12) << i;
+  }
+  // The body in B: gravity is -z_B, so the head is above the shoulder and the hips below it.
+  const Json& figure = set.info.at("figure");
+  EXPECT_EQ(figure["arm_attribute"], "arm_points");
+  const double shoulder_z = o.x_S_B.z();
+  EXPECT_GT(figure["head_centre"][2].get<double>() - figure["head_radius"].get<double>(), shoulder_z);
+  const Json& torso = figure["body_lines"][1];
+  EXPECT_LT(torso[1][2].get<double>(), shoulder_z - 0.4);
+  EXPECT_LT(torso[2][2].get<double>(), shoulder_z - 0.4);
+  fs::remove_all(dir);
+}
+
 TEST(HumanArm, SceneDoesNotDependOnTheThreadCount) {
   const fs::path dir = temp_dir("threads");
   Json options = small_scene(dir);
@@ -257,7 +283,7 @@ TEST(HumanArm, RefusesUnknownAttributes) {
   request.attributes = {"force_axes"};
   EXPECT_EQ(error_of([&] { HumanArmScene(options_of(options)).build(request); }),
             "human_arm: per-sample attribute 'force_axes' requested: this scene provides shoulder_pose, human_q, "
-            "manipulability, lattice_index, M_v, M_a");
+            "manipulability, lattice_index, arm_points, M_v, M_a");
   fs::remove_all(dir);
 }
 

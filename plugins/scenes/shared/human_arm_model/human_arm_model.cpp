@@ -247,6 +247,19 @@ Eigen::Isometry3d HumanArm::forward(const Vector7d& q) const {
   return T;
 }
 
+std::array<Eigen::Vector3d, 8> HumanArm::frame_origins(const Vector7d& q) const {
+  std::array<Eigen::Vector3d, 8> origins;
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  origins[0].setZero();
+  for (int i = 0; i < 7; ++i) {
+    const DhRow& r = data_.dh[i];
+    const double theta = q(i) + r.theta_offset;
+    origins[i + 1] = origins[i] + R * Eigen::Vector3d(r.a * std::cos(theta), r.a * std::sin(theta), r.d);
+    R = R * rz_rx(theta, r.alpha);
+  }
+  return origins;
+}
+
 Matrix67d HumanArm::jacobian(const Vector7d& q) const {
   // Joint i turns about z_{i-1} through o_{i-1} (standard DH): collect them, then the palm.
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();

@@ -96,6 +96,9 @@ class HumanArm {
 
   /// Palm pose in S for joint angles q [rad].
   Eigen::Isometry3d forward(const Vector7d& q) const;
+  /// The origins of DH frames 0 (the shoulder) to 7 (the palm) in S for joint angles q [rad]
+  /// [m]; the last is forward(q)'s translation.
+  std::array<Eigen::Vector3d, 8> frame_origins(const Vector7d& q) const;
   /// Geometric Jacobian [(rad/s, m/s) per rad/s] of the palm in S, rows (omega, v).
   Matrix67d jacobian(const Vector7d& q) const;
   /// Yoshikawa's manipulability sqrt(det(J J^T)) (>= 0, never NaN).
