@@ -17,6 +17,7 @@ function(hapsyn_add_view target)
   # route|content type|file; three.js and its orbit controls copied next to the page.
   set(js "text/javascript")  # no ";" in a CMake list: view_command adds the charset
   set(assets "/|text/html|${web}/index.html" "/app.js|${js}|${web}/app.js")
+  list(APPEND assets "/prototype.js|${js}|${web}/prototype.js")  # the virtual prototype
   set(missing "")
   if(EXISTS ${three}/build/three.module.min.js AND EXISTS ${three}/examples/jsm/controls/OrbitControls.js)
     list(APPEND assets "/three.module.js|${js}|${three}/build/three.module.min.js"
@@ -53,6 +54,10 @@ function(hapsyn_add_view target)
     VERBATIM)
   target_sources(${target} PRIVATE app/view/view_command.cpp app/view/view_data.cpp app/view/view_source.cpp
     app/view/samples_csv_reader.cpp app/view/http_server.cpp ${output})
+  # The virtual prototype: the replay, and the live mode with the motion scene's signal processing.
+  target_sources(${target} PRIVATE app/view/replay_data.cpp app/view/live_session.cpp app/view/socket_session.cpp
+    ${PROJECT_SOURCE_DIR}/plugins/scenes/motion/motion_signal.cpp)
+  target_include_directories(${target} PRIVATE ${PROJECT_SOURCE_DIR}/plugins/scenes/motion)
   target_include_directories(${target} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/app/view)
   target_compile_definitions(${target} PRIVATE HAPSYN_WITH_VIEW=1)
 endfunction()

@@ -138,7 +138,8 @@ async function main() {
   for (const s of study.segments) for (const p of s.points) box.expandByPoint(new THREE.Vector3(p[0], p[1], p[2]));
   box.expandByPoint(new THREE.Vector3(0, 0, 0));
   const size = Math.max(box.getSize(new THREE.Vector3()).length(), 1e-3);
-  scene.add(mechanism(study, size * 0.006));
+  const drawn = mechanism(study, size * 0.006);
+  scene.add(drawn);
   scene.add(new THREE.AxesHelper(size * 0.15));
   const g = new THREE.Vector3(...study.gravity).normalize();
   const top = box.max.clone();
@@ -172,6 +173,9 @@ async function main() {
     camera.updateProjectionMatrix();
     renderer.setSize(container.clientWidth, container.clientHeight);
   });
+  // The virtual prototype (prototype.js) draws into the same scene.
+  window.hapsynScene = { scene, size, mechanism: drawn, samples };
+  window.dispatchEvent(new CustomEvent('hapsyn-scene', { detail: window.hapsynScene }));
   let frames = 0;
   renderer.setAnimationLoop(() => {
     controls.update();
