@@ -4,17 +4,23 @@
 // and keeps its state on window.hapsynView.replay for tests:
 //   {ready, available, reason, frames, frame, sample, time, playing, speed, q, qdotRatio,
 //    tauRatio, feasible, infeasible (the scene samples marked infeasible), trajectory,
-//    seek(frame), seekSample(sample), play(), pause(), setSpeed(x)}.
+//    seek(frame), seekSample(sample), play(), pause(), setSpeed(x)};
+// its live mode (button "live": the frames of the poses a tracker bridge sends to /live, received
+// on the WebSocket /live/watch) on window.hapsynView.live:
+//   {on, connected, frames, t, status, q, qdotRatio, tauRatio, feasible, rates, tip, start(), stop()}.
 import * as THREE from 'three';
 
 const SPEEDS = [1, 2, 4];
 const BAR_FULL = 2;  // a bar's full width is twice the limit: the limit sits in the middle
 
+const live = { on: false, connected: false, frames: 0, t: null, status: null, q: null, qdotRatio: null, tauRatio: null,
+               feasible: null, rates: null, tip: null };
 const replay = {
   ready: false, available: false, reason: null, frames: 0, frame: -1, sample: null, time: 0, playing: false, speed: 1,
   q: [], qdotRatio: [], tauRatio: [], feasible: null, infeasible: [], trajectory: null,
 };
 (window.hapsynView || (window.hapsynView = {})).replay = replay;
+window.hapsynView.live = live;
 
 const STYLE = `
   #prototype { position: absolute; left: 10px; right: 10px; bottom: 10px; padding: 8px 12px; background: rgba(255,255,255,0.92);
@@ -180,6 +186,7 @@ function startReplay(three, doc) {
   for (const s of SPEEDS) element('option', { value: String(s), textContent: `x${s}` }, speed);
   const scrubber = element('input', { id: 'proto-scrubber', type: 'range', min: '0', max: String(doc.frames - 1), step: '1', value: '0' }, row);
   const label = element('span', { id: 'proto-time' }, row);
+  const liveButton = element('button', { id: 'proto-live', textContent: 'live', title: 'follow the poses a tracker bridge sends to /live' }, row);
   const timeline = element('canvas', { id: 'proto-timeline' }, panel);
   const marked = doc.feasible ? doc.feasible.filter(v => v === 0).length : 0;
   element('div', {
@@ -243,6 +250,7 @@ function startReplay(three, doc) {
   replay.seekSample = s => (frameOf.has(s) ? seek(frameOf.get(s)) : -1);
   replay.play = () => {
     if (replay.playing) return;
+    live.stop();
     if (replay.frame >= doc.frames - 1) seek(0);
     replay.playing = true;
     play.textContent = 'pause';
@@ -259,9 +267,50 @@ function startReplay(three, doc) {
     speed.value = String(x);
     return true;
   };
+  // Live: every frame the server computes for a bridge's poses, drawn as it comes.
+  let socket = null;
+  const showLive = frame => {
+    const lines = frame.segments.map(s => s.points.map(p => new THREE.Vector3(p[0], p[1], p[2])));
+    arm.show(lines);
+    hand.position.set(frame.position[0], frame.position[1], frame.position[2]);
+    Object.assign(live, {
+      frames: live.frames + 1, t: frame.t, status: frame.status, q: frame.q, qdotRatio: frame.qdot_ratio,
+      tauRatio: frame.tau_ratio, feasible: frame.feasible, rates: frame.rates,
+      tip: lines.length ? lines[lines.length - 1][lines[lines.length - 1].length - 1].toArray() : null,
+    });
+    bars.show(frame.qdot_ratio || [], frame.tau_ratio || []);
+    label.textContent = `live t = ${frame.t.toFixed(3)} s, ${frame.status}` +
+      (frame.feasible === 0 ? ', infeasible' : '') + `; rates: ${frame.rates}`;
+  };
+  live.start = () => {
+    if (live.on) return;
+    replay.pause();
+    live.on = true;
+    liveButton.textContent = 'stop live';
+    label.textContent = 'live: waiting for poses on /live';
+    socket = new WebSocket(`ws://${location.host}/live/watch`);
+    socket.onopen = () => { live.connected = true; };
+    socket.onclose = () => { live.connected = false; };
+    socket.onmessage = event => {
+      const frame = JSON.parse(event.data);
+      if (live.on && !frame.error) showLive(frame);
+    };
+  };
+  live.stop = () => {
+    if (!live.on) return;
+    live.on = false;
+    liveButton.textContent = 'live';
+    if (socket) socket.close();
+    socket = null;
+    show(replay.frame);
+  };
+  liveButton.addEventListener('click', () => (live.on ? live.stop() : live.start()));
   play.addEventListener('click', () => (replay.playing ? replay.pause() : replay.play()));
   speed.addEventListener('change', () => replay.setSpeed(Number(speed.value)));
-  scrubber.addEventListener('input', () => seek(Number(scrubber.value)));
+  scrubber.addEventListener('input', () => {
+    live.stop();
+    seek(Number(scrubber.value));
+  });
   drawTimeline(timeline, doc, g);
   window.addEventListener('resize', () => drawTimeline(timeline, doc, g));
   seek(0);

@@ -32,8 +32,9 @@ std::string shown(const Json& value) {
   throw hapsyn::Error("live", "message." + field + " = " + shown(value) + ": " + rule);
 }
 
-double finite_number(const Json& value, const std::string& field, const std::string& rule) {
-  if (!value.is_number() || !std::isfinite(value.get<double>())) refuse(field, value, rule);
+// `value` (an element of `whole`, the field's value) as a finite number.
+double finite_number(const Json& value, const std::string& field, const std::string& rule, const Json& whole) {
+  if (!value.is_number() || !std::isfinite(value.get<double>())) refuse(field, whole, rule);
   return value.get<double>();
 }
 
@@ -42,7 +43,7 @@ Eigen::Quaterniond orientation(const Json& value) {
   if (!value.is_array() || (value.size() != 4 && value.size() != 3)) refuse("orientation", value, rule);
   if (value.size() == 4) {
     double c[4];
-    for (std::size_t k = 0; k < 4; ++k) c[k] = finite_number(value[k], "orientation", rule);
+    for (std::size_t k = 0; k < 4; ++k) c[k] = finite_number(value[k], "orientation", rule, value);
     const Eigen::Quaterniond q(c[0], c[1], c[2], c[3]);
     if (!(std::abs(q.norm() - 1.0) <= 1e-3)) refuse("orientation", value, "a quaternion's norm must be 1 within 1e-3");
     return q.normalized();
@@ -51,7 +52,7 @@ Eigen::Quaterniond orientation(const Json& value) {
   for (int i = 0; i < 3; ++i) {
     const Json& row = value[static_cast<std::size_t>(i)];
     if (!row.is_array() || row.size() != 3) refuse("orientation", value, rule);
-    for (int j = 0; j < 3; ++j) r(i, j) = finite_number(row[static_cast<std::size_t>(j)], "orientation", rule);
+    for (int j = 0; j < 3; ++j) r(i, j) = finite_number(row[static_cast<std::size_t>(j)], "orientation", rule, value);
   }
   const double off = (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   if (!(off <= 1e-4) || !(r.determinant() > 0.0)) {
@@ -89,10 +90,10 @@ void parse_live_message(std::string_view message, double& t, Eigen::Vector3d& po
   for (const char* key : {"t", "position", "orientation"}) {
     if (!doc.contains(key)) throw hapsyn::Error("live", std::string("message.") + key + ": missing (a message has t, position, orientation)");
   }
-  t = finite_number(doc["t"], "t", "must be a finite number [s]");
+  t = finite_number(doc["t"], "t", "must be a finite number [s]", doc["t"]);
   const Json& p = doc["position"];
   if (!p.is_array() || p.size() != 3) refuse("position", p, "must be [x, y, z] [m]");
-  for (std::size_t k = 0; k < 3; ++k) position[static_cast<Eigen::Index>(k)] = finite_number(p[k], "position", "must be 3 finite numbers [m]");
+  for (std::size_t k = 0; k < 3; ++k) position[static_cast<Eigen::Index>(k)] = finite_number(p[k], "position", "must be 3 finite numbers [m]", p);
   rotation = orientation(doc["orientation"]);
 }
 
