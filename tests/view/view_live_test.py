@@ -10,7 +10,10 @@ the example bridge's stdlib WebSocket client (examples/live_bridge/stream_record
 - a watcher on /live/watch gets every frame; the page in headless Chromium, in live mode, moves
   the arm to the frames a bridge's poses give. Saves a screenshot.
 
-Usage: view_live_test.py HAPSYN PROBLEM_FILE WORK_DIR (PYTHONPATH holds the build's python/).
+Usage: view_live_test.py HAPSYN PROBLEM_FILE WORK_DIR [--socket-only]
+(PYTHONPATH holds the build's python/). --socket-only: the WebSocket's rules alone, with the raw
+rows of a shipped recording as poses, without the Python module and the browser (so that the
+sanitizer build runs it).
 """
 import json
 import os
@@ -50,8 +53,17 @@ def message(t, pose):
     return json.dumps({"t": float(t), "position": [float(v) for v in pose[:3]], "orientation": [float(v) for v in pose[3:7]]})
 
 
+def recording_poses():
+    """The raw rows of a shipped recording: time stamps and (x, y, z, qw, qx, qy, qz) rows."""
+    from stream_recording import read_recording
+    path = os.path.join(HERE, "..", "..", "share", "motion", "synthetic", "csv", "S01", "drinking.csv")
+    rows = read_recording(path)
+    return [r[0] for r in rows], [r[1] + r[2] for r in rows]
+
+
 def main():
     hapsyn, problem, work = sys.argv[1:4]
+    socket_only = "--socket-only" in sys.argv[4:]
     os.makedirs(work, exist_ok=True)
     failures = []
 
@@ -60,11 +72,15 @@ def main():
         if not condition:
             failures.append(what)
 
-    import hapsyn as module
-    study = module.load(problem)
-    shoulder = study.scene.attributes["shoulder_pose"]
-    stamps = study.scene.attributes["time"].reshape(-1)
-    ik = study.evaluate({}, samples=True, quantities=["joint_velocity"])["quantities"]["q"]
+    if socket_only:
+        stamps, shoulder = recording_poses()
+        ik = None
+    else:
+        import hapsyn as module
+        study = module.load(problem)
+        shoulder = study.scene.attributes["shoulder_pose"]
+        stamps = study.scene.attributes["time"].reshape(-1)
+        ik = study.evaluate({}, samples=True, quantities=["joint_velocity"])["quantities"]["q"]
     # The first trajectory's first poses (the scene's order is time order within a recording).
     count = 0
     while count + 1 < len(stamps) and stamps[count + 1] > stamps[count] and count < 80:
@@ -87,18 +103,39 @@ def main():
             if frame.get("status") != "reachable" or frame.get("q") is None:
                 bad_ik.append(i)
                 continue
-            if any(abs(frame["q"][j] - ik[i][j]) > 1e-9 for j in range(J)):
+            if len(frame["q"]) != J:
                 bad_ik.append(i)
-            f = frame_of[i]
-            if any(abs(frame["q"][j] - replay["q"][f * J + j]) > 1e-9 for j in range(J)):
-                bad_replay.append(i)
+                continue
+            if socket_only:
+                pass  # raw rows are not the scene's filtered poses: nothing to compare with
+            else:
+                if any(abs(frame["q"][j] - ik[i][j]) > 1e-9 for j in range(J)):
+                    bad_ik.append(i)
+                f = frame_of[i]
+                if any(abs(frame["q"][j] - replay["q"][f * J + j]) > 1e-9 for j in range(J)):
+                    bad_replay.append(i)
             if rates_from is None and frame["qdot_ratio"] is not None:
                 rates_from = i
-        check(not bad_ik, f"{len(samples)} poses: joint angles = the IK's (Python module) ({len(bad_ik)} differ)")
-        check(not bad_replay, f"joint angles = the replay's for the same samples ({len(bad_replay)} differ)")
+        if socket_only:
+            check(not bad_ik, f"{len(samples)} raw poses: reachable frames with {J} joint angles ({len(bad_ik)} not)")
+        else:
+            check(not bad_ik, f"{len(samples)} poses: joint angles = the IK's (Python module) ({len(bad_ik)} differ)")
+            check(not bad_replay, f"joint angles = the replay's for the same samples ({len(bad_replay)} differ)")
         check(rates_from is not None and 3 <= rates_from <= 40 and last["feasible"] in (0, 1) and
               len(last["tau_ratio"]) == J and "filtered over the last" in last["rates"],
               f"bars from pose {rates_from} on (the filter's minimum), feasibility {last['feasible']}: {last['rates']}")
+
+        # A tracker's jittering time stamps (a shipped recording with clock jitter): resampled
+        # to the stream's median rate before the filter, as the scene resamples a recording.
+        from stream_recording import read_recording
+        jitter = read_recording(os.path.join(HERE, "..", "..", "share", "motion", "synthetic", "csv", "S05", "side_reach.csv"))
+        other = WebSocket(live)
+        for t_j, p_j, o_j in jitter[:40]:
+            other.send(json.dumps({"t": t_j, "position": p_j, "orientation": o_j}))
+            jittered = json.loads(other.receive())
+        other.close()
+        check(jittered.get("rates", "").endswith("(resampled)") and jittered.get("tau_ratio") is not None,
+              f"jittering time stamps: {jittered.get('rates')}")
 
         # Bad messages: an error frame each, the connection keeps working.
         t = float(stamps[samples[-1]]) + 1.0
@@ -164,6 +201,11 @@ def main():
         watcher.close()
         sender.close()
 
+        if socket_only:
+            code, _ = view.stop()
+            check(code == 0, "the server stops with exit 0")
+            print(f"{len(failures)} failure(s)")
+            return 1 if failures else 0
         if not (shutil.which("chromium") and os.path.exists(CHROMEDRIVER)):
             print("FAIL chromium or chromedriver is not installed: bash scripts/setup.sh --browser")
             return 1
