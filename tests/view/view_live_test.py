@@ -61,6 +61,34 @@ def recording_poses():
     return [r[0] for r in rows], [r[1] + r[2] for r in rows]
 
 
+def check_other_studies(hapsyn, problem, work, check):
+    """A study without a motion scene: /live answers with why; a motion study whose metric asks
+    for the reachable share only: the replay has no bars and says why."""
+    other = os.path.join(HERE, "..", "..", "problems", "fivebar-table2-best-gii.json")
+    with ViewProcess(hapsyn, other) as view:
+        ws = WebSocket(f"ws://127.0.0.1:{view.port}/live")
+        answer = json.loads((ws.send(json.dumps({"t": 0, "position": [0, 0, 0], "orientation": [1, 0, 0, 0]})), ws.receive())[1])
+        ws.close()
+        check(answer.get("error") == "live: the study's scene is not a motion scene: live frames need its frames and filter",
+              f"a five-bar study's /live: {answer.get('error')!r}")
+        view.stop()
+    with open(problem) as f:
+        doc = json.load(f)
+    doc["objectives"] = doc["objectives"][:1]  # share "reachable": no rates or dynamics asked for
+    doc["scene"]["options"]["path"] = os.path.abspath(os.path.join(HERE, "..", "..", "share", "motion", "synthetic", "csv",
+                                                                    "S01", "drinking.csv"))
+    reduced = os.path.join(work, "reachable-only.json")
+    with open(reduced, "w") as f:
+        json.dump(doc, f)
+    with ViewProcess(hapsyn, reduced) as view:
+        replay = get_json(view.url + "api/replay")
+        view.stop()
+    check(replay["ratios_missing"].startswith("the study's metrics do not ask the mechanism for the joint rates") and
+          all(v is None for v in replay["qdot_ratio"] + replay["tau_ratio"]) and
+          any(v is not None for v in replay["q"]),
+          "a reachable-share study's replay: joint values, no bars, and why")
+
+
 def main():
     hapsyn, problem, work = sys.argv[1:4]
     socket_only = "--socket-only" in sys.argv[4:]
@@ -185,6 +213,8 @@ def main():
         check(frame.get("q") is not None, "the server keeps working after it")
         again.close()
 
+        if socket_only:
+            check_other_studies(hapsyn, problem, work, check)
         check(" 403 " in upgrade_status(port, "/live", host="evil.example:80") + " ", "foreign Host: 403")
         check(" 403 " in upgrade_status(port, "/live", origin="http://evil.example") + " ", "foreign Origin: 403")
         check(" 101 " in upgrade_status(port, "/live", origin=f"http://127.0.0.1:{port}") + " ", "the page's Origin: 101")
