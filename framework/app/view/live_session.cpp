@@ -76,8 +76,8 @@ Json vector_json(const double* v, int n) {
   return out;
 }
 
-}  // namespace
-
+// Parses and checks a message. \throws hapsyn::Error("live", ...) naming the field, its value
+// and the rule.
 void parse_live_message(std::string_view message, double& t, Eigen::Vector3d& position, Eigen::Quaterniond& rotation) {
   const Json doc = Json::parse(message.begin(), message.end(), nullptr, false);
   if (doc.is_discarded()) throw hapsyn::Error("live", "the message is not JSON: send {\"t\": s, \"position\": [x, y, z], \"orientation\": [w, x, y, z]}");
@@ -96,6 +96,8 @@ void parse_live_message(std::string_view message, double& t, Eigen::Vector3d& po
   for (std::size_t k = 0; k < 3; ++k) position[static_cast<Eigen::Index>(k)] = finite_number(p[k], "position", "must be 3 finite numbers [m]", p);
   rotation = orientation(doc["orientation"]);
 }
+
+}  // namespace
 
 LiveModel::LiveModel(std::shared_ptr<const ViewSource> source) : source_(std::move(source)) {
   const hapsyn::Problem& problem = *source_->study.problem;

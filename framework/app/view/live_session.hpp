@@ -94,8 +94,4 @@ class LiveSession {
   std::vector<double> locals_;
 };
 
-/// Parses and checks a message; \throws hapsyn::Error("live", ...) naming the field.
-/// (Exposed for the server's error frames and tests.)
-void parse_live_message(std::string_view message, double& t, Eigen::Vector3d& position, Eigen::Quaterniond& rotation);
-
 }  // namespace hapsyn_cli
