@@ -174,7 +174,7 @@ async function main() {
     renderer.setSize(container.clientWidth, container.clientHeight);
   });
   // The virtual prototype (prototype.js) draws into the same scene.
-  window.hapsynScene = { scene, size, mechanism: drawn, samples };
+  window.hapsynScene = { scene, size, mechanism: drawn, samples, renderer };
   window.dispatchEvent(new CustomEvent('hapsyn-scene', { detail: window.hapsynScene }));
   let frames = 0;
   renderer.setAnimationLoop(() => {

@@ -7,7 +7,9 @@
 //    seek(frame), seekSample(sample), play(), pause(), setSpeed(x)};
 // its live mode (button "live": the frames of the poses a tracker bridge sends to /live, received
 // on the WebSocket /live/watch) on window.hapsynView.live:
-//   {on, connected, frames, t, status, q, qdotRatio, tauRatio, feasible, rates, tip, start(), stop()}.
+//   {on, connected, frames, t, status, q, qdotRatio, tauRatio, feasible, rates, tip, start(), stop()};
+// and WebXR (button "XR" where a headset is available) on window.hapsynView.xr:
+//   {supported, active, shoulder, sent, message(t, p, q), baseToXr(p), send(t, p, q) -> frame}.
 import * as THREE from 'three';
 
 const SPEEDS = [1, 2, 4];
@@ -15,12 +17,14 @@ const BAR_FULL = 2;  // a bar's full width is twice the limit: the limit sits in
 
 const live = { on: false, connected: false, frames: 0, t: null, status: null, q: null, qdotRatio: null, tauRatio: null,
                feasible: null, rates: null, tip: null };
+const xr = { supported: false, active: false, shoulder: [0.2, 1.35, 0], sent: 0 };
 const replay = {
   ready: false, available: false, reason: null, frames: 0, frame: -1, sample: null, time: 0, playing: false, speed: 1,
   q: [], qdotRatio: [], tauRatio: [], feasible: null, infeasible: [], trajectory: null,
 };
 (window.hapsynView || (window.hapsynView = {})).replay = replay;
 window.hapsynView.live = live;
+window.hapsynView.xr = xr;
 
 const STYLE = `
   #prototype { position: absolute; left: 10px; right: 10px; bottom: 10px; padding: 8px 12px; background: rgba(255,255,255,0.92);
@@ -305,6 +309,7 @@ function startReplay(three, doc) {
     show(replay.frame);
   };
   liveButton.addEventListener('click', () => (live.on ? live.stop() : live.start()));
+  startXr(three, doc, row, showLive);
   play.addEventListener('click', () => (replay.playing ? replay.pause() : replay.play()));
   speed.addEventListener('change', () => replay.setSpeed(Number(speed.value)));
   scrubber.addEventListener('input', () => {
@@ -314,6 +319,87 @@ function startReplay(three, doc) {
   drawTimeline(timeline, doc, g);
   window.addEventListener('resize', () => drawTimeline(timeline, doc, g));
   seek(0);
+}
+
+// WebXR: a headset's controller drives the prototype. WebXR's reference space has the axes of
+// the arm model's shoulder frame S (x to the right, y up, z backwards), so the controller's grip
+// pose relative to the user's shoulder (xr.shoulder, set by pressing the trigger with the
+// controller at the right shoulder) is the live message's palm pose, sent to /live; the study's
+// scene is placed around the user by S's pose in the base frame (/api/replay shoulder_frame).
+function startXr(three, doc, row, showLive) {
+  const frame = doc.shoulder_frame;
+  if (!frame) return;
+  const C = frame.C_S_B, x0 = frame.x_S_B;
+  // x_XR = shoulder + C_S_B^T (x_B - x_S_B)
+  xr.baseToXr = p => {
+    const d = [p[0] - x0[0], p[1] - x0[1], p[2] - x0[2]];
+    return [0, 1, 2].map(k => xr.shoulder[k] + C[0][k] * d[0] + C[1][k] * d[1] + C[2][k] * d[2]);
+  };
+  xr.message = (t, p, q) => ({ t, position: [0, 1, 2].map(k => p[k] - xr.shoulder[k]), orientation: q });
+  let socket = null, pending = null;
+  const open = () => new Promise((resolve, reject) => {
+    if (socket && socket.readyState === WebSocket.OPEN) return resolve(socket);
+    socket = new WebSocket(`ws://${location.host}/live`);
+    socket.onopen = () => resolve(socket);
+    socket.onerror = () => reject(new Error('/live: the WebSocket failed'));
+    socket.onmessage = event => {
+      const answer = JSON.parse(event.data);
+      if (!answer.error) showLive(answer);
+      if (pending) pending(answer);
+      pending = null;
+    };
+  });
+  // One pose in flight at a time: a headset's frames come faster than they need to be sent.
+  xr.send = async (t, p, q) => {
+    if (pending) return null;
+    const ws = await open();
+    return new Promise(resolve => {
+      pending = resolve;
+      ws.send(JSON.stringify(xr.message(t, p, q)));
+      ++xr.sent;
+    });
+  };
+  if (!navigator.xr) return;
+  navigator.xr.isSessionSupported('immersive-vr').then(supported => {
+    xr.supported = supported;
+    if (!supported) return;
+    const button = element('button', { id: 'proto-xr', textContent: 'XR' }, row);
+    button.addEventListener('click', async () => {
+      const renderer = three.renderer;
+      const session = await navigator.xr.requestSession('immersive-vr', { optionalFeatures: ['local-floor'] });
+      renderer.xr.enabled = true;
+      renderer.xr.setReferenceSpaceType('local-floor');
+      await renderer.xr.setSession(session);
+      xr.active = true;
+      replay.pause();
+      // The study around the user: B placed so that S sits at the shoulder.
+      const root = three.scene;
+      const m = new THREE.Matrix4().set(C[0][0], C[1][0], C[2][0], 0, C[0][1], C[1][1], C[2][1], 0,
+                                        C[0][2], C[1][2], C[2][2], 0, 0, 0, 0, 1);
+      const o = xr.baseToXr([0, 0, 0]);
+      m.setPosition(o[0], o[1], o[2]);
+      root.matrixAutoUpdate = false;
+      root.matrix.copy(m);
+      const grip = renderer.xr.getControllerGrip(0);
+      const controller = renderer.xr.getController(0);
+      controller.addEventListener('selectstart', () => { xr.shoulder = grip.position.toArray(); });
+      const loop = (time, xrFrame) => {
+        if (!xr.active) return;
+        if (grip.visible !== false) {
+          const q = grip.quaternion;
+          xr.send(time / 1000, grip.position.toArray(), [q.w, q.x, q.y, q.z]);
+        }
+        session.requestAnimationFrame(loop);
+      };
+      session.requestAnimationFrame(loop);
+      session.addEventListener('end', () => {
+        xr.active = false;
+        root.matrixAutoUpdate = true;
+        root.matrix.identity();
+        renderer.xr.enabled = false;
+      });
+    });
+  });
 }
 
 async function start(three) {

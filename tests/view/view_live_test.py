@@ -8,7 +8,8 @@ the example bridge's stdlib WebSocket client (examples/live_bridge/stream_record
   connection keeps working (a good message after each); a message beyond the hard limit closes
   that connection only; foreign Host or Origin headers and other targets are refused;
 - a watcher on /live/watch gets every frame; the page in headless Chromium, in live mode, moves
-  the arm to the frames a bridge's poses give. Saves a screenshot.
+  the arm to the frames a bridge's poses give; its WebXR path (without a headset) turns a
+  controller pose into the same frame and places the target at the controller. Saves a screenshot.
 
 Usage: view_live_test.py HAPSYN PROBLEM_FILE WORK_DIR [--socket-only]
 (PYTHONPATH holds the build's python/). --socket-only: the WebSocket's rules alone, with the raw
@@ -270,6 +271,23 @@ def main():
                   f"the page's arm is at the last pose's joint angles {['%.3f' % v for v in last['q']]}")
             check(state.get("tip") is not None and all(abs(a - b) < 1e-6 for a, b in zip(state["tip"], tip)),
                   f"the drawn tip {state.get('tip')} = the frame's {tip}")
+            # WebXR's path without a headset: a controller pose relative to the user's shoulder is
+            # the palm pose in S; the frame equals the bridge's for that pose, and the study
+            # placed around the user puts the end-effector target at the controller.
+            shoulder_xr = driver.execute_script("return window.hapsynView.xr.shoulder")
+            i = pick[-1]
+            controller = [shoulder_xr[k] + float(shoulder[i][k]) for k in range(3)]
+            orientation = [float(v) for v in shoulder[i][3:7]]
+            xr_frame = driver.execute_async_script(
+                "const [t, p, q, done] = arguments; window.hapsynView.xr.send(t, p, q).then(done);",
+                1.0, controller, orientation)
+            check(xr_frame and xr_frame.get("q") is not None and
+                  all(abs(a - b) <= 1e-9 for a, b in zip(xr_frame["q"], last["q"])),
+                  "WebXR: a controller pose at the shoulder + the palm position gives the bridge's joint angles")
+            placed = driver.execute_script("return window.hapsynView.xr.baseToXr(arguments[0])", xr_frame["position"])
+            check(all(abs(a - b) <= 1e-9 for a, b in zip(placed, controller)),
+                  f"WebXR: the end-effector target placed in the headset's space {placed} = the controller {controller}")
+            print(f"     WebXR session supported in this browser: {driver.execute_script('return window.hapsynView.xr.supported')}")
             shot = os.path.join(work, "live.png")
             driver.save_screenshot(shot)
             check(os.path.getsize(shot) > 10000, f"screenshot {shot}")

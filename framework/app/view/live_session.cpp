@@ -121,6 +121,13 @@ LiveModel::LiveModel(std::shared_ptr<const ViewSource> source) : source_(std::mo
   rate_needs_ = (provided & kRateNeeds) == kRateNeeds ? kRateNeeds : 0;
 }
 
+hapsyn::Json LiveModel::shoulder_frame() const {
+  if (!unavailable_.empty()) return nullptr;
+  Json rows = Json::array();
+  for (int i = 0; i < 3; ++i) rows.push_back({C_S_B_(i, 0), C_S_B_(i, 1), C_S_B_(i, 2)});
+  return {{"C_S_B", rows}, {"x_S_B", {x_S_B_.x(), x_S_B_.y(), x_S_B_.z()}}};
+}
+
 LiveSession::LiveSession(const LiveModel& model) : model_(model) {
   if (!model_.unavailable().empty()) return;
   scratch_ = model_.source_->study.problem->mechanism().make_scratch();

@@ -34,6 +34,10 @@ class LiveModel {
   explicit LiveModel(std::shared_ptr<const ViewSource> source);
   /// "" when live frames can be computed, else why not (a study without a motion scene).
   const std::string& unavailable() const { return unavailable_; }
+  /// Where the arm model's shoulder frame S sits in the base B (x_B = x_S_B + C_S_B x_S): the
+  /// page places the study around a headset's user with it. {"C_S_B": 3 rows, "x_S_B": [m]};
+  /// null when unavailable.
+  hapsyn::Json shoulder_frame() const;
 
  private:
   friend class LiveSession;

@@ -22,7 +22,10 @@ int view_command(const std::string& path, const std::string& host, int port, con
   // The API's documents are made once; the server hands out views of them.
   const std::string study = data.study.dump();
   const std::string samples = data.samples.dump();
-  const std::string replay = replay_json(*data.source->study.problem, data.source->design).dump();
+  const auto live = std::make_shared<const LiveModel>(data.source);
+  hapsyn::Json replay_doc = replay_json(*data.source->study.problem, data.source->design);
+  if (replay_doc["available"] == true) replay_doc["shoulder_frame"] = live->shoulder_frame();
+  const std::string replay = replay_doc.dump();
   std::map<std::string, Resource> routes;
   for (const WebAsset& asset : web_assets()) {
     routes[std::string(asset.route)] = {std::string(asset.content_type) + "; charset=utf-8", asset.body};
@@ -36,7 +39,6 @@ int view_command(const std::string& path, const std::string& host, int port, con
   // Told to listen beyond loopback, the server answers the names others reach it by.
   settings.loopback_hosts_only = host == "127.0.0.1" || host == "::1";
   // The live prototype: poses in on /live (each answered with its frame), frames out on /live/watch.
-  const auto live = std::make_shared<const LiveModel>(data.source);
   SocketEndpoints sockets;
   sockets.target = "/live";
   sockets.watch_target = "/live/watch";
