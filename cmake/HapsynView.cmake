@@ -17,6 +17,7 @@ function(hapsyn_add_view target)
   # route|content type|file; three.js and its orbit controls copied next to the page.
   set(js "text/javascript")  # no ";" in a CMake list: view_command adds the charset
   set(assets "/|text/html|${web}/index.html" "/app.js|${js}|${web}/app.js" "/figure.js|${js}|${web}/figure.js")
+  list(APPEND assets "/prototype.js|${js}|${web}/prototype.js")  # the virtual prototype
   set(missing "")
   if(EXISTS ${three}/build/three.module.min.js AND EXISTS ${three}/examples/jsm/controls/OrbitControls.js)
     list(APPEND assets "/three.module.js|${js}|${three}/build/three.module.min.js"
@@ -53,6 +54,16 @@ function(hapsyn_add_view target)
     VERBATIM)
   target_sources(${target} PRIVATE app/view/view_command.cpp app/view/view_data.cpp app/view/view_figure.cpp app/view/view_source.cpp
     app/view/samples_csv_reader.cpp app/view/http_server.cpp ${output})
+  # The virtual prototype: the replay and the live frames (with the motion scene's signal
+  # processing), a library of their own that benchmarks/live_frame_benchmark.cpp times too.
+  add_library(hapsyn_view_prototype STATIC app/view/replay_data.cpp app/view/live_session.cpp
+    ${PROJECT_SOURCE_DIR}/plugins/scenes/motion/motion_signal.cpp)
+  target_include_directories(hapsyn_view_prototype PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/app/view
+    ${PROJECT_SOURCE_DIR}/plugins/scenes/motion)
+  target_link_libraries(hapsyn_view_prototype PUBLIC hapsyn hapsyn_internal)
+  target_compile_options(hapsyn_view_prototype PRIVATE ${HAPSYN_WARNINGS})
+  target_sources(${target} PRIVATE app/view/socket_session.cpp)
+  target_link_libraries(${target} PRIVATE hapsyn_view_prototype)
   target_include_directories(${target} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/app/view)
   target_compile_definitions(${target} PRIVATE HAPSYN_WITH_VIEW=1)
 endfunction()

@@ -141,7 +141,8 @@ async function main() {
   for (const p of figurePoints(study.figure)) box.expandByPoint(new THREE.Vector3(p[0], p[1], p[2]));
   box.expandByPoint(new THREE.Vector3(0, 0, 0));
   const size = Math.max(box.getSize(new THREE.Vector3()).length(), 1e-3);
-  scene.add(mechanism(study, size * 0.006));
+  const drawn = mechanism(study, size * 0.006);
+  scene.add(drawn);
   const human = humanFigure(study.figure);
   if (human) scene.add(human);
   // What the page drew of the human, for tests: the arm's joints and the head.
@@ -179,6 +180,9 @@ async function main() {
     camera.updateProjectionMatrix();
     renderer.setSize(container.clientWidth, container.clientHeight);
   });
+  // The virtual prototype (prototype.js) draws into the same scene.
+  window.hapsynScene = { scene, size, mechanism: drawn, samples, renderer };
+  window.dispatchEvent(new CustomEvent('hapsyn-scene', { detail: window.hapsynScene }));
   let frames = 0;
   renderer.setAnimationLoop(() => {
     controls.update();

@@ -7,6 +7,7 @@
 #include <boost/asio/signal_set.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/websocket/rfc6455.hpp>
 
 #include <csignal>
 #include <optional>
@@ -28,6 +29,7 @@ constexpr std::string_view kNotAllowed = "method not allowed: only GET\n";
 constexpr std::string_view kBadRequest = "bad request\n";
 constexpr std::string_view kHeadTooLarge = "request header too large\n";
 constexpr std::string_view kBodyTooLarge = "request body too large\n";
+constexpr std::string_view kForeignOrigin = "forbidden: a WebSocket's Origin must be a page of this server\n";
 constexpr std::string_view kForeignHost = "forbidden: the Host header must name this machine's loopback\n";
 
 // Whether `host` (a Host header) names the loopback at `port`.
@@ -53,8 +55,9 @@ Response make_response(http::status status, unsigned version, std::string_view t
 // One client connection: requests read one at a time, each answered from the route table.
 class Session : public std::enable_shared_from_this<Session> {
  public:
-  Session(tcp::socket socket, const Routes& routes, const ServerSettings& settings, unsigned short port)
-      : stream_(std::move(socket)), routes_(routes), settings_(settings), port_(port) {}
+  Session(tcp::socket socket, const Routes& routes, const ServerSettings& settings, unsigned short port,
+          const std::optional<SocketEndpoints>& sockets, const std::shared_ptr<SocketHub>& hub)
+      : stream_(std::move(socket)), routes_(routes), settings_(settings), port_(port), sockets_(sockets), hub_(hub) {}
 
   void read() {
     parser_.emplace();
@@ -69,6 +72,7 @@ class Session : public std::enable_shared_from_this<Session> {
   void on_read(beast::error_code ec) {
     if (!ec) {
       const auto& request = parser_->get();
+      if (beast::websocket::is_upgrade(request) && sockets_) return upgrade();
       return send(answer(request), request.keep_alive());
     }
     if (ec == http::error::header_limit) return send(make_response(http::status::request_header_fields_too_large, 11, "text/plain", kHeadTooLarge), false);
@@ -79,6 +83,28 @@ class Session : public std::enable_shared_from_this<Session> {
       return close();
     }
     send(make_response(http::status::bad_request, 11, "text/plain", kBadRequest), false);
+  }
+
+  // A WebSocket upgrade: handed to socket_session.cpp on the endpoints' targets only.
+  void upgrade() {
+    http::request<http::string_body> request = parser_->release();
+    const unsigned version = request.version();
+    const std::string_view target(request.target().data(), request.target().size());
+    const bool watch = target == sockets_->watch_target;
+    const auto host = request[http::field::host];
+    const std::string_view host_name(host.data(), host.size());
+    const auto origin = request[http::field::origin];
+    if (target != sockets_->target && !watch) {
+      return send(make_response(http::status::not_found, version, "text/plain", kNotFound), false);
+    }
+    if (settings_.loopback_hosts_only && !loopback_host(host_name, port_)) {
+      return send(make_response(http::status::forbidden, version, "text/plain", kForeignHost), false);
+    }
+    if (!origin.empty() && std::string_view(origin.data(), origin.size()) != "http://" + std::string(host_name)) {
+      return send(make_response(http::status::forbidden, version, "text/plain", kForeignOrigin), false);
+    }
+    stream_.expires_never();  // the WebSocket keeps its own timeouts
+    start_socket_session(stream_.release_socket(), std::move(request), *sockets_, watch, hub_);
   }
 
   Response answer(const http::request<http::string_body>& request) const {
@@ -122,31 +148,36 @@ class Session : public std::enable_shared_from_this<Session> {
   const Routes& routes_;
   const ServerSettings& settings_;
   unsigned short port_;  // the server's, for the Host check
+  const std::optional<SocketEndpoints>& sockets_;
+  std::shared_ptr<SocketHub> hub_;
 };
 
 }  // namespace
 
 struct ViewServer::Impl {
-  Impl(Routes r, const ServerSettings& s) : routes(std::move(r)), settings(s), acceptor(context), signals(context, SIGINT, SIGTERM) {}
+  Impl(Routes r, const ServerSettings& s, std::optional<SocketEndpoints> e)
+      : routes(std::move(r)), settings(s), sockets(std::move(e)), acceptor(context), signals(context, SIGINT, SIGTERM) {}
 
   void accept() {
     acceptor.async_accept([this](beast::error_code ec, tcp::socket socket) {
       if (!acceptor.is_open()) return;
-      if (!ec) std::make_shared<Session>(std::move(socket), routes, settings, port)->read();
+      if (!ec) std::make_shared<Session>(std::move(socket), routes, settings, port, sockets, hub)->read();
       accept();  // an error on one connection (a reset before accept) stops no other
     });
   }
 
   Routes routes;
   ServerSettings settings;
+  std::optional<SocketEndpoints> sockets;
+  std::shared_ptr<SocketHub> hub = make_socket_hub();
   unsigned short port = 0;  // bound
   asio::io_context context{1};
   tcp::acceptor acceptor;
   asio::signal_set signals;
 };
 
-ViewServer::ViewServer(Routes routes, const ServerSettings& settings)
-    : impl_(std::make_unique<Impl>(std::move(routes), settings)) {
+ViewServer::ViewServer(Routes routes, const ServerSettings& settings, std::optional<SocketEndpoints> sockets)
+    : impl_(std::make_unique<Impl>(std::move(routes), settings, std::move(sockets))) {
   beast::error_code ec;
   const asio::ip::address address = asio::ip::make_address(settings.host, ec);
   if (ec) throw hapsyn::Error("view", "--host " + settings.host + ": not an IP address (e.g. 127.0.0.1, ::1, 0.0.0.0)");

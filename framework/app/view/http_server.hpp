@@ -1,10 +1,13 @@
 #pragma once
 // The local HTTP server of `hapsyn view` (Boost.Beast): a fixed table of routes, each a body
 // held in memory; nothing else is served, no path of a request is ever opened.
+#include "socket_session.hpp"
+
 #include <chrono>
 #include <cstddef>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -41,7 +44,11 @@ class ViewServer {
  public:
   /// Binds and listens. \throws hapsyn::Error("view", ...) naming the address and port when
   /// the host is not an IP address or the port cannot be bound.
-  ViewServer(std::map<std::string, Resource> routes, const ServerSettings& settings);
+  /// `sockets`: WebSocket endpoints (socket_session.hpp), upgraded only on their two targets,
+  /// with the Host rule of HTTP and, when the request has an Origin, only that of a page of this
+  /// server ("http://" + its Host): another site's page cannot drive or watch the prototype.
+  ViewServer(std::map<std::string, Resource> routes, const ServerSettings& settings,
+             std::optional<SocketEndpoints> sockets = std::nullopt);
   ~ViewServer();
   ViewServer(const ViewServer&) = delete;
   ViewServer& operator=(const ViewServer&) = delete;

@@ -171,6 +171,7 @@ ViewData load_view_data(const std::string& path, const hapsyn::Registry& registr
   data.name = source.study.resolved.value("name", std::string());
   data.study = study_json(source, sample);
   data.samples = samples_json(source, records, origin);
+  data.source = std::make_shared<const ViewSource>(std::move(source));
   return data;
 }
 

@@ -5,16 +5,21 @@
 #include <hapsyn/internal/registry.hpp>
 #include <hapsyn/json.hpp>
 
+#include <memory>
 #include <ostream>
 #include <string>
 
 namespace hapsyn_cli {
+
+struct ViewSource;
 
 /// The two JSON documents of the page's API.
 struct ViewData {
   std::string name;     ///< the study's name
   hapsyn::Json study;   ///< /api/study: name, plugins, design, drawn sample, segments, gravity
   hapsyn::Json samples; ///< /api/samples: positions, status, local-value columns with units
+  /// The study and its design, kept for the virtual prototype (replay_data.hpp).
+  std::shared_ptr<const ViewSource> source;
 };
 
 /// Loads a problem file or a result directory (one holding result.json) and computes its
