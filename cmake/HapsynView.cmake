@@ -16,7 +16,8 @@ function(hapsyn_add_view target)
   endif()
   # route|content type|file; three.js and its orbit controls copied next to the page.
   set(js "text/javascript")  # no ";" in a CMake list: view_command adds the charset
-  set(assets "/|text/html|${web}/index.html" "/app.js|${js}|${web}/app.js")
+  set(assets "/|text/html|${web}/index.html" "/app.js|${js}|${web}/app.js" "/front.js|${js}|${web}/front.js"
+                  "/plots.js|${js}|${web}/plots.js")
   set(missing "")
   if(EXISTS ${three}/build/three.module.min.js AND EXISTS ${three}/examples/jsm/controls/OrbitControls.js)
     list(APPEND assets "/three.module.js|${js}|${three}/build/three.module.min.js"
@@ -52,7 +53,7 @@ function(hapsyn_add_view target)
     COMMENT "Embedding the page of hapsyn view"
     VERBATIM)
   target_sources(${target} PRIVATE app/view/view_command.cpp app/view/view_data.cpp app/view/view_source.cpp
-    app/view/samples_csv_reader.cpp app/view/http_server.cpp ${output})
+    app/view/samples_csv_reader.cpp app/view/http_server.cpp app/view/result_views.cpp app/view/report_command.cpp ${output})
   target_include_directories(${target} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/app/view)
   target_compile_definitions(${target} PRIVATE HAPSYN_WITH_VIEW=1)
 endfunction()

@@ -3,6 +3,8 @@
 // window.hapsynView for tests: {ready, error, pointCount, objective, colourRange, segments}.
 import * as THREE from 'three';
 import { OrbitControls } from '/OrbitControls.js';
+import { setupFront } from '/front.js';
+import { setupRuns } from '/plots.js';
 
 const state = { ready: false, error: null, pointCount: 0, objective: null, colourRange: null, segments: 0, columns: [] };
 window.hapsynView = state;
@@ -18,6 +20,9 @@ function colourAt(t) {
 }
 
 async function getJson(url) {
+  // A report (hapsyn report) carries its documents in the page.
+  const inline = document.querySelector(`script[type="application/json"][data-route="${url}"]`);
+  if (inline) return JSON.parse(inline.textContent);
   const response = await fetch(url);
   if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
   return response.json();
@@ -116,7 +121,7 @@ function frameCamera(camera, controls, box) {
 }
 
 async function main() {
-  const [study, samples] = await Promise.all([getJson('/api/study'), getJson('/api/samples')]);
+  const [study, samples, result] = await Promise.all([getJson('/api/study'), getJson('/api/samples'), getJson('/api/result')]);
   const container = document.getElementById('view');
   const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
   renderer.setPixelRatio(window.devicePixelRatio);
@@ -138,7 +143,8 @@ async function main() {
   for (const s of study.segments) for (const p of s.points) box.expandByPoint(new THREE.Vector3(p[0], p[1], p[2]));
   box.expandByPoint(new THREE.Vector3(0, 0, 0));
   const size = Math.max(box.getSize(new THREE.Vector3()).length(), 1e-3);
-  scene.add(mechanism(study, size * 0.006));
+  let drawn = mechanism(study, size * 0.006);
+  scene.add(drawn);
   scene.add(new THREE.AxesHelper(size * 0.15));
   const g = new THREE.Vector3(...study.gravity).normalize();
   const top = box.max.clone();
@@ -147,6 +153,16 @@ async function main() {
   fillPanel(study, samples);
   state.pointCount = samples.count;
   state.segments = study.segments.length;
+  state.drawnSegments = study.segments;
+  setupRuns(result, study.objectives, state);
+  // A front point clicked: its design drawn instead (front.js).
+  setupFront(result, state, point => {
+    scene.remove(drawn);
+    drawn = mechanism(point, size * 0.006);
+    scene.add(drawn);
+    state.segments = point.segments.length;
+    state.drawnSegments = point.segments;
+  });
   state.columns = samples.columns.map(c => c.name);
   const select = document.getElementById('objective');
   const choose = index => {

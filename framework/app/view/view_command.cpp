@@ -19,12 +19,14 @@ int view_command(const std::string& path, const std::string& host, int port, con
   // The API's documents are made once; the server hands out views of them.
   const std::string study = data.study.dump();
   const std::string samples = data.samples.dump();
+  const std::string result = data.result.dump();
   std::map<std::string, Resource> routes;
   for (const WebAsset& asset : web_assets()) {
     routes[std::string(asset.route)] = {std::string(asset.content_type) + "; charset=utf-8", asset.body};
   }
   routes["/api/study"] = {"application/json", study};
   routes["/api/samples"] = {"application/json", samples};
+  routes["/api/result"] = {"application/json", result};
   ServerSettings settings;
   settings.host = host;
   settings.port = static_cast<unsigned short>(port);

@@ -1,5 +1,6 @@
 #include "view_data.hpp"
 
+#include "result_views.hpp"
 #include "samples_csv_reader.hpp"
 #include "view_source.hpp"
 
@@ -169,6 +170,7 @@ ViewData load_view_data(const std::string& path, const hapsyn::Registry& registr
   data.name = source.study.resolved.value("name", std::string());
   data.study = study_json(source, sample);
   data.samples = samples_json(source, records, origin);
+  data.result = view_result_json(source, sample);
   return data;
 }
 

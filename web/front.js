@@ -1,0 +1,122 @@
+// The Pareto front of a result directory (/api/result "front"): a 2D scatter of two chosen
+// objectives drawn as SVG in the #front panel; clicking a point shows that design (onSelect
+// redraws the mechanism) and its objectives and design in the panel. State for tests on
+// `state` (window.hapsynView): frontCount, frontAxes, selectedPoint, selectedDesign,
+// frontPointPosition(i) -> the point's centre in client pixels, selectFrontPoint(i).
+const SVG = 'http://www.w3.org/2000/svg';
+const WIDTH = 360, HEIGHT = 260, MARGIN = { left: 56, right: 12, top: 10, bottom: 40 };
+
+function element(name, attributes, parent) {
+  const e = document.createElementNS(SVG, name);
+  for (const [k, v] of Object.entries(attributes)) e.setAttribute(k, String(v));
+  if (parent) parent.appendChild(e);
+  return e;
+}
+
+function format(v) {
+  return v === null || v === undefined ? '–' : Number(v).toPrecision(4);
+}
+
+function label(objective) {
+  return `${objective.name} (${objective.sense === 'maximize' ? 'max' : 'min'})` + (objective.unit ? ` [${objective.unit}]` : '');
+}
+
+// [lo, hi] of the finite values, widened by 5 % (a single value gets +-1 % or +-1).
+function extent(values) {
+  const finite = values.filter(v => v !== null && Number.isFinite(v));
+  if (!finite.length) return [0, 1];
+  let lo = Math.min(...finite), hi = Math.max(...finite);
+  if (hi === lo) {
+    const pad = lo === 0 ? 1 : Math.abs(lo) * 0.01;
+    return [lo - pad, hi + pad];
+  }
+  const pad = (hi - lo) * 0.05;
+  return [lo - pad, hi + pad];
+}
+
+function axisSelect(id, objectives, chosen) {
+  const select = document.getElementById(id);
+  select.textContent = '';
+  objectives.forEach((o, i) => {
+    const option = document.createElement('option');
+    option.value = String(i);
+    option.textContent = label(o);
+    select.appendChild(option);
+  });
+  select.value = String(chosen);
+  return select;
+}
+
+function describe(front, point) {
+  const objectives = front.objectives.map(o => `${o.name} = ${format(point.objectives[o.name])}${o.unit ? ' ' + o.unit : ''}`);
+  const design = Object.entries(point.design).map(([k, v]) => `${k} = ${Array.isArray(v) ? '[' + v.map(format).join(', ') + ']' : format(v)}`);
+  const drawn = point.drawn_sample === null ? 'reaches none of the samples tried: not drawn' : `drawn at sample ${point.drawn_sample}`;
+  return `objectives: ${objectives.join(', ')}; design: ${design.join(', ')}; ${drawn}`;
+}
+
+/// Shows `result.front` in #front (hidden when there is none). onSelect(point) draws the design.
+export function setupFront(result, state, onSelect) {
+  const front = result.front;
+  const panel = document.getElementById('front');
+  state.frontCount = front ? front.points.length : 0;
+  state.selectedPoint = null;
+  state.selectedDesign = null;
+  if (!front || !front.points.length || front.objectives.length < 2) return;
+  panel.hidden = false;
+  document.getElementById('front-title').textContent =
+    `Pareto front: ${front.points.length} point${front.points.length === 1 ? '' : 's'}`;
+  const svg = document.getElementById('front-plot');
+  svg.setAttribute('viewBox', `0 0 ${WIDTH} ${HEIGHT}`);
+  svg.setAttribute('width', WIDTH);
+  svg.setAttribute('height', HEIGHT);
+  const xSelect = axisSelect('front-x', front.objectives, 0);
+  const ySelect = axisSelect('front-y', front.objectives, 1);
+  let circles = [];
+
+  const select = index => {
+    circles.forEach((c, i) => c.setAttribute('class', i === index ? 'point selected' : 'point'));
+    const point = front.points[index];
+    state.selectedPoint = index;
+    state.selectedDesign = point.design;
+    document.getElementById('front-info').textContent = `point ${index + 1}: ${describe(front, point)}`;
+    onSelect(point);
+  };
+
+  const draw = () => {
+    const [ox, oy] = [front.objectives[Number(xSelect.value)], front.objectives[Number(ySelect.value)]];
+    state.frontAxes = [ox.name, oy.name];
+    svg.textContent = '';
+    const xs = front.points.map(p => p.objectives[ox.name]), ys = front.points.map(p => p.objectives[oy.name]);
+    const [x0, x1] = extent(xs), [y0, y1] = extent(ys);
+    const px = v => MARGIN.left + (v - x0) / (x1 - x0) * (WIDTH - MARGIN.left - MARGIN.right);
+    const py = v => HEIGHT - MARGIN.bottom - (v - y0) / (y1 - y0) * (HEIGHT - MARGIN.top - MARGIN.bottom);
+    element('rect', { x: MARGIN.left, y: MARGIN.top, width: WIDTH - MARGIN.left - MARGIN.right,
+                      height: HEIGHT - MARGIN.top - MARGIN.bottom, class: 'frame' }, svg);
+    for (let k = 0; k <= 4; ++k) {
+      const vx = x0 + (x1 - x0) * k / 4, vy = y0 + (y1 - y0) * k / 4;
+      element('text', { x: px(vx), y: HEIGHT - MARGIN.bottom + 14, 'text-anchor': 'middle', class: 'tick' }, svg).textContent = format(vx);
+      element('text', { x: MARGIN.left - 4, y: py(vy) + 4, 'text-anchor': 'end', class: 'tick' }, svg).textContent = format(vy);
+    }
+    element('text', { x: (MARGIN.left + WIDTH - MARGIN.right) / 2, y: HEIGHT - 6, 'text-anchor': 'middle', class: 'axis' }, svg)
+      .textContent = label(ox);
+    element('text', { x: 12, y: (MARGIN.top + HEIGHT - MARGIN.bottom) / 2, 'text-anchor': 'middle', class: 'axis',
+                      transform: `rotate(-90 12 ${(MARGIN.top + HEIGHT - MARGIN.bottom) / 2})` }, svg).textContent = label(oy);
+    circles = front.points.map((p, i) => {
+      const x = xs[i], y = ys[i];
+      const finite = x !== null && y !== null && Number.isFinite(x) && Number.isFinite(y);
+      const c = element('circle', { cx: finite ? px(x) : -10, cy: finite ? py(y) : -10, r: 5, class: 'point' }, svg);
+      element('title', {}, c).textContent = `point ${i + 1}: ${ox.name} = ${format(x)}, ${oy.name} = ${format(y)}`;
+      c.addEventListener('click', () => select(i));
+      return c;
+    });
+    if (state.selectedPoint !== null) circles[state.selectedPoint].setAttribute('class', 'point selected');
+  };
+  xSelect.addEventListener('change', draw);
+  ySelect.addEventListener('change', draw);
+  draw();
+  state.frontPointPosition = index => {
+    const box = circles[index].getBoundingClientRect();
+    return [box.left + box.width / 2, box.top + box.height / 2];
+  };
+  state.selectFrontPoint = index => select(index);
+}
