@@ -80,11 +80,13 @@ def check_errors(hapsyn, run, work):
     cases = (([missing], f"report: {missing}: not a directory: give a result directory (one holding result.json)"),
              ([os.path.join(run, "result.json")], "result.json: not a directory"),
              ([empty], f"report: {empty}: no result.json in it: give the output directory of hapsyn run"),
-             ([run, "-o", os.path.join(missing, "r.html")], f"report: cannot write {missing}/r.html.tmp-"))
+             ([run, "-o", os.path.join(missing, "r.html")], f"report: cannot write {missing}/r.html.tmp-"),
+             ([run, "-o", empty], f"report: cannot rename {empty}.tmp-"))
     for args, message in cases:
         r = subprocess.run([hapsyn, "report", *args], capture_output=True, text=True, timeout=120)
         check(r.returncode == 1 and message in r.stderr, f"report {' '.join(args)}: exit 1, '{message}' ({r.stderr.strip()})")
     check(not os.path.exists(missing), "nothing created for a refused output")
+    check(not glob.glob(empty + ".tmp-*") and os.path.isdir(empty), "a refused rename leaves no temporary file")
 
 
 def main():
