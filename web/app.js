@@ -4,7 +4,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from '/OrbitControls.js';
 import { setupFront } from '/front.js';
-import { setupRuns } from '/plots.js';
+import { setupBatch, setupRuns } from '/plots.js';
 
 const state = { ready: false, error: null, pointCount: 0, objective: null, colourRange: null, segments: 0, columns: [] };
 window.hapsynView = state;
@@ -155,6 +155,7 @@ async function main() {
   state.segments = study.segments.length;
   state.drawnSegments = study.segments;
   setupRuns(result, study.objectives, state);
+  setupBatch(result, state);
   // A front point clicked: its design drawn instead (front.js).
   setupFront(result, state, point => {
     scene.remove(drawn);

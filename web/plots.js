@@ -137,3 +137,69 @@ export function setupRuns(result, objectives, state) {
     state.clusterRows = rows.length;
   }
 }
+
+/// Draws one bar per row (`labels`, `values`, null skipped) into `svg`; returns the bars drawn.
+export function barPlot(svg, labels, values, yLabel) {
+  svg.textContent = '';
+  const height = HEIGHT + 40;  // room for the rotated labels
+  svg.setAttribute('viewBox', `0 0 ${WIDTH} ${height}`);
+  svg.setAttribute('width', WIDTH);
+  svg.setAttribute('height', height);
+  const finite = values.filter(v => v !== null && Number.isFinite(v));
+  const [y0, y1] = extent([0, ...finite]);
+  const bottom = HEIGHT - MARGIN.bottom;
+  const py = v => bottom - (v - y0) / (y1 - y0) * (bottom - MARGIN.top);
+  const slot = (WIDTH - MARGIN.left - MARGIN.right) / Math.max(values.length, 1);
+  element('rect', { x: MARGIN.left, y: MARGIN.top, width: WIDTH - MARGIN.left - MARGIN.right, height: bottom - MARGIN.top, class: 'frame' }, svg);
+  for (let k = 0; k <= 4; ++k) {
+    const vy = y0 + (y1 - y0) * k / 4;
+    element('text', { x: MARGIN.left - 4, y: py(vy) + 4, 'text-anchor': 'end', class: 'tick' }, svg).textContent = format(vy);
+  }
+  const mid = (MARGIN.top + bottom) / 2;
+  element('text', { x: 12, y: mid, 'text-anchor': 'middle', class: 'axis', transform: `rotate(-90 12 ${mid})` }, svg).textContent = yLabel;
+  let bars = 0;
+  values.forEach((v, i) => {
+    const x = MARGIN.left + slot * (i + 0.15);
+    const lx = MARGIN.left + slot * (i + 0.5);
+    element('text', { x: lx, y: bottom + 10, 'text-anchor': 'end', class: 'tick', transform: `rotate(-30 ${lx} ${bottom + 10})` }, svg)
+      .textContent = labels[i];
+    if (v === null || !Number.isFinite(v)) return;
+    const top = Math.min(py(v), py(0)), h = Math.abs(py(v) - py(0));
+    const bar = element('rect', { x, y: top, width: slot * 0.7, height: Math.max(h, 0.5), class: 'bar', fill: COLOURS[0] }, svg);
+    element('title', {}, bar).textContent = `${labels[i]}: ${format(v)}`;
+    ++bars;
+  });
+  return bars;
+}
+
+/// Shows `result.batch` (a sweep's or comparison's table) in #batch: a bar plot of a chosen
+/// column over the runs and the table (hidden when there is none).
+export function setupBatch(result, state) {
+  const batch = result.batch;
+  state.batchKind = batch ? batch.kind : null;
+  state.batchRows = batch ? batch.rows.length : 0;
+  if (!batch) return;
+  document.getElementById('batch').hidden = false;
+  document.getElementById('batch-title').textContent =
+    `${batch.kind === 'sweep' ? 'Sweep' : 'Comparison'}: ${batch.rows.length} runs (3D view: ${batch.shown})`;
+  const columns = [...new Set(batch.rows.flatMap(r => Object.keys(r.values)))];
+  const select = document.getElementById('batch-column');
+  for (const c of columns) select.appendChild(document.createElement('option')).textContent = c;
+  const preferred = ['errors.objective_error', 'wall_time_s', 'run_time_s'].find(c => columns.includes(c));
+  select.value = preferred || columns[0];
+  const labels = batch.rows.map(r => r.label);
+  const draw = () => {
+    const column = select.value;
+    state.batchColumn = column;
+    state.batchBars = barPlot(document.getElementById('batch-plot'), labels, batch.rows.map(r => r.values[column] ?? null), column);
+  };
+  select.addEventListener('change', draw);
+  draw();
+  table(document.getElementById('batch-table'), ['run', ...columns], batch.rows.map(r => [r.label, ...columns.map(c => r.values[c] ?? null)]));
+  state.selectBatchColumn = column => {
+    if (!columns.includes(column)) return false;
+    select.value = column;
+    draw();
+    return true;
+  };
+}

@@ -445,13 +445,17 @@ void define_study_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.scene->add_option("--attribute", a.scene_attributes, "Request a per-sample attribute (e.g. M_v, M_a); repeatable");
 
   c.view = app.add_subcommand("view", "Show a study in the browser: its mechanism, samples and local values (local web server)");
-  c.view->add_option("path", a.file, "Problem file (JSON) or result directory (holding result.json)")->required();
+  c.view->add_option("path", a.file,
+                     "Problem file (JSON), result directory (holding result.json), or the output directory of "
+                     "hapsyn sweep or compare")
+      ->required();
   c.view->add_option("--port", a.view_port, "TCP port (0: any free port)")->check(CLI::Range(0, 65535))->capture_default_str();
   c.view->add_option("--host", a.view_host, "Address to listen on (another than loopback exposes the study to the network)")
       ->capture_default_str();
   c.report = app.add_subcommand("report", "Write a result directory's views (mechanism, samples, front, convergence) "
                                           "as one self-contained HTML file (no server)");
-  c.report->add_option("path", a.file, "Result directory (holding result.json)")->required();
+  c.report->add_option("path", a.file, "Result directory (holding result.json), or the output directory of hapsyn sweep or compare")
+      ->required();
   c.report->add_option("-o,--output", a.report_out, "HTML file to write (default: RESULT_DIR/report.html)");
 }
 

@@ -79,7 +79,7 @@ def check_errors(hapsyn, run, work):
     missing = os.path.join(work, "no-such-dir")
     cases = (([missing], f"report: {missing}: not a directory: give a result directory (one holding result.json)"),
              ([os.path.join(run, "result.json")], "result.json: not a directory"),
-             ([empty], f"report: {empty}: no result.json in it: give the output directory of hapsyn run"),
+             ([empty], f"report: {empty}: no result.json (nor sweep.json, compare.json) in it: give the output directory of hapsyn run, sweep or compare"),
              ([run, "-o", os.path.join(missing, "r.html")], f"report: cannot write {missing}/r.html.tmp-"),
              ([run, "-o", empty], f"report: cannot rename {empty}.tmp-"))
     for args, message in cases:

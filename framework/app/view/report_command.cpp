@@ -103,8 +103,10 @@ int report_command(const std::string& result_dir, const std::string& output, con
   if (!fs::is_directory(dir)) {
     throw hapsyn::Error("report", result_dir + ": not a directory: give a result directory (one holding result.json)");
   }
-  if (!fs::is_regular_file(dir / "result.json")) {
-    throw hapsyn::Error("report", result_dir + ": no result.json in it: give the output directory of hapsyn run");
+  if (!fs::is_regular_file(dir / "result.json") && !fs::is_regular_file(dir / "sweep.json") &&
+      !fs::is_regular_file(dir / "compare.json")) {
+    throw hapsyn::Error("report", result_dir + ": no result.json (nor sweep.json, compare.json) in it: give the output "
+                                               "directory of hapsyn run, sweep or compare");
   }
   const std::string html = report_html(load_view_data(result_dir, registry, &std::cerr));
   const fs::path file = output.empty() ? dir / "report.html" : fs::path(output);

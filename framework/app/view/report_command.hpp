@@ -17,11 +17,12 @@ namespace hapsyn_cli {
 ///         "</script" (it could not be inlined).
 std::string report_html(const ViewData& data);
 
-/// Loads the result directory (view_data.hpp) and writes report_html to `output` ("" =
+/// Loads the result directory, or a sweep's or comparison's directory (view_data.hpp), and writes report_html to `output` ("" =
 /// RESULT_DIR/report.html) through a temporary file beside it renamed into place, so that a
 /// reader never sees half a report. Prints "hapsyn report: <file> (<size>)". \return 0.
-/// \throws hapsyn::Error("report", ...) naming the path when it is not a directory or holds no
-///         result.json, or the file cannot be written; the loader's errors.
+/// \throws hapsyn::Error("report", ...) naming the path when it is not a directory or holds none
+///         of result.json, sweep.json, compare.json, or the file cannot be written; the loader's
+///         errors.
 int report_command(const std::string& result_dir, const std::string& output, const hapsyn::Registry& registry);
 
 }  // namespace hapsyn_cli

@@ -1,6 +1,10 @@
 #include "result_views.hpp"
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/json_text.hpp>
+#include <hapsyn/read_file.hpp>
+
+#include <boost/filesystem.hpp>
 
 #include <algorithm>
 #include <numeric>
@@ -83,7 +87,69 @@ Json statistics_json(const Json& result) {
   return out;
 }
 
+// A row's numbers (null kept: a missing measurement) as "prefix" + key.
+void add_numbers(const Json& object, const std::string& prefix, Json& values) {
+  if (!object.is_object()) return;
+  for (const auto& [key, value] : object.items()) {
+    if (value.is_number() || value.is_null()) values[prefix + key] = value;
+  }
+}
+
+Json sweep_table(const Json& sweep, const std::string& file) {
+  Json rows = Json::array();
+  for (const Json& run : sweep.at("runs")) {
+    std::string label;
+    if (run.contains("values") && run["values"].is_object()) {
+      for (const auto& [path, value] : run["values"].items()) label += (label.empty() ? "" : ", ") + path + "=" + value.dump();
+    }
+    Json values = Json::object();
+    for (const char* key : {"run_time_s", "solve_time_s"}) {
+      if (run.contains(key)) values[key] = run[key];
+    }
+    for (const char* group : {"errors", "evaluations", "objectives"}) {
+      if (run.contains(group)) add_numbers(run[group], std::string(group) + ".", values);
+    }
+    rows.push_back({{"label", label.empty() ? run.value("case", std::string("?")) : label}, {"values", values}});
+  }
+  return {{"kind", "sweep"}, {"file", file}, {"rows", rows}};
+}
+
+Json compare_table(const Json& compare, const std::string& file) {
+  Json rows = Json::array();
+  for (const Json& row : compare.at("rows")) {
+    Json values = Json::object();
+    add_numbers(row, "", values);
+    rows.push_back({{"label", row.value("study", std::string("?"))}, {"values", values}});
+  }
+  return {{"kind", "compare"}, {"file", file}, {"rows", rows}};
+}
+
 }  // namespace
+
+std::optional<Batch> find_batch(const std::string& folder) {
+  namespace fs = boost::filesystem;
+  const fs::path dir(folder);
+  for (const char* name : {"sweep.json", "compare.json"}) {
+    const std::string file = (dir / name).string();
+    if (!fs::is_regular_file(file)) continue;
+    const Json doc = hapsyn::parse_json_text(hapsyn::read_regular_file(file, "view", name, std::uint64_t{1} << 28), file, "view");
+    const bool sweep = std::string(name) == "sweep.json";
+    const char* list = sweep ? "runs" : "rows";
+    if (!doc.contains(list) || !doc[list].is_array() || doc[list].empty()) {
+      throw hapsyn::Error("view", file + ": no \"" + list + "\" to show (an unfinished " + (sweep ? "sweep" : "comparison") + "?)");
+    }
+    Batch batch;
+    batch.table = sweep ? sweep_table(doc, file) : compare_table(doc, file);
+    // Each run's folder, by its name inside this directory (the directory may have moved).
+    const Json& shown = sweep ? doc[list].back() : doc[list].front();
+    const std::string run = sweep ? shown.value("case", std::string())
+                                  : fs::path(shown.value("output_directory", std::string())).filename().string();
+    batch.run_dir = (dir / run).string();
+    batch.table["shown"] = sweep ? batch.table["rows"].back()["label"] : batch.table["rows"].front()["label"];
+    return batch;
+  }
+  return std::nullopt;
+}
 
 Json view_result_json(const ViewSource& source, int drawn_sample) {
   const Json& result = source.result;

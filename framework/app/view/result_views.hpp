@@ -6,6 +6,9 @@
 
 #include <hapsyn/json.hpp>
 
+#include <optional>
+#include <string>
+
 namespace hapsyn_cli {
 
 /// Most samples tried per front design for one it reaches (view_front_json): the drawing search
@@ -23,5 +26,18 @@ inline constexpr int kMaxDrawTries = 2000;
 /// \throws hapsyn::Error("view", ...) naming result.json's path (front[i].design...) when a
 ///         front point lacks a number for a design component.
 hapsyn::Json view_result_json(const ViewSource& source, int drawn_sample);
+
+/// A sweep's or a comparison's output directory, shown as its table (/api/result "batch") and
+/// one of its runs in 3D.
+struct Batch {
+  std::string run_dir;  ///< the result directory shown: a sweep's last run, a comparison's first study
+  hapsyn::Json table;   ///< {"kind": "sweep"|"compare", "file", "shown", "rows": [{"label", "values": {column: number|null}}]}
+};
+
+/// The batch of `dir` when it holds sweep.json or compare.json (and no result.json), else
+/// nullopt. Sweep columns: run_time_s, solve_time_s, errors.*, evaluations.*, objectives.*;
+/// compare columns: every number (or null) of a row. \throws hapsyn::Error("view", ...) naming
+/// the file when it has no runs (rows) or cannot be read.
+std::optional<Batch> find_batch(const std::string& dir);
 
 }  // namespace hapsyn_cli

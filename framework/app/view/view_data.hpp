@@ -18,8 +18,8 @@ struct ViewData {
   hapsyn::Json result;  ///< /api/result: a result directory's front (result_views.hpp)
 };
 
-/// Loads a problem file or a result directory (one holding result.json) and computes its
-/// ViewData. The design: a result's best design (result.json "best.design"); for a problem
+/// Loads a problem file, a result directory (one holding result.json) or a sweep's or
+/// comparison's directory (result_views.hpp find_batch: one of its runs) and computes its ViewData. The design: a result's best design (result.json "best.design"); for a problem
 /// file, every fixed component's value and the midpoint of every free one's bounds (rounded
 /// for integer variables), which is the design `hapsyn run` evaluates for an evaluate-solver
 /// study. The local values: the result's samples.csv when it has one, else the design evaluated
