@@ -4,6 +4,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from '/OrbitControls.js';
 import { setupFront } from '/front.js';
+import { scatter3d } from '/front3d.js';
 import { setupBatch, setupRuns } from '/plots.js';
 
 const state = { ready: false, error: null, pointCount: 0, objective: null, colourRange: null, segments: 0, columns: [] };
@@ -163,7 +164,7 @@ async function main() {
     scene.add(drawn);
     state.segments = point.segments.length;
     state.drawnSegments = point.segments;
-  });
+  }, scatter3d);
   state.columns = samples.columns.map(c => c.name);
   const select = document.getElementById('objective');
   const choose = index => {

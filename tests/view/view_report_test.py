@@ -44,7 +44,7 @@ def offline_browser():
 def check_file(html):
     check(not LOADS.search(html), f"the page loads no http(s) URL ({LOADS.search(html)})")
     modules = re.findall(r'"data:text/javascript;base64,([A-Za-z0-9+/=]+)"', html)
-    check(len(modules) == 4, f"{len(modules)} modules inlined as data: URLs (three, orbit controls, front, plots)")
+    check(len(modules) == 5, f"{len(modules)} modules inlined as data: URLs (three, orbit controls, front, front3d, plots)")
     found = [LOADS.search(base64.b64decode(m).decode("utf-8")) for m in modules]
     check(not any(found), f"no inlined module loads an http(s) URL ({[f.group(0) for f in found if f]})")
     check(html.count('type="application/json" data-route="/api/') == 3, "the three documents embedded")

@@ -78,7 +78,7 @@ def listening_addresses(port):
 def check_routes(port, rows):
     for path, kind in (("/", "text/html"), ("/app.js", "text/javascript"), ("/three.module.js", "text/javascript"),
                        ("/OrbitControls.js", "text/javascript"), ("/api/study", "application/json"),
-                       ("/api/samples", "application/json"), ("/front.js", "text/javascript"), ("/plots.js", "text/javascript"),
+                       ("/api/samples", "application/json"), ("/front.js", "text/javascript"), ("/front3d.js", "text/javascript"), ("/plots.js", "text/javascript"),
                        ("/api/result", "application/json")):
         status, headers, body = get(port, path)
         check(status == 200 and headers.get("Content-Type", "").startswith(kind) and len(body) > 0,
