@@ -4,7 +4,8 @@ shows the batch's table (one row per run of sweep.json / row of compare.json) an
 of the chosen column that has a value, and draws the run it names (a sweep's last run, a
 comparison's first study) at that run's best design, all checked against the files; `hapsyn
 report` of the sweep embeds its table. A sweep
-without runs, or whose shown run is gone, is refused with a message naming the file.
+without runs or whose shown run is gone, and a compare.json that is no JSON, are refused with a
+message naming the file.
 
 Usage: view_batch_test.py HAPSYN SWEEP_PROBLEM COMPARE_PROBLEM_A COMPARE_PROBLEM_B WORK_DIR.
 Exit 0 when every check passes.
@@ -57,8 +58,14 @@ def check_errors(hapsyn, sweep, work):
     shutil.copytree(sweep, gone)
     last = doc["runs"][-1]["case"]
     shutil.rmtree(os.path.join(gone, last))
+    broken = os.path.join(work, "compare-broken")
+    shutil.rmtree(broken, ignore_errors=True)
+    os.makedirs(broken)
+    with open(os.path.join(broken, "compare.json"), "w") as f:
+        f.write('{"rows": [')
     for folder, message in ((empty, f"view: {empty}/sweep.json: no \"runs\" to show (an unfinished sweep?)"),
-                            (gone, f"{gone}/{last}/result.json")):
+                            (gone, f"{gone}/{last}/result.json"),
+                            (broken, f"view: {broken}/compare.json")):
         r = subprocess.run([hapsyn, "view", folder, "--port", "0"], capture_output=True, text=True, timeout=120)
         check(r.returncode == 1 and message in r.stderr, f"{os.path.basename(folder)}: exit 1, '{message}' ({r.stderr.strip()})")
 
