@@ -16,8 +16,8 @@ function(hapsyn_add_view target)
   endif()
   # route|content type|file; three.js and its orbit controls copied next to the page.
   set(js "text/javascript")  # no ";" in a CMake list: view_command adds the charset
-  set(assets "/|text/html|${web}/index.html" "/app.js|${js}|${web}/app.js" "/front.js|${js}|${web}/front.js" "/front3d.js|${js}|${web}/front3d.js"
-                  "/plots.js|${js}|${web}/plots.js")
+  set(assets "/|text/html|${web}/index.html" "/app.js|${js}|${web}/app.js" "/front.js|${js}|${web}/front.js"
+             "/front3d.js|${js}|${web}/front3d.js" "/plots.js|${js}|${web}/plots.js")
   set(missing "")
   if(EXISTS ${three}/build/three.module.min.js AND EXISTS ${three}/examples/jsm/controls/OrbitControls.js)
     list(APPEND assets "/three.module.js|${js}|${three}/build/three.module.min.js"

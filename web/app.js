@@ -1,6 +1,7 @@
 // The page of `hapsyn view`: the study's mechanism at its design, its scene frame and gravity,
 // and the samples as a point cloud coloured by a chosen local value. Its state is on
-// window.hapsynView for tests: {ready, error, pointCount, objective, colourRange, segments}.
+// window.hapsynView for tests: {ready, error, pointCount, objective, colourRange, segments,
+// drawnSegments}; front.js and plots.js add theirs (a result's front, runs, sweep or comparison).
 import * as THREE from 'three';
 import { OrbitControls } from '/OrbitControls.js';
 import { setupFront } from '/front.js';
@@ -160,6 +161,7 @@ async function main() {
   // A front point clicked: its design drawn instead (front.js).
   setupFront(result, state, point => {
     scene.remove(drawn);
+    drawn.traverse(o => o.geometry && o.geometry.dispose());
     drawn = mechanism(point, size * 0.006);
     scene.add(drawn);
     state.segments = point.segments.length;

@@ -73,6 +73,29 @@ def check_page(driver, report, result, rows):
     check(os.path.getsize(shot) > 10000, f"screenshot {shot}")
 
 
+HOSTILE = "</script><script>window.pwned = 1</script><!--"
+
+
+def check_hostile(driver, hapsyn, run, work):
+    """A result.json string holding markup stays a string: the report loads, runs none of it."""
+    folder = os.path.join(work, "hostile")
+    shutil.rmtree(folder, ignore_errors=True)
+    shutil.copytree(run, folder, ignore=shutil.ignore_patterns("report*"))
+    path = os.path.join(folder, "result.json")
+    with open(path) as f:
+        result = json.load(f)
+    result["statistics"]["algorithm"] = HOSTILE
+    with open(path, "w") as f:
+        json.dump(result, f)
+    r = subprocess.run([hapsyn, "report", folder], capture_output=True, text=True, timeout=120)
+    html = open(os.path.join(folder, "report.html"), encoding="utf-8").read() if r.returncode == 0 else ""
+    check(HOSTILE not in html and html.count("</script>") == html.count("<script"), "markup in a string is escaped")
+    driver.get("file://" + os.path.abspath(os.path.join(folder, "report.html")))
+    state = wait_state(driver, "ready", timeout=60)
+    pwned = driver.execute_script("return window.pwned === undefined")
+    check(state.get("ready") is True and pwned, f"the report loads and runs none of it (error: {state.get('error')})")
+
+
 def check_errors(hapsyn, run, work):
     empty = os.path.join(work, "empty")
     os.makedirs(empty, exist_ok=True)
@@ -117,6 +140,7 @@ def main():
     driver = offline_browser()
     try:
         check_page(driver, report, result, rows)
+        check_hostile(driver, hapsyn, run, work)
     finally:
         driver.quit()
     check_errors(hapsyn, run, work)

@@ -43,14 +43,18 @@ std::string base64(std::string_view bytes) {
   return out;
 }
 
-// JSON text safe inside a <script> element: "</" written as "<\/" (the same string in JSON).
+// JSON text safe inside a <script> element: every "<" (only ever inside a JSON string) written
+// as "\u003c", the same string, so that no "</script" or "<!--" can end or bend the element.
 std::string script_json(const hapsyn::Json& document) {
-  std::string text = document.dump();
+  const std::string text = document.dump();
   std::string out;
   out.reserve(text.size());
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    out += text[i];
-    if (text[i] == '<' && i + 1 < text.size() && text[i + 1] == '/') out += '\\';
+  for (const char c : text) {
+    if (c == '<') {
+      out += "\\u003c";
+    } else {
+      out += c;
+    }
   }
   return out;
 }
@@ -83,8 +87,8 @@ std::string report_html(const ViewData& data) {
       imports[key] = "data:text/javascript;base64," + base64(asset.body);
     }
   }
-  if (app.find("</script") != std::string::npos) {
-    throw hapsyn::Error("report", "app.js holds \"</script\": it cannot be inlined into the report");
+  if (app.find("</script") != std::string::npos || app.find("<!--") != std::string::npos) {
+    throw hapsyn::Error("report", "app.js holds \"</script\" or \"<!--\": it cannot be inlined into the report");
   }
   replace_once(page, kImportMap, "<script type=\"importmap\">" + hapsyn::Json{{"imports", imports}}.dump() + "</script>");
   std::string scripts;

@@ -13,8 +13,8 @@ namespace hapsyn_cli {
 /// <script type="application/json" data-route="/api/..."> elements (which the page reads instead
 /// of fetching), app.js as an inline module, the other modules (three.js, its orbit controls,
 /// front.js, plots.js) as data: URLs of the import map. Loads nothing from anywhere.
-/// \throws hapsyn::Error("report", ...) when the page's assets were not built or a script holds
-///         "</script" (it could not be inlined).
+/// \throws hapsyn::Error("report", ...) when the page's assets were not built or app.js holds
+///         "</script" or "<!--" (it could not be inlined).
 std::string report_html(const ViewData& data);
 
 /// Loads the result directory, or a sweep's or comparison's directory (view_data.hpp), and writes report_html to `output` ("" =

@@ -15,7 +15,7 @@ struct ViewData {
   std::string name;     ///< the study's name
   hapsyn::Json study;   ///< /api/study: name, plugins, design, drawn sample, segments, gravity
   hapsyn::Json samples; ///< /api/samples: positions, status, local-value columns with units
-  hapsyn::Json result;  ///< /api/result: a result directory's front (result_views.hpp)
+  hapsyn::Json result;  ///< /api/result: front, statistics (runs, history), batch (result_views.hpp)
 };
 
 /// Loads a problem file, a result directory (one holding result.json) or a sweep's or
