@@ -45,6 +45,13 @@ def check_file(html):
     check(not LOADS.search(html), f"the page loads no http(s) URL ({LOADS.search(html)})")
     modules = re.findall(r'"data:text/javascript;base64,([A-Za-z0-9+/=]+)"', html)
     check(len(modules) == 5, f"{len(modules)} modules inlined as data: URLs (three, orbit controls, front, front3d, plots)")
+    # Byte for byte the page's modules (base64 checked by an independent decoder).
+    web = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "web")
+    sources = [os.path.join(web, n) for n in ("front.js", "front3d.js", "plots.js")] + \
+        [os.path.join(web, "node_modules", "three", p) for p in ("build/three.module.min.js", "examples/jsm/controls/OrbitControls.js")]
+    want = sorted(open(p, "rb").read() for p in sources)
+    check(sorted(base64.b64decode(m) for m in modules) == want,
+          f"the data: modules decode to the files (sizes mod 3: {sorted(len(w) % 3 for w in want)})")
     found = [LOADS.search(base64.b64decode(m).decode("utf-8")) for m in modules]
     check(not any(found), f"no inlined module loads an http(s) URL ({[f.group(0) for f in found if f]})")
     check(html.count('type="application/json" data-route="/api/') == 3, "the three documents embedded")
