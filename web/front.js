@@ -24,6 +24,12 @@ function label(objective) {
 }
 
 // [lo, hi] of the finite values, widened by 5 % (a single value gets +-1 % or +-1).
+// An axis label: three significant digits, exponent notation for small or large magnitudes.
+function tick(v) {
+  const m = Math.abs(v);
+  return m !== 0 && (m < 1e-2 || m >= 1e5) ? v.toExponential(1) : String(Number(v.toPrecision(3)));
+}
+
 function extent(values) {
   const finite = values.filter(v => v !== null && Number.isFinite(v));
   if (!finite.length) return [0, 1];
@@ -135,8 +141,8 @@ export function setupFront(result, state, onSelect, scatter3d) {
                       height: HEIGHT - MARGIN.top - MARGIN.bottom, class: 'frame' }, svg);
     for (let k = 0; k <= 4; ++k) {
       const vx = x0 + (x1 - x0) * k / 4, vy = y0 + (y1 - y0) * k / 4;
-      element('text', { x: px(vx), y: HEIGHT - MARGIN.bottom + 14, 'text-anchor': 'middle', class: 'tick' }, svg).textContent = format(vx);
-      element('text', { x: MARGIN.left - 4, y: py(vy) + 4, 'text-anchor': 'end', class: 'tick' }, svg).textContent = format(vy);
+      element('text', { x: px(vx), y: HEIGHT - MARGIN.bottom + 14, 'text-anchor': 'middle', class: 'tick' }, svg).textContent = tick(vx);
+      element('text', { x: MARGIN.left - 4, y: py(vy) + 4, 'text-anchor': 'end', class: 'tick' }, svg).textContent = tick(vy);
     }
     element('text', { x: (MARGIN.left + WIDTH - MARGIN.right) / 2, y: HEIGHT - 6, 'text-anchor': 'middle', class: 'axis' }, svg)
       .textContent = label(ox);

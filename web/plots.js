@@ -19,6 +19,12 @@ function format(v) {
   return v === null || v === undefined ? '–' : typeof v === 'number' ? Number(v).toPrecision(4) : String(v);
 }
 
+// An axis label: three significant digits, exponent notation for small or large magnitudes.
+function tick(v) {
+  const m = Math.abs(v);
+  return m !== 0 && (m < 1e-2 || m >= 1e5) ? v.toExponential(1) : String(Number(v.toPrecision(3)));
+}
+
 function extent(values) {
   const finite = values.filter(v => v !== null && Number.isFinite(v));
   if (!finite.length) return [0, 1];
@@ -41,8 +47,8 @@ export function linePlot(svg, series, xLabel, yLabel) {
                     height: HEIGHT - MARGIN.top - MARGIN.bottom, class: 'frame' }, svg);
   for (let k = 0; k <= 4; ++k) {
     const vx = x0 + (x1 - x0) * k / 4, vy = y0 + (y1 - y0) * k / 4;
-    element('text', { x: px(vx), y: HEIGHT - MARGIN.bottom + 13, 'text-anchor': 'middle', class: 'tick' }, svg).textContent = format(vx);
-    element('text', { x: MARGIN.left - 4, y: py(vy) + 4, 'text-anchor': 'end', class: 'tick' }, svg).textContent = format(vy);
+    element('text', { x: px(vx), y: HEIGHT - MARGIN.bottom + 13, 'text-anchor': 'middle', class: 'tick' }, svg).textContent = tick(vx);
+    element('text', { x: MARGIN.left - 4, y: py(vy) + 4, 'text-anchor': 'end', class: 'tick' }, svg).textContent = tick(vy);
   }
   element('text', { x: (MARGIN.left + WIDTH - MARGIN.right) / 2, y: HEIGHT - 4, 'text-anchor': 'middle', class: 'axis' }, svg).textContent = xLabel;
   const mid = (MARGIN.top + HEIGHT - MARGIN.bottom) / 2;
@@ -146,14 +152,15 @@ export function barPlot(svg, labels, values, yLabel) {
   svg.setAttribute('width', WIDTH);
   svg.setAttribute('height', height);
   const finite = values.filter(v => v !== null && Number.isFinite(v));
-  const [y0, y1] = extent([0, ...finite]);
+  let [y0, y1] = extent([0, ...finite]);
+  if (finite.every(v => v >= 0)) y0 = 0;  // bars of non-negative values stand on the axis
   const bottom = HEIGHT - MARGIN.bottom;
   const py = v => bottom - (v - y0) / (y1 - y0) * (bottom - MARGIN.top);
   const slot = (WIDTH - MARGIN.left - MARGIN.right) / Math.max(values.length, 1);
   element('rect', { x: MARGIN.left, y: MARGIN.top, width: WIDTH - MARGIN.left - MARGIN.right, height: bottom - MARGIN.top, class: 'frame' }, svg);
   for (let k = 0; k <= 4; ++k) {
     const vy = y0 + (y1 - y0) * k / 4;
-    element('text', { x: MARGIN.left - 4, y: py(vy) + 4, 'text-anchor': 'end', class: 'tick' }, svg).textContent = format(vy);
+    element('text', { x: MARGIN.left - 4, y: py(vy) + 4, 'text-anchor': 'end', class: 'tick' }, svg).textContent = tick(vy);
   }
   const mid = (MARGIN.top + bottom) / 2;
   element('text', { x: 12, y: mid, 'text-anchor': 'middle', class: 'axis', transform: `rotate(-90 12 ${mid})` }, svg).textContent = yLabel;
