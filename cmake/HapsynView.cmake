@@ -16,7 +16,8 @@ function(hapsyn_add_view target)
   endif()
   # route|content type|file; three.js and its orbit controls copied next to the page.
   set(js "text/javascript")  # no ";" in a CMake list: view_command adds the charset
-  set(assets "/|text/html|${web}/index.html" "/app.js|${js}|${web}/app.js" "/figure.js|${js}|${web}/figure.js")
+  set(assets "/|text/html|${web}/index.html" "/app.js|${js}|${web}/app.js" "/front.js|${js}|${web}/front.js"
+             "/front3d.js|${js}|${web}/front3d.js" "/plots.js|${js}|${web}/plots.js" "/figure.js|${js}|${web}/figure.js")
   list(APPEND assets "/prototype.js|${js}|${web}/prototype.js")  # the virtual prototype
   set(missing "")
   if(EXISTS ${three}/build/three.module.min.js AND EXISTS ${three}/examples/jsm/controls/OrbitControls.js)
@@ -53,7 +54,7 @@ function(hapsyn_add_view target)
     COMMENT "Embedding the page of hapsyn view"
     VERBATIM)
   target_sources(${target} PRIVATE app/view/view_command.cpp app/view/view_data.cpp app/view/view_figure.cpp app/view/view_source.cpp
-    app/view/samples_csv_reader.cpp app/view/http_server.cpp ${output})
+    app/view/samples_csv_reader.cpp app/view/http_server.cpp app/view/result_views.cpp app/view/report_command.cpp ${output})
   # The virtual prototype: the replay and the live frames (with the motion scene's signal
   # processing), a library of their own that benchmarks/live_frame_benchmark.cpp times too.
   add_library(hapsyn_view_prototype STATIC app/view/replay_data.cpp app/view/live_session.cpp

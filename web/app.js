@@ -1,9 +1,13 @@
 // The page of `hapsyn view`: the study's mechanism at its design, its scene frame and gravity,
 // and the samples as a point cloud coloured by a chosen local value. Its state is on
-// window.hapsynView for tests: {ready, error, pointCount, objective, colourRange, segments, human}.
+// window.hapsynView for tests: {ready, error, pointCount, objective, colourRange, segments,
+// drawnSegments, human}; front.js and plots.js add theirs (a result's front, runs, sweep or comparison).
 import * as THREE from 'three';
 import { OrbitControls } from '/OrbitControls.js';
 import { humanFigure, figurePoints } from '/figure.js';
+import { setupFront } from '/front.js';
+import { scatter3d } from '/front3d.js';
+import { setupBatch, setupRuns } from '/plots.js';
 
 const state = { ready: false, error: null, pointCount: 0, objective: null, colourRange: null, segments: 0, columns: [],
                 human: null };
@@ -20,6 +24,9 @@ function colourAt(t) {
 }
 
 async function getJson(url) {
+  // A report (hapsyn report) carries its documents in the page.
+  const inline = document.querySelector(`script[type="application/json"][data-route="${url}"]`);
+  if (inline) return JSON.parse(inline.textContent);
   const response = await fetch(url);
   if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
   return response.json();
@@ -118,7 +125,7 @@ function frameCamera(camera, controls, box) {
 }
 
 async function main() {
-  const [study, samples] = await Promise.all([getJson('/api/study'), getJson('/api/samples')]);
+  const [study, samples, result] = await Promise.all([getJson('/api/study'), getJson('/api/samples'), getJson('/api/result')]);
   const container = document.getElementById('view');
   const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
   renderer.setPixelRatio(window.devicePixelRatio);
@@ -141,7 +148,7 @@ async function main() {
   for (const p of figurePoints(study.figure)) box.expandByPoint(new THREE.Vector3(p[0], p[1], p[2]));
   box.expandByPoint(new THREE.Vector3(0, 0, 0));
   const size = Math.max(box.getSize(new THREE.Vector3()).length(), 1e-3);
-  const drawn = mechanism(study, size * 0.006);
+  let drawn = mechanism(study, size * 0.006);
   scene.add(drawn);
   const human = humanFigure(study.figure);
   if (human) scene.add(human);
@@ -155,6 +162,18 @@ async function main() {
   fillPanel(study, samples);
   state.pointCount = samples.count;
   state.segments = study.segments.length;
+  state.drawnSegments = study.segments;
+  setupRuns(result, study.objectives, state);
+  setupBatch(result, state);
+  // A front point clicked: its design drawn instead (front.js).
+  setupFront(result, state, point => {
+    scene.remove(drawn);
+    drawn.traverse(o => o.geometry && o.geometry.dispose());
+    drawn = mechanism(point, size * 0.006);
+    scene.add(drawn);
+    state.segments = point.segments.length;
+    state.drawnSegments = point.segments;
+  }, scatter3d);
   state.columns = samples.columns.map(c => c.name);
   const select = document.getElementById('objective');
   const choose = index => {

@@ -26,6 +26,7 @@
 #include "summary.hpp"
 #include "reference_command.hpp"
 #if HAPSYN_WITH_VIEW
+#include "report_command.hpp"
 #include "view_command.hpp"
 #endif
 
@@ -359,6 +360,7 @@ struct Arguments {
   hapsyn::CompareOptions compare;
   std::string view_host = "127.0.0.1";
   int view_port = 8080;
+  std::string report_out;
 };
 
 struct Commands {
@@ -374,6 +376,7 @@ struct Commands {
   CLI::App* merge = nullptr;
   CLI::App* reference = nullptr;
   CLI::App* view = nullptr;
+  CLI::App* report = nullptr;
 };
 
 // --seed: a whole number that fits 64 bits. Checked on the text, before CLI11 converts it: a
@@ -442,10 +445,18 @@ void define_study_commands(CLI::App& app, Arguments& a, Commands& c) {
   c.scene->add_option("--attribute", a.scene_attributes, "Request a per-sample attribute (e.g. M_v, M_a); repeatable");
 
   c.view = app.add_subcommand("view", "Show a study in the browser: its mechanism, samples and local values (local web server)");
-  c.view->add_option("path", a.file, "Problem file (JSON) or result directory (holding result.json)")->required();
+  c.view->add_option("path", a.file,
+                     "Problem file (JSON), result directory (holding result.json), or the output directory of "
+                     "hapsyn sweep or compare")
+      ->required();
   c.view->add_option("--port", a.view_port, "TCP port (0: any free port)")->check(CLI::Range(0, 65535))->capture_default_str();
   c.view->add_option("--host", a.view_host, "Address to listen on (another than loopback exposes the study to the network)")
       ->capture_default_str();
+  c.report = app.add_subcommand("report", "Write a result directory's views (mechanism, samples, front, convergence) "
+                                          "as one self-contained HTML file (no server)");
+  c.report->add_option("path", a.file, "Result directory (holding result.json), or the output directory of hapsyn sweep or compare")
+      ->required();
+  c.report->add_option("-o,--output", a.report_out, "HTML file to write (default: RESULT_DIR/report.html)");
 }
 
 // `hapsyn reference`: the JSON the documentation's reference pages are generated from
@@ -686,6 +697,13 @@ int dispatch(const Commands& c, Arguments& a, const hapsyn::Registry& registry) 
     return hapsyn_cli::view_command(a.file, a.view_host, a.view_port, registry);
 #else
     throw hapsyn::Error("view", "this hapsyn was built without the view (configure with -DHAPSYN_WITH_VIEW=ON)");
+#endif
+  }
+  if (*c.report) {
+#if HAPSYN_WITH_VIEW
+    return hapsyn_cli::report_command(a.file, a.report_out, registry);
+#else
+    throw hapsyn::Error("report", "this hapsyn was built without the view (configure with -DHAPSYN_WITH_VIEW=ON)");
 #endif
   }
   if (*c.scene) {

@@ -79,7 +79,8 @@ def check_routes(port, rows):
     for path, kind in (("/", "text/html"), ("/app.js", "text/javascript"), ("/figure.js", "text/javascript"),
                        ("/three.module.js", "text/javascript"),
                        ("/OrbitControls.js", "text/javascript"), ("/api/study", "application/json"),
-                       ("/api/samples", "application/json")):
+                       ("/api/samples", "application/json"), ("/front.js", "text/javascript"), ("/front3d.js", "text/javascript"), ("/plots.js", "text/javascript"),
+                       ("/api/result", "application/json")):
         status, headers, body = get(port, path)
         check(status == 200 and headers.get("Content-Type", "").startswith(kind) and len(body) > 0,
               f"GET {path}: 200 {kind} ({status}, {headers.get('Content-Type')}, {len(body)} bytes)")
@@ -165,7 +166,10 @@ def check_result_dir(hapsyn, problem, work):
         samples = json.loads(body)
         _, _, body = get(view.port, "/api/study")
         study = json.loads(body)
+        _, _, body = get(view.port, "/api/result")
+        front = json.loads(body)["front"]
         view.stop()
+    check(front is None and "front" not in result, "result dir without a front: /api/result's front is null")
     check(samples["values_from"] == "samples.csv" and samples["count"] == rows, f"result dir: {rows} samples from samples.csv")
     check(study["design"] == result["best"]["design"], "result dir: the design is result.json's best.design")
     for column in samples["columns"]:
@@ -201,7 +205,7 @@ def check_result_dir_errors(hapsyn, work):
     rows = len(csv_lines) - 1
     cases = (
         (variant("empty"), "is a directory without result.json: give a problem file or a result directory"),
-        (variant("no-best", without_best), 'no "best.design" (status'),
+        (variant("no-best", without_best), 'no "best.design" and no front (status'),
         (variant("no-problem", without_problem), 'no "problem" object: not a result.json that hapsyn run wrote'),
         (variant("no-l1", without_l1), "result.json: best.design.l1: no number for design component l1"),
         (variant("rows", result, csv_lines[:-1]), f"{rows - 1} rows, the scene has {rows} samples"),

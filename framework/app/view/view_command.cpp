@@ -26,6 +26,7 @@ int view_command(const std::string& path, const std::string& host, int port, con
   hapsyn::Json replay_doc = replay_json(*data.source->study.problem, data.source->design);
   if (replay_doc["available"] == true) replay_doc["shoulder_frame"] = live->shoulder_frame();
   const std::string replay = replay_doc.dump();
+  const std::string result = data.result.dump();
   std::map<std::string, Resource> routes;
   for (const WebAsset& asset : web_assets()) {
     routes[std::string(asset.route)] = {std::string(asset.content_type) + "; charset=utf-8", asset.body};
@@ -33,6 +34,7 @@ int view_command(const std::string& path, const std::string& host, int port, con
   routes["/api/study"] = {"application/json", study};
   routes["/api/samples"] = {"application/json", samples};
   routes["/api/replay"] = {"application/json", replay};
+  routes["/api/result"] = {"application/json", result};
   ServerSettings settings;
   settings.host = host;
   settings.port = static_cast<unsigned short>(port);

@@ -1,5 +1,6 @@
 #include "view_data.hpp"
 
+#include "result_views.hpp"
 #include "samples_csv_reader.hpp"
 #include "view_figure.hpp"
 #include "view_source.hpp"
@@ -12,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace hapsyn_cli {
 namespace {
@@ -147,9 +149,12 @@ Json samples_json(const ViewSource& s, const hapsyn::SampleRecords& records, con
 
 ViewData load_view_data(const std::string& path, const hapsyn::Registry& registry, std::ostream* progress) {
   const fs::path p(path);
+  std::optional<Batch> batch;  // a sweep's or comparison's directory: its table, one run shown
   ViewSource source = [&] {
     if (fs::is_directory(p)) {
       if (!fs::is_regular_file(p / "result.json")) {
+        batch = find_batch(path);
+        if (batch) return load_result_dir(batch->run_dir, registry, progress);
         throw hapsyn::Error("view", path + " is a directory without result.json: give a problem file or a result directory");
       }
       return load_result_dir(path, registry, progress);
@@ -171,6 +176,8 @@ ViewData load_view_data(const std::string& path, const hapsyn::Registry& registr
   data.name = source.study.resolved.value("name", std::string());
   data.study = study_json(source, sample);
   data.samples = samples_json(source, records, origin);
+  data.result = view_result_json(source, sample);
+  data.result["batch"] = batch ? batch->table : Json(nullptr);
   data.source = std::make_shared<const ViewSource>(std::move(source));
   return data;
 }

@@ -18,11 +18,13 @@ struct ViewData {
   std::string name;     ///< the study's name
   hapsyn::Json study;   ///< /api/study: name, plugins, design, drawn sample, segments, gravity
   hapsyn::Json samples; ///< /api/samples: positions, status, local-value columns with units
+  hapsyn::Json result;  ///< /api/result: front, statistics (runs, history), batch (result_views.hpp)
   /// The study and its design, kept for the virtual prototype (replay_data.hpp).
   std::shared_ptr<const ViewSource> source;
 };
 
-/// Loads a problem file or a result directory (one holding result.json) and computes its
+/// Loads a problem file, a result directory (one holding result.json) or a sweep's or
+/// comparison's directory (result_views.hpp find_batch: one of its runs) and computes its
 /// ViewData (/api/study also carries the human of a scene that models one: view_figure.hpp).
 /// The design: a result's best design (result.json "best.design"); for a problem file, every
 /// fixed component's value and the midpoint of every free one's bounds (rounded for integer

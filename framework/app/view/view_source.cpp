@@ -19,7 +19,8 @@ using hapsyn::Json;
 
 constexpr std::uint64_t kMaxResultBytes = std::uint64_t{1} << 30;
 
-// The full design from a design object {"l": [..], "r": 0.4} (result.json's best.design).
+}  // namespace
+
 Eigen::VectorXd design_from_json(const hapsyn::Problem& problem, const Json& design, const std::string& where) {
   const auto& components = problem.design_space().components();
   Eigen::VectorXd full(static_cast<Eigen::Index>(components.size()));
@@ -35,6 +36,8 @@ Eigen::VectorXd design_from_json(const hapsyn::Problem& problem, const Json& des
   }
   return full;
 }
+
+namespace {
 
 // The design `hapsyn run` evaluates with the evaluate solver: the fixed values; free
 // components (another solver's study) at the midpoint of their bounds, integers rounded.
@@ -65,8 +68,10 @@ ViewSource load_result_dir(const std::string& folder, const hapsyn::Registry& re
   if (!result.contains("problem") || !result["problem"].is_object()) {
     throw hapsyn::Error("view", file + ": no \"problem\" object: not a result.json that hapsyn run wrote");
   }
-  if (!result.contains("best") || !result["best"].contains("design")) {
-    throw hapsyn::Error("view", file + ": no \"best.design\" (status " + result.value("status", std::string("?")) +
+  const bool has_best = result.contains("best") && result["best"].contains("design");
+  const bool has_front = result.contains("front") && result["front"].is_array() && !result["front"].empty();
+  if (!has_best && !has_front) {
+    throw hapsyn::Error("view", file + ": no \"best.design\" and no front (status " + result.value("status", std::string("?")) +
                                     "): the study found no design to show");
   }
   // The problem's relative paths are relative to its file, which the result names only for a
@@ -82,17 +87,34 @@ ViewSource load_result_dir(const std::string& folder, const hapsyn::Registry& re
   if (problem.contains("design")) {
     for (auto& entry : problem["design"].items()) entry.value().erase("unit");
   }
-  ViewSource s{hapsyn::load_study(problem, registry, {}, quiet_settings(progress)), {}, "result directory", {}};
-  s.design = design_from_json(*s.study.problem, result["best"]["design"], file + ": best.design");
+  ViewSource s{hapsyn::load_study(problem, registry, {}, quiet_settings(progress)), {}, "result directory", {}, {}, {}};
+  if (has_best) {
+    s.design = design_from_json(*s.study.problem, result["best"]["design"], file + ": best.design");
+  } else {
+    // A front without a best design (nsga2): its point of the highest score.
+    const Json& front = result["front"];
+    std::size_t top = 0;
+    const auto score = [&](std::size_t i) {
+      return front[i].contains("score") && front[i]["score"].is_number() ? front[i]["score"].get<double>() : -HUGE_VAL;
+    };
+    for (std::size_t i = 1; i < front.size(); ++i) {
+      if (score(i) > score(top)) top = i;
+    }
+    Json design = result.contains("design_fixed") ? result["design_fixed"] : Json::object();
+    if (front[top].contains("design")) design.update(front[top]["design"]);
+    s.design = design_from_json(*s.study.problem, design, file + ": front[" + std::to_string(top) + "].design");
+  }
   const fs::path csv = dir / "samples.csv";
   if (fs::is_regular_file(csv)) s.samples_csv = csv.string();
+  s.result = result;
+  s.result_file = file;
   return s;
 }
 
 ViewSource load_problem_file(const std::string& file, const hapsyn::Registry& registry, std::ostream* progress) {
   const Json document = hapsyn::read_problem_file(file);
   const hapsyn::ProblemDirectoryScope scope(file);
-  ViewSource s{hapsyn::load_study(document, registry, {}, quiet_settings(progress)), {}, "problem file", {}};
+  ViewSource s{hapsyn::load_study(document, registry, {}, quiet_settings(progress)), {}, "problem file", {}, {}, {}};
   s.design = midpoint_design(*s.study.problem);
   return s;
 }
