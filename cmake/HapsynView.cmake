@@ -21,6 +21,12 @@ function(hapsyn_add_view target)
   if(EXISTS ${three}/build/three.module.min.js AND EXISTS ${three}/examples/jsm/controls/OrbitControls.js)
     list(APPEND assets "/three.module.js|${js}|${three}/build/three.module.min.js"
                        "/OrbitControls.js|${js}|${three}/examples/jsm/controls/OrbitControls.js")
+    # A URDF's meshes (web/meshes.js): three's loaders; ColladaLoader's "../loaders/TGALoader.js"
+    # resolves to /loaders/TGALoader.js.
+    list(APPEND assets "/meshes.js|${js}|${web}/meshes.js"
+                       "/loaders/STLLoader.js|${js}|${three}/examples/jsm/loaders/STLLoader.js"
+                       "/loaders/ColladaLoader.js|${js}|${three}/examples/jsm/loaders/ColladaLoader.js"
+                       "/loaders/TGALoader.js|${js}|${three}/examples/jsm/loaders/TGALoader.js")
   else()
     set(assets "")
     # Plain text: it becomes a C++ string literal.
@@ -53,6 +59,7 @@ function(hapsyn_add_view target)
     VERBATIM)
   target_sources(${target} PRIVATE app/view/view_command.cpp app/view/view_data.cpp app/view/view_source.cpp
     app/view/samples_csv_reader.cpp app/view/http_server.cpp ${output})
+  target_sources(${target} PRIVATE app/view/view_meshes.cpp)
   target_include_directories(${target} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/app/view)
   target_compile_definitions(${target} PRIVATE HAPSYN_WITH_VIEW=1)
 endfunction()

@@ -1,8 +1,10 @@
 // The page of `hapsyn view`: the study's mechanism at its design, its scene frame and gravity,
 // and the samples as a point cloud coloured by a chosen local value. Its state is on
-// window.hapsynView for tests: {ready, error, pointCount, objective, colourRange, segments}.
+// window.hapsynView for tests: {ready, error, pointCount, objective, colourRange, segments,
+// meshes, meshErrors, meshesDone} (the meshes: meshes.js).
 import * as THREE from 'three';
 import { OrbitControls } from '/OrbitControls.js';
+import { addMeshes } from '/meshes.js';
 
 const state = { ready: false, error: null, pointCount: 0, objective: null, colourRange: null, segments: 0, columns: [] };
 window.hapsynView = state;
@@ -138,7 +140,9 @@ async function main() {
   for (const s of study.segments) for (const p of s.points) box.expandByPoint(new THREE.Vector3(p[0], p[1], p[2]));
   box.expandByPoint(new THREE.Vector3(0, 0, 0));
   const size = Math.max(box.getSize(new THREE.Vector3()).length(), 1e-3);
-  scene.add(mechanism(study, size * 0.006));
+  const capsules = mechanism(study, size * 0.006);
+  scene.add(capsules);
+  const meshes = addMeshes(scene, study, capsules, state);
   scene.add(new THREE.AxesHelper(size * 0.15));
   const g = new THREE.Vector3(...study.gravity).normalize();
   const top = box.max.clone();
@@ -167,6 +171,7 @@ async function main() {
     return true;
   };
   frameCamera(camera, controls, box);
+  meshes.catch(e => { state.meshErrors.push(String(e)); state.meshesDone = true; });
   window.addEventListener('resize', () => {
     camera.aspect = container.clientWidth / container.clientHeight;
     camera.updateProjectionMatrix();
