@@ -27,6 +27,10 @@ function parser(format, data, route) {
     const collada = new ColladaLoader().parse(data, route);
     if (!collada || !collada.scene) throw new Error(`${route}: not a COLLADA file three can read`);
     collada.scene.rotation.set(0, 0, 0);  // the up axis ignored (see the file comment); the unit kept
+    // A file without normals would be drawn black under the lights.
+    collada.scene.traverse(o => {
+      if (o.isMesh && !o.geometry.getAttribute('normal')) o.geometry.computeVertexNormals();
+    });
     return () => collada.scene.clone();
   }
   throw new Error(`${route}: format "${format}" is not drawn`);
