@@ -21,9 +21,10 @@ namespace {
 
 // A folder of robot files for the tests: robots/my_pkg/urdf/robot.urdf (with parts/rel.stl
 // beside it), robots/my_pkg/meshes/a.stl, robots/other_pkg/meshes/b.stl, ros/third_pkg/c.dae
-// (for ROS_PACKAGE_PATH), abs/d.STL.
+// (for ROS_PACKAGE_PATH), abs/d.STL. One folder per test: ctest runs them in parallel.
 struct RobotFolder {
-  fs::path root = fs::path(HAPSYN_BINARY_DIR) / "chain_meshes_test";
+  fs::path root = fs::path(HAPSYN_BINARY_DIR) / "chain_meshes_test" /
+                  ::testing::UnitTest::GetInstance()->current_test_info()->name();
   fs::path urdf_dir = root / "robots/my_pkg/urdf";
   fs::path urdf = urdf_dir / "robot.urdf";
 
