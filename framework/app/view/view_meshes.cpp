@@ -29,7 +29,10 @@ Json pose_rows(const Eigen::Isometry3d& pose) {
   return rows;
 }
 
-std::string show_mb(std::uint64_t bytes) { return std::to_string(bytes >> 20) + " MB"; }
+// "32 MB" for whole megabytes, else the bytes.
+std::string show_size(std::uint64_t bytes) {
+  return bytes % (1u << 20) == 0 ? std::to_string(bytes >> 20) + " MB" : std::to_string(bytes) + " bytes";
+}
 
 // Reads the distinct files of `visuals` within the limits: file -> route index, -1 when refused.
 std::map<std::string, int> read_files(const std::vector<hapsyn::MeshVisual>& visuals, const MeshLimits& limits,
@@ -39,18 +42,17 @@ std::map<std::string, int> read_files(const std::vector<hapsyn::MeshVisual>& vis
   for (const hapsyn::MeshVisual& v : visuals) {
     if (index.count(v.file)) continue;
     index[v.file] = -1;
-    const std::string at = "mesh file " + v.file + " (link " + v.link + ")";
     std::string bytes;
     try {
       bytes = hapsyn::read_regular_file(v.file, "view", "mesh file", limits.per_file);
     } catch (const hapsyn::Error& e) {
-      if (warnings) *warnings << "hapsyn view: warning: " << e.what() << " (at most " << show_mb(limits.per_file) << " per file); not drawn\n";
+      if (warnings) *warnings << "hapsyn view: warning: link " << v.link << ": " << e.what() << "; not drawn\n";
       continue;
     }
     if (total + bytes.size() > limits.total) {
       if (warnings) {
-        *warnings << "hapsyn view: warning: " << at << ": " << bytes.size() << " bytes would take the meshes over "
-                  << show_mb(limits.total) << " in all; not drawn\n";
+        *warnings << "hapsyn view: warning: link " << v.link << ": mesh file " << v.file << ": " << bytes.size() << " bytes would take the meshes over "
+                  << show_size(limits.total) << " in all; not drawn\n";
       }
       continue;
     }
