@@ -121,6 +121,38 @@ def server(hapsyn, problem, work):
               f"the tip link's mesh at the drawn sample {drawn}")
         code, _ = view.stop()
         check(code == 0, "the server stops with exit 0")
+    warnings(hapsyn, problem, work)
+
+
+def warnings(hapsyn, problem, work):
+    """A copy of the study's URDF in `work` with a missing file, an .obj and a box: the study is
+    still shown, one warning line each naming the link and the file, the rest drawn."""
+    doc = json.load(open(problem))
+    options = doc["mechanism"]["options"]
+    share = os.path.join(os.path.dirname(os.path.abspath(problem)), "..", "share")
+    text = open(os.path.join(share, options["urdf"])).read()
+    meshes = os.path.abspath(os.path.join(share, "serial_chain", "meshes"))
+    text = text.replace('filename="meshes/', f'filename="file://{meshes}/').replace('package://serial_chain/meshes/', f'{meshes}/')
+    text = text.replace('<mesh filename="file://' + meshes + '/phantom_3r/gimbal.dae"/>', '<mesh filename="missing/gimbal.dae"/>')
+    text = text.replace('<link name="turret">', '<link name="turret">\n    <visual><geometry><box size="0.1 0.1 0.1"/></geometry></visual>'
+                        '\n    <visual><geometry><mesh filename="turret.obj"/></geometry></visual>')
+    os.makedirs(work, exist_ok=True)
+    urdf = os.path.join(os.path.abspath(work), "bad_meshes.urdf")
+    open(urdf, "w").write(text)
+    doc["mechanism"]["options"]["urdf"] = urdf
+    bad = os.path.join(work, "bad-meshes.json")
+    json.dump(doc, open(bad, "w"))
+    with ViewProcess(hapsyn, bad) as view:
+        _, _, body = get(view.port, "/api/study")
+        study = json.loads(body)
+        view.stop()
+    lines = [l.rstrip("\n") for l in view.stderr if "warning" in l]
+    want = [f'hapsyn view: warning: {urdf}: link "turret" visual box: a primitive shape, not drawn (only .stl and .dae meshes are)',
+            f'hapsyn view: warning: {urdf}: link "turret" visual mesh "turret.obj": not drawn (only .stl and .dae files are)',
+            f'hapsyn view: warning: {urdf}: link "stylus_tip" visual mesh "missing/gimbal.dae": no such file (relative to the '
+            f"URDF's folder: {os.path.join(os.path.abspath(work), 'missing/gimbal.dae')}); not drawn"]
+    check(lines == want, "one warning per visual left out:\n  " + "\n  ".join(lines))
+    check(len(study["meshes"]) == len(expected(problem)) - 1, f"the others drawn: {len(study['meshes'])}")
 
 
 def browser(hapsyn, problem, work):
