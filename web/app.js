@@ -1,7 +1,7 @@
 // The page of `hapsyn view`: the study's mechanism at its design, its scene frame and gravity,
 // and the samples as a point cloud coloured by a chosen local value. Its state is on
 // window.hapsynView for tests: {ready, error, pointCount, objective, colourRange, segments,
-// meshes, meshErrors, meshesDone} (the meshes: meshes.js).
+// meshes, meshBoxes, meshErrors, meshesDone} (the meshes: meshes.js).
 import * as THREE from 'three';
 import { OrbitControls } from '/OrbitControls.js';
 import { addMeshes } from '/meshes.js';

@@ -69,11 +69,20 @@ function fade(capsules) {
   });
 }
 
-/// Adds the study's meshes to `scene`. Sets state.meshes (how many were placed), state.meshErrors
+// The box a placed mesh takes in the scene frame, for tests: {link, min, max}.
+function boxOf(holder) {
+  holder.updateMatrixWorld(true);
+  const box = new THREE.Box3().setFromObject(holder);
+  return { link: holder.name, min: box.min.toArray(), max: box.max.toArray() };
+}
+
+/// Adds the study's meshes to `scene`. Sets state.meshes (how many were placed), state.meshBoxes
+/// (the axis-aligned box each takes in the scene frame, in the study's order), state.meshErrors
 /// (one message per file that failed) and state.meshesDone (true when every file was tried).
 export async function addMeshes(scene, study, capsules, state) {
   const meshes = study.meshes || [];
   state.meshes = 0;
+  state.meshBoxes = [];
   state.meshErrors = [];
   state.meshesDone = false;
   if (meshes.length > 0) {
@@ -95,7 +104,9 @@ export async function addMeshes(scene, study, capsules, state) {
     }
     const make = parsed.get(mesh.route);
     if (!make) continue;
-    group.add(place(make, mesh));
+    const holder = place(make, mesh);
+    group.add(holder);
+    state.meshBoxes.push(boxOf(holder));
     state.meshes += 1;
   }
   state.meshesDone = true;

@@ -6,7 +6,9 @@
            a route /api/mesh/K whose bytes equal the file; the next route and /api/mesh/99 are
            404; the base's mesh sits at the base, the tip link's at the drawn sample.
   browser  the page (headless Chromium) loads every mesh (window.hapsynView.meshes equals that
-           count, no error) and renders a non-blank canvas; saves a screenshot.
+           count, no error), places each where its pose and scale put the file's vertices (the
+           box they take in the scene frame, from the STL's triangles or the COLLADA's
+           positions read here), and renders a non-blank canvas; saves a screenshot.
 
 Usage: view_meshes_test.py server|browser HAPSYN PROBLEM_FILE WORK_DIR. Exit 0 when every check passes.
 """
@@ -155,6 +157,29 @@ def warnings(hapsyn, problem, work):
     check(len(study["meshes"]) == len(expected(problem)) - 1, f"the others drawn: {len(study['meshes'])}")
 
 
+def file_vertices(path):
+    """The vertices of a binary STL or of a COLLADA file's float arrays of positions [file units]."""
+    import re
+    import struct
+    data = open(path, "rb").read()
+    if path.lower().endswith(".stl"):
+        count = struct.unpack_from("<I", data, 80)[0]
+        return [struct.unpack_from("<3f", data, 84 + 50 * t + 12 + 12 * k) for t in range(count) for k in range(3)]
+    numbers = [float(x) for a in re.findall(rb'<float_array id="[^"]*positions[^"]*"[^>]*>([^<]*)<', data) for x in a.split()]
+    return [tuple(numbers[i:i + 3]) for i in range(0, len(numbers), 3)]
+
+
+def placed_box(mesh, path):
+    """The axis-aligned box of the file's vertex box corners, scaled and moved by the mesh's pose."""
+    vertices = file_vertices(path)
+    low = [min(v[k] for v in vertices) for k in range(3)]
+    high = [max(v[k] for v in vertices) for k in range(3)]
+    corners = [[(high if (c >> k) & 1 else low)[k] * mesh["scale"][k] for k in range(3)] for c in range(8)]
+    pose = mesh["pose"]
+    moved = [[sum(pose[r][k] * p[k] for k in range(3)) + pose[r][3] for r in range(3)] for p in corners]
+    return [min(p[k] for p in moved) for k in range(3)], [max(p[k] for p in moved) for k in range(3)]
+
+
 def browser(hapsyn, problem, work):
     sys.path.insert(0, HERE)
     from view_browser_test import COUNT_COLOURS, MIN_COLOURS, browser as start_browser
@@ -175,6 +200,14 @@ def browser(hapsyn, problem, work):
             check(state.get("ready") is True and not state.get("error"), f"page ready (error: {state.get('error')})")
             check(state.get("meshesDone") is True and state.get("meshErrors") == [], f"every mesh tried, no error: {state.get('meshErrors')}")
             check(state.get("meshes") == count, f"meshes loaded {state.get('meshes')} = the URDF's drawable visuals {count}")
+            study = driver.execute_script("return fetch('/api/study').then(r => r.json())")
+            boxes = state.get("meshBoxes", [])
+            for mesh, (link, path), box in zip(study["meshes"], expected(problem), boxes):
+                low, high = placed_box(mesh, path)
+                near = all(abs(a - b) < 1e-6 for a, b in zip(low + high, box["min"] + box["max"]))
+                check(box["link"] == link and near, f"{link} placed at [{', '.join(f'{x:.4f}' for x in box['min'])}] - "
+                      f"[{', '.join(f'{x:.4f}' for x in box['max'])}] (file + pose + scale: "
+                      f"[{', '.join(f'{x:.4f}' for x in low)}] - [{', '.join(f'{x:.4f}' for x in high)}])")
             time.sleep(0.5)  # a few frames with the meshes
             colours = driver.execute_script(COUNT_COLOURS)
             check(colours > MIN_COLOURS, f"canvas not blank: {colours} distinct colours (> {MIN_COLOURS})")
