@@ -29,9 +29,9 @@ Json pose_rows(const Eigen::Isometry3d& pose) {
   return rows;
 }
 
-// "32 MB" for whole megabytes, else the bytes.
+// "32 MiB" for whole mebibytes, else the bytes.
 std::string show_size(std::uint64_t bytes) {
-  return bytes % (1u << 20) == 0 ? std::to_string(bytes >> 20) + " MB" : std::to_string(bytes) + " bytes";
+  return bytes % (1u << 20) == 0 ? std::to_string(bytes >> 20) + " MiB" : std::to_string(bytes) + " bytes";
 }
 
 // Reads the distinct files of `visuals` within the limits: file -> route index, -1 when refused.
