@@ -123,7 +123,8 @@ TEST(ViewMeshes, LeavesOutFilesOverTheLimitsOrUnreadableWithAWarning) {
   const Files f;
   const std::string small = f.make("small.stl", 8), big = f.make("big.stl", 12), fits = f.make("fits.stl", 9),
                     over = f.make("over.stl", 9), gone = (f.root / "gone.stl").string();
-  const TestMechanism m({visual("a", small), visual("b", big), visual("c", fits), visual("d", over), visual("e", gone)});
+  const TestMechanism m({visual("a", small), visual("b", big), visual("c", fits), visual("d", over), visual("e", gone),
+                         visual("caf\xe9", "x.stl")});
   std::ostringstream warnings;
   MeshLimits limits;
   limits.per_file = 10;
@@ -136,7 +137,8 @@ TEST(ViewMeshes, LeavesOutFilesOverTheLimitsOrUnreadableWithAWarning) {
   EXPECT_EQ(meshes.list[0]["link"], "a");
   EXPECT_EQ(meshes.list[1]["link"], "c");
   EXPECT_EQ(warnings.str(), "hapsyn view: warning: robot.urdf: link \"c\" visual box: not drawn\n"
-                            "hapsyn view: warning: link b: view: mesh file " + big +
+                            "hapsyn view: warning: link \"caf\\xe9\": mesh file \"x.stl\": not UTF-8 (the page's documents are JSON); not drawn\n"
+                                "hapsyn view: warning: link b: view: mesh file " + big +
                                 " is 12 bytes, more than the 10 this reader accepts; not drawn\n"
                                 "hapsyn view: warning: link d: mesh file " + over +
                                 ": 9 bytes would take the meshes over 25 bytes in all; not drawn\n"

@@ -78,7 +78,17 @@ ViewMeshes load_view_meshes(const hapsyn::Mechanism& mechanism, const double* de
     for (const std::string& w : drawing->mesh_warnings()) *warnings << "hapsyn view: warning: " << w << "\n";
   }
   const auto scratch = mechanism.make_scratch();
-  const std::vector<hapsyn::MeshVisual> visuals = drawing->mesh_visuals(scene, sample, *scratch);
+  std::vector<hapsyn::MeshVisual> visuals = drawing->mesh_visuals(scene, sample, *scratch);
+  // The list is JSON, which must be UTF-8 (a mechanism's names, a path on Linux, need not be).
+  const auto not_utf8 = [&](const hapsyn::MeshVisual& v) {
+    if (hapsyn::invalid_utf8_at(v.link) == std::string::npos && hapsyn::invalid_utf8_at(v.file) == std::string::npos) return false;
+    if (warnings) {
+      *warnings << "hapsyn view: warning: link " << hapsyn::shown_bytes(v.link) << ": mesh file " << hapsyn::shown_bytes(v.file)
+                << ": not UTF-8 (the page's documents are JSON); not drawn\n";
+    }
+    return true;
+  };
+  visuals.erase(std::remove_if(visuals.begin(), visuals.end(), not_utf8), visuals.end());
   const std::map<std::string, int> index = read_files(visuals, limits, out.files, warnings);
   for (const hapsyn::MeshVisual& v : visuals) {
     const int k = index.at(v.file);

@@ -125,6 +125,7 @@ std::string robot_urdf(const RobotFolder& r) {
 )";
 }
 
+
 struct TestRobot : RobotFolder {
   TestRobot() {
     std::ofstream(urdf) << robot_urdf(*this);
@@ -151,6 +152,11 @@ Eigen::Matrix3d rpy(double r, double p, double y) {
 
 TEST(ChainMeshes, CollectsThePathsAndFixedLinksMeshesAndWarnsOfTheRest) {
   const TestRobot r;
+  // A package found through a folder whose name is Latin-1, not UTF-8 (the view's JSON needs it).
+  const std::string latin1 = r.at("ros") + "\xe9";
+  fs::create_directories(fs::path(latin1) / "third_pkg");
+  fs::copy_file(r.at("ros/third_pkg/c.dae"), fs::path(latin1) / "third_pkg/c.dae");
+  setenv("ROS_PACKAGE_PATH", latin1.c_str(), 1);
   const ChainTemplate t = ChainTemplate::from_urdf(r.urdf.string(), "base", "tip");
   const ChainMeshes& m = t.meshes();
   const std::string u = r.urdf.string();
@@ -158,6 +164,7 @@ TEST(ChainMeshes, CollectsThePathsAndFixedLinksMeshesAndWarnsOfTheRest) {
       u + ": link \"base\" visual mesh \"parts/missing.stl\": no such file (relative to the URDF's folder: " +
           r.at("robots/my_pkg/urdf/parts/missing.stl") + "); not drawn",
       u + ": link \"l1\" visual box: a primitive shape, not drawn (only .stl and .dae meshes are)",
+      u + ": link \"cover\" visual mesh \"package://third_pkg/c.dae\": the link's or the file's name is not UTF-8; not drawn",
       u + ": link \"tip\" visual mesh \"meshes/thing.obj\": not drawn (only .stl and .dae files are)"};
   EXPECT_EQ(m.warnings, warnings);
   std::vector<std::pair<std::string, std::string>> drawn;
@@ -165,7 +172,6 @@ TEST(ChainMeshes, CollectsThePathsAndFixedLinksMeshesAndWarnsOfTheRest) {
   const std::vector<std::pair<std::string, std::string>> want = {{"base", r.at("robots/my_pkg/meshes/a.stl")},
                                                                  {"l1", r.at("robots/my_pkg/urdf/parts/rel.stl")},
                                                                  {"l2", r.at("robots/other_pkg/meshes/b.stl")},
-                                                                 {"cover", r.at("ros/third_pkg/c.dae")},
                                                                  {"tip", r.at("abs/d.STL")}};
   EXPECT_EQ(drawn, want);
   EXPECT_EQ(m.visuals[1].scale, Eigen::Vector3d(2, 3, 4));

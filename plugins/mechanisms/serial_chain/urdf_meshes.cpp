@@ -5,6 +5,8 @@
 
 #include "chain_template_impl.hpp"
 
+#include <hapsyn/read_file.hpp>
+
 #include <set>
 
 namespace hapsyn::plugins {
@@ -70,6 +72,12 @@ class Collector {
     const MeshFileLookup found = resolve_mesh_file(mesh.filename, urdf_path_, ros_package_path_);
     if (found.path.empty()) {
       out.warnings.push_back(named + found.problem + "; not drawn");
+      return;
+    }
+    // The view lists link and file names in JSON, which must be UTF-8 (a path on Linux need not be).
+    if (invalid_utf8_at(link) != std::string::npos || invalid_utf8_at(found.path) != std::string::npos) {
+      out.warnings.push_back(urdf_path_ + ": link " + shown_bytes(link) + " visual mesh " + shown_bytes(mesh.filename) +
+                             ": the link's or the file's name is not UTF-8; not drawn");
       return;
     }
     ChainMeshVisual v = frame;
