@@ -12,7 +12,9 @@
 ///   or one solve() finds only outside the joint limits).
 /// - Each MeshVisual::file is an absolute path to a regular file the mechanism resolved and
 ///   checked at load (a file that could not be resolved is left out with a warning then, never
-///   an error: mesh_warnings() says why); only ".stl" (binary or ASCII STL) and ".dae" (COLLADA) files are listed.
+///   an error: mesh_warnings() says why); only ".stl" (binary or ASCII STL) and ".dae"
+///   (COLLADA) files are listed. Links and files should be named in UTF-8 (a viewer writes
+///   them into JSON and leaves out, with a warning, a visual whose names are not).
 /// - Called once per picture, outside the per-sample loop, with a scratch from
 ///   Mechanism::make_scratch: may allocate; const and thread-safe like solve().
 #include <hapsyn/mechanism.hpp>
