@@ -23,6 +23,12 @@ function(hapsyn_add_view target)
   if(EXISTS ${three}/build/three.module.min.js AND EXISTS ${three}/examples/jsm/controls/OrbitControls.js)
     list(APPEND assets "/three.module.js|${js}|${three}/build/three.module.min.js"
                        "/OrbitControls.js|${js}|${three}/examples/jsm/controls/OrbitControls.js")
+    # A URDF's meshes (web/meshes.js): three's loaders; ColladaLoader's "../loaders/TGALoader.js"
+    # resolves to /loaders/TGALoader.js.
+    list(APPEND assets "/meshes.js|${js}|${web}/meshes.js"
+                       "/loaders/STLLoader.js|${js}|${three}/examples/jsm/loaders/STLLoader.js"
+                       "/loaders/ColladaLoader.js|${js}|${three}/examples/jsm/loaders/ColladaLoader.js"
+                       "/loaders/TGALoader.js|${js}|${three}/examples/jsm/loaders/TGALoader.js")
   else()
     set(assets "")
     # Plain text: it becomes a C++ string literal.
@@ -65,6 +71,7 @@ function(hapsyn_add_view target)
   target_compile_options(hapsyn_view_prototype PRIVATE ${HAPSYN_WARNINGS})
   target_sources(${target} PRIVATE app/view/socket_session.cpp)
   target_link_libraries(${target} PRIVATE hapsyn_view_prototype)
+  target_sources(${target} PRIVATE app/view/view_meshes.cpp)
   target_include_directories(${target} PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/app/view)
   target_compile_definitions(${target} PRIVATE HAPSYN_WITH_VIEW=1)
 endfunction()

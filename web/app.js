@@ -1,10 +1,12 @@
 // The page of `hapsyn view`: the study's mechanism at its design, its scene frame and gravity,
 // and the samples as a point cloud coloured by a chosen local value. Its state is on
 // window.hapsynView for tests: {ready, error, pointCount, objective, colourRange, segments,
-// drawnSegments, human}; front.js and plots.js add theirs (a result's front, runs, sweep or comparison).
+// drawnSegments, human, meshes, meshBoxes, meshErrors, meshesDone} (the meshes: meshes.js);
+// front.js and plots.js add theirs (a result's front, runs, sweep or comparison).
 import * as THREE from 'three';
 import { OrbitControls } from '/OrbitControls.js';
 import { humanFigure, figurePoints } from '/figure.js';
+import { addMeshes } from '/meshes.js';
 import { setupFront } from '/front.js';
 import { scatter3d } from '/front3d.js';
 import { setupBatch, setupRuns } from '/plots.js';
@@ -150,6 +152,7 @@ async function main() {
   const size = Math.max(box.getSize(new THREE.Vector3()).length(), 1e-3);
   let drawn = mechanism(study, size * 0.006);
   scene.add(drawn);
+  const meshes = addMeshes(scene, study, drawn, state);
   const human = humanFigure(study.figure);
   if (human) scene.add(human);
   // What the page drew of the human, for tests: the arm's joints and the head.
@@ -194,6 +197,7 @@ async function main() {
     return true;
   };
   frameCamera(camera, controls, box);
+  meshes.catch(e => { state.meshErrors.push(String(e)); state.meshesDone = true; });
   window.addEventListener('resize', () => {
     camera.aspect = container.clientWidth / container.clientHeight;
     camera.updateProjectionMatrix();

@@ -35,6 +35,7 @@ int view_command(const std::string& path, const std::string& host, int port, con
   routes["/api/samples"] = {"application/json", samples};
   routes["/api/replay"] = {"application/json", replay};
   routes["/api/result"] = {"application/json", result};
+  for (const MeshFile& mesh : data.meshes.files) routes[mesh.route] = {mesh.content_type, mesh.bytes};
   ServerSettings settings;
   settings.host = host;
   settings.port = static_cast<unsigned short>(port);

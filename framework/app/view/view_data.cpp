@@ -175,6 +175,8 @@ ViewData load_view_data(const std::string& path, const hapsyn::Registry& registr
   ViewData data;
   data.name = source.study.resolved.value("name", std::string());
   data.study = study_json(source, sample);
+  data.meshes = load_view_meshes(problem.mechanism(), source.design.data(), problem.samples(), sample, MeshLimits{}, progress);
+  data.study["meshes"] = data.meshes.list;
   data.samples = samples_json(source, records, origin);
   data.result = view_result_json(source, sample);
   data.result["batch"] = batch ? batch->table : Json(nullptr);

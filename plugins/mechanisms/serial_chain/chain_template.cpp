@@ -23,6 +23,11 @@ int ChainTemplate::find(const std::string& name) const {
   return -1;
 }
 
+const ChainMeshes& ChainTemplate::meshes() const {
+  static const ChainMeshes none;
+  return impl_ ? impl_->meshes : none;
+}
+
 int ChainTemplate::dof() const { return impl_ ? impl_->dof : 0; }
 
 const FennelMassModel* ChainTemplate::fennel_mass_model() const {

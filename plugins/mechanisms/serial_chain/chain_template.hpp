@@ -11,6 +11,7 @@
 /// ':' keeps the names free of '.', which problem-file paths and --set use as a separator. The
 /// full rules, and the DH table format, are in share/serial_chain/README.md.
 #include "chain.hpp"
+#include "chain_meshes.hpp"
 
 #include <memory>
 #include <string>
@@ -55,7 +56,9 @@ class ChainTemplate {
   /// child links' inertials into the body before them (parallel-axis theorem; inertials riding on
   /// the base have no effect); revolute / continuous / prismatic joints become ChainJoints with
   /// the URDF's limits (continuous: unlimited position), everything off the path (other
-  /// branches, transmissions, gazebo tags, meshes) is ignored. Gravity -9.81 along the base's z.
+  /// branches, transmissions, gazebo tags) is ignored. Gravity -9.81 along the base's z. The
+  /// mesh visuals of the links it carries are collected for drawing (meshes(); urdf_meshes.hpp),
+  /// package:// names searched also in the ROS_PACKAGE_PATH environment variable.
   /// The origins' parameters are the `<origin>` values as written (not urdfdom's quaternion).
   /// \throws Error("serial_chain", "<file>: ...") naming the file: a file that cannot be read,
   ///         is not XML (with TinyXML's line and column) or that urdfdom refuses (with its
@@ -78,6 +81,9 @@ class ChainTemplate {
   int find(const std::string& name) const;
   /// Number of moving joints.
   int dof() const;
+  /// A URDF's drawable mesh visuals and a warning line for each visual left out (empty for a
+  /// DH table).
+  const ChainMeshes& meshes() const;
   /// The file it was read from.
   const std::string& source() const { return source_; }
   /// The Fennel mass model when the file asks for it (DH tables), else null: the chain's bodies

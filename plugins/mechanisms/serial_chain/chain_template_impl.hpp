@@ -23,6 +23,7 @@ struct ChainTemplate::Impl {
   std::optional<FennelMassModel> fennel;  ///< set when the file asks for the Fennel mass model
   /// Builds the chain (values: the template's parameters; motor_mass: see instantiate()).
   std::function<void(const double* values, const double* motor_mass, Chain& out)> build;
+  ChainMeshes meshes;  ///< a URDF's drawable mesh visuals (none for a DH table)
 };
 
 namespace serial_chain_detail {

@@ -33,6 +33,7 @@
 #include "serial_chain_options.hpp"
 
 #include <hapsyn/mechanism.hpp>
+#include <hapsyn/mesh_drawing.hpp>
 
 #include <Eigen/Geometry>
 #include <cstdint>
@@ -83,7 +84,7 @@ struct SerialChainScratch final : MechanismScratch {
 };
 
 /// The manipulator for one design. solve() is const, thread-safe and allocation-free.
-class SerialChainModel final : public MechanismModel {
+class SerialChainModel final : public MechanismModel, public MeshDrawing {
  public:
   /// Builds the chain for a full design vector (see SerialChainSetup::parameter_count).
   SerialChainModel(const double* design, const SerialChainSetup& setup);
@@ -94,6 +95,12 @@ class SerialChainModel final : public MechanismModel {
   /// configuration solve() picks (T_S^B applied to the frames of chain_frames). Empty for an
   /// unreachable sample or one out of the joint limits.
   std::vector<Segment> segments(const SampleSet& scene, int sample, MechanismScratch& scratch) const override;
+  /// A URDF's mesh visuals (ChainTemplate::meshes) in the scene frame S at the configuration
+  /// segments() draws: T_S^B times the carrying joint frame times mesh_pose_in_body
+  /// (serial_chain_meshes.cpp). Empty when segments() is, or the file has no drawable mesh.
+  std::vector<MeshVisual> mesh_visuals(const SampleSet& scene, int sample, MechanismScratch& scratch) const override;
+  /// ChainTemplate::meshes().warnings.
+  std::vector<std::string> mesh_warnings() const override;
 
   const Chain& chain() const { return chain_; }
   const JointVector& max_velocity() const { return max_velocity_; }  ///< [rad/s or m/s]
@@ -123,6 +130,7 @@ class SerialChainModel final : public MechanismModel {
   std::uint64_t id_;  ///< unique per model, for the warm start (an address may be reused)
   Chain chain_;
   JointVector max_velocity_, max_torque_;
+  std::vector<double> mesh_parameters_;  ///< the design's chain parameters, kept only when there are meshes
 };
 
 /// The "serial_chain" mechanism plugin.

@@ -45,6 +45,7 @@ SerialChainModel::SerialChainModel(const double* design, const SerialChainSetup&
     for (int i = 0; i < n; ++i) motor_mass(i) = setup.actuators->mass[static_cast<std::size_t>(std::lround(size[i]) - 1)];
   }
   t.instantiate(design, setup.actuators ? motor_mass.data() : nullptr, chain_);
+  if (!t.meshes().visuals.empty()) mesh_parameters_.assign(design, design + t.parameters().size());
   max_velocity_.resize(n);
   max_torque_.resize(n);
   for (int i = 0; i < n; ++i) {

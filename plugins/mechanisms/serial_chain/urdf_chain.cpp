@@ -11,6 +11,7 @@
 #include <cassert>
 #include <cmath>
 #include <cstddef>
+#include <cstdlib>
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -22,6 +23,8 @@
 #include <console_bridge/console.h>
 #include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
+
+#include "urdf_meshes.hpp"
 
 #include <algorithm>
 #include <array>
@@ -415,6 +418,12 @@ ChainTemplate ChainTemplate::from_urdf(const std::string& path, const std::strin
   auto impl = std::make_shared<Impl>();
   impl->dof = shared->dof;
   impl->build = [shared](const double* values, const double*, Chain& out) { build_chain(*shared, values, out); };
+  std::vector<UrdfPathJoint> path_joints;
+  for (std::size_t k = 0; k < joints.size(); ++k) {
+    path_joints.push_back({joints[k], shared->steps[k].moving, shared->steps[k].origin_parameter});
+  }
+  const char* ros_package_path = std::getenv("ROS_PACKAGE_PATH");
+  impl->meshes = collect_urdf_meshes(path, *model, base, path_joints, origins, ros_package_path ? ros_package_path : "");
   t.impl_ = impl;
   return t;
 }
