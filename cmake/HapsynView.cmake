@@ -23,11 +23,23 @@ function(hapsyn_add_view target)
   if(EXISTS ${three}/build/three.module.min.js AND EXISTS ${three}/examples/jsm/controls/OrbitControls.js)
     list(APPEND assets "/three.module.js|${js}|${three}/build/three.module.min.js"
                        "/OrbitControls.js|${js}|${three}/examples/jsm/controls/OrbitControls.js")
-    # A URDF's meshes (web/meshes.js): three's loaders; ColladaLoader's "../loaders/TGALoader.js"
-    # resolves to /loaders/TGALoader.js.
+    # A URDF's meshes (web/meshes.js): three's loaders. ColladaLoader imports TGALoader by a
+    # relative path, which a report's data: copy of it cannot resolve: the copy embedded imports
+    # it by the bare name of the page's import map instead (the only change).
+    set(collada_source ${three}/examples/jsm/loaders/ColladaLoader.js)
+    set(collada ${CMAKE_BINARY_DIR}/web-patched/ColladaLoader.js)
+    file(READ ${collada_source} collada_text)
+    string(FIND "${collada_text}" "'../loaders/TGALoader.js'" tga_import)
+    if(tga_import EQUAL -1)
+      message(FATAL_ERROR "hapsyn view: ${collada_source} no longer imports '../loaders/TGALoader.js'; update cmake/HapsynView.cmake")
+    endif()
+    string(REPLACE "'../loaders/TGALoader.js'" "'three/addons/loaders/TGALoader.js'" collada_text "${collada_text}")
+    file(WRITE ${collada}.new "${collada_text}")
+    execute_process(COMMAND ${CMAKE_COMMAND} -E copy_if_different ${collada}.new ${collada})
+    set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${collada_source})
     list(APPEND assets "/meshes.js|${js}|${web}/meshes.js"
                        "/loaders/STLLoader.js|${js}|${three}/examples/jsm/loaders/STLLoader.js"
-                       "/loaders/ColladaLoader.js|${js}|${three}/examples/jsm/loaders/ColladaLoader.js"
+                       "/loaders/ColladaLoader.js|${js}|${collada}"
                        "/loaders/TGALoader.js|${js}|${three}/examples/jsm/loaders/TGALoader.js")
   else()
     set(assets "")

@@ -112,7 +112,7 @@ TEST(ProblemFileSchema, IsTheFormerHandWrittenSchema) {
 
 TEST(ProblemFileSchema, ResolvesEveryProblemFileInTheRepositoryAsTheFormerSchema) {
   const std::vector<fs::path> files = problem_files();
-  // problems/ alone holds 21 studies; examples, conformance studies and test problems add more.
+  // problems/ alone holds over 20 studies; examples, conformance studies and test problems add more.
   EXPECT_GE(files.size(), 50u);
   int resolved = 0;
   for (const fs::path& file : files) {
@@ -147,7 +147,13 @@ TEST(ProblemFileSchema, ResolvesEveryShippedProblem) {
     }
     ++count;
   }
-  EXPECT_EQ(count, 22);  // every file of problems/
+  // Every file of problems/, counted here by a plain listing (problem_files() walks the tree).
+  int listed = 0;
+  for (const auto& entry : fs::directory_iterator(fs::path(HAPSYN_SOURCE_DIR) / "problems")) {
+    listed += entry.path().extension() == ".json" ? 1 : 0;
+  }
+  EXPECT_GE(listed, 20);
+  EXPECT_EQ(count, listed);
 }
 
 // Mutations of a shipped problem, each refused (or accepted) the same way by both schemas.

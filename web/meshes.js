@@ -5,12 +5,19 @@
 // not: its coordinates are taken as written in the link frame (z up, as URDF viewers such as rviz
 // do). With meshes, the capsules fade, and a check box in the panel shows or hides them.
 import * as THREE from 'three';
-import { STLLoader } from '/loaders/STLLoader.js';
-import { ColladaLoader } from '/loaders/ColladaLoader.js';
+// Bare names of the page's import map, so that a report's data: copy of this module resolves them.
+import { STLLoader } from 'three/addons/loaders/STLLoader.js';
+import { ColladaLoader } from 'three/addons/loaders/ColladaLoader.js';
 
 const MESH_COLOUR = 0x8fa3b8;
 
 async function fetchFile(route, format) {
+  // A report (hapsyn report) carries the files in the page, base64 encoded.
+  const inline = document.querySelector(`script[type="application/octet-stream"][data-route="${route}"]`);
+  if (inline) {
+    const bytes = Uint8Array.from(atob(inline.textContent), c => c.charCodeAt(0));
+    return format === 'dae' ? new TextDecoder().decode(bytes) : bytes.buffer;
+  }
   const response = await fetch(route);
   if (!response.ok) throw new Error(`${route}: HTTP ${response.status}`);
   return format === 'dae' ? response.text() : response.arrayBuffer();

@@ -15,6 +15,9 @@ Usage: view_meshes_test.py server|browser HAPSYN PROBLEM_FILE WORK_DIR. Exit 0 w
 import json
 import math
 import os
+import re
+import shutil
+import subprocess
 import sys
 import time
 import xml.etree.ElementTree as ET
@@ -223,6 +226,41 @@ def browser(hapsyn, problem, work):
             driver.quit()
         code, _ = view.stop()
         check(code == 0, "the server stops with exit 0")
+    report(hapsyn, problem, work, count)
+
+
+def report(hapsyn, problem, work, count):
+    """hapsyn report of the study's result carries the mesh files: opened from disk, every mesh
+    loads from the page itself."""
+    from view_report_test import offline_browser
+    run = os.path.join(work, "run")
+    shutil.rmtree(run, ignore_errors=True)
+    subprocess.run([hapsyn, "run", problem, "--out", run, "--quiet"], check=True, stdout=subprocess.DEVNULL)
+    r = subprocess.run([hapsyn, "report", run], capture_output=True, text=True, timeout=120)
+    check(r.returncode == 0, f"report written: {r.stdout.strip()} {r.stderr.strip()}")
+    page = os.path.join(run, "report.html")
+    with open(page, encoding="utf-8") as f:
+        html = f.read()
+    embedded = re.findall(r'<script type="application/octet-stream" data-route="(/api/mesh/\d+)">', html)
+    with ViewProcess(hapsyn, problem) as view:
+        study = json.loads(get(view.port, "/api/study")[2])
+    routes = sorted({m["route"] for m in study["meshes"]})
+    check(sorted(embedded) == routes, f"the report embeds every mesh file: {embedded} = {routes}")
+    check("/prototype.js" not in html, "the report leaves out the virtual prototype (it needs the server)")
+    driver = offline_browser()
+    try:
+        driver.get("file://" + os.path.abspath(page))
+        deadline = time.time() + 30
+        state = {}
+        while time.time() < deadline:
+            state = driver.execute_script("return JSON.parse(JSON.stringify(window.hapsynView || {}))")
+            if (state.get("ready") and state.get("meshesDone")) or state.get("error"):
+                break
+            time.sleep(0.2)
+        check(state.get("meshesDone") is True and state.get("meshErrors") == [] and state.get("meshes") == count,
+              f"the report loads its {state.get('meshes')} meshes from itself (= {count}; errors {state.get('meshErrors')})")
+    finally:
+        driver.quit()
 
 
 def main():

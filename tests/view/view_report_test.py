@@ -44,11 +44,14 @@ def offline_browser():
 def check_file(html):
     check(not LOADS.search(html), f"the page loads no http(s) URL ({LOADS.search(html)})")
     modules = re.findall(r'"data:text/javascript;base64,([A-Za-z0-9+/=]+)"', html)
-    check(len(modules) == 5, f"{len(modules)} modules inlined as data: URLs (three, orbit controls, front, front3d, plots)")
-    # Byte for byte the page's modules (base64 checked by an independent decoder).
-    web = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "web")
-    sources = [os.path.join(web, n) for n in ("front.js", "front3d.js", "plots.js")] + \
-        [os.path.join(web, "node_modules", "three", p) for p in ("build/three.module.min.js", "examples/jsm/controls/OrbitControls.js")]
+    # Byte for byte the page's modules as the build embeds them (its manifest: route|type|file),
+    # all but the page, app.js (inline) and the virtual prototype (it needs the server); the
+    # base64 checked by an independent decoder.
+    with open(os.environ["HAPSYN_WEB_MANIFEST"]) as f:
+        assets = [line.rstrip("\n").split("|") for line in f if line.strip()]
+    sources = [path for route, _, path in assets if route not in ("/", "/app.js", "/prototype.js")]
+    check(len(modules) == len(sources) and len(sources) >= 5,
+          f"{len(modules)} modules inlined as data: URLs ({len(sources)} in the manifest but the page, app.js and prototype.js)")
     want = sorted(open(p, "rb").read() for p in sources)
     check(sorted(base64.b64decode(m) for m in modules) == want,
           f"the data: modules decode to the files (sizes mod 3: {sorted(len(w) % 3 for w in want)})")

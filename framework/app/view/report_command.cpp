@@ -10,6 +10,8 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <map>
+#include <set>
 #include <iostream>
 #include <unistd.h>
 
@@ -18,9 +20,10 @@ namespace {
 
 namespace fs = boost::filesystem;
 
-// The index page's lines that report_html replaces (web/index.html must keep them as they are).
-constexpr std::string_view kImportMap = R"(<script type="importmap">{ "imports": { "three": "/three.module.js" } }</script>)";
+// The index page's elements that report_html replaces (web/index.html must keep them as they are).
+constexpr std::string_view kImportMapStart = R"(<script type="importmap">)";
 constexpr std::string_view kAppScript = R"(<script type="module" src="/app.js"></script>)";
+constexpr std::string_view kPrototypeScript = R"(<script type="module" src="/prototype.js"></script>)";
 
 std::string base64(std::string_view bytes) {
   static constexpr char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
@@ -67,6 +70,38 @@ void replace_once(std::string& page, std::string_view what, const std::string& w
   page.replace(at, what.size(), with);
 }
 
+// The page's import map with every module as a data: URL: its bare names ("three",
+// "three/addons/...") mapped to the data: URL of the route they name, for the modules that import
+// them (a data: module cannot resolve a path), every other module by its route, for the inline
+// app.js (whose base is the page).
+void replace_import_map(std::string& page, const std::map<std::string, std::string>& modules) {
+  const std::size_t start = page.find(kImportMapStart);
+  const std::size_t end = start == std::string::npos ? start : page.find("</script>", start);
+  if (end == std::string::npos) {
+    throw hapsyn::Error("report", "the embedded index.html lacks its import map (web/index.html changed?)");
+  }
+  const std::size_t body = start + kImportMapStart.size();
+  const hapsyn::Json declared = hapsyn::Json::parse(page.substr(body, end - body), nullptr, false);
+  if (declared.is_discarded() || !declared.contains("imports") || !declared["imports"].is_object()) {
+    throw hapsyn::Error("report", "the embedded index.html's import map is not {\"imports\": {...}} (web/index.html changed?)");
+  }
+  hapsyn::Json imports = hapsyn::Json::object();
+  std::set<std::string> named;  // routes reached by a bare name (each module once in the page)
+  for (const auto& [name, route] : declared["imports"].items()) {
+    const auto module = route.is_string() ? modules.find(route.get<std::string>()) : modules.end();
+    if (module == modules.end()) {
+      throw hapsyn::Error("report", "the import map's \"" + name + "\" names " + route.dump() + ", not a built-in module");
+    }
+    imports[name] = module->second;
+    named.insert(module->first);
+  }
+  for (const auto& [route, url] : modules) {
+    if (named.count(route) == 0) imports[route] = url;
+  }
+  page.replace(start, end + std::string_view("</script>").size() - start,
+               std::string(kImportMapStart) + hapsyn::Json{{"imports", imports}}.dump() + "</script>");
+}
+
 }  // namespace
 
 std::string report_html(const ViewData& data) {
@@ -74,31 +109,35 @@ std::string report_html(const ViewData& data) {
     throw hapsyn::Error("report", "the page's assets are not built into this hapsyn: " + std::string(missing));
   }
   std::string page, app;
-  hapsyn::Json imports = hapsyn::Json::object();
+  std::map<std::string, std::string> modules;  // route -> data: URL
   for (const WebAsset& asset : web_assets()) {
     if (asset.route == "/") {
       page = asset.body;
     } else if (asset.route == "/app.js") {
       app = asset.body;
-    } else {
-      // A module by its route ("/front.js", resolved against the page as the inline app.js's
-      // imports are); three.js by its bare name, which the other modules import.
-      const std::string key = asset.route == "/three.module.js" ? "three" : std::string(asset.route);
-      imports[key] = "data:text/javascript;base64," + base64(asset.body);
+    } else if (asset.route != "/prototype.js") {  // the virtual prototype is left out (below)
+      modules[std::string(asset.route)] = "data:text/javascript;base64," + base64(asset.body);
     }
   }
   if (app.find("</script") != std::string::npos || app.find("<!--") != std::string::npos) {
     throw hapsyn::Error("report", "app.js holds \"</script\" or \"<!--\": it cannot be inlined into the report");
   }
-  replace_once(page, kImportMap, "<script type=\"importmap\">" + hapsyn::Json{{"imports", imports}}.dump() + "</script>");
+  replace_import_map(page, modules);
   std::string scripts;
   using Document = std::pair<const char*, const hapsyn::Json*>;
   for (const auto& [route, document] : {Document{"/api/study", &data.study}, Document{"/api/samples", &data.samples},
                                         Document{"/api/result", &data.result}}) {
     scripts += std::string("<script type=\"application/json\" data-route=\"") + route + "\">" + script_json(*document) + "</script>\n";
   }
+  // The mesh files travel in the page too (meshes.js reads them before it would fetch).
+  for (const MeshFile& mesh : data.meshes.files) {
+    scripts += "<script type=\"application/octet-stream\" data-route=\"" + mesh.route + "\">" + base64(mesh.bytes) +
+               "</script>\n";
+  }
   scripts += "<script type=\"module\">\n" + app + "</script>";
   replace_once(page, kAppScript, scripts);
+  // The virtual prototype needs the server (its replay document and live socket): a report has none.
+  replace_once(page, kPrototypeScript, "");
   return page;
 }
 
