@@ -57,7 +57,7 @@ struct SerialChainIkOptions {
                                                     "the same in every run).")
         .minimum(0);
     d.add(&SerialChainIkOptions::warm_start, "warm_start", false,
-          "Also start from the previous sample's solution on the same thread. Faster on dense scenes, but the "
+          "Numerical IK: also start from the previous sample's solution on the same thread. Faster on dense scenes, but the "
           "configuration a sample gets then depends on how samples are split over threads (results repeat for a "
           "given --threads).");
   }
