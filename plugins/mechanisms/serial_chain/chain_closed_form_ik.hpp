@@ -6,10 +6,16 @@
 ///
 /// - Applies to 6 revolute joints and the full-pose task (closed_form_applicability()); the
 ///   chain's axes then pick a family (ChainGeometry::describe()) or none.
-/// - solve() asks the engine for every solution without limits, moves each into the joint
-///   limits by whole turns (ik_shift_into_limits, tolerance kClosedFormLimitTolerance) and picks,
-///   among those inside, the one closest to home (ik_home_distance, the numerical IK's measure;
-///   ties: the engine's order) or the first in the engine's order (first_found).
+/// - solve() picks, among the engine's solutions (without limits) moved into the joint limits by
+///   whole turns (ik_shift_into_limits, tolerance kClosedFormLimitTolerance), the one closest to
+///   home (ik_home_distance, the numerical IK's measure; ties: the engine's order) or the first in
+///   the engine's order (first_found). To polish only what it uses it ranks the engine's raw
+///   candidates first (closest_to_home: those inside the limits to 1e-6 rad by their distance;
+///   first_found: engine order) and polishes in that order until one reproduces the target and
+///   lies inside the limits; a closest-to-home candidate that the polish moved farther than the
+///   next one's distance sends it to the full solve (all_solutions()), so the pick is always the
+///   closest of all solutions. Only when none lies inside are the rest polished, to tell
+///   kJointLimit from kUnreachable.
 /// - Statuses are proved, not guessed: kJointLimit when solutions exist and every one lies
 ///   outside the limits, kUnreachable when the pose has none. Two caveats, both the engine's: at a
 ///   singular configuration with a continuum of solutions the engine returns one representative
@@ -22,6 +28,7 @@
 #include "shared/closed_form_ik/six_r_ik.hpp"
 
 #include <Eigen/Geometry>
+#include <array>
 #include <string>
 
 namespace hapsyn::plugins {
@@ -35,6 +42,8 @@ constexpr double kClosedFormLimitTolerance = 1e-9;
 struct ClosedFormScratch {
   closed_form_ik::IkScratch engine;
   closed_form_ik::IkSolutions solutions;
+  std::array<int, 128> order{};     ///< candidates ranked by the selection rule
+  std::array<double, 128> key{};    ///< their distances to home
 };
 
 /// Why the closed form does not apply to a chain and task ("" when it does: 6 revolute joints,
@@ -59,9 +68,19 @@ class ChainClosedFormIk {
   IkStatus solve(const Chain& chain, const Eigen::Isometry3d& target, const double* home, bool first_found, double* q,
                  ClosedFormScratch& scratch) const;
 
+  /// Every solution of the target without limits (the engine's solve(): polished, wrapped into
+  /// (-pi, pi], duplicates merged) in scratch.solutions. Allocation-free.
+  const closed_form_ik::IkSolutions& all_solutions(const Eigen::Isometry3d& target, ClosedFormScratch& scratch) const;
+
   const closed_form_ik::ChainGeometry& geometry() const { return engine_.geometry(); }
 
  private:
+  // solve() over all_solutions(): the reference path, and the fallback of the ranked one.
+  IkStatus solve_from_all(const Chain& chain, const Eigen::Isometry3d& target, const double* home, bool first_found,
+                          double* q, ClosedFormScratch& scratch) const;
+  // Polishes raw candidate i; true when it reproduces the target, then wrapped into (-pi, pi] in out.
+  bool polished(const Eigen::Isometry3d& target, const ClosedFormScratch& scratch, int i, closed_form_ik::Vector6d& out) const;
+
   closed_form_ik::ClosedFormIk6R engine_;
 };
 

@@ -112,7 +112,7 @@ TEST(ChainClosedFormIk, FindsEveryGeneratingConfigurationAndTheTrueClosestToHome
       ++checked;
       JointVector picked(6);
       ASSERT_EQ(ik.solve(chain, f.tip, home.data(), false, picked.data(), scratch), IkStatus::kConverged) << arm.name << " pose " << k;
-      const auto& all = scratch.solutions;
+      const auto& all = ik.all_solutions(f.tip, scratch);
       bool generating = false;
       double closest = INFINITY;
       for (int s = 0; s < all.count; ++s) {
@@ -149,6 +149,7 @@ TEST(ChainClosedFormIk, FirstFoundIsTheEnginesFirstAdmissibleSolution) {
     chain_frames(chain, q.data(), f);
     JointVector first(6), again(6);
     ASSERT_EQ(ik.solve(chain, f.tip, m.setup().home.data(), true, first.data(), scratch), IkStatus::kConverged);
+    ik.all_solutions(f.tip, scratch);
     int expected = -1;
     for (int s = 0; s < scratch.solutions.count && expected < 0; ++s) {
       if (admissible(chain, scratch.solutions.q[static_cast<std::size_t>(s)].data())) expected = s;
@@ -177,6 +178,7 @@ TEST(ChainClosedFormIk, InvalidOnlyWhenEverySolutionLiesOutsideTheLimits) {
   narrow.joints[0].lower = 0.5;
   narrow.joints[0].upper = 0.6;
   EXPECT_EQ(ChainClosedFormIk(narrow).solve(narrow, f.tip, nullptr, false, out.data(), scratch), IkStatus::kJointLimit);
+  ChainClosedFormIk(narrow).all_solutions(f.tip, scratch);
   ASSERT_GT(scratch.solutions.count, 0);
   for (int s = 0; s < scratch.solutions.count; ++s) EXPECT_FALSE(admissible(narrow, scratch.solutions.q[static_cast<std::size_t>(s)].data()));
   // [0.1, 0.3] admits the generating configuration's branch.
@@ -188,7 +190,7 @@ TEST(ChainClosedFormIk, InvalidOnlyWhenEverySolutionLiesOutsideTheLimits) {
   Eigen::Isometry3d far = f.tip;
   far.translation() << 3.0, 0.0, 0.0;
   EXPECT_EQ(ChainClosedFormIk(chain).solve(chain, far, nullptr, false, out.data(), scratch), IkStatus::kUnreachable);
-  EXPECT_EQ(scratch.solutions.count, 0);
+  EXPECT_EQ(ChainClosedFormIk(chain).all_solutions(far, scratch).count, 0);
 }
 
 // Through the mechanism: the sample statuses follow the solutions. The UR5-like table with joint 1
@@ -213,7 +215,7 @@ TEST(ChainClosedFormIk, SampleStatusesFollowTheSolutions) {
     ChainFrames f;
     chain_frames(chain, q.data(), f);
     const SampleStatus status = solve_one(*model, m, one_pose_scene(f.tip), 0).status;
-    ik.solve(chain, f.tip, nullptr, false, out.data(), scratch);
+    ik.all_solutions(f.tip, scratch);
     bool any_inside = false;
     for (int s = 0; s < scratch.solutions.count; ++s) {
       any_inside = any_inside || admissible(chain, scratch.solutions.q[static_cast<std::size_t>(s)].data());
