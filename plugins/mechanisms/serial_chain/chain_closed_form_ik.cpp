@@ -79,6 +79,7 @@ IkStatus ChainClosedFormIk::solve(const Chain& chain, const Eigen::Isometry3d& t
   int ranked = 0;
   closed_form_ik::Vector6d c;
   for (int i = 0; i < count; ++i) {
+    scratch.failed[static_cast<std::size_t>(i)] = false;
     double key = 0.0;
     if (by_distance) {
       c = scratch.engine.candidate[static_cast<std::size_t>(i)];
@@ -94,7 +95,11 @@ IkStatus ChainClosedFormIk::solve(const Chain& chain, const Eigen::Isometry3d& t
     scratch.order[static_cast<std::size_t>(j)] = i;
   }
   for (int r = 0; r < ranked; ++r) {
-    if (!polished(target, scratch, scratch.order[static_cast<std::size_t>(r)], c)) continue;
+    const int i = scratch.order[static_cast<std::size_t>(r)];
+    if (!polished(target, scratch, i, c)) {
+      scratch.failed[static_cast<std::size_t>(i)] = true;
+      continue;
+    }
     if (!ik_shift_into_limits(chain, c.data(), kClosedFormLimitTolerance)) continue;
     if (by_distance && r + 1 < ranked &&
         ik_home_distance(chain, c.data(), home) > scratch.key[static_cast<std::size_t>(r + 1)] + 1e-9) {
@@ -105,7 +110,7 @@ IkStatus ChainClosedFormIk::solve(const Chain& chain, const Eigen::Isometry3d& t
   }
   // Nothing inside the limits: is there a solution at all? (The engine's order, as its solve().)
   for (int i = 0; i < count; ++i) {
-    if (!polished(target, scratch, i, c)) continue;
+    if (scratch.failed[static_cast<std::size_t>(i)] || !polished(target, scratch, i, c)) continue;
     std::copy_n(c.data(), 6, q);
     return IkStatus::kJointLimit;
   }

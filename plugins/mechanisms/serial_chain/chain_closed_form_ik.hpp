@@ -44,6 +44,7 @@ struct ClosedFormScratch {
   closed_form_ik::IkSolutions solutions;
   std::array<int, 128> order{};     ///< candidates ranked by the selection rule
   std::array<double, 128> key{};    ///< their distances to home
+  std::array<bool, 128> failed{};   ///< candidate i did not polish onto the target (not polished again)
 };
 
 /// Why the closed form does not apply to a chain and task ("" when it does: 6 revolute joints,
