@@ -30,7 +30,8 @@ struct SerialChainIkOptions {
           "arms, axes 1-2-3 and 4-5 parallel as the haptic 6R, or axes 5 x 6 meeting: a 1-D search), else the "
           "numerical IK; 'closed_form' refuses a chain without one (naming its axis geometry); 'numerical' always "
           "the damped least squares. The run header and result.json's mechanism_summary name the solver a chain got. "
-          "The options below from position_tolerance on are the numerical IK's.")
+          "position_tolerance, orientation_tolerance, max_iterations, restarts, seed and warm_start are the "
+          "numerical IK's.")
         .one_of({"auto", "closed_form", "numerical"});
     d.add(&SerialChainIkOptions::selection, "selection", "closest_to_home",
           "Which solution a sample gets: the one closest to home (sum of squared joint differences, revolute ones "
@@ -49,7 +50,7 @@ struct SerialChainIkOptions {
         .unit("rad");
     d.add(&SerialChainIkOptions::max_iterations, "max_iterations", 100, "Iteration budget per start.").range(1, 10000);
     d.add(&SerialChainIkOptions::restarts, "restarts", 8,
-          "Deterministic pseudo-random starts inside the joint limits tried after 'home'. More find the "
+          "Numerical IK: deterministic pseudo-random starts inside the joint limits tried after 'home'. More find the "
           "configuration closest to home more often (the haptic 6R: 95 % of a workspace's poses with 8, all with "
           "24) at a proportional cost.")
         .range(0, 1000);
