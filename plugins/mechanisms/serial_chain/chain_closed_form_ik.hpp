@@ -69,6 +69,11 @@ class ChainClosedFormIk {
   IkStatus solve(const Chain& chain, const Eigen::Isometry3d& target, const double* home, bool first_found, double* q,
                  ClosedFormScratch& scratch) const;
 
+  /// solve() from all_solutions(): the same contract and pick (the reference the ranked path is
+  /// tested against, and its fallback when the polish moves a candidate). Allocation-free.
+  IkStatus solve_from_all(const Chain& chain, const Eigen::Isometry3d& target, const double* home, bool first_found,
+                          double* q, ClosedFormScratch& scratch) const;
+
   /// Every solution of the target without limits (the engine's solve(): polished, wrapped into
   /// (-pi, pi], duplicates merged) in scratch.solutions. Allocation-free.
   const closed_form_ik::IkSolutions& all_solutions(const Eigen::Isometry3d& target, ClosedFormScratch& scratch) const;
@@ -76,9 +81,6 @@ class ChainClosedFormIk {
   const closed_form_ik::ChainGeometry& geometry() const { return engine_.geometry(); }
 
  private:
-  // solve() over all_solutions(): the reference path, and the fallback of the ranked one.
-  IkStatus solve_from_all(const Chain& chain, const Eigen::Isometry3d& target, const double* home, bool first_found,
-                          double* q, ClosedFormScratch& scratch) const;
   // Polishes raw candidate i; true when it reproduces the target, then wrapped into (-pi, pi] in out.
   bool polished(const Eigen::Isometry3d& target, const ClosedFormScratch& scratch, int i, closed_form_ik::Vector6d& out) const;
 

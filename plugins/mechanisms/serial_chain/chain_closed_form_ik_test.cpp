@@ -161,6 +161,41 @@ TEST(ChainClosedFormIk, FirstFoundIsTheEnginesFirstAdmissibleSolution) {
   }
 }
 
+// The ranked path (polish in the rule's order, stop at the first in-limit solution) picks what
+// ranking all polished solutions picks, status and q, for both rules, on the UR5-like arm with
+// joint 1 limited to [-0.3, 0.3] rad (many invalid poses) and unlimited.
+TEST(ChainClosedFormIk, RankedPathEqualsTheAllSolutionsPath) {
+  const SerialChain m = serial_chain(Json{{"dh_file", "serial_chain/ur5_like_dh.json"}});
+  const auto model = m.build(nominal_design(m).data());
+  Chain chain = static_cast<const SerialChainModel&>(*model).chain();
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-kPi, kPi);
+  int invalid = 0;
+  for (const bool narrow : {false, true}) {
+    if (narrow) {
+      chain.joints[0].lower = -0.3;
+      chain.joints[0].upper = 0.3;
+    }
+    const ChainClosedFormIk ik(chain);
+    ClosedFormScratch scratch;
+    for (int k = 0; k < 1000; ++k) {
+      JointVector q(6);
+      for (int i = 0; i < 6; ++i) q(i) = u(rng);
+      ChainFrames f;
+      chain_frames(chain, q.data(), f);
+      for (const bool first : {false, true}) {
+        JointVector ranked(6), reference(6);
+        const IkStatus a = ik.solve(chain, f.tip, m.setup().home.data(), first, ranked.data(), scratch);
+        const IkStatus b = ik.solve_from_all(chain, f.tip, m.setup().home.data(), first, reference.data(), scratch);
+        ASSERT_EQ(a, b) << k;
+        EXPECT_LT(largest_gap(ranked.data(), reference.data()), 1e-12) << k << (first ? " first_found" : " closest");
+        invalid += a == IkStatus::kJointLimit;
+      }
+    }
+  }
+  EXPECT_GT(invalid, 100);
+}
+
 // kJointLimit is proved: solutions exist and all lie outside the limits; kUnreachable: none exist.
 TEST(ChainClosedFormIk, InvalidOnlyWhenEverySolutionLiesOutsideTheLimits) {
   const SerialChain m = serial_chain(Json{{"dh_file", "serial_chain/ur5_like_dh.json"}});
