@@ -48,7 +48,7 @@ const std::vector<ResultField>& result_json_fields() {
       {"evaluations.designs", "integer", "always", "Designs evaluated (a design ruled out by a bound counts too)"},
       {"evaluations.samples", "integer", "always", "Sample solves (inverse kinematics and metrics at one pose)"},
       {"mechanism_summary", "string", "when the mechanism gives one",
-       "What the options made of the mechanism (serial_chain: its moving joints, task and IK selection)"},
+       "What the options made of the mechanism (serial_chain: its moving joints, task, IK selection and IK solver)"},
       {"samples_in_scene", "integer", "always", "Samples of the scene"},
       {"scene", "object", "always", "The scene plugin's own summary of what it built (its README lists the keys)"},
       {"scene.**", "any", "always", "Scene-specific"},

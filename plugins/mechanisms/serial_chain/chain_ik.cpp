@@ -85,15 +85,7 @@ double chain_reach(const Chain& chain) {
   return r > 1e-9 ? r : 1.0;
 }
 
-// Sum of squared joint differences, revolute ones wrapped.
-double home_distance(const Chain& chain, const double* q, const double* home) {
-  double d = 0.0;
-  for (int i = 0; i < chain.dof(); ++i) {
-    const double x = is_revolute(joint(chain, i)) ? wrap_pi(q[i] - home[i]) : q[i] - home[i];
-    d += x * x;
-  }
-  return d;
-}
+double home_distance(const Chain& chain, const double* q, const double* home) { return ik_home_distance(chain, q, home); }
 
 std::uint64_t splitmix64(std::uint64_t& state) {
   std::uint64_t z = (state += 0x9E3779B97F4A7C15ULL);
@@ -377,25 +369,6 @@ void move_toward_home(const Problem& p, const double* home, double* q, IkScratch
 }
 
 // q moved into the limits by whole turns of its revolute joints; false when some joint cannot be.
-bool shift_into_limits(const Chain& chain, double* q) {
-  for (int i = 0; i < chain.dof(); ++i) {
-    const ChainJoint& j = joint(chain, i);
-    if (is_continuous(j)) {
-      q[i] = wrap_continuous(j, q[i]);
-      continue;
-    }
-    double x = q[i];
-    if (is_revolute(j)) {
-      x = wrap_pi(x);
-      if (x < j.lower) x += kTwoPi;
-      if (x > j.upper) x -= kTwoPi;
-    }
-    if (x < j.lower || x > j.upper) return false;
-    q[i] = x;
-  }
-  return true;
-}
-
 // The k-th start of solve_ik: given ones first, then the seeded pseudo-random ones.
 void start_of(const Chain& chain, const IkSettings& settings, const double* const* starts, int start_count, int k,
               double* q) {
@@ -459,6 +432,34 @@ void ik_random_start(const Chain& chain, std::uint64_t seed, int index, double* 
   }
 }
 
+double ik_home_distance(const Chain& chain, const double* q, const double* home) {
+  double d = 0.0;
+  for (int i = 0; i < chain.dof(); ++i) {
+    const double x = is_revolute(joint(chain, i)) ? wrap_pi(q[i] - home[i]) : q[i] - home[i];
+    d += x * x;
+  }
+  return d;
+}
+
+bool ik_shift_into_limits(const Chain& chain, double* q, double tolerance) {
+  for (int i = 0; i < chain.dof(); ++i) {
+    const ChainJoint& j = joint(chain, i);
+    if (is_continuous(j)) {
+      q[i] = wrap_continuous(j, q[i]);
+      continue;
+    }
+    double x = q[i];
+    if (is_revolute(j)) {
+      x = wrap_pi(x);
+      if (x < j.lower - tolerance) x += kTwoPi;
+      if (x > j.upper + tolerance) x -= kTwoPi;
+    }
+    if (x < j.lower - tolerance || x > j.upper + tolerance) return false;
+    q[i] = std::clamp(x, j.lower, j.upper);
+  }
+  return true;
+}
+
 IkStatus solve_ik_from(const Chain& chain, const IkTask& task, const IkSettings& settings,
                        const Eigen::Isometry3d& target, const double* start, double* q, IkScratch& scratch) {
   const Problem p(chain, task, settings, target);
@@ -510,7 +511,7 @@ IkStatus solve_ik(const Chain& chain, const IkTask& task, const IkSettings& sett
     start_of(chain, settings, starts, start_count, k, candidate);
     if (run(p, candidate, false, scratch) != RunEnd::kConverged) continue;
     std::copy_n(candidate, n, q);
-    if (shift_into_limits(chain, q)) {
+    if (ik_shift_into_limits(chain, q, 0.0)) {
       IkResidual residual;
       evaluate(p, q, scratch, scratch.error, residual);
       if (residual.within(settings)) return IkStatus::kConverged;  // whole turns away from a limited run's reach

@@ -61,11 +61,16 @@ struct IkSettings {
   int nullspace_steps = 8;
 };
 
-/// How one IK ended.
+/// How one IK ended. What kJointLimit and kUnreachable prove depends on the solver:
+/// - numerical (solve_ik): kJointLimit means no start converged inside the limits but a run
+///   without limits did: a guess (an in-limit solution no start reached may exist); kUnreachable
+///   means no start converged at all (also a guess near the reach boundary).
+/// - closed form (chain_closed_form_ik.hpp, every solution known): kJointLimit means solutions
+///   exist and every one lies outside the limits; kUnreachable means the pose has no solution.
 enum class IkStatus : std::uint8_t {
   kConverged,    ///< within the tolerances and the joint limits
-  kJointLimit,   ///< the pose is reachable only outside the joint limits
-  kUnreachable,  ///< no start converged
+  kJointLimit,   ///< solved only outside the joint limits (numerical: a guess; closed form: proved)
+  kUnreachable,  ///< no solution (numerical: no start converged; closed form: none exists)
 };
 
 /// The task error of a tip pose (task.rows(), see the file comment), and Jacobians of the task.
@@ -133,6 +138,18 @@ IkStatus solve_ik_from(const Chain& chain, const IkTask& task, const IkSettings&
 IkStatus solve_ik(const Chain& chain, const IkTask& task, const IkSettings& settings,
                   const Eigen::Isometry3d& target, const double* const* starts, int start_count,
                   const double* home, bool first_converged, double* q, IkScratch& scratch);
+
+/// The distance solve_ik's closest-to-home rule minimises: the sum of squared joint differences,
+/// revolute ones wrapped to (-pi, pi].
+double ik_home_distance(const Chain& chain, const double* q, const double* home);
+
+/// Moves n joint positions into the joint limits by whole turns, as solve_ik reports angles: a
+/// continuous revolute joint (limits spanning 2 pi or more, or infinite) is wrapped into
+/// (-pi, pi] when that fits inside its limits, else into [lower, lower + 2 pi); another revolute
+/// joint takes the value wrapped to (-pi, pi] or that plus or minus 2 pi that lies within
+/// [lower - tolerance, upper + tolerance], clamped onto [lower, upper]. Prismatic joints are only
+/// checked. \returns false (q partly changed) when a joint has no such value.
+bool ik_shift_into_limits(const Chain& chain, double* q, double tolerance);
 
 /// The `index`-th pseudo-random start of solve_ik's restarts (splitmix64 from `seed` and
 /// `index`; identical on every platform): each joint uniform in [lower, upper], (-pi, pi] for

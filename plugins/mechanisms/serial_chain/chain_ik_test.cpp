@@ -471,12 +471,15 @@ TEST(ChainIk, DoesNotAllocate) {
 
 #ifdef HAPSYN_COUNT_MALLOC
 // The mechanism's whole per-sample solve(), with every quantity including the demanded motion,
-// for a square (pose), a redundant (position) and the position_axis task: no malloc at all.
+// for a square (pose; closed form and numerical), a redundant (position) and the position_axis
+// task: no malloc at all.
 TEST(SerialChainModel, SolveWithEveryQuantityDoesNotAllocate) {
   const Needs all = kNeedJacobian | kNeedInertia | kNeedEffectiveMass | kNeedGravity | kNeedJointVelocity |
                     kNeedJointAcceleration | kNeedVelocityTorque;
   const Json cases[] = {
       {{"dh_file", "serial_chain/haptic6r_dh.json"}, {"base_rpy", {10, -20, 30}}, {"tool_xyz", {0, 0, 0.05}}},
+      {{"dh_file", "serial_chain/haptic6r_dh.json"}, {"base_rpy", {10, -20, 30}}, {"ik", {{"solver", "numerical"}}}},
+      {{"dh_file", "serial_chain/ur5_like_dh.json"}, {"ik", {{"solver", "closed_form"}}}},
       {{"dh_file", "serial_chain/ur5_like_dh.json"}, {"task", "position"}},
       {{"dh_file", "serial_chain/ur5_like_dh.json"}, {"task", "position_axis"}}};
   for (const Json& options : cases) {

@@ -97,8 +97,11 @@ struct Haptic6RComparison {
   double same_share() const { return both_reachable > 0 ? static_cast<double>(same) / both_reachable : 0.0; }
 };
 
-/// Compares the two on the human_arm scene of `scene_options` with `restarts` IK restarts.
-inline Haptic6RComparison compare_with_haptic6r(Json options, int restarts, const Json& scene_options, const char* form) {
+/// Compares the two on the human_arm scene of `scene_options` with serial_chain's IK `solver`
+/// ("auto": the closed form; "numerical" with `restarts` restarts).
+inline Haptic6RComparison compare_with_haptic6r(Json options, const char* solver, int restarts, const Json& scene_options,
+                                                const char* form) {
+  options["ik"]["solver"] = solver;
   options["ik"]["restarts"] = restarts;
   const SerialChain chain = serial_chain(options);
   const Haptic6R closed(make_options<Haptic6ROptions>(Json{{"selection", "closest_to_home"}}));

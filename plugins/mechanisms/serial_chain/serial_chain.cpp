@@ -102,6 +102,32 @@ void check_codes(const std::vector<int>& codes, int n, int max, const std::strin
   }
 }
 
+// Which IK the nominal chain gets (option ik.solver): sets closed_form and solver_summary.
+void choose_solver(const SerialChainOptions& o, const Chain& nominal, SerialChainSetup& s) {
+  const std::string numerical = "numerical (damped least squares, " + std::to_string(o.ik.restarts) + " restarts";
+  if (o.ik.solver == "numerical") {
+    s.solver_summary = numerical + ")";
+    return;
+  }
+  const std::string why_not = closed_form_applicability(nominal, s.task);
+  if (!why_not.empty()) {
+    if (o.ik.solver == "closed_form") throw Error(kName, "options.ik.solver = \"closed_form\": " + why_not);
+    s.solver_summary = numerical + "; no closed form: " + why_not + ")";
+    return;
+  }
+  const closed_form_ik::ChainGeometry geometry = closed_form_ik::classify(poe_chain_of(nominal));
+  if (geometry.family == closed_form_ik::IkFamily::kUnsupported) {
+    if (o.ik.solver == "closed_form") {
+      throw Error(kName, "options.ik.solver = \"closed_form\": no closed-form decomposition for this chain's axes (" +
+                             geometry.describe() + "); use \"auto\" or \"numerical\"");
+    }
+    s.solver_summary = numerical + "; no closed form for the axes: " + geometry.describe() + ")";
+    return;
+  }
+  s.closed_form = true;
+  s.solver_summary = "closed form (" + geometry.describe() + ")";
+}
+
 std::shared_ptr<SerialChainSetup> make_setup(const SerialChainOptions& o) {
   auto s = std::make_shared<SerialChainSetup>();
   s->options = o;
@@ -142,6 +168,7 @@ std::shared_ptr<SerialChainSetup> make_setup(const SerialChainOptions& o) {
   s->chain_template.instantiate(nominal_values(s->chain_template).data(), nullptr, nominal);
   s->home = home_of(o, nominal);
   s->characteristic_length = o.characteristic_length > 0.0 ? o.characteristic_length : std::max(reach_of(nominal), 1e-3);
+  choose_solver(o, nominal, *s);
   return s;
 }
 
@@ -246,7 +273,7 @@ std::string SerialChain::summary() const {
   }
   const std::string path = o.urdf.empty() ? "from " + o.dh_file : o.base_link + " -> " + o.tip_link;
   return std::to_string(nominal.joints.size()) + " moving joint" + (nominal.joints.size() == 1 ? "" : "s") + " " +
-         path + ": " + joints + "; task " + o.task + "; IK selection " + o.ik.selection;
+         path + ": " + joints + "; task " + o.task + "; IK selection " + o.ik.selection + "; IK solver " + setup_->solver_summary;
 }
 
 }  // namespace hapsyn::plugins

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// The serial_chain mechanism: a serial manipulator from a URDF file or a DH table
-/// (chain_template.hpp), every model parameter a design variable, numerical IK (chain_ik.hpp),
+/// (chain_template.hpp), every model parameter a design variable, closed-form or numerical IK,
 /// and the quantities the metrics need (chain.hpp). Conventions in docs/design.md, "serial
 /// chains":
 /// - A scene sample (x, y, z[, qw, qx, qy, qz]) in the scene frame S is the pose of the sample
@@ -10,9 +10,13 @@
 /// - The task Jacobian (SampleQuantities::jacobian) holds the rows the task matches, angular
 ///   rows first: pose 6 x n (omega, v), position 3 x n (v), position_axis 5 x n (two omega rows
 ///   orthogonal to the tip axis, then v); all in the base frame B, per joint rate.
-/// - Classification: IK converged inside the limits -> kReachable, or kSingular when the
-///   scaled task Jacobian's sigma_min / sigma_max < singularity_tolerance; converged only
-///   outside the limits -> kInvalid; no convergence -> kUnreachable. Never a NaN.
+/// - IK (option ik.solver): closed form (chain_closed_form_ik.hpp: every solution) for 6R chains
+///   with the pose task whose axes form a supported family, else numerical (chain_ik.hpp).
+/// - Classification: a solution inside the limits -> kReachable, or kSingular when the
+///   scaled task Jacobian's sigma_min / sigma_max < singularity_tolerance; solutions only
+///   outside the limits -> kInvalid; none -> kUnreachable. Never a NaN. The closed form proves
+///   kInvalid and kUnreachable (it knows every solution); the numerical IK guesses them (kInvalid:
+///   a run without limits converged and none with limits did; kUnreachable: no start converged).
 /// - Demanded motion (kNeedJointVelocity / kNeedJointAcceleration / kNeedVelocityTorque, every
 ///   task, reachable samples only): the sample's twist and twist rate are those of P in S; they
 ///   are carried to E in B like the target (rotated by R_B^S; v_E = v_P + omega x r, a_E = a_P +
@@ -27,6 +31,7 @@
 ///   and gravity torque (hapsyn/chain_motion.hpp). Without a twist (solve() outside the
 ///   evaluator) these outputs are NaN.
 #include "chain.hpp"
+#include "chain_closed_form_ik.hpp"
 #include "chain_ik.hpp"
 #include "chain_template.hpp"
 #include "linear_constraints.hpp"
@@ -66,6 +71,9 @@ struct SerialChainSetup {
   IkTask task;
   IkSettings ik;
   bool first_found = false;                 ///< ik.selection == "first_found"
+  /// The nominal chain got the closed-form IK (ik.solver auto or closed_form; see SerialChain::summary).
+  bool closed_form = false;
+  std::string solver_summary;               ///< "closed form (<geometry>)" or "numerical (...)"
   Eigen::Isometry3d base_from_scene;        ///< T_B^S
   Eigen::Isometry3d sample_to_tip;          ///< (T_E^P)^-1
   JointVector home;                         ///< [rad or m]
@@ -77,6 +85,7 @@ struct SerialChainSetup {
 /// Per-thread scratch: the IK's and the previous sample's solution (the warm start).
 struct SerialChainScratch final : MechanismScratch {
   IkScratch ik;
+  ClosedFormScratch closed_form;
   ChainFrames frames;
   TaskJointMatrix geometric, task;
   std::uint64_t last_model = 0;  ///< id of the model `last_q` was solved with (warm start only; 0 = none)
@@ -86,7 +95,10 @@ struct SerialChainScratch final : MechanismScratch {
 /// The manipulator for one design. solve() is const, thread-safe and allocation-free.
 class SerialChainModel final : public MechanismModel, public MeshDrawing {
  public:
-  /// Builds the chain for a full design vector (see SerialChainSetup::parameter_count).
+  /// Builds the chain for a full design vector (see SerialChainSetup::parameter_count), and its
+  /// closed-form IK when the nominal chain got one. A design whose axes leave the family (a freed
+  /// origin angle, say) falls back to the numerical IK under ik.solver "auto".
+  /// \throws Error("serial_chain", ...) under ik.solver "closed_form" for such a design, naming its geometry.
   SerialChainModel(const double* design, const SerialChainSetup& setup);
 
   void solve(const double* pose, Needs needs, MechanismScratch& scratch, SampleQuantities& out) const override;
@@ -103,6 +115,8 @@ class SerialChainModel final : public MechanismModel, public MeshDrawing {
   std::vector<std::string> mesh_warnings() const override;
 
   const Chain& chain() const { return chain_; }
+  /// Whether this design's samples are solved in closed form.
+  bool closed_form() const { return closed_form_ != nullptr; }
   const JointVector& max_velocity() const { return max_velocity_; }  ///< [rad/s or m/s]
   const JointVector& max_torque() const { return max_torque_; }      ///< [N m or N]
   /// T_B^E wanted for a scene sample (dimension 3 or 7).
@@ -129,6 +143,7 @@ class SerialChainModel final : public MechanismModel, public MeshDrawing {
   const SerialChainSetup* setup_;
   std::uint64_t id_;  ///< unique per model, for the warm start (an address may be reused)
   Chain chain_;
+  std::unique_ptr<const ChainClosedFormIk> closed_form_;  ///< null: the numerical IK
   JointVector max_velocity_, max_torque_;
   std::vector<double> mesh_parameters_;  ///< the design's chain parameters, kept only when there are meshes
 };
@@ -155,7 +170,8 @@ class SerialChain final : public Mechanism {
   /// effort limits.
   Needs provides() const;
   MechanismSpecs specs() const override { return {provides(), summary()}; }
-  /// "N moving joints base -> tip: name (revolute), ...; task T; IK selection S".
+  /// "N moving joints base -> tip: name (revolute), ...; task T; IK selection S; IK solver
+  /// closed form (<ChainGeometry::describe()>)" or "...; IK solver numerical (<why>)".
   std::string summary() const;
 
   const SerialChainSetup& setup() const { return *setup_; }

@@ -4,6 +4,7 @@
 
 #include <hapsyn/actuator_table.hpp>
 #include <hapsyn/chain_motion.hpp>
+#include <hapsyn/error.hpp>
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -46,6 +47,17 @@ SerialChainModel::SerialChainModel(const double* design, const SerialChainSetup&
   }
   t.instantiate(design, setup.actuators ? motor_mass.data() : nullptr, chain_);
   if (!t.meshes().visuals.empty()) mesh_parameters_.assign(design, design + t.parameters().size());
+  if (setup.closed_form) {
+    try {
+      closed_form_ = std::make_unique<const ChainClosedFormIk>(chain_);
+    } catch (const Error& e) {
+      // The design moved an axis out of the nominal chain's family.
+      if (setup.options.ik.solver == "closed_form") {
+        throw Error("serial_chain", "options.ik.solver = \"closed_form\": this design's chain has no closed form (" +
+                                        std::string(e.what()).substr(e.component().size() + 2) + ")");
+      }
+    }
+  }
   max_velocity_.resize(n);
   max_torque_.resize(n);
   for (int i = 0; i < n; ++i) {
@@ -77,13 +89,18 @@ void SerialChainModel::solve(const double* pose, Needs needs, MechanismScratch& 
   const SerialChainSetup& setup = *setup_;
   const int dimension = out.scene ? out.scene->dimension() : (setup.task.orientation == IkTask::Orientation::kNone ? 3 : 7);
   const Eigen::Isometry3d goal = target(pose, dimension);
-  const double* starts[2];
-  int start_count = 0;
-  if (setup.options.ik.warm_start && s.last_model == id_) starts[start_count++] = s.last_q.data();
-  starts[start_count++] = setup.home.data();
   out.q.resize(chain_.dof());
-  const IkStatus status = solve_ik(chain_, setup.task, setup.ik, goal, starts, start_count, setup.home.data(),
-                                   setup.first_found, out.q.data(), s.ik);
+  IkStatus status;
+  if (closed_form_) {
+    status = closed_form_->solve(chain_, goal, setup.home.data(), setup.first_found, out.q.data(), s.closed_form);
+  } else {
+    const double* starts[2];
+    int start_count = 0;
+    if (setup.options.ik.warm_start && s.last_model == id_) starts[start_count++] = s.last_q.data();
+    starts[start_count++] = setup.home.data();
+    status = solve_ik(chain_, setup.task, setup.ik, goal, starts, start_count, setup.home.data(), setup.first_found,
+                      out.q.data(), s.ik);
+  }
   if (status == IkStatus::kUnreachable) {
     out.status = SampleStatus::kUnreachable;
     return;

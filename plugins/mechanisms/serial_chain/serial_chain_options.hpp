@@ -11,6 +11,7 @@ namespace hapsyn::plugins {
 
 /// IK settings as the problem file gives them (a nested group "ik").
 struct SerialChainIkOptions {
+  std::string solver{};
   std::string selection{};
   double position_tolerance{};
   double orientation_tolerance{};
@@ -20,10 +21,23 @@ struct SerialChainIkOptions {
   bool warm_start{};
 
   static void declare(OptionDeclarations<SerialChainIkOptions>& d) {
-    d.describe("Numerical inverse kinematics (damped least squares with joint limits; docs/design.md, serial chains).");
+    d.describe(
+        "Inverse kinematics: every solution in closed form for 6R arms whose axes allow it, else damped least squares "
+        "with joint limits and restarts (docs/design.md, serial chains).");
+    d.add(&SerialChainIkOptions::solver, "solver", "auto",
+          "'auto': the closed form (every solution, subproblem decomposition) when the chain has 6 revolute joints, "
+          "the task is 'pose' and its axes form a supported family (spherical wrist, three parallel axes as UR "
+          "arms, axes 1-2-3 and 4-5 parallel as the haptic 6R, or axes 5 x 6 meeting: a 1-D search), else the "
+          "numerical IK; 'closed_form' refuses a chain without one (naming its axis geometry); 'numerical' always "
+          "the damped least squares. The run header and result.json's mechanism_summary name the solver a chain got. "
+          "position_tolerance, orientation_tolerance, max_iterations, restarts, seed and warm_start are the "
+          "numerical IK's.")
+        .one_of({"auto", "closed_form", "numerical"});
     d.add(&SerialChainIkOptions::selection, "selection", "closest_to_home",
-          "Which solution a sample gets: among those converged from 'home' and the restarts, the one closest to "
-          "home (deterministic per sample), or the first one found (faster; still deterministic).")
+          "Which solution a sample gets: the one closest to home (sum of squared joint differences, revolute ones "
+          "wrapped) among all solutions inside the limits (closed form: the true closest) or among those converged "
+          "from 'home' and the restarts (numerical: may miss a closer one), or the first one found (closed form: the "
+          "engine's first in-limit solution; numerical: faster). Deterministic either way.")
         .one_of({"closest_to_home", "first_found"});
     d.add(&SerialChainIkOptions::position_tolerance, "position_tolerance", 1e-10, "Converged when the position error is below this.")
         .greater_than(0)
@@ -36,7 +50,7 @@ struct SerialChainIkOptions {
         .unit("rad");
     d.add(&SerialChainIkOptions::max_iterations, "max_iterations", 100, "Iteration budget per start.").range(1, 10000);
     d.add(&SerialChainIkOptions::restarts, "restarts", 8,
-          "Deterministic pseudo-random starts inside the joint limits tried after 'home'. More find the "
+          "Numerical IK: deterministic pseudo-random starts inside the joint limits tried after 'home'. More find the "
           "configuration closest to home more often (the haptic 6R: 95 % of a workspace's poses with 8, all with "
           "24) at a proportional cost.")
         .range(0, 1000);
@@ -44,7 +58,7 @@ struct SerialChainIkOptions {
                                                     "the same in every run).")
         .minimum(0);
     d.add(&SerialChainIkOptions::warm_start, "warm_start", false,
-          "Also start from the previous sample's solution on the same thread. Faster on dense scenes, but the "
+          "Numerical IK: also start from the previous sample's solution on the same thread. Faster on dense scenes, but the "
           "configuration a sample gets then depends on how samples are split over threads (results repeat for a "
           "given --threads).");
   }

@@ -13,7 +13,7 @@ TEST(SerialChainPaperWorkspace, DhAndUrdfFormsAgreeWithTheClosedFormWhereBothPic
   for (const char* form : {"dh"}) {
 #endif
     const auto options = std::string(form) == "dh" ? haptic6r_dh_options() : haptic6r_urdf_options();
-    const Haptic6RComparison r = compare_with_haptic6r(options, 24, paper_human_arm(), form);
+    const Haptic6RComparison r = compare_with_haptic6r(options, "numerical", 24, paper_human_arm(), form);
     EXPECT_GE(r.same_share(), 0.999) << form;
   }
 }

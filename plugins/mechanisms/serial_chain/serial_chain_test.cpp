@@ -233,18 +233,53 @@ TEST(SerialChain, ClassifiesUnreachableSingularAndLimitSamplesNeverNaN) {
 }
 
 // The acceptance cross-check: the haptic 6R as a serial_chain (DH table and URDF) against the
-// closed-form haptic6r, sample by sample, on a human-arm workspace.
+// closed-form haptic6r, sample by sample, on a human-arm workspace. serial_chain's own closed form
+// (ik.solver auto) sees every solution too, so both pick the same configuration on every sample.
 class SerialChainHaptic6R : public ::testing::TestWithParam<const char*> {};
 
-TEST_P(SerialChainHaptic6R, AgreesWithTheClosedFormWhereBothPickTheSameConfiguration) {
+TEST_P(SerialChainHaptic6R, ClosedFormPicksTheSameConfigurationOnEverySample) {
   const Json options = std::string(GetParam()) == "dh" ? haptic6r_dh_options() : haptic6r_urdf_options();
-  EXPECT_GE(compare_with_haptic6r(options, 8, coarse_human_arm(), GetParam()).same_share(), 0.95);
+  const Haptic6RComparison r = compare_with_haptic6r(options, "auto", 8, coarse_human_arm(), GetParam());
+  EXPECT_EQ(r.same_share(), 1.0);
+  EXPECT_EQ(r.farther, 0);
+  EXPECT_EQ(r.missed, 0);
 }
 
-// The selection differs only because the numerical IK does not see every solution: with enough
-// starts it finds the closed form's closest one on every sample of the workspace.
+// The numerical IK: where it picks another configuration, it is because it did not see every
+// solution (never a closer one).
+TEST_P(SerialChainHaptic6R, NumericalAgreesWhereBothPickTheSameConfiguration) {
+  const Json options = std::string(GetParam()) == "dh" ? haptic6r_dh_options() : haptic6r_urdf_options();
+  EXPECT_GE(compare_with_haptic6r(options, "numerical", 8, coarse_human_arm(), GetParam()).same_share(), 0.95);
+}
+
+// With enough starts the numerical IK finds the closed form's closest one on every sample of the workspace.
 TEST(SerialChainHaptic6RSelection, EnoughRestartsPickTheClosedFormsConfigurationEverywhere) {
-  EXPECT_EQ(compare_with_haptic6r(haptic6r_dh_options(), 24, coarse_human_arm(), "dh, 24 restarts").same_share(), 1.0);
+  EXPECT_EQ(compare_with_haptic6r(haptic6r_dh_options(), "numerical", 24, coarse_human_arm(), "dh, 24 restarts").same_share(), 1.0);
+}
+
+// problems/haptic6r-urdf-evaluate.json (serial_chain, closed form) against
+// problems/haptic6r-evaluate.json (haptic6r) through the framework: the same objective values.
+TEST(SerialChainHaptic6RStudy, UrdfStudyGivesHaptic6RsObjectivesTo1e9) {
+#ifdef HAPSYN_HAVE_URDFDOM
+  const auto run = [](const std::string& file) {
+    const Json doc = read_problem_file(std::string(HAPSYN_SOURCE_DIR) + "/problems/" + file);
+    const Study study = load_study(doc, test::registry());
+    SolverContext context;
+    context.threads = 2;
+    return study.solver->solve(*study.problem, context);
+  };
+  const SolverResult urdf = run("haptic6r-urdf-evaluate.json"), closed = run("haptic6r-evaluate.json");
+  ASSERT_TRUE(urdf.best.has_value()) << urdf.message;
+  ASSERT_TRUE(closed.best.has_value()) << closed.message;
+  ASSERT_EQ(urdf.best->objectives.size(), 5u);
+  ASSERT_EQ(closed.best->objectives.size(), 5u);
+  for (std::size_t k = 0; k < 5; ++k) {  // J_x, J_v, J_a, J_f, J
+    EXPECT_NEAR(urdf.best->objectives[k], closed.best->objectives[k], 1e-9) << "objective " << k;
+    std::printf("[ objective %zu ] serial_chain %.17g, haptic6r %.17g\n", k, urdf.best->objectives[k], closed.best->objectives[k]);
+  }
+#else
+  GTEST_SKIP() << "built without urdfdom";
+#endif
 }
 
 #ifdef HAPSYN_HAVE_URDFDOM

@@ -86,13 +86,20 @@ class ClosedFormIk6R {
   /// All solutions q with chain().forward(q) = target (to accept_tolerance).
   void solve(const Eigen::Isometry3d& target, IkScratch& scratch, IkSolutions& out) const;
 
+  /// The two halves of solve(), for a caller that needs only some solutions (serial_chain
+  /// polishes its candidates in the order of its selection rule and stops at the first one):
+  /// the raw candidates of the subproblems into scratch.candidate[0..count) (unpolished, not
+  /// wrapped, possibly duplicated or spurious), and the Newton polish of one of them (true when
+  /// it then reproduces the target to accept_tolerance; q is not wrapped). solve() is these two,
+  /// then wrapping, limits and duplicates. Allocation-free.
+  void candidates(const Eigen::Isometry3d& target, IkScratch& scratch) const;
+  bool polish(const Eigen::Isometry3d& target, Vector6d& q) const;
+
   const PoeChain& chain() const { return chain_; }
   const ChainGeometry& geometry() const { return geometry_; }
   const IkOptions& options() const { return options_; }
 
  private:
-  void candidates(const Eigen::Isometry3d& target, IkScratch& scratch) const;
-  bool polish(const Eigen::Isometry3d& target, Vector6d& q) const;
   bool wrap_into_limits(Vector6d& q) const;
 
   PoeChain chain_;
