@@ -32,10 +32,10 @@ struct MeshVisual {
   std::string file;  ///< absolute path of the mesh file (.stl or .dae), resolved at load
   /// The mesh file's frame in the frame of the scene's poses [m]: a point p of the file (after
   /// `scale`) is drawn at pose * p. For a URDF: the link frame at the configuration times the
-  /// visual's <origin>.
+  /// visual's `<origin>`.
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  /// Per-axis scale of the file's coordinates (URDF <mesh scale>; 1 1 1 when not given). Note
-  /// that a COLLADA file's own <unit> applies before it.
+  /// Per-axis scale of the file's coordinates (URDF `<mesh scale>`; 1 1 1 when not given). Note
+  /// that a COLLADA file's own `<unit>` applies before it.
   Eigen::Vector3d scale = Eigen::Vector3d::Ones();
 };
 

@@ -133,6 +133,9 @@ class SerialChainModel final : public MechanismModel, public MeshDrawing {
                                         const Eigen::Vector3d& omega_chain);
 
  private:
+  /// The chain's frames at the configuration the IK gives `sample` (what segments() and
+  /// mesh_visuals() draw); false when the sample is unreachable or reachable only outside the limits.
+  bool drawn_frames(const SampleSet& scene, int sample, MechanismScratch& scratch, ChainFrames& frames) const;
   void fill_quantities(const ChainFrames& frames, const TaskJointMatrix& jacobian, Needs needs,
                        SampleQuantities& out) const;
   // kNeedJointVelocity, kNeedJointAcceleration, kNeedVelocityTorque at s.frames, s.task and

@@ -7,13 +7,8 @@ namespace hapsyn::plugins {
 std::vector<MeshVisual> SerialChainModel::mesh_visuals(const SampleSet& scene, int sample, MechanismScratch& scratch) const {
   const std::vector<ChainMeshVisual>& visuals = setup_->chain_template.meshes().visuals;
   if (visuals.empty()) return {};
-  SampleQuantities q;
-  q.scene = &scene;
-  q.sample = sample;
-  solve(scene.pose(sample), kNeedPose, scratch, q);
-  if (q.status == SampleStatus::kUnreachable || q.status == SampleStatus::kInvalid) return {};
   ChainFrames frames;
-  chain_frames(chain_, q.q.data(), frames);
+  if (!drawn_frames(scene, sample, scratch, frames)) return {};
   const Eigen::Isometry3d scene_from_base = setup_->base_from_scene.inverse();
   std::vector<MeshVisual> out;
   for (const ChainMeshVisual& v : visuals) {

@@ -132,14 +132,20 @@ void SerialChainModel::solve(const double* pose, Needs needs, MechanismScratch& 
   if (needs & kMotion) fill_motion(pose, dimension, goal, s, needs, out);
 }
 
-std::vector<Segment> SerialChainModel::segments(const SampleSet& scene, int sample, MechanismScratch& scratch) const {
+bool SerialChainModel::drawn_frames(const SampleSet& scene, int sample, MechanismScratch& scratch,
+                                    ChainFrames& frames) const {
   SampleQuantities q;
   q.scene = &scene;
   q.sample = sample;
   solve(scene.pose(sample), kNeedPose, scratch, q);
-  if (q.status == SampleStatus::kUnreachable || q.status == SampleStatus::kInvalid) return {};
-  ChainFrames frames;
+  if (q.status == SampleStatus::kUnreachable || q.status == SampleStatus::kInvalid) return false;
   chain_frames(chain_, q.q.data(), frames);
+  return true;
+}
+
+std::vector<Segment> SerialChainModel::segments(const SampleSet& scene, int sample, MechanismScratch& scratch) const {
+  ChainFrames frames;
+  if (!drawn_frames(scene, sample, scratch, frames)) return {};
   const Eigen::Isometry3d scene_from_base = setup_->base_from_scene.inverse();
   Segment links{"links", {scene_from_base.translation()}};
   for (int i = 0; i < chain_.dof(); ++i) {
