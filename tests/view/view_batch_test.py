@@ -17,7 +17,7 @@ import subprocess
 import sys
 
 from view_process import ViewProcess
-from view_support import browser, browser_missing, check, check_stops, finish, get_json, wait_state
+from view_support import browser_missing, chromium, check, check_stops, finish, get_json, wait_state
 
 
 def check_batch(driver, hapsyn, folder, kind, rows, shown_dir, column, values):
@@ -83,16 +83,13 @@ def main():
         runs = json.load(f)["runs"]
     with open(os.path.join(compare, "compare.json")) as f:
         rows = json.load(f)["rows"]
-    driver = browser()
-    try:
+    with chromium() as driver:
         driver.set_page_load_timeout(30)
         check_batch(driver, hapsyn, sweep, "sweep", len(runs), os.path.join(sweep, runs[-1]["case"]),
                     "errors.objective_error", [r["errors"].get("objective_error") for r in runs])
         check_batch(driver, hapsyn, compare, "compare", len(rows),
                     os.path.join(compare, os.path.basename(rows[0]["output_directory"])),
                     "wall_time_s", [r.get("wall_time_s") for r in rows])
-    finally:
-        driver.quit()
     check_errors(hapsyn, sweep, work)
     r = subprocess.run([hapsyn, "report", sweep], capture_output=True, text=True, timeout=120)
     html = open(os.path.join(sweep, "report.html"), encoding="utf-8").read() if r.returncode == 0 else ""

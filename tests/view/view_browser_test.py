@@ -15,8 +15,8 @@ import time
 import urllib.request
 
 from view_process import ViewProcess, read_csv_columns
-from view_support import (browser, browser_missing, check, check_not_blank, check_stops, finish, open_page,
-                          page_state, run_study, screenshot)
+from view_support import (check, check_not_blank, check_stops, chromium, finish, open_page, page_state,
+                          prepare_study, screenshot)
 
 
 def check_human(state, study_doc, result, columns):
@@ -39,20 +39,17 @@ def check_human(state, study_doc, result, columns):
 
 
 def main():
-    hapsyn, problem, work = sys.argv[1:4]
-    os.makedirs(work, exist_ok=True)
-    if browser_missing():
+    prepared = prepare_study(sys.argv[1:4])
+    if prepared is None:
         return 1
-    out = os.path.join(work, "run")
-    result = run_study(hapsyn, problem, out)
+    hapsyn, problem, work, out, result = prepared
     columns, rows = read_csv_columns(os.path.join(out, "samples.csv"))
     local_columns = list(columns)[list(columns).index("status") + 1:]
     chosen = local_columns[-1]  # not the page's default (the first): selecting it is tested too
     cells = [float(v) for v in columns[chosen] if v != ""]
 
     with ViewProcess(hapsyn, problem) as view:
-        driver = browser()
-        try:
+        with chromium() as driver:
             state = open_page(driver, view.url)
             check(state.get("pointCount") == rows, f"pointCount {state.get('pointCount')} = samples.csv rows {rows}")
             check(state.get("columns") == local_columns, f"the page's columns = samples.csv's local columns {local_columns}")
@@ -74,8 +71,6 @@ def main():
                 check(state.get("human") is None, "no human drawn for a scene without one")
             check_not_blank(driver)
             screenshot(driver, os.path.join(work, "view-" + os.path.splitext(os.path.basename(problem))[0] + ".png"))
-        finally:
-            driver.quit()
         check_stops(view)
     return finish()
 

@@ -12,23 +12,20 @@ import sys
 import time
 
 from view_process import ViewProcess
-from view_support import (browser, browser_missing, check, check_not_blank, check_stops, click_at, finish, get_json,
-                          open_page, page_state, run_study, set_options)
+from view_support import (check, check_not_blank, check_stops, chromium, click_at, finish, get_json, open_page,
+                          page_state, prepare_study)
 
 
 def main():
-    hapsyn, problem, work = sys.argv[1:4]
-    os.makedirs(work, exist_ok=True)
-    if browser_missing():
+    prepared = prepare_study(sys.argv[1:])
+    if prepared is None:
         return 1
-    run = os.path.join(work, "run")
-    result = run_study(hapsyn, problem, run, set_options(sys.argv[4:]))
+    hapsyn, problem, work, run, result = prepared
     names = [o.get("name", o["metric"]) for o in result["problem"]["objectives"]]
     check(len(names) == 3 and len(result["front"]) >= 3, f"a front of {len(result['front'])} points, objectives {names}")
     with ViewProcess(hapsyn, run) as view:
         front = get_json(view.url + "api/result", timeout=30)["front"]
-        driver = browser()
-        try:
+        with chromium() as driver:
             state = open_page(driver, view.url)
             check(state.get("front3d") is True and state.get("frontAxes") == names, f"3D scatter of {state.get('frontAxes')}")
             check(state.get("frontCount") == len(result["front"]), f"frontCount {state.get('frontCount')} = {len(result['front'])}")
@@ -49,8 +46,6 @@ def main():
             state = page_state(driver)
             circles = driver.execute_script("return document.querySelectorAll('#front-plot circle.point').length")
             check(state.get("front3d") is False and circles == len(result["front"]), f"2D again: {circles} circles")
-        finally:
-            driver.quit()
         check_stops(view)
     return finish()
 

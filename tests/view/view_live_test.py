@@ -27,7 +27,7 @@ sys.path.insert(0, os.path.join(HERE, "..", "..", "examples", "live_bridge"))
 
 from stream_recording import WebSocket  # noqa: E402
 from view_process import ViewProcess  # noqa: E402
-from view_support import browser, browser_missing, check, check_stops, finish, get_json, screenshot, wait_for  # noqa: E402
+from view_support import browser_missing, chromium, check, check_stops, finish, get_json, screenshot, wait_for  # noqa: E402
 
 
 def upgrade_status(port, target, host=None, origin=None):
@@ -225,8 +225,7 @@ def main():
             return finish()
         if browser_missing():
             return 1
-        driver = browser()
-        try:
+        with chromium() as driver:
             driver.set_page_load_timeout(60)
             driver.get(view.url)
             wait_for(driver, bool, 60, script="return !!(window.hapsynView.replay || {}).ready", poll=0.3)
@@ -265,8 +264,6 @@ def main():
                   f"WebXR: the end-effector target placed in the headset's space {placed} = the controller {controller}")
             print(f"     WebXR session supported in this browser: {driver.execute_script('return window.hapsynView.xr.supported')}")
             screenshot(driver, os.path.join(work, "live.png"))
-        finally:
-            driver.quit()
         check_stops(view)
     return finish()
 

@@ -22,9 +22,8 @@ import time
 import xml.etree.ElementTree as ET
 
 from view_process import ViewProcess
-from view_support import browser as start_browser
-from view_support import (check, check_not_blank, check_stops, finish, offline_browser, open_page, run_study,
-                          screenshot, wait_for)
+from view_support import (check, check_not_blank, check_stops, chromium, finish, open_page, run_study, screenshot,
+                          wait_for)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -189,8 +188,7 @@ def browser(hapsyn, problem, work):
     count = len(expected(problem))
     os.makedirs(work, exist_ok=True)
     with ViewProcess(hapsyn, problem) as view:
-        driver = start_browser()
-        try:
+        with chromium() as driver:
             state = open_page(driver, view.url, done=meshes_loaded)
             check(state.get("meshesDone") is True and state.get("meshErrors") == [], f"every mesh tried, no error: {state.get('meshErrors')}")
             check(state.get("meshes") == count, f"meshes loaded {state.get('meshes')} = the URDF's drawable visuals {count}")
@@ -207,8 +205,6 @@ def browser(hapsyn, problem, work):
             toggle = driver.execute_script("return !!document.querySelector('#capsules-toggle input')")
             check(toggle, "a check box shows or hides the capsules")
             screenshot(driver, os.path.join(work, "view-" + os.path.splitext(os.path.basename(problem))[0] + ".png"))
-        finally:
-            driver.quit()
         check_stops(view)
     report(hapsyn, problem, work, count)
 
@@ -229,14 +225,11 @@ def report(hapsyn, problem, work, count):
     routes = sorted({m["route"] for m in study["meshes"]})
     check(sorted(embedded) == routes, f"the report embeds every mesh file: {embedded} = {routes}")
     check("/prototype.js" not in html, "the report leaves out the virtual prototype (it needs the server)")
-    driver = offline_browser()
-    try:
+    with chromium(offline=True) as driver:
         driver.get("file://" + os.path.abspath(page))
         state = wait_for(driver, meshes_loaded)
         check(state.get("meshesDone") is True and state.get("meshErrors") == [] and state.get("meshes") == count,
               f"the report loads its {state.get('meshes')} meshes from itself (= {count}; errors {state.get('meshErrors')})")
-    finally:
-        driver.quit()
 
 
 def main():

@@ -21,7 +21,7 @@ import sys
 import time
 
 from view_process import ViewProcess, read_csv_columns
-from view_support import (browser, browser_missing, check, check_stops, finish, get_json, run_study, screenshot,
+from view_support import (browser_missing, chromium, check, check_stops, finish, get_json, run_study, screenshot,
                           wait_for)
 
 FEASIBILITY = "motion_feasibility."
@@ -120,8 +120,7 @@ def main():
         check(not bad_ratio, f"|qdot|/limit, |tau|/limit = NumPy's from the module's quantities ({len(bad_ratio)} differ)")
         check(not bad_flags, f"the bars agree with samples.csv's velocity / acceleration flags ({len(bad_flags)} differ)")
 
-        driver = browser()
-        try:
+        with chromium() as driver:
             driver.set_page_load_timeout(60)
             driver.get(view.url)
             state = wait_for(driver, lambda replay: replay.get("ready"), 90, poll=0.3, script=(
@@ -158,8 +157,6 @@ def main():
             check(1.0 <= played - doc["time"][0] <= 4.0 * elapsed * 1.2,
                   f"x4 for {elapsed:.2f} s: the replay moved {played - doc['time'][0]:.2f} s")
             screenshot(driver, os.path.join(work, "replay-" + os.path.splitext(os.path.basename(problem))[0] + ".png"))
-        finally:
-            driver.quit()
         check_stops(view)
     return finish()
 

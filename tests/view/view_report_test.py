@@ -17,8 +17,8 @@ import shutil
 import subprocess
 import sys
 
-from view_support import (browser_missing, check, check_not_blank, click_at, finish, offline_browser, open_page,
-                          run_study, screenshot, set_options, wait_state)
+from view_support import (check, check_not_blank, chromium, click_at, finish, open_page, prepare_study, screenshot,
+                          wait_state)
 
 # A URL the page would load: an element's src/href, an import or a fetch of an absolute URL.
 LOADS = re.compile(r"""(?:\b(?:src|href)\s*=\s*["']?\s*(?:https?:)?//)|(?:\bfrom\s*["']https?:)|"""
@@ -101,12 +101,10 @@ def check_errors(hapsyn, run, work):
 
 
 def main():
-    hapsyn, problem, work = sys.argv[1:4]
-    os.makedirs(work, exist_ok=True)
-    if browser_missing():
+    prepared = prepare_study(sys.argv[1:])
+    if prepared is None:
         return 1
-    run = os.path.join(work, "run")
-    result = run_study(hapsyn, problem, run, set_options(sys.argv[4:]))
+    hapsyn, problem, work, run, result = prepared
     rows = result["samples_in_scene"]
     r = subprocess.run([hapsyn, "report", run], capture_output=True, text=True, timeout=120)
     report = os.path.join(run, "report.html")
@@ -119,12 +117,9 @@ def main():
         html = f.read()
     check(html == open(other, encoding="utf-8").read(), "both reports are the same file")
     check_file(html)
-    driver = offline_browser()
-    try:
+    with chromium(offline=True) as driver:
         check_page(driver, report, result, rows)
         check_hostile(driver, hapsyn, run, work)
-    finally:
-        driver.quit()
     check_errors(hapsyn, run, work)
     return finish()
 

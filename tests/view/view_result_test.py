@@ -18,8 +18,8 @@ import sys
 import time
 
 from view_process import ViewProcess
-from view_support import (browser, browser_missing, check, check_not_blank, check_stops, click_at, finish, get_json,
-                          open_page, page_state, run_study, screenshot, set_options)
+from view_support import (check, check_not_blank, check_stops, chromium, click_at, finish, get_json, open_page,
+                          page_state, prepare_study, screenshot)
 
 
 def fivebar_links_match(design, segments):
@@ -115,22 +115,17 @@ def check_bad_front(hapsyn, run, work):
 
 
 def main():
-    hapsyn, problem, work = sys.argv[1:4]
-    os.makedirs(work, exist_ok=True)
-    if browser_missing():
+    prepared = prepare_study(sys.argv[1:])
+    if prepared is None:
         return 1
-    run = os.path.join(work, "run")
-    result = run_study(hapsyn, problem, run, set_options(sys.argv[4:]))
+    hapsyn, problem, work, run, result = prepared
     check(len(result.get("front", [])) >= 2, f"the run has a front of {len(result.get('front', []))} points")
     with ViewProcess(hapsyn, run) as view:
         get = lambda route: get_json(view.url.rstrip("/") + route, timeout=30)
         front, study, samples = get("/api/result")["front"], get("/api/study"), get("/api/samples")
         check_api(front, result, samples, study)
-        driver = browser()
-        try:
+        with chromium() as driver:
             check_page(driver, view.url, result, front, study["design"], work)
-        finally:
-            driver.quit()
         check_stops(view)
     check_bad_front(hapsyn, run, work)
     return finish()

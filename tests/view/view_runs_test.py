@@ -10,8 +10,7 @@ import os
 import sys
 
 from view_process import ViewProcess
-from view_support import (browser, browser_missing, check, check_stops, finish, open_page, run_study, screenshot,
-                          set_options)
+from view_support import check, check_stops, chromium, finish, open_page, prepare_study, screenshot
 
 
 def expected_counts(result):
@@ -41,19 +40,14 @@ def check_page(driver, url, result):
 
 
 def main():
-    hapsyn, problem, work = sys.argv[1:4]
-    os.makedirs(work, exist_ok=True)
-    if browser_missing():
+    prepared = prepare_study(sys.argv[1:])
+    if prepared is None:
         return 1
-    run = os.path.join(work, "run")
-    result = run_study(hapsyn, problem, run, set_options(sys.argv[4:]))
+    hapsyn, problem, work, run, result = prepared
     with ViewProcess(hapsyn, run) as view:
-        driver = browser()
-        try:
+        with chromium() as driver:
             check_page(driver, view.url, result)
             screenshot(driver, os.path.join(work, "view-runs.png"))
-        finally:
-            driver.quit()
         check_stops(view)
     return finish()
 

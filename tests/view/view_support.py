@@ -1,6 +1,7 @@
 """What the browser tests of `hapsyn view` share (tests/view/*_test.py): the check list, the study
 run, headless Chromium, waiting for the page's state, counting a canvas' colours, screenshots and
 stopping the server. One place, so that every script checks these the same way."""
+import contextlib
 import json
 import os
 import shutil
@@ -56,6 +57,19 @@ def run_study(hapsyn, problem, out, sets=()):
         return json.load(f)
 
 
+def prepare_study(args):
+    """For a script's `HAPSYN PROBLEM_FILE WORK_DIR [path=value ...]` (args, sys.argv[1:]): makes
+    WORK_DIR and runs the study into WORK_DIR/run with the path=value as --set options; (hapsyn,
+    problem, work, run, result.json). None when Chromium or chromedriver is missing (said as a
+    failure), before anything runs."""
+    hapsyn, problem, work = args[:3]
+    os.makedirs(work, exist_ok=True)
+    if browser_missing():
+        return None
+    run = os.path.join(work, "run")
+    return hapsyn, problem, work, run, run_study(hapsyn, problem, run, set_options(args[3:]))
+
+
 def get_json(url, timeout=60):
     """The JSON document a GET of url answers."""
     with urllib.request.urlopen(url, timeout=timeout) as response:
@@ -81,6 +95,16 @@ def offline_browser():
     driver.execute_cdp_cmd("Network.enable", {})
     driver.execute_cdp_cmd("Network.setBlockedURLs", {"urls": ["http://*", "https://*", "ws://*", "wss://*"]})
     return driver
+
+
+@contextlib.contextmanager
+def chromium(offline=False):
+    """browser() (offline: offline_browser()) for a with block; it quits at the block's end."""
+    driver = offline_browser() if offline else browser()
+    try:
+        yield driver
+    finally:
+        driver.quit()
 
 
 def page_state(driver):
