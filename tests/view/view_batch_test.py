@@ -15,11 +15,9 @@ import os
 import shutil
 import subprocess
 import sys
-import urllib.request
 
-from view_browser_test import CHROMEDRIVER, browser
 from view_process import ViewProcess
-from view_result_test import check, failures, wait_state
+from view_support import browser_missing, chromium, check, check_stops, finish, get_json, wait_state
 
 
 def check_batch(driver, hapsyn, folder, kind, rows, shown_dir, column, values):
@@ -27,7 +25,7 @@ def check_batch(driver, hapsyn, folder, kind, rows, shown_dir, column, values):
     with open(os.path.join(shown_dir, "result.json")) as f:
         shown = json.load(f)
     with ViewProcess(hapsyn, folder) as view:
-        get = lambda route: json.load(urllib.request.urlopen(view.url.rstrip("/") + route, timeout=30))
+        get = lambda route: get_json(view.url.rstrip("/") + route, timeout=30)
         batch, study = get("/api/result")["batch"], get("/api/study")
         check(batch["kind"] == kind and len(batch["rows"]) == rows, f"{kind}: /api/result batch of {len(batch['rows'])} rows = {rows}")
         check(study["design"] == shown["best"]["design"], f"{kind}: the 3D view shows {os.path.basename(shown_dir)}'s best design")
@@ -41,8 +39,7 @@ def check_batch(driver, hapsyn, folder, kind, rows, shown_dir, column, values):
         table_rows = driver.execute_script("return document.querySelectorAll('#batch-table tbody tr').length")
         check(table_rows == rows, f"{kind}: {table_rows} table rows")
         driver.save_screenshot(os.path.join(os.path.dirname(folder), f"view-{kind}.png"))
-        code, _ = view.stop()
-        check(code == 0, f"{kind}: the server stops with exit 0")
+        check_stops(view, f"{kind}: the server stops with exit 0")
 
 
 def check_errors(hapsyn, sweep, work):
@@ -73,10 +70,8 @@ def check_errors(hapsyn, sweep, work):
 def main():
     hapsyn, sweep_problem, compare_a, compare_b, work = sys.argv[1:6]
     os.makedirs(work, exist_ok=True)
-    for need in ("chromium", CHROMEDRIVER):
-        if not shutil.which(need):
-            print(f"FAIL {need} is not installed: bash scripts/setup.sh --browser")
-            return 1
+    if browser_missing():
+        return 1
     sweep, compare = os.path.join(work, "sweep"), os.path.join(work, "compare")
     for folder in (sweep, compare):
         shutil.rmtree(folder, ignore_errors=True)
@@ -88,22 +83,18 @@ def main():
         runs = json.load(f)["runs"]
     with open(os.path.join(compare, "compare.json")) as f:
         rows = json.load(f)["rows"]
-    driver = browser()
-    try:
+    with chromium() as driver:
         driver.set_page_load_timeout(30)
         check_batch(driver, hapsyn, sweep, "sweep", len(runs), os.path.join(sweep, runs[-1]["case"]),
                     "errors.objective_error", [r["errors"].get("objective_error") for r in runs])
         check_batch(driver, hapsyn, compare, "compare", len(rows),
                     os.path.join(compare, os.path.basename(rows[0]["output_directory"])),
                     "wall_time_s", [r.get("wall_time_s") for r in rows])
-    finally:
-        driver.quit()
     check_errors(hapsyn, sweep, work)
     r = subprocess.run([hapsyn, "report", sweep], capture_output=True, text=True, timeout=120)
     html = open(os.path.join(sweep, "report.html"), encoding="utf-8").read() if r.returncode == 0 else ""
     check('"kind":"sweep"' in html and html.count('"label":') >= len(runs), "hapsyn report of a sweep embeds its table")
-    print(f"{len(failures)} failure(s)")
-    return 1 if failures else 0
+    return finish()
 
 
 if __name__ == "__main__":

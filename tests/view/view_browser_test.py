@@ -10,44 +10,16 @@ Usage: view_browser_test.py HAPSYN PROBLEM_FILE WORK_DIR. Exit 0 when every chec
 import json
 import math
 import os
-import shutil
-import subprocess
 import sys
 import time
 import urllib.request
 
 from view_process import ViewProcess, read_csv_columns
-
-# Distinct colours a rendered view has at least (background, grid of points in a colour ramp,
-# links, axes); a blank or failed canvas has 1 or 2.
-MIN_COLOURS = 50
-CHROMEDRIVER = "/usr/bin/chromedriver"
-
-COUNT_COLOURS = """
-const source = document.querySelector('#view canvas');
-const copy = document.createElement('canvas');
-copy.width = source.width; copy.height = source.height;
-const context = copy.getContext('2d');
-context.drawImage(source, 0, 0);
-const data = context.getImageData(0, 0, copy.width, copy.height).data;
-const seen = new Set();
-for (let i = 0; i < data.length; i += 4) seen.add((data[i] << 16) | (data[i + 1] << 8) | data[i + 2]);
-return seen.size;
-"""
+from view_support import (check, check_not_blank, check_stops, chromium, finish, open_page, page_state,
+                          prepare_study, screenshot)
 
 
-def browser():
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
-    options = webdriver.ChromeOptions()
-    for flag in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--window-size=1000,700",
-                 "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"):
-        options.add_argument(flag)
-    options.binary_location = shutil.which("chromium") or "/usr/bin/chromium"
-    return webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
-
-
-def check_human(check, state, study_doc, result, columns):
+def check_human(state, study_doc, result, columns):
     """The figure against the run's own files: its shoulder is the resolved x_S_B, its palm lies
     |x_E_P| from the drawn sample's position in samples.csv, and its head is above the shoulder
     (gravity points along -z of the scene frame)."""
@@ -67,47 +39,23 @@ def check_human(check, state, study_doc, result, columns):
 
 
 def main():
-    hapsyn, problem, work = sys.argv[1:4]
-    os.makedirs(work, exist_ok=True)
-    failures = []
-
-    def check(condition, what):
-        print(("ok   " if condition else "FAIL ") + what, flush=True)
-        if not condition:
-            failures.append(what)
-
-    for need in ("chromium", CHROMEDRIVER):
-        if not shutil.which(need):
-            print(f"FAIL {need} is not installed: bash scripts/setup.sh --browser")
-            return 1
-    out = os.path.join(work, "run")
-    shutil.rmtree(out, ignore_errors=True)
-    subprocess.run([hapsyn, "run", problem, "--out", out, "--quiet"], check=True, stdout=subprocess.DEVNULL)
+    prepared = prepare_study(sys.argv[1:4])
+    if prepared is None:
+        return 1
+    hapsyn, problem, work, out, result = prepared
     columns, rows = read_csv_columns(os.path.join(out, "samples.csv"))
     local_columns = list(columns)[list(columns).index("status") + 1:]
     chosen = local_columns[-1]  # not the page's default (the first): selecting it is tested too
     cells = [float(v) for v in columns[chosen] if v != ""]
-    with open(os.path.join(out, "result.json")) as f:
-        result = json.load(f)
 
     with ViewProcess(hapsyn, problem) as view:
-        driver = browser()
-        try:
-            driver.set_page_load_timeout(30)
-            driver.get(view.url)
-            deadline = time.time() + 30
-            state = {}
-            while time.time() < deadline:
-                state = driver.execute_script("return JSON.parse(JSON.stringify(window.hapsynView || {}))")
-                if state.get("ready") or state.get("error"):
-                    break
-                time.sleep(0.2)
-            check(state.get("ready") is True and not state.get("error"), f"page ready (error: {state.get('error')})")
+        with chromium() as driver:
+            state = open_page(driver, view.url)
             check(state.get("pointCount") == rows, f"pointCount {state.get('pointCount')} = samples.csv rows {rows}")
             check(state.get("columns") == local_columns, f"the page's columns = samples.csv's local columns {local_columns}")
             selected = driver.execute_script("return window.hapsynView.select(arguments[0])", chosen)
             time.sleep(0.5)  # a few frames with the new colours
-            state = driver.execute_script("return JSON.parse(JSON.stringify(window.hapsynView))")
+            state = page_state(driver)
             low, high = state.get("colourRange") or (None, None)
             check(selected and state.get("objective") == chosen, f"objective {state.get('objective')} selected")
             check(low is not None and abs(low - min(cells)) <= 1e-9 * max(1.0, abs(low)) and
@@ -118,20 +66,13 @@ def main():
             check(legend[0] != "–" and legend[1] != "–", f"legend shows the range: {legend}")
             if result["problem"]["scene"]["plugin"] == "human_arm":
                 with urllib.request.urlopen(view.url + "api/study") as response:
-                    check_human(check, state, json.load(response), result, columns)
+                    check_human(state, json.load(response), result, columns)
             else:
                 check(state.get("human") is None, "no human drawn for a scene without one")
-            colours = driver.execute_script(COUNT_COLOURS)
-            check(colours > MIN_COLOURS, f"canvas not blank: {colours} distinct colours (> {MIN_COLOURS})")
-            shot = os.path.join(work, "view-" + os.path.splitext(os.path.basename(problem))[0] + ".png")
-            driver.save_screenshot(shot)
-            check(os.path.getsize(shot) > 10000, f"screenshot {shot}")
-        finally:
-            driver.quit()
-        code, _ = view.stop()
-        check(code == 0, "the server stops with exit 0")
-    print(f"{len(failures)} failure(s)")
-    return 1 if failures else 0
+            check_not_blank(driver)
+            screenshot(driver, os.path.join(work, "view-" + os.path.splitext(os.path.basename(problem))[0] + ".png"))
+        check_stops(view)
+    return finish()
 
 
 if __name__ == "__main__":

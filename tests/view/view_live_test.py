@@ -18,23 +18,16 @@ sanitizer build runs it).
 """
 import json
 import os
-import shutil
 import socket
 import sys
 import time
-import urllib.request
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "..", "examples", "live_bridge"))
 
 from stream_recording import WebSocket  # noqa: E402
-from view_browser_test import CHROMEDRIVER, browser  # noqa: E402
 from view_process import ViewProcess  # noqa: E402
-
-
-def get_json(url):
-    with urllib.request.urlopen(url, timeout=60) as response:
-        return json.load(response)
+from view_support import browser_missing, chromium, check, check_stops, finish, get_json, screenshot, wait_for  # noqa: E402
 
 
 def upgrade_status(port, target, host=None, origin=None):
@@ -62,7 +55,7 @@ def recording_poses():
     return [r[0] for r in rows], [r[1] + r[2] for r in rows]
 
 
-def check_other_studies(hapsyn, problem, work, check):
+def check_other_studies(hapsyn, problem, work):
     """A study without a motion scene: /live answers with why; a motion study whose metric asks
     for the reachable share only: the replay has no bars and says why."""
     other = os.path.join(HERE, "..", "..", "problems", "fivebar-table2-best-gii.json")
@@ -94,13 +87,6 @@ def main():
     hapsyn, problem, work = sys.argv[1:4]
     socket_only = "--socket-only" in sys.argv[4:]
     os.makedirs(work, exist_ok=True)
-    failures = []
-
-    def check(condition, what):
-        print(("ok   " if condition else "FAIL ") + what, flush=True)
-        if not condition:
-            failures.append(what)
-
     if socket_only:
         stamps, shoulder = recording_poses()
         ik = None
@@ -217,7 +203,7 @@ def main():
         again.close()
 
         if socket_only:
-            check_other_studies(hapsyn, problem, work, check)
+            check_other_studies(hapsyn, problem, work)
         check(" 403 " in upgrade_status(port, "/live", host="evil.example:80") + " ", "foreign Host: 403")
         check(" 403 " in upgrade_status(port, "/live", origin="http://evil.example") + " ", "foreign Origin: 403")
         check(" 101 " in upgrade_status(port, "/live", origin=f"http://127.0.0.1:{port}") + " ", "the page's Origin: 101")
@@ -235,37 +221,24 @@ def main():
         sender.close()
 
         if socket_only:
-            code, _ = view.stop()
-            check(code == 0, "the server stops with exit 0")
-            print(f"{len(failures)} failure(s)")
-            return 1 if failures else 0
-        if not (shutil.which("chromium") and os.path.exists(CHROMEDRIVER)):
-            print("FAIL chromium or chromedriver is not installed: bash scripts/setup.sh --browser")
+            check_stops(view)
+            return finish()
+        if browser_missing():
             return 1
-        driver = browser()
-        try:
+        with chromium() as driver:
             driver.set_page_load_timeout(60)
             driver.get(view.url)
-            deadline = time.time() + 60
-            while time.time() < deadline and not driver.execute_script("return !!(window.hapsynView.replay || {}).ready"):
-                time.sleep(0.3)
+            wait_for(driver, bool, 60, script="return !!(window.hapsynView.replay || {}).ready", poll=0.3)
             before = driver.execute_script("return window.hapsynView.replay.q")
             driver.execute_script("window.hapsynView.live.start()")
-            deadline = time.time() + 20
-            while time.time() < deadline and not driver.execute_script("return window.hapsynView.live.connected"):
-                time.sleep(0.1)
+            wait_for(driver, bool, 20, script="return window.hapsynView.live.connected", poll=0.1)
             check(driver.execute_script("return window.hapsynView.live.connected"), "the page watches /live/watch")
             bridge = WebSocket(live)
             pick = samples[len(samples) // 2:]
             frames = [json.loads((bridge.send(message(stamps[i], shoulder[i])), bridge.receive())[1]) for i in pick]
             bridge.close()
-            deadline = time.time() + 20
-            state = {}
-            while time.time() < deadline:
-                state = driver.execute_script("return JSON.parse(JSON.stringify(window.hapsynView.live))")
-                if state.get("frames", 0) >= len(frames):
-                    break
-                time.sleep(0.2)
+            state = wait_for(driver, lambda live: live.get("frames", 0) >= len(frames), 20,
+                             script="return JSON.parse(JSON.stringify(window.hapsynView.live))")
             last = frames[-1]
             tip = last["segments"][-1]["points"][-1]
             check(state.get("frames") == len(frames), f"the page drew {state.get('frames')} live frames of {len(frames)}")
@@ -290,15 +263,9 @@ def main():
             check(all(abs(a - b) <= 1e-9 for a, b in zip(placed, controller)),
                   f"WebXR: the end-effector target placed in the headset's space {placed} = the controller {controller}")
             print(f"     WebXR session supported in this browser: {driver.execute_script('return window.hapsynView.xr.supported')}")
-            shot = os.path.join(work, "live.png")
-            driver.save_screenshot(shot)
-            check(os.path.getsize(shot) > 10000, f"screenshot {shot}")
-        finally:
-            driver.quit()
-        code, _ = view.stop()
-        check(code == 0, "the server stops with exit 0")
-    print(f"{len(failures)} failure(s)")
-    return 1 if failures else 0
+            screenshot(driver, os.path.join(work, "live.png"))
+        check_stops(view)
+    return finish()
 
 
 if __name__ == "__main__":

@@ -16,22 +16,16 @@ import json
 import math
 import os
 import re
-import shutil
 import subprocess
 import sys
 import time
 import xml.etree.ElementTree as ET
 
 from view_process import ViewProcess
+from view_support import (check, check_not_blank, check_stops, chromium, finish, open_page, run_study, screenshot,
+                          wait_for)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-failures = []
-
-
-def check(condition, what):
-    print(("ok   " if condition else "FAIL ") + what, flush=True)
-    if not condition:
-        failures.append(what)
 
 
 def resolve(name, urdf):
@@ -124,8 +118,7 @@ def server(hapsyn, problem, work):
         drawn = study.get("drawn_position")
         check(tip is not None and drawn is not None and math.dist([tip["pose"][r][3] for r in range(3)], drawn) < 1e-9,
               f"the tip link's mesh at the drawn sample {drawn}")
-        code, _ = view.stop()
-        check(code == 0, "the server stops with exit 0")
+        check_stops(view)
     warnings(hapsyn, problem, work)
 
 
@@ -186,24 +179,17 @@ def placed_box(mesh, path):
     return [min(p[k] for p in moved) for k in range(3)], [max(p[k] for p in moved) for k in range(3)]
 
 
+def meshes_loaded(state):
+    """Whether the page is ready with every mesh tried, or failed."""
+    return (state.get("ready") and state.get("meshesDone")) or state.get("error")
+
+
 def browser(hapsyn, problem, work):
-    sys.path.insert(0, HERE)
-    from view_browser_test import COUNT_COLOURS, MIN_COLOURS, browser as start_browser
     count = len(expected(problem))
     os.makedirs(work, exist_ok=True)
     with ViewProcess(hapsyn, problem) as view:
-        driver = start_browser()
-        try:
-            driver.set_page_load_timeout(30)
-            driver.get(view.url)
-            deadline = time.time() + 30
-            state = {}
-            while time.time() < deadline:
-                state = driver.execute_script("return JSON.parse(JSON.stringify(window.hapsynView || {}))")
-                if (state.get("ready") and state.get("meshesDone")) or state.get("error"):
-                    break
-                time.sleep(0.2)
-            check(state.get("ready") is True and not state.get("error"), f"page ready (error: {state.get('error')})")
+        with chromium() as driver:
+            state = open_page(driver, view.url, done=meshes_loaded)
             check(state.get("meshesDone") is True and state.get("meshErrors") == [], f"every mesh tried, no error: {state.get('meshErrors')}")
             check(state.get("meshes") == count, f"meshes loaded {state.get('meshes')} = the URDF's drawable visuals {count}")
             study = driver.execute_script("return fetch('/api/study').then(r => r.json())")
@@ -215,27 +201,19 @@ def browser(hapsyn, problem, work):
                       f"[{', '.join(f'{x:.4f}' for x in box['max'])}] (file + pose + scale: "
                       f"[{', '.join(f'{x:.4f}' for x in low)}] - [{', '.join(f'{x:.4f}' for x in high)}])")
             time.sleep(0.5)  # a few frames with the meshes
-            colours = driver.execute_script(COUNT_COLOURS)
-            check(colours > MIN_COLOURS, f"canvas not blank: {colours} distinct colours (> {MIN_COLOURS})")
+            check_not_blank(driver)
             toggle = driver.execute_script("return !!document.querySelector('#capsules-toggle input')")
             check(toggle, "a check box shows or hides the capsules")
-            shot = os.path.join(work, "view-" + os.path.splitext(os.path.basename(problem))[0] + ".png")
-            driver.save_screenshot(shot)
-            check(os.path.getsize(shot) > 10000, f"screenshot {shot}")
-        finally:
-            driver.quit()
-        code, _ = view.stop()
-        check(code == 0, "the server stops with exit 0")
+            screenshot(driver, os.path.join(work, "view-" + os.path.splitext(os.path.basename(problem))[0] + ".png"))
+        check_stops(view)
     report(hapsyn, problem, work, count)
 
 
 def report(hapsyn, problem, work, count):
     """hapsyn report of the study's result carries the mesh files: opened from disk, every mesh
     loads from the page itself."""
-    from view_report_test import offline_browser
     run = os.path.join(work, "run")
-    shutil.rmtree(run, ignore_errors=True)
-    subprocess.run([hapsyn, "run", problem, "--out", run, "--quiet"], check=True, stdout=subprocess.DEVNULL)
+    run_study(hapsyn, problem, run)
     r = subprocess.run([hapsyn, "report", run], capture_output=True, text=True, timeout=120)
     check(r.returncode == 0, f"report written: {r.stdout.strip()} {r.stderr.strip()}")
     page = os.path.join(run, "report.html")
@@ -247,27 +225,17 @@ def report(hapsyn, problem, work, count):
     routes = sorted({m["route"] for m in study["meshes"]})
     check(sorted(embedded) == routes, f"the report embeds every mesh file: {embedded} = {routes}")
     check("/prototype.js" not in html, "the report leaves out the virtual prototype (it needs the server)")
-    driver = offline_browser()
-    try:
+    with chromium(offline=True) as driver:
         driver.get("file://" + os.path.abspath(page))
-        deadline = time.time() + 30
-        state = {}
-        while time.time() < deadline:
-            state = driver.execute_script("return JSON.parse(JSON.stringify(window.hapsynView || {}))")
-            if (state.get("ready") and state.get("meshesDone")) or state.get("error"):
-                break
-            time.sleep(0.2)
+        state = wait_for(driver, meshes_loaded)
         check(state.get("meshesDone") is True and state.get("meshErrors") == [] and state.get("meshes") == count,
               f"the report loads its {state.get('meshes')} meshes from itself (= {count}; errors {state.get('meshErrors')})")
-    finally:
-        driver.quit()
 
 
 def main():
     mode, hapsyn, problem, work = sys.argv[1:5]
     {"server": server, "browser": browser}[mode](hapsyn, problem, work)
-    print(f"{len(failures)} failure(s)")
-    return 1 if failures else 0
+    return finish()
 
 
 if __name__ == "__main__":

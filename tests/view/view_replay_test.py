@@ -16,24 +16,15 @@ Saves a screenshot.
 Usage: view_replay_test.py HAPSYN PROBLEM_FILE NON_MOTION_PROBLEM WORK_DIR
 (PYTHONPATH holds the build's python/ folder). Exit 0 when every check passes.
 """
-import json
-import math
 import os
-import shutil
-import subprocess
 import sys
 import time
-import urllib.request
 
-from view_browser_test import CHROMEDRIVER, browser
 from view_process import ViewProcess, read_csv_columns
+from view_support import (browser_missing, chromium, check, check_stops, finish, get_json, run_study, screenshot,
+                          wait_for)
 
 FEASIBILITY = "motion_feasibility."
-
-
-def get_json(url):
-    with urllib.request.urlopen(url, timeout=60) as response:
-        return json.load(response)
 
 
 def close(a, b, tol):
@@ -73,20 +64,10 @@ def independent_quantities(problem):
 def main():
     hapsyn, problem, other, work = sys.argv[1:5]
     os.makedirs(work, exist_ok=True)
-    failures = []
-
-    def check(condition, what):
-        print(("ok   " if condition else "FAIL ") + what, flush=True)
-        if not condition:
-            failures.append(what)
-
-    for need in ("chromium", CHROMEDRIVER):
-        if not shutil.which(need):
-            print(f"FAIL {need} is not installed: bash scripts/setup.sh --browser")
-            return 1
+    if browser_missing():
+        return 1
     out = os.path.join(work, "run")
-    shutil.rmtree(out, ignore_errors=True)
-    subprocess.run([hapsyn, "run", problem, "--out", out, "--quiet"], check=True, stdout=subprocess.DEVNULL)
+    run_study(hapsyn, problem, out)
     columns, rows = read_csv_columns(os.path.join(out, "samples.csv"))
     checks, infeasible, velocity_ok, acceleration_ok = expected_from_csv(columns, rows)
     check(len(checks) > 0, f"samples.csv has motion_feasibility columns {checks}")
@@ -139,19 +120,12 @@ def main():
         check(not bad_ratio, f"|qdot|/limit, |tau|/limit = NumPy's from the module's quantities ({len(bad_ratio)} differ)")
         check(not bad_flags, f"the bars agree with samples.csv's velocity / acceleration flags ({len(bad_flags)} differ)")
 
-        driver = browser()
-        try:
+        with chromium() as driver:
             driver.set_page_load_timeout(60)
             driver.get(view.url)
-            deadline = time.time() + 90
-            state = {}
-            while time.time() < deadline:
-                state = driver.execute_script(
-                    "const r = (window.hapsynView || {}).replay || {};"
-                    "return {ready: r.ready, available: r.available, error: r.error, frames: r.frames};")
-                if state.get("ready"):
-                    break
-                time.sleep(0.3)
+            state = wait_for(driver, lambda replay: replay.get("ready"), 90, poll=0.3, script=(
+                "const r = (window.hapsynView || {}).replay || {};"
+                "return {ready: r.ready, available: r.available, error: r.error, frames: r.frames};"))
             check(state.get("ready") and state.get("available") and not state.get("error"),
                   f"the page's replay is ready ({state})")
             page_marked = driver.execute_script("return window.hapsynView.replay.infeasible")
@@ -182,15 +156,9 @@ def main():
             elapsed = time.time() - start
             check(1.0 <= played - doc["time"][0] <= 4.0 * elapsed * 1.2,
                   f"x4 for {elapsed:.2f} s: the replay moved {played - doc['time'][0]:.2f} s")
-            shot = os.path.join(work, "replay-" + os.path.splitext(os.path.basename(problem))[0] + ".png")
-            driver.save_screenshot(shot)
-            check(os.path.getsize(shot) > 10000, f"screenshot {shot}")
-        finally:
-            driver.quit()
-        code, _ = view.stop()
-        check(code == 0, "the server stops with exit 0")
-    print(f"{len(failures)} failure(s)")
-    return 1 if failures else 0
+            screenshot(driver, os.path.join(work, "replay-" + os.path.splitext(os.path.basename(problem))[0] + ".png"))
+        check_stops(view)
+    return finish()
 
 
 if __name__ == "__main__":

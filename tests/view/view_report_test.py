@@ -17,28 +17,12 @@ import shutil
 import subprocess
 import sys
 
-from view_browser_test import CHROMEDRIVER, COUNT_COLOURS, MIN_COLOURS
-from view_result_test import check, click_at, failures, wait_state
+from view_support import (check, check_not_blank, chromium, click_at, finish, open_page, prepare_study, screenshot,
+                          wait_state)
 
 # A URL the page would load: an element's src/href, an import or a fetch of an absolute URL.
 LOADS = re.compile(r"""(?:\b(?:src|href)\s*=\s*["']?\s*(?:https?:)?//)|(?:\bfrom\s*["']https?:)|"""
                    r"""(?:\bimport\s*\(?\s*["']https?:)|(?:\bfetch\s*\(\s*["']https?:)|(?:url\(\s*["']?https?:)""")
-
-
-def offline_browser():
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
-    options = webdriver.ChromeOptions()
-    for flag in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--window-size=1000,700",
-                 "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist",
-                 # No network: every host name fails to resolve, any proxy use goes nowhere.
-                 "--host-resolver-rules=MAP * ~NOTFOUND", "--proxy-server=127.0.0.1:9", "--allow-file-access-from-files"):
-        options.add_argument(flag)
-    options.binary_location = shutil.which("chromium") or "/usr/bin/chromium"
-    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
-    driver.execute_cdp_cmd("Network.enable", {})
-    driver.execute_cdp_cmd("Network.setBlockedURLs", {"urls": ["http://*", "https://*", "ws://*", "wss://*"]})
-    return driver
 
 
 def check_file(html):
@@ -61,14 +45,10 @@ def check_file(html):
 
 
 def check_page(driver, report, result, rows):
-    driver.set_page_load_timeout(60)
-    driver.get("file://" + os.path.abspath(report))
-    state = wait_state(driver, "ready", timeout=60)
-    check(state.get("ready") is True and not state.get("error"), f"report ready offline (error: {state.get('error')})")
+    state = open_page(driver, "file://" + os.path.abspath(report), "report ready offline", timeout=60)
     check(state.get("pointCount") == rows, f"pointCount {state.get('pointCount')} = result.json samples_in_scene {rows}")
     check(state.get("frontCount") == len(result["front"]), f"frontCount {state.get('frontCount')} = {len(result['front'])}")
-    colours = driver.execute_script(COUNT_COLOURS)
-    check(colours > MIN_COLOURS, f"canvas not blank: {colours} distinct colours (> {MIN_COLOURS})")
+    check_not_blank(driver)
     last = len(result["front"]) - 1
     x, y = driver.execute_script("return window.hapsynView.frontPointPosition(arguments[0])", last)
     click_at(driver, x, y)
@@ -78,9 +58,7 @@ def check_page(driver, report, result, rows):
           f"a click shows front point {last}'s design")
     loaded = driver.execute_script("return performance.getEntriesByType('resource').map(e => e.name)")
     check(all(not n.startswith(("http:", "https:")) for n in loaded), f"nothing fetched from a network: {loaded[:3]}")
-    shot = os.path.join(os.path.dirname(report), "report.png")
-    driver.save_screenshot(shot)
-    check(os.path.getsize(shot) > 10000, f"screenshot {shot}")
+    screenshot(driver, os.path.join(os.path.dirname(report), "report.png"))
 
 
 HOSTILE = "</script><script>window.pwned = 1</script><!--"
@@ -123,18 +101,10 @@ def check_errors(hapsyn, run, work):
 
 
 def main():
-    hapsyn, problem, work = sys.argv[1:4]
-    sets = [a for s in sys.argv[4:] for a in ("--set", s)]
-    os.makedirs(work, exist_ok=True)
-    for need in ("chromium", CHROMEDRIVER):
-        if not shutil.which(need):
-            print(f"FAIL {need} is not installed: bash scripts/setup.sh --browser")
-            return 1
-    run = os.path.join(work, "run")
-    shutil.rmtree(run, ignore_errors=True)
-    subprocess.run([hapsyn, "run", problem, "--out", run, "--quiet", *sets], check=True, stdout=subprocess.DEVNULL)
-    with open(os.path.join(run, "result.json")) as f:
-        result = json.load(f)
+    prepared = prepare_study(sys.argv[1:])
+    if prepared is None:
+        return 1
+    hapsyn, problem, work, run, result = prepared
     rows = result["samples_in_scene"]
     r = subprocess.run([hapsyn, "report", run], capture_output=True, text=True, timeout=120)
     report = os.path.join(run, "report.html")
@@ -147,15 +117,11 @@ def main():
         html = f.read()
     check(html == open(other, encoding="utf-8").read(), "both reports are the same file")
     check_file(html)
-    driver = offline_browser()
-    try:
+    with chromium(offline=True) as driver:
         check_page(driver, report, result, rows)
         check_hostile(driver, hapsyn, run, work)
-    finally:
-        driver.quit()
     check_errors(hapsyn, run, work)
-    print(f"{len(failures)} failure(s)")
-    return 1 if failures else 0
+    return finish()
 
 
 if __name__ == "__main__":

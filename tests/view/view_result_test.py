@@ -16,18 +16,10 @@ import shutil
 import subprocess
 import sys
 import time
-import urllib.request
 
-from view_browser_test import CHROMEDRIVER, COUNT_COLOURS, MIN_COLOURS, browser
 from view_process import ViewProcess
-
-failures = []
-
-
-def check(condition, what):
-    print(("ok   " if condition else "FAIL ") + what, flush=True)
-    if not condition:
-        failures.append(what)
+from view_support import (check, check_not_blank, check_stops, chromium, click_at, finish, get_json, open_page,
+                          page_state, prepare_study, screenshot)
 
 
 def fivebar_links_match(design, segments):
@@ -42,26 +34,6 @@ def fivebar_links_match(design, segments):
             math.dist(a2, (design["l0"] / 2, -design["r"], 0)) < 1e-9 and
             near(math.dist(a1, b1), design["l1"]) and near(math.dist(a2, b2), design["l1"]) and
             near(math.dist(b1, e), design["l2"]) and near(math.dist(b2, e), design["l2"]))
-
-
-def wait_state(driver, key, timeout=30):
-    deadline = time.time() + timeout
-    state = {}
-    while time.time() < deadline:
-        state = driver.execute_script("return JSON.parse(JSON.stringify(window.hapsynView || {}))")
-        if state.get(key) or state.get("error"):
-            break
-        time.sleep(0.2)
-    return state
-
-
-def click_at(driver, x, y):
-    """A real mouse click at client pixel (x, y)."""
-    from selenium.webdriver.common.actions.action_builder import ActionBuilder
-    actions = ActionBuilder(driver)
-    actions.pointer_action.move_to_location(int(round(x)), int(round(y)))
-    actions.pointer_action.click()
-    actions.perform()
 
 
 def check_api(front, result, samples, study):
@@ -88,10 +60,7 @@ def check_api(front, result, samples, study):
 
 
 def check_page(driver, url, result, front, best, work):
-    driver.set_page_load_timeout(30)
-    driver.get(url)
-    state = wait_state(driver, "ready")
-    check(state.get("ready") is True and not state.get("error"), f"page ready (error: {state.get('error')})")
+    state = open_page(driver, url)
     check(state.get("frontCount") == len(result["front"]), f"frontCount {state.get('frontCount')} = {len(result['front'])}")
     # NSGA-II's one history: its first objective's ideal per generation by default.
     history = result["statistics"]["history"]
@@ -115,7 +84,7 @@ def check_page(driver, url, result, front, best, work):
     x, y = driver.execute_script("return window.hapsynView.frontPointPosition(arguments[0])", target)
     click_at(driver, x, y)
     time.sleep(0.5)
-    state = driver.execute_script("return JSON.parse(JSON.stringify(window.hapsynView))")
+    state = page_state(driver)
     check(state.get("selectedPoint") == target, f"click at ({x:.0f}, {y:.0f}) selects point {state.get('selectedPoint')} = {target}")
     check(state.get("selectedDesign") == point["design"], f"selectedDesign = the point's {point['design']}")
     check(state.get("drawnSegments") == point["segments"], "the 3D view draws the point's segments")
@@ -124,11 +93,8 @@ def check_page(driver, url, result, front, best, work):
     check(fivebar_links_match(state.get("selectedDesign"), state.get("drawnSegments") or []), "drawn links fit the selected design")
     info = driver.execute_script("return document.getElementById('front-info').textContent")
     check(info.startswith(f"point {target + 1}:") and all(k in info for k in point["design"]), f"panel: {info[:80]}…")
-    colours = driver.execute_script(COUNT_COLOURS)
-    check(colours > MIN_COLOURS, f"canvas not blank: {colours} distinct colours")
-    shot = os.path.join(work, "view-front.png")
-    driver.save_screenshot(shot)
-    check(os.path.getsize(shot) > 10000, f"screenshot {shot}")
+    check_not_blank(driver)
+    screenshot(driver, os.path.join(work, "view-front.png"))
 
 
 def check_bad_front(hapsyn, run, work):
@@ -149,33 +115,20 @@ def check_bad_front(hapsyn, run, work):
 
 
 def main():
-    hapsyn, problem, work = sys.argv[1:4]
-    sets = [a for s in sys.argv[4:] for a in ("--set", s)]
-    os.makedirs(work, exist_ok=True)
-    for need in ("chromium", CHROMEDRIVER):
-        if not shutil.which(need):
-            print(f"FAIL {need} is not installed: bash scripts/setup.sh --browser")
-            return 1
-    run = os.path.join(work, "run")
-    shutil.rmtree(run, ignore_errors=True)
-    subprocess.run([hapsyn, "run", problem, "--out", run, "--quiet", *sets], check=True, stdout=subprocess.DEVNULL)
-    with open(os.path.join(run, "result.json")) as f:
-        result = json.load(f)
+    prepared = prepare_study(sys.argv[1:])
+    if prepared is None:
+        return 1
+    hapsyn, problem, work, run, result = prepared
     check(len(result.get("front", [])) >= 2, f"the run has a front of {len(result.get('front', []))} points")
     with ViewProcess(hapsyn, run) as view:
-        get = lambda route: json.load(urllib.request.urlopen(view.url.rstrip("/") + route, timeout=30))
+        get = lambda route: get_json(view.url.rstrip("/") + route, timeout=30)
         front, study, samples = get("/api/result")["front"], get("/api/study"), get("/api/samples")
         check_api(front, result, samples, study)
-        driver = browser()
-        try:
+        with chromium() as driver:
             check_page(driver, view.url, result, front, study["design"], work)
-        finally:
-            driver.quit()
-        code, _ = view.stop()
-        check(code == 0, "the server stops with exit 0")
+        check_stops(view)
     check_bad_front(hapsyn, run, work)
-    print(f"{len(failures)} failure(s)")
-    return 1 if failures else 0
+    return finish()
 
 
 if __name__ == "__main__":

@@ -6,15 +6,11 @@ runs' and clusters' tables one row per run and per cluster, all counted here fro
 Usage: view_runs_test.py HAPSYN PROBLEM_FILE WORK_DIR [--set path=value ...]. Exit 0 when every
 check passes.
 """
-import json
 import os
-import shutil
-import subprocess
 import sys
 
-from view_browser_test import CHROMEDRIVER, browser
 from view_process import ViewProcess
-from view_result_test import check, failures, wait_state
+from view_support import check, check_stops, chromium, finish, open_page, prepare_study, screenshot
 
 
 def expected_counts(result):
@@ -29,10 +25,7 @@ def expected_counts(result):
 
 def check_page(driver, url, result):
     lines, points, run_rows, cluster_rows = expected_counts(result)
-    driver.set_page_load_timeout(30)
-    driver.get(url)
-    state = wait_state(driver, "ready")
-    check(state.get("ready") is True and not state.get("error"), f"page ready (error: {state.get('error')})")
+    state = open_page(driver, url)
     check(state.get("frontCount") == 0, "no front: frontCount 0")
     check(state.get("convergenceColumn") == "best", f"plots column {state.get('convergenceColumn')} = best")
     check(state.get("convergenceSeries") == lines, f"{state.get('convergenceSeries')} lines = {lines} runs with a history")
@@ -47,31 +40,16 @@ def check_page(driver, url, result):
 
 
 def main():
-    hapsyn, problem, work = sys.argv[1:4]
-    sets = [a for s in sys.argv[4:] for a in ("--set", s)]
-    os.makedirs(work, exist_ok=True)
-    for need in ("chromium", CHROMEDRIVER):
-        if not shutil.which(need):
-            print(f"FAIL {need} is not installed: bash scripts/setup.sh --browser")
-            return 1
-    run = os.path.join(work, "run")
-    shutil.rmtree(run, ignore_errors=True)
-    subprocess.run([hapsyn, "run", problem, "--out", run, "--quiet", *sets], check=True, stdout=subprocess.DEVNULL)
-    with open(os.path.join(run, "result.json")) as f:
-        result = json.load(f)
+    prepared = prepare_study(sys.argv[1:])
+    if prepared is None:
+        return 1
+    hapsyn, problem, work, run, result = prepared
     with ViewProcess(hapsyn, run) as view:
-        driver = browser()
-        try:
+        with chromium() as driver:
             check_page(driver, view.url, result)
-            shot = os.path.join(work, "view-runs.png")
-            driver.save_screenshot(shot)
-            check(os.path.getsize(shot) > 10000, f"screenshot {shot}")
-        finally:
-            driver.quit()
-        code, _ = view.stop()
-        check(code == 0, "the server stops with exit 0")
-    print(f"{len(failures)} failure(s)")
-    return 1 if failures else 0
+            screenshot(driver, os.path.join(work, "view-runs.png"))
+        check_stops(view)
+    return finish()
 
 
 if __name__ == "__main__":
