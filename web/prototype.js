@@ -2,7 +2,8 @@
 // hand at the configuration its IK picks, per-joint bars of |qdot|/limit and |tau|/limit, the
 // infeasible samples marked on the timeline). It draws into app.js's scene (window.hapsynScene)
 // and keeps its state on window.hapsynView.replay for tests:
-//   {ready, available, reason, frames, frame, sample, time, playing, speed, q, qdotRatio,
+//   {ready, available, reason, frames, frame, sample, time, clock (the replay's clock [s]),
+//    wallPlayed (the page's clock while it last played [s]), playing, speed, q, qdotRatio,
 //    tauRatio, feasible, infeasible (the scene samples marked infeasible), trajectory,
 //    seek(frame), seekSample(sample), play(), pause(), setSpeed(x)};
 // its live mode (button "live": the frames of the poses a tracker bridge sends to /live, received
@@ -20,6 +21,7 @@ const live = { on: false, connected: false, frames: 0, t: null, status: null, q:
 const xr = { supported: false, active: false, shoulder: [0.2, 1.35, 0], sent: 0 };
 const replay = {
   ready: false, available: false, reason: null, frames: 0, frame: -1, sample: null, time: 0, playing: false, speed: 1,
+  wallPlayed: 0, clock: 0,
   q: [], qdotRatio: [], tauRatio: [], feasible: null, infeasible: [], trajectory: null,
 };
 (window.hapsynView || (window.hapsynView = {})).replay = replay;
@@ -235,12 +237,18 @@ function startReplay(three, doc) {
   const seek = f => {
     const frame = Math.max(0, Math.min(doc.frames - 1, Math.round(f)));
     clock = g[frame];
+    replay.clock = clock;
     show(frame);
     return frame;
   };
   const tick = now => {
     if (!replay.playing) return;
-    if (last !== null) clock += (now - last) / 1000 * replay.speed;
+    if (last !== null) {
+      const seconds = (now - last) / 1000;
+      clock += seconds * replay.speed;
+      replay.wallPlayed += seconds;  // the page's own clock while playing, for tests
+    }
+    replay.clock = clock;
     last = now;
     if (clock >= g[g.length - 1]) {
       clock = g[g.length - 1];
@@ -257,6 +265,7 @@ function startReplay(three, doc) {
     live.stop();
     if (replay.frame >= doc.frames - 1) seek(0);
     replay.playing = true;
+    replay.wallPlayed = 0;
     play.textContent = 'pause';
     last = null;
     requestAnimationFrame(tick);

@@ -144,9 +144,6 @@ def warnings(hapsyn, problem, work):
         _, _, body = get(view.port, "/api/study")
         study = json.loads(body)
         view.stop()
-    deadline = time.time() + 10  # stderr is read by a thread of ViewProcess: let it reach the end
-    while time.time() < deadline and sum("warning" in l for l in view.stderr) < 3:
-        time.sleep(0.05)
     lines = [l.rstrip("\n") for l in view.stderr if "warning" in l]
     want = [f'hapsyn view: warning: {urdf}: link "turret" visual box: a primitive shape, not drawn (only .stl and .dae meshes are)',
             f'hapsyn view: warning: {urdf}: link "turret" visual mesh "turret.obj": not drawn (only .stl and .dae files are)',

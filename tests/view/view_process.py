@@ -14,8 +14,9 @@ class ViewProcess:
     def __init__(self, hapsyn, *args, timeout=120):
         self.process = subprocess.Popen([hapsyn, "view", *args, "--port", "0"], stdout=subprocess.PIPE,
                                         stderr=subprocess.PIPE, text=True)
-        self.stderr = []
-        threading.Thread(target=lambda: self.stderr.extend(self.process.stderr), daemon=True).start()
+        self.stderr = []  # every line of stderr, read by one thread (complete after stop())
+        self._stderr_reader = threading.Thread(target=lambda: self.stderr.extend(self.process.stderr), daemon=True)
+        self._stderr_reader.start()
         self.url, self.study = None, None
         deadline = time.time() + timeout
         for line in self.process.stdout:
@@ -31,9 +32,13 @@ class ViewProcess:
         self.port = int(self.url.rsplit(":", 1)[1].strip("/"))
 
     def stop(self, sig=signal.SIGINT, timeout=10):
-        """Sends `sig`; returns (exit code, the rest of stdout)."""
+        """Sends `sig`; returns (exit code, the rest of stdout) once the process has ended and
+        self.stderr holds all it wrote. (Not communicate(): it would read stderr too, taking
+        lines from the reader thread.)"""
         self.process.send_signal(sig)
-        rest, _ = self.process.communicate(timeout=timeout)
+        self.process.wait(timeout=timeout)  # hapsyn view writes little: no pipe fills up meanwhile
+        rest = self.process.stdout.read()
+        self._stderr_reader.join(timeout)
         return self.process.returncode, rest
 
     def __enter__(self):
