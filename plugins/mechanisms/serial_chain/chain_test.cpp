@@ -1190,7 +1190,8 @@ std::string fold_extra(double gripper_mass = 0.8, const std::string& finger = "f
   return urdf_link("camera", "0 0 0.05", "0 0 0", 0.2, "0.001 0 0 0.001 0 0.001") +
          urdf_joint("camera_mount", "fixed", "base", "camera", "0.1 0 0.3", "0 0.2 0") +
          urdf_joint("grip_mount", "fixed", "l2", "gripper", "0.4 0.02 -0.01", "0.3 -0.5 0.7") +
-         urdf_link("gripper", "0.03 0.01 0.02", "0.1 0.2 0.3", gripper_mass, "0.004 0.0005 -0.0003 0.005 0.0004 0.006") +
+         urdf_link("gripper", "0.03 0.01 0.02", "0.1 0.2 0.3", gripper_mass,
+                   "0.004 0.0005 -0.0003 0.005 0.0004 0.006") +
          urdf_joint("finger_mount", "fixed", "gripper", finger, "0.05 -0.02 0.03", "-0.4 0.6 1.1") +
          urdf_link(finger, "0.01 0.02 -0.03", "0.5 -0.3 0.2", 0.15, "0.0002 0.00003 -0.00002 0.0003 0.00001 0.00025") +
          urdf_joint("jaw_joint", "revolute", "gripper", "jaw", "0.08 0 0", "0 0 0", "0 0 1") +
@@ -1222,8 +1223,10 @@ Part l2_with_gripper_by_hand() {
   const Eigen::Isometry3d gripper = xyz_rpy(0.4, 0.02, -0.01, 0.3, -0.5, 0.7);
   const Eigen::Isometry3d finger = gripper * xyz_rpy(0.05, -0.02, 0.03, -0.4, 0.6, 1.1);
   const std::vector<Part> parts = {
-      part_in(Eigen::Isometry3d::Identity(), xyz_rpy(0.2, 0, 0, 0, 0, 0), 1.0, symmetric(0.01, 0.001, 0, 0.02, 0, 0.015)),
-      part_in(gripper, xyz_rpy(0.03, 0.01, 0.02, 0.1, 0.2, 0.3), 0.8, symmetric(0.004, 0.0005, -0.0003, 0.005, 0.0004, 0.006)),
+      part_in(Eigen::Isometry3d::Identity(), xyz_rpy(0.2, 0, 0, 0, 0, 0), 1.0,
+              symmetric(0.01, 0.001, 0, 0.02, 0, 0.015)),
+      part_in(gripper, xyz_rpy(0.03, 0.01, 0.02, 0.1, 0.2, 0.3), 0.8,
+              symmetric(0.004, 0.0005, -0.0003, 0.005, 0.0004, 0.006)),
       part_in(finger, xyz_rpy(0.01, 0.02, -0.03, 0.5, -0.3, 0.2), 0.15,
               symmetric(0.0002, 0.00003, -0.00002, 0.0003, 0.00001, 0.00025))};
   Part sum{0.0, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Zero()};
@@ -1242,7 +1245,8 @@ Part l2_with_gripper_by_hand() {
 }  // namespace
 
 TEST(ChainTemplate, FixedChildLinksFoldIntoTheirBodyAsTheHandMergedFile) {
-  const std::string full = write_file("fold_full.urdf", arm_with(urdf_link("l2", "0.2 0 0", "0 0 0", 1.0, kL2Inertia), fold_extra()));
+  const std::string l2 = urdf_link("l2", "0.2 0 0", "0 0 0", 1.0, kL2Inertia);
+  const std::string full = write_file("fold_full.urdf", arm_with(l2, fold_extra()));
   const Part hand = l2_with_gripper_by_hand();
   const std::string merged = write_file("fold_merged.urdf", arm_with(exact_link("l2", hand.c, hand.m, hand.i), ""));
   const Chain folded = nominal_chain(ChainTemplate::from_urdf(full, "base", "tip"));
@@ -1278,8 +1282,8 @@ TEST(ChainTemplate, FoldingSwitchedOffIsTheFileWithoutTheChildLinks) {
 }
 
 TEST(ChainTemplate, FoldedLinksAreListedAndTheirMassesAreDesignParameters) {
-  const ChainTemplate t = ChainTemplate::from_urdf(
-      write_file("fold_list.urdf", arm_with(urdf_link("l2", "0.2 0 0", "0 0 0", 1.0, kL2Inertia), fold_extra())), "base", "tip");
+  const std::string l2 = urdf_link("l2", "0.2 0 0", "0 0 0", 1.0, kL2Inertia);
+  const ChainTemplate t = ChainTemplate::from_urdf(write_file("fold_list.urdf", arm_with(l2, fold_extra())), "base", "tip");
   ASSERT_EQ(t.folded_links().size(), 1u);
   EXPECT_EQ(t.folded_links()[0].body, 1);
   EXPECT_EQ(t.folded_links()[0].body_link, "l2");

@@ -102,7 +102,7 @@ struct SerialChainOptions {
     d.add(&SerialChainOptions::fold_fixed_links, "fold_fixed_links", true,
           "URDF: fold every link hanging off the base -> tip path through fixed joints only (a gripper and its "
           "fixed fingers, a payload, a tool) into the moving body it hangs from (mass, centre of mass, inertia; a "
-          "<link>:mass design variable each). Links fixed to the base carry no dynamics; links behind a moving "
+          "design variable LINK:mass each). Links fixed to the base carry no dynamics; links behind a moving "
           "joint off the path are never folded. The summary lists what each body carries (folded: ... -> link). "
           "false: only the path's own links.");
     d.add(&SerialChainOptions::dh_file, "dh_file", "", "DH or modified-DH table (format hapsyn-dh, share/serial_chain/README.md).");

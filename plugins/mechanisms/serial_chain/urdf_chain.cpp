@@ -500,7 +500,8 @@ ChainTemplate ChainTemplate::from_urdf(const std::string& path, const std::strin
   const std::vector<urdf::JointConstSharedPtr> joints = joints_between(path, base, tip);
   ChainTemplate t;
   t.source_ = path;
-  auto shared = std::make_shared<const UrdfPath>(read_path(path, base_link, tip_link, joints, *model, origins, fold_fixed_links, t.parameters_));
+  auto shared = std::make_shared<const UrdfPath>(
+      read_path(path, base_link, tip_link, joints, *model, origins, fold_fixed_links, t.parameters_));
   auto impl = std::make_shared<Impl>();
   impl->dof = shared->dof;
   impl->folded_links = folded_links_of(*shared, joints);
