@@ -223,7 +223,7 @@ TEST(Cli, RunHeaderListsAChainsMovingJoints) {
                               (dir / "whole").string());
   ASSERT_EQ(o.code, 0) << o.out;
   const std::string joints = "3 moving joints world -> stylus_tip: yaw_joint (revolute), shoulder_joint (revolute), "
-                             "elbow_joint (revolute); task position; IK selection closest_to_home; IK solver numerical (damped "
+                             "elbow_joint (revolute); folded: stylus_tip -> forearm; task position; IK selection closest_to_home; IK solver numerical (damped "
                              "least squares, 8 restarts; no closed form: 3 moving joints (the closed form is for 6 revolute "
                              "joints))";
   EXPECT_NE(o.out.find("mechanism serial_chain: " + joints), std::string::npos) << o.out;
@@ -252,7 +252,8 @@ TEST(Cli, RunHeaderListsAChainsMovingJoints) {
       "\"tip_link\": \"tool0\"}'");
   EXPECT_NE(described.out.find("built: 6 moving joints base_link -> tool0: shoulder_pan_joint (revolute), "
                                "shoulder_lift_joint (revolute), elbow_joint (revolute), wrist_1_joint (revolute), "
-                               "wrist_2_joint (revolute), wrist_3_joint (revolute); task pose"),
+                               "wrist_2_joint (revolute), wrist_3_joint (revolute); folded: gripper_base -> wrist_3_link; "
+                               "task pose"),
             std::string::npos)
       << described.out;
   // The five-bar has nothing to add: no line.

@@ -28,6 +28,16 @@ const ChainMeshes& ChainTemplate::meshes() const {
   return impl_ ? impl_->meshes : none;
 }
 
+const std::vector<ChainFoldedLinks>& ChainTemplate::folded_links() const {
+  static const std::vector<ChainFoldedLinks> none;
+  return impl_ ? impl_->folded_links : none;
+}
+
+const std::vector<std::string>& ChainTemplate::links_on_base() const {
+  static const std::vector<std::string> none;
+  return impl_ ? impl_->links_on_base : none;
+}
+
 int ChainTemplate::dof() const { return impl_ ? impl_->dof : 0; }
 
 const FennelMassModel* ChainTemplate::fennel_mass_model() const {

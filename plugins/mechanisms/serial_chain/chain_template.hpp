@@ -48,6 +48,13 @@ struct FennelMassModel {
   double ee_length = 0.05;           ///< [m]
 };
 
+/// The links of a URDF whose inertials one moving body carries besides its own link's.
+struct ChainFoldedLinks {
+  int body = 0;                    ///< index of the moving body (0: the one after the first moving joint)
+  std::string body_link;           ///< the body's own link (the child link of its moving joint)
+  std::vector<std::string> links;  ///< path order; a link's fixed subtree depth-first after it
+};
+
 /// A chain file read once: its parameters and how to build a Chain from their values.
 class ChainTemplate {
  public:
@@ -55,8 +62,14 @@ class ChainTemplate {
   /// joints fold into the next moving joint's origin (after the last one: into T_tip), their
   /// child links' inertials into the body before them (parallel-axis theorem; inertials riding on
   /// the base have no effect); revolute / continuous / prismatic joints become ChainJoints with
-  /// the URDF's limits (continuous: unlimited position), everything off the path (other
-  /// branches, transmissions, gazebo tags) is ignored. Gravity -9.81 along the base's z. The
+  /// the URDF's limits (continuous: unlimited position). With `fold_fixed_links`, every link
+  /// hanging off the path through fixed joints only (recursively: a gripper and its fixed
+  /// fingers, a payload, a tool) folds into the body of the path link it hangs from: its mass
+  /// added, its inertial frame placed by the fixed joints' origins as written (not design
+  /// parameters), a "<link>:mass" parameter when its mass is > 0; links so fixed to the base, or
+  /// to a path link before the first moving joint, ride on the base (no dynamics). Links behind a
+  /// moving joint off the path are never folded (they move on their own). Everything else off
+  /// the path (transmissions, gazebo tags) is ignored. Gravity -9.81 along the base's z. The
   /// mesh visuals of the links it carries are collected for drawing (meshes(); urdf_meshes.hpp),
   /// package:// names searched also in the ROS_PACKAGE_PATH environment variable.
   /// The origins' parameters are the `<origin>` values as written (not urdfdom's quaternion).
@@ -64,9 +77,11 @@ class ChainTemplate {
   ///         is not XML (with TinyXML's line and column) or that urdfdom refuses (with its
   ///         console_bridge messages), a missing base or tip link (with the links it has and a
   ///         did-you-mean), a tip that is not below the base, a floating or planar joint or a
-  ///         mimic joint on the path, fewer than 1 or more than kMaxChainJoints moving joints;
+  ///         mimic joint on the path, fewer than 1 or more than kMaxChainJoints moving joints, a
+  ///         bad inertial or a name that is not UTF-8 on a link it folds;
   ///         and, in a build without urdfdom (HAPSYN_WITH_URDFDOM=OFF), always.
-  static ChainTemplate from_urdf(const std::string& path, const std::string& base_link, const std::string& tip_link);
+  static ChainTemplate from_urdf(const std::string& path, const std::string& base_link, const std::string& tip_link,
+                                 bool fold_fixed_links = true);
 
   /// Reads a DH or modified-DH table (JSON, format "hapsyn-dh" version 1, documented in
   /// share/serial_chain/README.md).
@@ -84,6 +99,13 @@ class ChainTemplate {
   /// A URDF's drawable mesh visuals and a warning line for each visual left out (empty for a
   /// DH table).
   const ChainMeshes& meshes() const;
+  /// A URDF's moving bodies that carry other links' inertials (fixed links on the path after
+  /// their moving joint, and the folded links off it), in body order; bodies without any are
+  /// left out. Empty for a DH table.
+  const std::vector<ChainFoldedLinks>& folded_links() const;
+  /// The links with an inertial fixed off the path to the base_link or to a path link before the
+  /// first moving joint (folding on): they ride on the base and carry no dynamics.
+  const std::vector<std::string>& links_on_base() const;
   /// The file it was read from.
   const std::string& source() const { return source_; }
   /// The Fennel mass model when the file asks for it (DH tables), else null: the chain's bodies

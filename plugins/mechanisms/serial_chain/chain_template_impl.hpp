@@ -24,6 +24,8 @@ struct ChainTemplate::Impl {
   /// Builds the chain (values: the template's parameters; motor_mass: see instantiate()).
   std::function<void(const double* values, const double* motor_mass, Chain& out)> build;
   ChainMeshes meshes;  ///< a URDF's drawable mesh visuals (none for a DH table)
+  std::vector<ChainFoldedLinks> folded_links;  ///< see ChainTemplate::folded_links
+  std::vector<std::string> links_on_base;      ///< see ChainTemplate::links_on_base
 };
 
 namespace serial_chain_detail {

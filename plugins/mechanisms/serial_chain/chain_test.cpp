@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <iomanip>
 #include <random>
 #include <string>
 #include <vector>
@@ -517,7 +518,8 @@ TEST(ChainTemplate, UrdfAndDhFormsOfUr5LikeAreTheSameChain) {
   const Chain dh = nominal_chain(ChainTemplate::from_dh_file(share("ur5_like_dh.json")));
   for (const char* base : {"world", "base_link"}) {
     SCOPED_TRACE(base);
-    const Chain urdf = nominal_chain(ChainTemplate::from_urdf(share("ur5_like.urdf"), base, "tool0"));
+    // The DH table has no gripper: the file without its folded gripper_base.
+    const Chain urdf = nominal_chain(ChainTemplate::from_urdf(share("ur5_like.urdf"), base, "tool0", false));
     expect_same_chain(dh, urdf);
     std::mt19937 rng(23);
     const std::vector<double> q = random_q(6, rng);
@@ -865,13 +867,15 @@ TEST(ChainTemplate, UrdfParametersAreListedAsDocumented) {
   EXPECT_GE(t.find("flange-tool0:yaw"), 0);
   EXPECT_GE(t.find("upper_arm_link:mass"), 0);
   EXPECT_EQ(t.find("base_link_inertia:mass"), -1);  // rides on the base
-  EXPECT_EQ(t.find("gripper_base:mass"), -1);       // beyond the tip
+  EXPECT_GE(t.find("gripper_base:mass"), 0);        // fixed beyond the tip: folded into wrist_3_link
+  EXPECT_EQ(t.find("finger_left:mass"), -1);        // behind a prismatic joint: not folded
   EXPECT_EQ(t.find("finger_left_joint:x"), -1);
   EXPECT_EQ(p.back().name, "mass_scale");
 }
 
 TEST(ChainTemplate, UrdfParametersChangeTheChainAsDocumented) {
-  const ChainTemplate t = ChainTemplate::from_urdf(share("ur5_like.urdf"), "world", "tool0");
+  // Without the gripper, which flange-tool0:z would move along with tool0.
+  const ChainTemplate t = ChainTemplate::from_urdf(share("ur5_like.urdf"), "world", "tool0", false);
   const Chain base = nominal_chain(t);
   std::vector<double> v = nominal(t);
   value_of(t, v, "elbow_joint:x") = -0.5;
@@ -1153,6 +1157,195 @@ TEST(ChainTemplate, UrdfErrorsNameTheFileAndTheProblem) {
   const std::string long_chain = write_file("eight.urdf", robot(links));
   expect_error([&] { ChainTemplate::from_urdf(long_chain, "l0", "l8"); }, {long_chain, "has 8 moving joints: must have 1 to 7"});
   EXPECT_EQ(ChainTemplate::from_urdf(long_chain, "l1", "l8").dof(), 7);
+}
+
+// ---- Fixed child links folded into the last moving body (issue 52) ----
+
+namespace {
+
+// A URDF link whose inertial is written with every digit (urdf_link prints 6).
+std::string exact_link(const std::string& name, const Eigen::Vector3d& com, double mass, const Eigen::Matrix3d& i) {
+  std::ostringstream s;
+  s << std::setprecision(17) << "<link name=\"" << name << "\"><inertial><origin xyz=\"" << com.x() << " " << com.y()
+    << " " << com.z() << "\" rpy=\"0 0 0\"/><mass value=\"" << mass << "\"/><inertia ixx=\"" << i(0, 0) << "\" ixy=\""
+    << i(0, 1) << "\" ixz=\"" << i(0, 2) << "\" iyy=\"" << i(1, 1) << "\" iyz=\"" << i(1, 2) << "\" izz=\"" << i(2, 2)
+    << "\"/></inertial></link>\n";
+  return s.str();
+}
+
+// Two revolute joints about y along x; l2 carries a gripper on a rotated fixed joint, the gripper
+// a finger on another (both inertials rotated, with products of inertia), and a jaw on a revolute
+// joint (moving off the path: not folded); a camera is fixed to the base (no dynamics). `l2` is
+// l2's link element, `extra` what hangs off the path.
+std::string arm_with(const std::string& l2, const std::string& extra) {
+  return robot(urdf_link("base") + urdf_joint("j1", "revolute", "base", "l1", "0 0 0.1", "0 0 0", "0 1 0") +
+               urdf_link("l1", "0.25 0 0", "0 0 0", 2.0, "0.01 0 0 0.04 0 0.04") +
+               urdf_joint("j2", "revolute", "l1", "l2", "0.5 0 0", "0 0 0", "0 1 0") + l2 +
+               urdf_joint("tip_joint", "fixed", "l2", "tip", "0.4 0 0", "0 0 0") + urdf_link("tip") + extra);
+}
+
+const char* const kL2Inertia = "0.01 0.001 0 0.02 0 0.015";
+
+std::string fold_extra(double gripper_mass = 0.8, const std::string& finger = "finger") {
+  return urdf_link("camera", "0 0 0.05", "0 0 0", 0.2, "0.001 0 0 0.001 0 0.001") +
+         urdf_joint("camera_mount", "fixed", "base", "camera", "0.1 0 0.3", "0 0.2 0") +
+         urdf_joint("grip_mount", "fixed", "l2", "gripper", "0.4 0.02 -0.01", "0.3 -0.5 0.7") +
+         urdf_link("gripper", "0.03 0.01 0.02", "0.1 0.2 0.3", gripper_mass,
+                   "0.004 0.0005 -0.0003 0.005 0.0004 0.006") +
+         urdf_joint("finger_mount", "fixed", "gripper", finger, "0.05 -0.02 0.03", "-0.4 0.6 1.1") +
+         urdf_link(finger, "0.01 0.02 -0.03", "0.5 -0.3 0.2", 0.15, "0.0002 0.00003 -0.00002 0.0003 0.00001 0.00025") +
+         urdf_joint("jaw_joint", "revolute", "gripper", "jaw", "0.08 0 0", "0 0 0", "0 0 1") +
+         urdf_link("jaw", "0.02 0 0", "0 0 0", 0.3, "0.0001 0 0 0.0001 0 0.0001");
+}
+
+// One rigid part in l2's frame: mass, centre, inertia about the centre.
+struct Part {
+  double m;
+  Eigen::Vector3d c;
+  Eigen::Matrix3d i;
+};
+
+Part part_in(const Eigen::Isometry3d& link_in_l2, const Eigen::Isometry3d& inertial_in_link, double m,
+             const Eigen::Matrix3d& i) {
+  const Eigen::Isometry3d f = link_in_l2 * inertial_in_link;
+  return {m, f.translation(), f.linear() * i * f.linear().transpose()};
+}
+
+Eigen::Matrix3d symmetric(double xx, double xy, double xz, double yy, double yz, double zz) {
+  Eigen::Matrix3d i;
+  i << xx, xy, xz, xy, yy, yz, xz, yz, zz;
+  return i;
+}
+
+// l2, gripper and finger written out from the file's numbers and summed about the common centre:
+// I = sum (R I_k R^T + m_k (|d_k|^2 1 - d_k d_k^T)), d_k from the common centre to part k's.
+Part l2_with_gripper_by_hand() {
+  const Eigen::Isometry3d gripper = xyz_rpy(0.4, 0.02, -0.01, 0.3, -0.5, 0.7);
+  const Eigen::Isometry3d finger = gripper * xyz_rpy(0.05, -0.02, 0.03, -0.4, 0.6, 1.1);
+  const std::vector<Part> parts = {
+      part_in(Eigen::Isometry3d::Identity(), xyz_rpy(0.2, 0, 0, 0, 0, 0), 1.0,
+              symmetric(0.01, 0.001, 0, 0.02, 0, 0.015)),
+      part_in(gripper, xyz_rpy(0.03, 0.01, 0.02, 0.1, 0.2, 0.3), 0.8,
+              symmetric(0.004, 0.0005, -0.0003, 0.005, 0.0004, 0.006)),
+      part_in(finger, xyz_rpy(0.01, 0.02, -0.03, 0.5, -0.3, 0.2), 0.15,
+              symmetric(0.0002, 0.00003, -0.00002, 0.0003, 0.00001, 0.00025))};
+  Part sum{0.0, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Zero()};
+  for (const Part& p : parts) {
+    sum.m += p.m;
+    sum.c += p.m * p.c;
+  }
+  sum.c /= sum.m;
+  for (const Part& p : parts) {
+    const Eigen::Vector3d d = p.c - sum.c;
+    sum.i += p.i + p.m * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
+  }
+  return sum;
+}
+
+}  // namespace
+
+TEST(ChainTemplate, FixedChildLinksFoldIntoTheirBodyAsTheHandMergedFile) {
+  const std::string l2 = urdf_link("l2", "0.2 0 0", "0 0 0", 1.0, kL2Inertia);
+  const std::string full = write_file("fold_full.urdf", arm_with(l2, fold_extra()));
+  const Part hand = l2_with_gripper_by_hand();
+  const std::string merged = write_file("fold_merged.urdf", arm_with(exact_link("l2", hand.c, hand.m, hand.i), ""));
+  const Chain folded = nominal_chain(ChainTemplate::from_urdf(full, "base", "tip"));
+  const Chain by_hand = nominal_chain(ChainTemplate::from_urdf(merged, "base", "tip"));
+  ASSERT_EQ(folded.dof(), 2);
+  // The body against the hand-written sum (l2's frame is body 1's frame).
+  EXPECT_NEAR(folded.bodies[1].mass, 1.95, 1e-15);  // l2 + gripper + finger; not the jaw
+  EXPECT_LT((folded.bodies[1].com - hand.c).norm(), 1e-15);
+  EXPECT_LT((folded.bodies[1].inertia - hand.i).norm(), 1e-15) << folded.bodies[1].inertia << "\n\n" << hand.i;
+  EXPECT_NEAR(folded.bodies[0].mass, 2.0, 1e-15);  // the camera rides on the base
+  // H and the gravity torque against the file merged by hand.
+  std::mt19937 rng(52);
+  for (int k = 0; k < 20; ++k) {
+    const std::vector<double> q = random_q(2, rng);
+    const State a = state_at(folded, q), b = state_at(by_hand, q);
+    EXPECT_LT((a.inertia - b.inertia).norm(), 1e-12) << a.inertia << "\n\n" << b.inertia;
+    EXPECT_LT((a.gravity - b.gravity).norm(), 1e-12) << a.gravity.transpose() << "\n" << b.gravity.transpose();
+  }
+}
+
+TEST(ChainTemplate, FoldingSwitchedOffIsTheFileWithoutTheChildLinks) {
+  const std::string l2 = urdf_link("l2", "0.2 0 0", "0 0 0", 1.0, kL2Inertia);
+  const std::string full = write_file("fold_off_full.urdf", arm_with(l2, fold_extra()));
+  const std::string bare = write_file("fold_off_bare.urdf", arm_with(l2, ""));
+  const ChainTemplate off = ChainTemplate::from_urdf(full, "base", "tip", false);
+  const Chain a = nominal_chain(off), b = nominal_chain(ChainTemplate::from_urdf(bare, "base", "tip"));
+  expect_same_bodies(a, b, 1e-15);
+  expect_same_chain(a, b, 20, 1e-12);
+  EXPECT_TRUE(off.folded_links().empty());
+  EXPECT_TRUE(off.links_on_base().empty());
+  EXPECT_EQ(off.find("gripper:mass"), -1);
+  EXPECT_EQ(off.parameters().size(), ChainTemplate::from_urdf(bare, "base", "tip").parameters().size());
+}
+
+TEST(ChainTemplate, FoldedLinksAreListedAndTheirMassesAreDesignParameters) {
+  const std::string l2 = urdf_link("l2", "0.2 0 0", "0 0 0", 1.0, kL2Inertia);
+  const ChainTemplate t = ChainTemplate::from_urdf(write_file("fold_list.urdf", arm_with(l2, fold_extra())), "base", "tip");
+  ASSERT_EQ(t.folded_links().size(), 1u);
+  EXPECT_EQ(t.folded_links()[0].body, 1);
+  EXPECT_EQ(t.folded_links()[0].body_link, "l2");
+  EXPECT_EQ(t.folded_links()[0].links, (std::vector<std::string>{"gripper", "finger"}));
+  EXPECT_EQ(t.links_on_base(), std::vector<std::string>{"camera"});
+  EXPECT_EQ(t.find("camera:mass"), -1);  // no dynamics on the base
+  EXPECT_EQ(t.find("jaw:mass"), -1);     // behind a moving joint: not folded
+  std::vector<double> v = nominal(t);
+  const Chain base = instantiate(t, v);
+  value_of(t, v, "gripper:mass") = 1.6;
+  value_of(t, v, "finger:mass") = 0.0;
+  const Chain c = instantiate(t, v);
+  EXPECT_NEAR(c.bodies[1].mass - base.bodies[1].mass, 0.8 - 0.15, 1e-15);
+  // A fixed link on the path after a moving joint is listed too (the phantom's stylus tip).
+  const ChainTemplate phantom = ChainTemplate::from_urdf(share("phantom_3r.urdf"), "world", "stylus_tip");
+  ASSERT_EQ(phantom.folded_links().size(), 1u);
+  EXPECT_EQ(phantom.folded_links()[0].body_link, "forearm");
+  EXPECT_EQ(phantom.folded_links()[0].links, std::vector<std::string>{"stylus_tip"});
+}
+
+// Holding torque (tau_g = -sum J^T m g): at q = 0 the arm points along +x, and a positive turn
+// about y lowers it, so a heavier payload needs more negative torque at both joints; their
+// difference is the payload's weight times the 0.5 m between the two axes, whatever its centre.
+TEST(ChainTemplate, APayloadAddsTheGravityTorqueOfItsWeightAtTheProximalJoints) {
+  const std::string l2 = urdf_link("l2", "0.2 0 0", "0 0 0", 1.0, kL2Inertia);
+  const ChainTemplate t = ChainTemplate::from_urdf(write_file("payload.urdf", arm_with(l2, fold_extra())), "base", "tip");
+  const Chain with = nominal_chain(t);
+  const Chain without = nominal_chain(ChainTemplate::from_urdf(write_file("payload_bare.urdf", arm_with(l2, "")), "base", "tip"));
+  const State a = state_at(with, {0.0, 0.0}), b = state_at(without, {0.0, 0.0});
+  const JointVector delta = a.gravity - b.gravity;
+  EXPECT_LT(delta(0), 0.0);
+  EXPECT_LT(delta(1), 0.0);
+  EXPECT_LT(delta(0), delta(1));
+  EXPECT_NEAR(delta(0) - delta(1), -9.81 * 0.95 * 0.5, 1e-12);
+  // Released at rest the arm falls: both joints accelerate the way that lowers it.
+  const JointVector qddot = a.inertia.ldlt().solve(-a.gravity);
+  EXPECT_GT(qddot(0), 0.0);
+  // Doubling the gripper's mass (a design variable) adds as much again of its share.
+  std::vector<double> v = nominal(t);
+  value_of(t, v, "gripper:mass") = 1.6;
+  const JointVector heavier = state_at(instantiate(t, v), {0.0, 0.0}).gravity;
+  EXPECT_LT(heavier(0), a.gravity(0));
+  EXPECT_NEAR((heavier(0) - a.gravity(0)) - (heavier(1) - a.gravity(1)), -9.81 * 0.8 * 0.5, 1e-12);
+}
+
+TEST(ChainTemplate, ShippedUr5LikeCarriesItsGripperBaseButNotItsFingers) {
+  const Chain on = nominal_chain(ChainTemplate::from_urdf(share("ur5_like.urdf"), "world", "tool0"));
+  const Chain off = nominal_chain(ChainTemplate::from_urdf(share("ur5_like.urdf"), "world", "tool0", false));
+  for (std::size_t i = 0; i < 5; ++i) EXPECT_EQ(on.bodies[i].mass, off.bodies[i].mass) << i;
+  EXPECT_NEAR(on.bodies[5].mass - off.bodies[5].mass, 0.9, 1e-12);  // gripper_base; the fingers slide
+}
+
+TEST(ChainTemplate, FoldedLinkErrorsNameTheLinkAndTheRule) {
+  const std::string l2 = urdf_link("l2", "0.2 0 0", "0 0 0", 1.0, kL2Inertia);
+  const std::string negative = write_file("fold_negative.urdf", arm_with(l2, fold_extra(-0.5)));
+  expect_error([&] { ChainTemplate::from_urdf(negative, "base", "tip"); },
+               {negative + ": link \"gripper\" <inertial> <mass value=\"-0.5\">: must be a finite mass >= 0 kg"});
+  EXPECT_NO_THROW(ChainTemplate::from_urdf(negative, "base", "tip", false));  // not read when not folded
+  const std::string bad_name = write_file("fold_bad_name.urdf", arm_with(l2, fold_extra(0.8, "f\xff")));
+  expect_error([&] { ChainTemplate::from_urdf(bad_name, "base", "tip"); },
+               {bad_name + ": link name \"f\\xff\": invalid UTF-8 at byte 1 (names become design variables"});
+  EXPECT_NO_THROW(ChainTemplate::from_urdf(bad_name, "base", "tip", false));
 }
 #else
 TEST(ChainTemplate, UrdfWithoutUrdfdomIsRefusedClearly) {

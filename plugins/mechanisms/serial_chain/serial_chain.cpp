@@ -36,7 +36,7 @@ Eigen::Isometry3d pose_from(const std::vector<double>& xyz, const std::vector<do
 ChainTemplate read_chain(const SerialChainOptions& o) {
   // Exactly one of urdf and dh_file, the links with a URDF only: declared rules (serial_chain_options.hpp).
   if (!o.dh_file.empty()) return ChainTemplate::from_dh_file(find_data_file(kName, "dh_file", o.dh_file));
-  return ChainTemplate::from_urdf(find_data_file(kName, "urdf", o.urdf), o.base_link, o.tip_link);
+  return ChainTemplate::from_urdf(find_data_file(kName, "urdf", o.urdf), o.base_link, o.tip_link, o.fold_fixed_links);
 }
 
 IkTask task_of(const SerialChainOptions& o) {
@@ -272,8 +272,15 @@ std::string SerialChain::summary() const {
     joints += (joints.empty() ? "" : ", ") + j.name + (j.type == ChainJointType::kPrismatic ? " (prismatic)" : " (revolute)");
   }
   const std::string path = o.urdf.empty() ? "from " + o.dh_file : o.base_link + " -> " + o.tip_link;
+  // What each body carries besides its own link: a payload that went missing shows here too.
+  std::string folded;
+  for (const ChainFoldedLinks& f : setup_->chain_template.folded_links()) {
+    std::string links;
+    for (const std::string& l : f.links) links += (links.empty() ? "" : ", ") + l;
+    folded += "; folded: " + links + " -> " + f.body_link;
+  }
   return std::to_string(nominal.joints.size()) + " moving joint" + (nominal.joints.size() == 1 ? "" : "s") + " " +
-         path + ": " + joints + "; task " + o.task + "; IK selection " + o.ik.selection + "; IK solver " + setup_->solver_summary;
+         path + ": " + joints + folded + "; task " + o.task + "; IK selection " + o.ik.selection + "; IK solver " + setup_->solver_summary;
 }
 
 }  // namespace hapsyn::plugins

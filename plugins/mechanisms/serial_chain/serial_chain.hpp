@@ -173,8 +173,9 @@ class SerialChain final : public Mechanism {
   /// effort limits.
   Needs provides() const;
   MechanismSpecs specs() const override { return {provides(), summary()}; }
-  /// "N moving joints base -> tip: name (revolute), ...; task T; IK selection S; IK solver
-  /// closed form (<ChainGeometry::describe()>)" or "...; IK solver numerical (<why>)".
+  /// "N moving joints base -> tip: name (revolute), ...[; folded: link, link -> body_link]...;
+  /// task T; IK selection S; IK solver closed form (<ChainGeometry::describe()>)" or "...; IK
+  /// solver numerical (<why>)". One "folded" part per body of ChainTemplate::folded_links().
   std::string summary() const;
 
   const SerialChainSetup& setup() const { return *setup_; }

@@ -69,6 +69,7 @@ struct SerialChainOptions {
   std::string urdf{};
   std::string base_link{};
   std::string tip_link{};
+  bool fold_fixed_links{};
   std::string dh_file{};
   std::string task{};
   std::string task_axis{};
@@ -98,6 +99,12 @@ struct SerialChainOptions {
           "urdf and dh_file.");
     d.add(&SerialChainOptions::base_link, "base_link", "", "URDF link the chain starts at (its frame is the base).");
     d.add(&SerialChainOptions::tip_link, "tip_link", "", "URDF link whose frame is the tip (the end effector).");
+    d.add(&SerialChainOptions::fold_fixed_links, "fold_fixed_links", true,
+          "URDF: fold every link hanging off the base -> tip path through fixed joints only (a gripper and its "
+          "fixed fingers, a payload, a tool) into the moving body it hangs from (mass, centre of mass, inertia; a "
+          "design variable LINK:mass each). Links fixed to the base carry no dynamics; links behind a moving "
+          "joint off the path are never folded. The summary lists what each body carries (folded: ... -> link). "
+          "false: only the path's own links.");
     d.add(&SerialChainOptions::dh_file, "dh_file", "", "DH or modified-DH table (format hapsyn-dh, share/serial_chain/README.md).");
     d.add(&SerialChainOptions::task, "task", "pose",
           "What of a sample the tip must match: the full pose (6 rows; needs 7-coordinate samples), the position "
@@ -170,6 +177,9 @@ struct SerialChainOptions {
                     "a URDF chain needs base_link and tip_link (the links it runs between)");
       });
     }
+    d.rule({"fold_fixed_links", "dh_file"}, "fold_fixed_links only with urdf", [when](const O& o) {
+      return when(!o.dh_file.empty() && !o.fold_fixed_links, "only for a URDF (a DH table has no fixed links)");
+    });
     for (const auto& [name, member] : {std::pair{"actuator_size", &O::actuator_size}, std::pair{"actuator_gear", &O::actuator_gear}}) {
       d.rule({name, "actuator_file"}, std::string(name) + " only with actuator_file", [when, member = member](const O& o) {
         return when(o.actuator_file.empty() && !(o.*member).empty(), "only with an actuator_file");

@@ -13,7 +13,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <iomanip>
 #include <random>
 
@@ -128,7 +130,58 @@ TEST(SerialChain, OptionErrorsNameTheOptionTheValueAndTheRule) {
   EXPECT_NE(error(missing).find("options.dh_file = \"no/such.json\": no such file"), std::string::npos);
 }
 
+TEST(SerialChain, FoldFixedLinksIsOnlyForAUrdf) {
+  Json o = haptic6r_dh_options();
+  o["fold_fixed_links"] = false;
+  const std::string e = test::error_of([&] { serial_chain(o); });
+  EXPECT_NE(e.find("options.fold_fixed_links = false: only for a URDF (a DH table has no fixed links)"), std::string::npos) << e;
+}
+
 #ifdef HAPSYN_HAVE_URDFDOM
+// The summary (run header, result.json, describe) names what each body carries; switched off,
+// nothing is folded and nothing listed.
+TEST(SerialChain, SummaryListsTheFoldedLinksPerBody) {
+  const std::string path = ::testing::TempDir() + "serial_chain_test_folded.urdf";
+  std::ofstream(path) << R"(<?xml version="1.0"?>
+<robot name="t">
+  <link name="base"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.1"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="5" velocity="2"/></joint>
+  <link name="l1"><inertial><origin xyz="0.1 0 0"/><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.3 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-1" upper="1" effort="5" velocity="2"/></joint>
+  <link name="l2"/>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0.3 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-1" upper="1" effort="5" velocity="2"/></joint>
+  <link name="l3"><inertial><origin xyz="0.1 0 0"/><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="tip_joint" type="fixed"><parent link="l3"/><child link="tip"/><origin xyz="0.2 0 0"/></joint>
+  <link name="tip"/>
+  <joint name="payload_mount" type="fixed"><parent link="l1"/><child link="payload"/><origin xyz="0.1 0 0.05"/></joint>
+  <link name="payload"><inertial><origin xyz="0 0 0"/><mass value="0.5"/><inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/></inertial></link>
+  <joint name="grip_mount" type="fixed"><parent link="tip"/><child link="gripper"/><origin xyz="0 0 0.01"/></joint>
+  <link name="gripper"><inertial><origin xyz="0 0 0.02"/><mass value="0.4"/><inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/></inertial></link>
+  <joint name="finger_mount" type="fixed"><parent link="gripper"/><child link="finger_left"/><origin xyz="0 0.01 0.04"/></joint>
+  <link name="finger_left"><inertial><origin xyz="0 0 0.01"/><mass value="0.05"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-5"/></inertial></link>
+</robot>
+)";
+  Json o{{"urdf", path}, {"base_link", "base"}, {"tip_link", "tip"}, {"task", "position"}};
+  const std::string on = serial_chain(o).summary();
+  EXPECT_NE(on.find("3 moving joints base -> tip: j1 (revolute), j2 (revolute), j3 (revolute); folded: payload -> l1; "
+                    "folded: gripper, finger_left -> l3; task position"),
+            std::string::npos)
+      << on;
+  const SerialChain folding = serial_chain(o);
+  const auto variables = folding.variables();
+  const auto named = [&](const std::string& name) {
+    return std::any_of(variables.begin(), variables.end(), [&](const VariableDecl& v) { return v.name == name; });
+  };
+  EXPECT_TRUE(named("payload:mass") && named("gripper:mass") && named("finger_left:mass"));
+  o["fold_fixed_links"] = false;
+  const std::string off = serial_chain(o).summary();
+  EXPECT_EQ(off.find("folded"), std::string::npos) << off;
+  EXPECT_NE(off.find("j3 (revolute); task position"), std::string::npos) << off;
+}
+
 TEST(SerialChain, ThreeJointChainRefusesThePoseTask) {
   const std::string m = test::error_of([] {
     serial_chain(Json{{"urdf", "serial_chain/phantom_3r.urdf"}, {"base_link", "base_link"}, {"tip_link", "stylus_tip"}});

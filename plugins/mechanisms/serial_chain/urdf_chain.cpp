@@ -1,7 +1,8 @@
 // ChainTemplate::from_urdf: the base -> tip path of a URDF file (urdfdom) as a chain template.
 // A URDF is a tree of links joined by joints whose child link frame is the joint frame; the
 // path's fixed joints fold into the next moving joint's origin (after the last one: into T_tip)
-// and their child links' inertials into the body before them.
+// and their child links' inertials into the body before them, and so do the inertials of links
+// hanging off the path through fixed joints only (a gripper, a payload), unless switched off.
 #include "chain_template_impl.hpp"
 #include "xml_shape.hpp"
 
@@ -36,7 +37,7 @@ namespace hapsyn::plugins {
 
 #ifndef HAPSYN_HAVE_URDFDOM
 
-ChainTemplate ChainTemplate::from_urdf(const std::string& path, const std::string&, const std::string&) {
+ChainTemplate ChainTemplate::from_urdf(const std::string& path, const std::string&, const std::string&, bool) {
   throw Error(kSerialChainName, path +
                                     ": hapsyn was built without URDF support (HAPSYN_WITH_URDFDOM=OFF): "
                                     "rebuild with liburdfdom-dev installed, or describe the chain as a DH table");
@@ -63,10 +64,14 @@ struct UrdfStep {
   ChainJoint joint;                     // type, axis, limits (origin: from the parameters)
   int origin_parameter = -1;            // "<joint>:x", then y, z, roll, pitch, yaw
   std::optional<UrdfInertial> child;    // the child link's inertial, if any
+  // The inertials of the links fixed to the child link off the path (recursively), their frames
+  // in the child link's frame (the fixed joints' origins as written).
+  std::vector<UrdfInertial> folded;
 };
 
 struct UrdfPath {
   std::vector<UrdfStep> steps;
+  std::vector<std::string> on_base;  // links with an inertial fixed off the path to the base (or before joint 1)
   int dof = 0;
   int mass_scale_parameter = -1;
 };
@@ -327,21 +332,64 @@ ChainParameter mass_parameter(const UrdfInertial& in) {
   return c;
 }
 
+// The names become design variables ("<joint>:x", "<link>:mass") written into result.json.
+void check_utf8_name(const std::string& path, const char* what, const std::string& name) {
+  if (const std::size_t bad = invalid_utf8_at(name); bad != std::string::npos) {
+    throw Error(kSerialChainName, path + ": " + what + " name " + shown_bytes(name) + ": invalid UTF-8 at byte " +
+                                      std::to_string(bad) + " (names become design variables written into "
+                                      "result.json: they must be UTF-8)");
+  }
+}
+
+// The inertials of the links hanging from `anchor` off the path through fixed joints only, in
+// depth-first order, each frame in the anchor's frame. A moving joint off the path ends the walk:
+// what lies behind it moves on its own and is not part of the body.
+std::vector<UrdfInertial> fixed_subtree(const std::string& path, const urdf::ModelInterface& model,
+                                        const urdf::Link& anchor, const std::set<std::string>& on_path,
+                                        const std::map<std::string, Origin>& origins) {
+  std::vector<UrdfInertial> out;
+  // (link, its frame in the anchor's frame); an explicit stack: a file may nest thousands.
+  std::vector<std::pair<const urdf::Link*, Eigen::Isometry3d>> stack{{&anchor, Eigen::Isometry3d::Identity()}};
+  while (!stack.empty()) {
+    const auto [link, frame] = stack.back();
+    stack.pop_back();
+    if (link != &anchor) {
+      check_utf8_name(path, "link", link->name);
+      if (std::optional<UrdfInertial> in = inertial_of(path, *link)) {
+        in->frame = frame * in->frame;
+        out.push_back(*in);
+      }
+    }
+    // Reversed onto the stack: the file's (urdfdom's) order comes off first.
+    for (auto j = link->child_joints.rbegin(); j != link->child_joints.rend(); ++j) {
+      if ((*j)->type != urdf::Joint::FIXED || on_path.count((*j)->child_link_name)) continue;
+      const urdf::LinkConstSharedPtr child = model.getLink((*j)->child_link_name);
+      if (!child) continue;
+      const auto o = origins.find((*j)->name);
+      const Origin v = o == origins.end() ? Origin{} : o->second;
+      stack.emplace_back(child.get(), frame * xyz_rpy_pose(Eigen::Vector3d(v[0], v[1], v[2]), v[3], v[4], v[5]));
+    }
+  }
+  return out;
+}
+
 // Reads the path's joints into steps and declares the parameters in path order.
 UrdfPath read_path(const std::string& path, const std::string& base_link, const std::string& tip_link,
                    const std::vector<urdf::JointConstSharedPtr>& joints, const urdf::ModelInterface& model,
-                   const std::map<std::string, Origin>& origins, std::vector<ChainParameter>& parameters) {
+                   const std::map<std::string, Origin>& origins, bool fold_fixed_links,
+                   std::vector<ChainParameter>& parameters) {
   UrdfPath p;
-  for (const urdf::JointConstSharedPtr& j : joints) {
-    // The names become design variables ("<joint>:x", "<link>:mass") written into result.json.
-    for (const auto& [what, name] : {std::pair<const char*, const std::string&>{"joint", j->name},
-                                     {"link", j->child_link_name}}) {
-      if (const std::size_t bad = invalid_utf8_at(name); bad != std::string::npos) {
-        throw Error(kSerialChainName, path + ": " + what + " name " + shown_bytes(name) + ": invalid UTF-8 at byte " +
-                                          std::to_string(bad) + " (names become design variables written into "
-                                          "result.json: they must be UTF-8)");
-      }
+  std::set<std::string> on_path{base_link};
+  for (const urdf::JointConstSharedPtr& j : joints) on_path.insert(j->child_link_name);
+  if (fold_fixed_links) {
+    // Fixed to the base: they ride on it and have no dynamics; named for the docs' sake only.
+    for (const UrdfInertial& in : fixed_subtree(path, model, *model.getLink(base_link), on_path, origins)) {
+      p.on_base.push_back(in.link);
     }
+  }
+  for (const urdf::JointConstSharedPtr& j : joints) {
+    check_utf8_name(path, "joint", j->name);
+    check_utf8_name(path, "link", j->child_link_name);
     UrdfStep step = step_of(path, *j);
     step.origin_parameter = static_cast<int>(parameters.size());
     const auto origin = origins.find(j->name);
@@ -353,6 +401,19 @@ UrdfPath read_path(const std::string& path, const std::string& base_link, const 
     if (step.child && p.dof > 0 && step.child->mass > 0.0) {
       step.child->mass_parameter = static_cast<int>(parameters.size());
       parameters.push_back(mass_parameter(*step.child));
+    }
+    if (fold_fixed_links) {
+      const urdf::LinkConstSharedPtr child = model.getLink(j->child_link_name);
+      step.folded = fixed_subtree(path, model, *child, on_path, origins);
+      for (UrdfInertial& in : step.folded) {
+        if (p.dof == 0) {
+          p.on_base.push_back(in.link);
+        } else if (in.mass > 0.0) {
+          in.mass_parameter = static_cast<int>(parameters.size());
+          parameters.push_back(mass_parameter(in));
+        }
+      }
+      if (p.dof == 0) step.folded.clear();
     }
     p.steps.push_back(step);
   }
@@ -392,8 +453,13 @@ void build_chain(const UrdfPath& p, const double* values, Chain& out) {
     } else {
       pending = pending * origin;
     }
-    if (s.child && !out.bodies.empty()) {
+    if (out.bodies.empty()) continue;  // on the base: no dynamics
+    if (s.child) {
       const ChainBody part = inertial_part(*s.child, pending, values);
+      add_part(out.bodies.back(), part.mass, part.com, part.inertia);
+    }
+    for (const UrdfInertial& in : s.folded) {
+      const ChainBody part = inertial_part(in, pending, values);
       add_part(out.bodies.back(), part.mass, part.com, part.inertia);
     }
   }
@@ -402,9 +468,29 @@ void build_chain(const UrdfPath& p, const double* values, Chain& out) {
   for (ChainBody& b : out.bodies) scale_body(b, scale);
 }
 
+// Which links' inertials each moving body carries besides its own link's (the summary's list),
+// in path order.
+std::vector<ChainFoldedLinks> folded_links_of(const UrdfPath& p, const std::vector<urdf::JointConstSharedPtr>& joints) {
+  std::vector<ChainFoldedLinks> out;
+  for (std::size_t k = 0; k < p.steps.size(); ++k) {
+    const UrdfStep& s = p.steps[k];
+    if (s.moving) {
+      out.push_back({static_cast<int>(out.size()), joints[k]->child_link_name, {}});
+    } else if (!out.empty() && s.child) {
+      out.back().links.push_back(s.child->link);
+    }
+    for (const UrdfInertial& in : s.folded) {
+      if (!out.empty()) out.back().links.push_back(in.link);
+    }
+  }
+  out.erase(std::remove_if(out.begin(), out.end(), [](const ChainFoldedLinks& f) { return f.links.empty(); }), out.end());
+  return out;
+}
+
 }  // namespace
 
-ChainTemplate ChainTemplate::from_urdf(const std::string& path, const std::string& base_link, const std::string& tip_link) {
+ChainTemplate ChainTemplate::from_urdf(const std::string& path, const std::string& base_link, const std::string& tip_link,
+                                       bool fold_fixed_links) {
   const std::string text = read_text(path);
   check_xml_shape(text, path, kSerialChainName);
   const std::map<std::string, Origin> origins = read_xml_origins(path, text);
@@ -414,9 +500,12 @@ ChainTemplate ChainTemplate::from_urdf(const std::string& path, const std::strin
   const std::vector<urdf::JointConstSharedPtr> joints = joints_between(path, base, tip);
   ChainTemplate t;
   t.source_ = path;
-  auto shared = std::make_shared<const UrdfPath>(read_path(path, base_link, tip_link, joints, *model, origins, t.parameters_));
+  auto shared = std::make_shared<const UrdfPath>(
+      read_path(path, base_link, tip_link, joints, *model, origins, fold_fixed_links, t.parameters_));
   auto impl = std::make_shared<Impl>();
   impl->dof = shared->dof;
+  impl->folded_links = folded_links_of(*shared, joints);
+  impl->links_on_base = shared->on_base;
   impl->build = [shared](const double* values, const double*, Chain& out) { build_chain(*shared, values, out); };
   std::vector<UrdfPathJoint> path_joints;
   for (std::size_t k = 0; k < joints.size(); ++k) {
