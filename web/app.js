@@ -9,7 +9,7 @@ import { humanFigure, figurePoints } from '/figure.js';
 import { addMeshes } from '/meshes.js';
 import { setupFront } from '/front.js';
 import { scatter3d } from '/front3d.js';
-import { setupBatch, setupRuns } from '/plots.js';
+import { setupBatch, setupRuns } from 'hapsyn/plots.js';
 
 const state = { ready: false, error: null, pointCount: 0, objective: null, colourRange: null, segments: 0, columns: [],
                 human: null };

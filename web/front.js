@@ -5,15 +5,9 @@
 // frontPointPosition(i) -> the point's centre in client pixels (and its depth in 3D),
 // selectFrontPoint(i), showFront3d(on). A front of three or more objectives opens in a 3D scatter
 // (front3d.js, given as `scatter3d`) with a third objective; a check box turns it to 2D.
-const SVG = 'http://www.w3.org/2000/svg';
-const WIDTH = 360, HEIGHT = 260, MARGIN = { left: 56, right: 12, top: 10, bottom: 40 };
+import { element, extent, tick } from 'hapsyn/plots.js';
 
-function element(name, attributes, parent) {
-  const e = document.createElementNS(SVG, name);
-  for (const [k, v] of Object.entries(attributes)) e.setAttribute(k, String(v));
-  if (parent) parent.appendChild(e);
-  return e;
-}
+const WIDTH = 360, HEIGHT = 260, MARGIN = { left: 56, right: 12, top: 10, bottom: 40 };
 
 function format(v) {
   return v === null || v === undefined ? '–' : Number(v).toPrecision(4);
@@ -21,25 +15,6 @@ function format(v) {
 
 function label(objective) {
   return `${objective.name} (${objective.sense === 'maximize' ? 'max' : 'min'})` + (objective.unit ? ` [${objective.unit}]` : '');
-}
-
-// [lo, hi] of the finite values, widened by 5 % (a single value gets +-1 % or +-1).
-// An axis label: three significant digits, exponent notation for small or large magnitudes.
-function tick(v) {
-  const m = Math.abs(v);
-  return m !== 0 && (m < 1e-2 || m >= 1e5) ? v.toExponential(1) : String(Number(v.toPrecision(3)));
-}
-
-function extent(values) {
-  const finite = values.filter(v => v !== null && Number.isFinite(v));
-  if (!finite.length) return [0, 1];
-  let lo = Math.min(...finite), hi = Math.max(...finite);
-  if (hi === lo) {
-    const pad = lo === 0 ? 1 : Math.abs(lo) * 0.01;
-    return [lo - pad, hi + pad];
-  }
-  const pad = (hi - lo) * 0.05;
-  return [lo - pad, hi + pad];
 }
 
 function axisSelect(id, objectives, chosen) {

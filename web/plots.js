@@ -8,7 +8,8 @@ const WIDTH = 360, HEIGHT = 200, MARGIN = { left: 56, right: 12, top: 10, bottom
 // Colour-blind-safe line colours (Okabe-Ito).
 const COLOURS = ['#0072b2', '#d55e00', '#009e73', '#cc79a7', '#e69f00', '#56b4e9', '#000000', '#f0e442'];
 
-function element(name, attributes, parent) {
+// An SVG element with its attributes, appended to parent when given (front.js uses it too).
+export function element(name, attributes, parent) {
   const e = document.createElementNS(SVG, name);
   for (const [k, v] of Object.entries(attributes)) e.setAttribute(k, String(v));
   if (parent) parent.appendChild(e);
@@ -20,12 +21,13 @@ function format(v) {
 }
 
 // An axis label: three significant digits, exponent notation for small or large magnitudes.
-function tick(v) {
+export function tick(v) {
   const m = Math.abs(v);
   return m !== 0 && (m < 1e-2 || m >= 1e5) ? v.toExponential(1) : String(Number(v.toPrecision(3)));
 }
 
-function extent(values) {
+// [lo, hi] of the finite values, widened by 5 % (a single value gets +-1 % or +-1).
+export function extent(values) {
   const finite = values.filter(v => v !== null && Number.isFinite(v));
   if (!finite.length) return [0, 1];
   let lo = Math.min(...finite), hi = Math.max(...finite);
