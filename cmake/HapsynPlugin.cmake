@@ -16,6 +16,8 @@ function(hapsyn_add_plugin name)
   endif()
   set(target hapsyn_plugin_${name})
   add_library(${target} MODULE ${ARG_SOURCES})
+  # Listed for hapsyn's aggregate target hapsyn_plugins (every shipped plugin, no test).
+  set_property(GLOBAL APPEND PROPERTY HAPSYN_PLUGIN_TARGETS ${target})
   set_target_properties(${target} PROPERTIES OUTPUT_NAME "hapsyn-${name}" PREFIX ""
     CXX_VISIBILITY_PRESET hidden VISIBILITY_INLINES_HIDDEN ON)
   if(TARGET hapsyn::hapsyn)
