@@ -174,6 +174,9 @@ async function main() {
     drawn.traverse(o => o.geometry && o.geometry.dispose());
     drawn = mechanism(point, size * 0.006);
     scene.add(drawn);
+    // A URDF's meshes are placed for the design shown first only: hidden for any other.
+    const meshGroup = scene.getObjectByName('meshes');
+    if (meshGroup) meshGroup.visible = false;
     state.segments = point.segments.length;
     state.drawnSegments = point.segments;
   }, scatter3d);
