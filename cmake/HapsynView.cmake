@@ -75,7 +75,7 @@ function(hapsyn_add_view target)
     app/view/samples_csv_reader.cpp app/view/http_server.cpp app/view/result_views.cpp app/view/report_command.cpp ${output})
   # The virtual prototype: the replay and the live frames (with the motion scene's signal
   # processing), a library of their own that benchmarks/live_frame_benchmark.cpp times too.
-  add_library(hapsyn_view_prototype STATIC app/view/replay_data.cpp app/view/live_session.cpp
+  add_library(hapsyn_view_prototype STATIC app/view/replay_data.cpp app/view/live_session.cpp app/view/view_json.cpp
     ${PROJECT_SOURCE_DIR}/plugins/scenes/motion/motion_signal.cpp)
   target_include_directories(hapsyn_view_prototype PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/app/view
     ${PROJECT_SOURCE_DIR}/plugins/scenes/motion)

@@ -5,7 +5,7 @@
 // frontPointPosition(i) -> the point's centre in client pixels (and its depth in 3D),
 // selectFrontPoint(i), showFront3d(on). A front of three or more objectives opens in a 3D scatter
 // (front3d.js, given as `scatter3d`) with a third objective; a check box turns it to 2D.
-import { element, extent, tick } from 'hapsyn/plots.js';
+import { axes, element, extent } from 'hapsyn/plots.js';
 
 const WIDTH = 360, HEIGHT = 260, MARGIN = { left: 56, right: 12, top: 10, bottom: 40 };
 
@@ -109,20 +109,7 @@ export function setupFront(result, state, onSelect, scatter3d) {
     state.frontAxes = [ox.name, oy.name];
     svg.textContent = '';
     const xs = front.points.map(p => p.objectives[ox.name]), ys = front.points.map(p => p.objectives[oy.name]);
-    const [x0, x1] = extent(xs), [y0, y1] = extent(ys);
-    const px = v => MARGIN.left + (v - x0) / (x1 - x0) * (WIDTH - MARGIN.left - MARGIN.right);
-    const py = v => HEIGHT - MARGIN.bottom - (v - y0) / (y1 - y0) * (HEIGHT - MARGIN.top - MARGIN.bottom);
-    element('rect', { x: MARGIN.left, y: MARGIN.top, width: WIDTH - MARGIN.left - MARGIN.right,
-                      height: HEIGHT - MARGIN.top - MARGIN.bottom, class: 'frame' }, svg);
-    for (let k = 0; k <= 4; ++k) {
-      const vx = x0 + (x1 - x0) * k / 4, vy = y0 + (y1 - y0) * k / 4;
-      element('text', { x: px(vx), y: HEIGHT - MARGIN.bottom + 14, 'text-anchor': 'middle', class: 'tick' }, svg).textContent = tick(vx);
-      element('text', { x: MARGIN.left - 4, y: py(vy) + 4, 'text-anchor': 'end', class: 'tick' }, svg).textContent = tick(vy);
-    }
-    element('text', { x: (MARGIN.left + WIDTH - MARGIN.right) / 2, y: HEIGHT - 6, 'text-anchor': 'middle', class: 'axis' }, svg)
-      .textContent = label(ox);
-    element('text', { x: 12, y: (MARGIN.top + HEIGHT - MARGIN.bottom) / 2, 'text-anchor': 'middle', class: 'axis',
-                      transform: `rotate(-90 12 ${(MARGIN.top + HEIGHT - MARGIN.bottom) / 2})` }, svg).textContent = label(oy);
+    const [px, py] = axes(svg, { width: WIDTH, height: HEIGHT, margin: MARGIN }, extent(xs), extent(ys), label(ox), label(oy));
     circles = front.points.map((p, i) => {
       const x = xs[i], y = ys[i];
       const finite = x !== null && y !== null && Number.isFinite(x) && Number.isFinite(y);

@@ -35,6 +35,28 @@ export function extent(values) {
   return [lo - (hi - lo) * 0.05, hi + (hi - lo) * 0.05];
 }
 
+/// The frame of an x-y plot into `svg`: its box ({width, height, margin: {left, right, top,
+/// bottom}}), five ticks on each axis over [x0, x1] and [y0, y1], and the axis labels. Returns
+/// [px, py], the maps from values to SVG coordinates (front.js draws its scatter with it too).
+export function axes(svg, box, [x0, x1], [y0, y1], xLabel, yLabel) {
+  const { width, height, margin } = box;
+  const px = v => margin.left + (v - x0) / (x1 - x0) * (width - margin.left - margin.right);
+  const py = v => height - margin.bottom - (v - y0) / (y1 - y0) * (height - margin.top - margin.bottom);
+  element('rect', { x: margin.left, y: margin.top, width: width - margin.left - margin.right,
+                    height: height - margin.top - margin.bottom, class: 'frame' }, svg);
+  for (let k = 0; k <= 4; ++k) {
+    const vx = x0 + (x1 - x0) * k / 4, vy = y0 + (y1 - y0) * k / 4;
+    element('text', { x: px(vx), y: height - margin.bottom + 13, 'text-anchor': 'middle', class: 'tick' }, svg).textContent = tick(vx);
+    element('text', { x: margin.left - 4, y: py(vy) + 4, 'text-anchor': 'end', class: 'tick' }, svg).textContent = tick(vy);
+  }
+  element('text', { x: (margin.left + width - margin.right) / 2, y: height - 5, 'text-anchor': 'middle', class: 'axis' }, svg)
+    .textContent = xLabel;
+  const mid = (margin.top + height - margin.bottom) / 2;
+  element('text', { x: 12, y: mid, 'text-anchor': 'middle', class: 'axis', transform: `rotate(-90 12 ${mid})` }, svg)
+    .textContent = yLabel;
+  return [px, py];
+}
+
 /// Draws `series` ([{label, x: [], y: []}], null y values skipped) into `svg`; returns the
 /// number of points drawn per series.
 export function linePlot(svg, series, xLabel, yLabel) {
@@ -42,19 +64,8 @@ export function linePlot(svg, series, xLabel, yLabel) {
   svg.setAttribute('viewBox', `0 0 ${WIDTH} ${HEIGHT}`);
   svg.setAttribute('width', WIDTH);
   svg.setAttribute('height', HEIGHT);
-  const [x0, x1] = extent(series.flatMap(s => s.x)), [y0, y1] = extent(series.flatMap(s => s.y));
-  const px = v => MARGIN.left + (v - x0) / (x1 - x0) * (WIDTH - MARGIN.left - MARGIN.right);
-  const py = v => HEIGHT - MARGIN.bottom - (v - y0) / (y1 - y0) * (HEIGHT - MARGIN.top - MARGIN.bottom);
-  element('rect', { x: MARGIN.left, y: MARGIN.top, width: WIDTH - MARGIN.left - MARGIN.right,
-                    height: HEIGHT - MARGIN.top - MARGIN.bottom, class: 'frame' }, svg);
-  for (let k = 0; k <= 4; ++k) {
-    const vx = x0 + (x1 - x0) * k / 4, vy = y0 + (y1 - y0) * k / 4;
-    element('text', { x: px(vx), y: HEIGHT - MARGIN.bottom + 13, 'text-anchor': 'middle', class: 'tick' }, svg).textContent = tick(vx);
-    element('text', { x: MARGIN.left - 4, y: py(vy) + 4, 'text-anchor': 'end', class: 'tick' }, svg).textContent = tick(vy);
-  }
-  element('text', { x: (MARGIN.left + WIDTH - MARGIN.right) / 2, y: HEIGHT - 4, 'text-anchor': 'middle', class: 'axis' }, svg).textContent = xLabel;
-  const mid = (MARGIN.top + HEIGHT - MARGIN.bottom) / 2;
-  element('text', { x: 12, y: mid, 'text-anchor': 'middle', class: 'axis', transform: `rotate(-90 12 ${mid})` }, svg).textContent = yLabel;
+  const [px, py] = axes(svg, { width: WIDTH, height: HEIGHT, margin: MARGIN },
+                        extent(series.flatMap(s => s.x)), extent(series.flatMap(s => s.y)), xLabel, yLabel);
   return series.map((s, i) => {
     const points = [];
     s.x.forEach((x, k) => {

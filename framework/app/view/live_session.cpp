@@ -2,6 +2,7 @@
 
 #include "motion_signal.hpp"
 #include "replay_data.hpp"
+#include "view_json.hpp"
 #include "view_source.hpp"
 
 #include <hapsyn/error.hpp>
@@ -250,13 +251,7 @@ Json LiveSession::frame(const Pose& p) {
 
   Json frame = {{"t", p.t}, {"status", hapsyn::to_string(q.status)}, {"position", {x.x(), x.y(), x.z()}}, {"rates", how}};
   frame["q"] = reachable ? vector_json(q.q.data(), joints) : Json(nullptr);
-  Json segments = Json::array();
-  for (const hapsyn::Segment& s : model_.model_->segments(one_, 0, *scratch_)) {
-    Json points = Json::array();
-    for (const Eigen::Vector3d& point : s.points) points.push_back({point.x(), point.y(), point.z()});
-    segments.push_back({{"name", s.name}, {"points", points}});
-  }
-  frame["segments"] = segments;
+  frame["segments"] = segments_json(model_.model_->segments(one_, 0, *scratch_));
   frame["qdot_ratio"] = nullptr;
   frame["tau_ratio"] = nullptr;
   frame["feasible"] = nullptr;

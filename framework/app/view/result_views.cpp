@@ -1,5 +1,7 @@
 #include "result_views.hpp"
 
+#include "view_json.hpp"
+
 #include <hapsyn/error.hpp>
 #include <hapsyn/json_text.hpp>
 #include <hapsyn/read_file.hpp>
@@ -15,24 +17,18 @@ namespace {
 
 using hapsyn::Json;
 
-Eigen::Vector3d position_of(const hapsyn::SampleSet& samples, int i) {
-  Eigen::Vector3d p = Eigen::Vector3d::Zero();
-  for (int c = 0; c < std::min(3, samples.dimension()); ++c) p[c] = samples.pose(i)[c];
-  return p;
-}
-
 // The samples a front design is tried at, nearest `drawn` first (the middle of the scene when
 // no sample is drawn), at most kMaxDrawTries: one order for every point.
 std::vector<int> draw_order(const hapsyn::SampleSet& samples, int drawn) {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   if (drawn >= 0) {
-    centre = position_of(samples, drawn);
+    centre = sample_position(samples, drawn);
   } else if (samples.size() > 0) {
-    for (int i = 0; i < samples.size(); ++i) centre += position_of(samples, i);
+    for (int i = 0; i < samples.size(); ++i) centre += sample_position(samples, i);
     centre /= samples.size();
   }
   std::vector<double> distance(static_cast<std::size_t>(samples.size()));
-  for (int i = 0; i < samples.size(); ++i) distance[static_cast<std::size_t>(i)] = (position_of(samples, i) - centre).squaredNorm();
+  for (int i = 0; i < samples.size(); ++i) distance[static_cast<std::size_t>(i)] = (sample_position(samples, i) - centre).squaredNorm();
   std::vector<int> order(static_cast<std::size_t>(samples.size()));
   std::iota(order.begin(), order.end(), 0);
   const auto tries = std::min<std::ptrdiff_t>(kMaxDrawTries, static_cast<std::ptrdiff_t>(order.size()));
@@ -53,13 +49,7 @@ Json drawing(const hapsyn::Problem& problem, const Eigen::VectorXd& design, cons
   for (int sample : order) {
     const std::vector<hapsyn::Segment> segments = model->segments(problem.samples(), sample, *scratch);
     if (segments.empty()) continue;
-    Json out = Json::array();
-    for (const hapsyn::Segment& segment : segments) {
-      Json points = Json::array();
-      for (const Eigen::Vector3d& p : segment.points) points.push_back({p.x(), p.y(), p.z()});
-      out.push_back({{"name", segment.name}, {"points", points}});
-    }
-    return {{"drawn_sample", sample}, {"segments", out}};
+    return {{"drawn_sample", sample}, {"segments", segments_json(segments)}};
   }
   return {{"drawn_sample", nullptr}, {"segments", Json::array()}};
 }

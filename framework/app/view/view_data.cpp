@@ -3,6 +3,7 @@
 #include "result_views.hpp"
 #include "samples_csv_reader.hpp"
 #include "view_figure.hpp"
+#include "view_json.hpp"
 #include "view_source.hpp"
 
 #include <hapsyn/error.hpp>
@@ -21,19 +22,13 @@ namespace {
 namespace fs = boost::filesystem;
 using hapsyn::Json;
 
-Eigen::Vector3d position_of(const hapsyn::SampleSet& samples, int i) {
-  Eigen::Vector3d p = Eigen::Vector3d::Zero();
-  for (int c = 0; c < std::min(3, samples.dimension()); ++c) p[c] = samples.pose(i)[c];
-  return p;
-}
-
 // The reachable sample nearest the reachable samples' centroid, -1 when none is reachable.
 int drawn_sample(const hapsyn::SampleSet& samples, const hapsyn::SampleRecords& records) {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   int count = 0;
   for (int i = 0; i < samples.size(); ++i) {
     if (records.status[static_cast<std::size_t>(i)] != "reachable") continue;
-    centroid += position_of(samples, i);
+    centroid += sample_position(samples, i);
     ++count;
   }
   if (count == 0) return -1;
@@ -42,24 +37,18 @@ int drawn_sample(const hapsyn::SampleSet& samples, const hapsyn::SampleRecords& 
   double nearest = std::numeric_limits<double>::infinity();
   for (int i = 0; i < samples.size(); ++i) {
     if (records.status[static_cast<std::size_t>(i)] != "reachable") continue;
-    const double d = (position_of(samples, i) - centroid).squaredNorm();
+    const double d = (sample_position(samples, i) - centroid).squaredNorm();
     if (d < nearest) nearest = d, best = i;
   }
   return best;
 }
 
-Json segments_json(const ViewSource& s, int sample) {
-  Json out = Json::array();
-  if (sample < 0) return out;
+Json drawing_json(const ViewSource& s, int sample) {
+  if (sample < 0) return Json::array();
   const hapsyn::Mechanism& mechanism = s.study.problem->mechanism();
   const auto model = mechanism.build(s.design.data());
   const auto scratch = mechanism.make_scratch();
-  for (const hapsyn::Segment& segment : model->segments(s.study.problem->samples(), sample, *scratch)) {
-    Json points = Json::array();
-    for (const Eigen::Vector3d& p : segment.points) points.push_back({p.x(), p.y(), p.z()});
-    out.push_back({{"name", segment.name}, {"points", points}});
-  }
-  return out;
+  return segments_json(model->segments(s.study.problem->samples(), sample, *scratch));
 }
 
 Json study_json(const ViewSource& s, int sample) {
@@ -75,14 +64,14 @@ Json study_json(const ViewSource& s, int sample) {
               {"objectives", objectives},
               {"design", s.study.problem->design_to_json(s.design)},
               {"drawn_sample", sample >= 0 ? Json(sample) : Json(nullptr)},
-              {"segments", segments_json(s, sample)},
+              {"segments", drawing_json(s, sample)},
               {"figure", figure_json(samples, sample)},
               // The mechanisms' convention (haptic6r, serial_chain's default): gravity along -z of
               // the base frame; the scene frame is drawn as the base frame.
               {"gravity", {0.0, 0.0, -1.0}},
               {"unit", samples.unit}};
   if (sample >= 0) {
-    const Eigen::Vector3d p = position_of(samples, sample);
+    const Eigen::Vector3d p = sample_position(samples, sample);
     doc["drawn_position"] = {p.x(), p.y(), p.z()};
   }
   return doc;
@@ -130,7 +119,7 @@ Json samples_json(const ViewSource& s, const hapsyn::SampleRecords& records, con
   const hapsyn::SampleSet& samples = s.study.problem->samples();
   Json positions = Json::array(), status = Json::array();
   for (int i = 0; i < samples.size(); ++i) {
-    const Eigen::Vector3d p = position_of(samples, i);
+    const Eigen::Vector3d p = sample_position(samples, i);
     positions.push_back(p.x());
     positions.push_back(p.y());
     positions.push_back(p.z());
