@@ -75,6 +75,11 @@ void chain_frames(const Chain& chain, const double* q, ChainFrames& out);
 /// frames of chain_frames. Allocation-free.
 void chain_jacobian(const Chain& chain, const ChainFrames& frames, TaskJointMatrix& jacobian);
 
+/// Whether sigma_min > tolerance sigma_max for a (task) Jacobian: the SVD's answer, reached for a
+/// square matrix far from a singularity through an LU instead (|J|_F |J^-1|_F tolerance < 1
+/// suffices). Allocation-free.
+bool chain_well_conditioned(const TaskJointMatrix& jacobian, double tolerance);
+
 /// Joint-space inertia H (n x n, symmetric, [kg m^2 / kg m / kg]) by composite rigid bodies,
 /// from the frames of chain_frames. Allocation-free.
 void chain_inertia(const Chain& chain, const ChainFrames& frames, JointMatrix& inertia);

@@ -2,6 +2,8 @@
 // limits and the selection rules.
 #include "chain_closed_form_ik.hpp"
 
+#include "shared/closed_form_ik/angles.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -64,7 +66,7 @@ bool ChainClosedFormIk::polished(const Eigen::Isometry3d& target, const ClosedFo
                                  closed_form_ik::Vector6d& out) const {
   out = scratch.engine.candidate[static_cast<std::size_t>(i)];
   if (!engine_.polish(target, out)) return false;
-  for (int k = 0; k < 6; ++k) out(k) = std::remainder(out(k), 2.0 * M_PI);  // as the engine's solve() wraps
+  for (int k = 0; k < 6; ++k) out(k) = closed_form_ik::remainder_two_pi(out(k));  // as the engine's solve() wraps
   return true;
 }
 

@@ -24,6 +24,8 @@
 // - Allocation: every matrix has a fixed capacity (IkScratch); nothing here allocates.
 #include "chain_ik.hpp"
 
+#include "shared/closed_form_ik/angles.hpp"
+
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -51,7 +53,7 @@ bool is_continuous(const ChainJoint& j) { return is_revolute(j) && !(j.upper - j
 
 // x wrapped into (-pi, pi].
 double wrap_pi(double x) {
-  double r = std::remainder(x, kTwoPi);
+  double r = closed_form_ik::remainder_two_pi(x);  // std::remainder's bits, several times faster
   if (r <= -kPi) r += kTwoPi;
   return r;
 }

@@ -14,6 +14,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+#include <Eigen/SVD>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -178,6 +180,39 @@ Eigen::Vector3d rotation_vector(const Eigen::Matrix3d& r) {
 }  // namespace
 
 // ---- Chain: kinematics and dynamics ----
+
+// chain_well_conditioned against JacobiSVD's sigma_min > tolerance sigma_max on matrices of known
+// condition (U diag V^T, random orthogonal U, V) from far below to far above 1 / tolerance, with
+// conditions within 1e-3 of the threshold, exactly singular ones, and non-square ones.
+TEST(Chain, WellConditionedIsTheSvdsAnswer) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), exponent(0.0, 12.0), near(-1e-3, 1e-3);
+  auto orthogonal = [&](int n) {
+    const Eigen::MatrixXd a = Eigen::MatrixXd::NullaryExpr(n, n, [&] { return unit(rng); });
+    return Eigen::MatrixXd(Eigen::HouseholderQR<Eigen::MatrixXd>(a).householderQ());
+  };
+  const double tolerance = 1e-6;
+  int regular = 0, singular = 0;
+  for (int k = 0; k < 3000; ++k) {
+    const int rows = k % 10 == 0 ? 5 : 6, cols = k % 10 == 1 ? 5 : 6;
+    const int m = std::min(rows, cols);
+    const double condition = k % 3 == 0 ? std::pow(10.0, 6.0 + near(rng)) : std::pow(10.0, exponent(rng));
+    Eigen::VectorXd sigma(m);
+    for (int i = 0; i < m; ++i) sigma(i) = std::pow(condition, -static_cast<double>(i) / (m - 1));
+    if (k % 50 == 7) sigma(m - 1) = 0.0;  // exactly singular
+    Eigen::MatrixXd diag = Eigen::MatrixXd::Zero(rows, cols);
+    diag.topLeftCorner(m, m) = sigma.asDiagonal();
+    const hapsyn::TaskJointMatrix j = 3.0 * orthogonal(rows) * diag * orthogonal(cols).transpose();
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd{Eigen::MatrixXd(j)};
+    const auto& s = svd.singularValues();
+    const bool expected = s(s.size() - 1) > tolerance * s(0);
+    EXPECT_EQ(hapsyn::plugins::chain_well_conditioned(j, tolerance), expected) << "condition " << condition << ", "
+                                                                                << rows << " x " << cols;
+    (expected ? regular : singular) += 1;
+  }
+  EXPECT_GT(regular, 1000);
+  EXPECT_GT(singular, 1000);
+}
 
 TEST(Chain, JacobianMatchesCentralDifferencesOfFrames) {
   for (const auto& [name, chain] : test_chains()) {

@@ -8,7 +8,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
-#include <Eigen/SVD>
 #include <array>
 #include <atomic>
 #include <cmath>
@@ -121,9 +120,7 @@ void SerialChainModel::solve(const double* pose, Needs needs, MechanismScratch& 
   const int angular = s.task.rows() - 3;
   TaskJointMatrix scaled = s.task;
   scaled.topRows(angular) *= setup.characteristic_length;
-  const Eigen::JacobiSVD<TaskJointMatrix> svd(scaled);
-  const auto& sigma = svd.singularValues();
-  if (!(sigma(sigma.size() - 1) > setup.options.singularity_tolerance * sigma(0))) {
+  if (!chain_well_conditioned(scaled, setup.options.singularity_tolerance)) {
     out.status = SampleStatus::kSingular;
     return;
   }

@@ -1,5 +1,6 @@
 // The 6R with axes 1, 2, 3 parallel and axes 4, 5 parallel (the haptic 6R / SCARA-with-wrist
 // type; six_r_ik.hpp): q4 + q5 by SP4, q4 by SP4, q6 and q1 + q2 + q3 by SP1, q2 by SP3, q1 by SP1.
+#include "shared/closed_form_ik/angles.hpp"
 #include "shared/closed_form_ik/families.hpp"
 #include "shared/closed_form_ik/subproblems.hpp"
 
@@ -40,7 +41,7 @@ void scara_pair_candidates(const PoeChain& c, const Eigen::Isometry3d& target, I
         const double q1 = sp1(p[1] + rot(h[1], q2) * p[2], d, k).theta[0];
         const double q3 = s3 * (q123 - q1 - s2 * q2);
         Vector6d q;
-        q << q1, q2, std::remainder(q3, 2 * M_PI), q4, std::remainder(q5, 2 * M_PI), q6;
+        q << q1, q2, remainder_two_pi(q3), q4, remainder_two_pi(q5), q6;
         push(s, q);
       }
     }

@@ -1,6 +1,7 @@
 // ClosedFormIk6R (six_r_ik.hpp): family dispatch, Newton polish, limits and duplicates.
 #include "shared/closed_form_ik/six_r_ik.hpp"
 
+#include "shared/closed_form_ik/angles.hpp"
 #include "shared/closed_form_ik/families.hpp"
 
 #include <hapsyn/error.hpp>
@@ -9,6 +10,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <sstream>
 
 namespace hapsyn::plugins::closed_form_ik {
 
@@ -24,6 +27,12 @@ ClosedFormIk6R::ClosedFormIk6R(const PoeChain& chain, const IkOptions& options)
     throw Error("closed_form_ik", "newton_steps = " + std::to_string(options.newton_steps) + ", accept_tolerance = " +
                                       std::to_string(options.accept_tolerance) + ": must be >= 0 and > 0");
   }
+  if (!(options.polish_radius >= options.accept_tolerance)) {
+    std::ostringstream message;
+    message << "polish_radius = " << options.polish_radius << ": must be >= accept_tolerance ("
+            << options.accept_tolerance << ")";
+    throw Error("closed_form_ik", message.str());
+  }
   if (options.use_limits) {
     for (int i = 0; i < 6; ++i) {
       const std::size_t s = static_cast<std::size_t>(i);
@@ -38,6 +47,9 @@ ClosedFormIk6R::ClosedFormIk6R(const PoeChain& chain, const IkOptions& options)
     throw Error("closed_form_ik", "no closed-form decomposition for this chain (" + geometry_.describe() + ")");
   }
   work_ = geometry_.reversed ? chain.reversed() : chain;
+  // The 1-D search's candidates at folds are only as close as its last interval halving: Newton
+  // brings them in from much farther than the exact families' answers.
+  polish_radius_ = geometry_.family == IkFamily::kSearch1d ? std::numeric_limits<double>::infinity() : options.polish_radius;
   const ChainGeometry work_geometry = classify(work_, options.geometry_tolerance);
   point_ = geometry_.family == IkFamily::kSphericalWrist ? work_geometry.wrist_point : work_geometry.point[4];
 }
@@ -68,30 +80,46 @@ void ClosedFormIk6R::candidates(const Eigen::Isometry3d& target, IkScratch& scra
   }
 }
 
-// Newton steps on the pose error (rotation vector of R_target R^T; position), then the test
-// against accept_tolerance.
+namespace {
+
+// The pose error of `pose` against `target`: the rotation vector of R_target R^T and the
+// position difference; returns the larger of their norms [rad or m].
+double pose_error(const Eigen::Isometry3d& target, const Eigen::Isometry3d& pose, Vector6d& error) {
+  const Eigen::AngleAxisd rotation(target.linear() * pose.linear().transpose());
+  error.head<3>() = rotation.angle() * rotation.axis();
+  error.tail<3>() = target.translation() - pose.translation();
+  return std::max(error.head<3>().norm(), error.tail<3>().norm());
+}
+
+}  // namespace
+
+// Newton steps on the pose error, then the test against accept_tolerance. The first error comes
+// from the forward kinematics alone: the subproblems' exact candidates already reproduce the
+// pose to about 1e-14, so most need no step (and no Jacobian), and their least-squares answers
+// to unreachable branches miss it by far more than polish_radius: those are dropped unpolished
+// (not in the 1-D search family, whose candidates are approximate)
+// (Newton from there ran all its steps, often diverging, for nothing).
 bool ClosedFormIk6R::polish(const Eigen::Isometry3d& target, Vector6d& q) const {
-  Eigen::Isometry3d pose;
+  Eigen::Isometry3d pose = chain_.forward(q.data());
   Eigen::Matrix<double, 6, kMaxJoints> jacobian;
   Vector6d error;
   for (int step = 0;; ++step) {
-    chain_.forward_jacobian(q.data(), pose, jacobian);
-    const Eigen::AngleAxisd rotation(target.linear() * pose.linear().transpose());
-    error.head<3>() = rotation.angle() * rotation.axis();
-    error.tail<3>() = target.translation() - pose.translation();
-    const double worst = std::max(error.head<3>().norm(), error.tail<3>().norm());
+    const double worst = pose_error(target, pose, error);
     if (step >= options_.newton_steps || worst <= 1e-4 * options_.accept_tolerance) {
       return worst <= options_.accept_tolerance;
     }
+    if (step == 0 && !(worst <= polish_radius_)) return false;
+    chain_.forward_jacobian(q.data(), pose, jacobian);
     const Eigen::Matrix<double, 6, 6> j6 = jacobian.leftCols<6>();
     q += j6.partialPivLu().solve(error);
+    pose = chain_.forward(q.data());
   }
 }
 
 bool ClosedFormIk6R::wrap_into_limits(Vector6d& q) const {
   constexpr double kTwoPi = 2 * M_PI;
   for (int i = 0; i < 6; ++i) {
-    q(i) = std::remainder(q(i), kTwoPi);
+    q(i) = remainder_two_pi(q(i));
     if (!options_.use_limits) continue;
     const double lo = options_.lower[static_cast<std::size_t>(i)], hi = options_.upper[static_cast<std::size_t>(i)];
     const double shifted = q(i) + kTwoPi * std::ceil((lo - q(i)) / kTwoPi - 1e-12);
@@ -112,7 +140,7 @@ void ClosedFormIk6R::solve(const Eigen::Isometry3d& target, IkScratch& scratch, 
     for (int j = 0; j < out.count && !duplicate; ++j) {
       const Vector6d& other = out.q[static_cast<std::size_t>(j)];
       double worst = 0.0;
-      for (int k = 0; k < 6; ++k) worst = std::max(worst, std::abs(std::remainder(q(k) - other(k), 2 * M_PI)));
+      for (int k = 0; k < 6; ++k) worst = std::max(worst, std::abs(remainder_two_pi(q(k) - other(k))));
       duplicate = worst <= 1e-9;
     }
     if (!duplicate) out.q[static_cast<std::size_t>(out.count++)] = q;

@@ -58,6 +58,10 @@ struct IkOptions {
   int search_samples = 72;          ///< samples of q1 in the 1-D search (>= 8)
   int newton_steps = 4;             ///< polishing steps per candidate (0 = none)
   double accept_tolerance = 1e-10;  ///< pose error a solution may keep [rad and m]
+  /// A raw candidate whose pose error exceeds this [rad or m] is dropped without polishing
+  /// (>= accept_tolerance). Exact candidates miss by about 1e-14; dropped ones by millimetres or
+  /// more. Not applied to the 1-D search family (its fold candidates are approximate).
+  double polish_radius = 1e-3;
   double geometry_tolerance = 1e-9;  ///< classify()'s tolerance
   bool use_limits = false;          ///< wrap into [lower, upper] and drop solutions outside
   std::array<double, 6> lower{}, upper{};  ///< joint limits [rad] when use_limits
@@ -80,7 +84,8 @@ struct IkScratch {
 class ClosedFormIk6R {
  public:
   /// \throws hapsyn::Error ("closed_form_ik") when the chain is not 6R, its family is
-  /// kUnsupported (the message carries ChainGeometry::describe()), or an option is out of range.
+  /// kUnsupported (the message carries ChainGeometry::describe()), or an option is out of range
+  /// (search_samples < 8, newton_steps < 0, accept_tolerance <= 0, polish_radius < accept_tolerance).
   explicit ClosedFormIk6R(const PoeChain& chain, const IkOptions& options = {});
 
   /// All solutions q with chain().forward(q) = target (to accept_tolerance).
@@ -106,6 +111,7 @@ class ClosedFormIk6R {
   PoeChain work_;  // the chain the family's pattern is on (chain_ or chain_.reversed())
   ChainGeometry geometry_;
   Eigen::Vector3d point_ = Eigen::Vector3d::Zero();  // wrist point / 5x6 intersection on work_
+  double polish_radius_ = 0.0;  // options_.polish_radius; infinite for the 1-D search family
   IkOptions options_;
 };
 

@@ -206,6 +206,10 @@ TEST(ClosedFormIk6R, RefusesWhatItCannotSolve) {
   tol.accept_tolerance = 0.0;
   EXPECT_EQ(error_of([&] { ClosedFormIk6R ik(puma().poe(), tol); }),
             "closed_form_ik: newton_steps = 4, accept_tolerance = 0.000000: must be >= 0 and > 0");
+  IkOptions radius;
+  radius.polish_radius = 1e-12;
+  EXPECT_EQ(error_of([&] { ClosedFormIk6R ik(puma().poe(), radius); }),
+            "closed_form_ik: polish_radius = 1e-12: must be >= accept_tolerance (1e-10)");
   IkOptions limits;
   limits.use_limits = true;
   limits.lower[2] = 1.0;

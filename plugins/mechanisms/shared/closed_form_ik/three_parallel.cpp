@@ -1,5 +1,6 @@
 // The 6R with axes 2, 3, 4 parallel (UR type; six_r_ik.hpp): (q1, q5) by SP6, q6 and
 // q2 + q3 + q4 by SP1, q3 by SP3, q2 by SP1.
+#include "shared/closed_form_ik/angles.hpp"
 #include "shared/closed_form_ik/families.hpp"
 #include "shared/closed_form_ik/subproblems.hpp"
 
@@ -37,7 +38,7 @@ void three_parallel_candidates(const PoeChain& c, const Eigen::Isometry3d& targe
       // h3, h4 may point against k: their angles enter q234 with the sign of h . k.
       const double q4 = (q234 - q2 - std::copysign(1.0, h[2].dot(k)) * q3) * std::copysign(1.0, h[3].dot(k));
       Vector6d q;
-      q << q1, q2, q3, std::remainder(q4, 2 * M_PI), q5, q6;
+      q << q1, q2, q3, remainder_two_pi(q4), q5, q6;
       push(s, q);
     }
   }
