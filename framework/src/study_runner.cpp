@@ -368,7 +368,7 @@ void write_group_files(const Study& study, const SampleRecords& records, const s
 // samples.csv, maps.csv and the map plots of the best design, as the options and the file ask,
 // into `dir` (the staging directory); each file written is named in doc["files"]. `note` tells
 // the user what takes long on a big scene.
-void write_best_design_files(const Study& study, const SolverResult& result, const RunOptions& options,
+void write_best_design_files(const Study& study, const SolverResult& result, const RunOptions& options, int threads,
                              const std::string& dir, const std::function<void(const std::string&)>& note, Json& doc) {
   const Json& output = study.resolved["output"];
   const bool want_samples = options.write_samples && output.value("samples_csv", true);
@@ -376,7 +376,7 @@ void write_best_design_files(const Study& study, const SolverResult& result, con
   const bool want_groups = options.write_samples && output.value("groups", true) && !study.problem->samples().groups.empty();
   if (!result.best || !(want_samples || want_maps || want_groups)) return;
   note("evaluating the best design on each of the " + std::to_string(study.problem->samples().size()) + " samples");
-  const SampleRecords records = record_samples(*study.problem, result.best->design);
+  const SampleRecords records = record_samples(*study.problem, result.best->design, threads);
   if (want_groups) write_group_files(study, records, dir, doc);
   if (want_samples) {
     note("writing samples.csv");
@@ -683,7 +683,7 @@ void write_outputs(const Study& study, const SolverResult& result, const RunOpti
       if (study.resolved["output"].value("plots", false)) plot_front_of(study, result, staged.dir(), doc);
     }
     if (study.resolved["output"].value("plots", false)) plot_convergence_of(study, result, staged.dir(), doc);
-    write_best_design_files(study, result, options, staged.dir(), note, doc);
+    write_best_design_files(study, result, options, run.threads, staged.dir(), note, doc);
   } catch (const std::exception& e) {
     errors.push_back(without_component(e));
   }
