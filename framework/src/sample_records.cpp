@@ -1,5 +1,6 @@
 // record_samples: every sample of one design, with its status and local values, in one pass.
 #include <hapsyn/internal/maps.hpp>
+#include <hapsyn/internal/solve_recording.hpp>
 #include <hapsyn/parallel.hpp>
 
 #include <algorithm>
@@ -51,26 +52,12 @@ void record_piece(const Problem& problem, const double* free_design, long long f
 
 SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full, int threads) {
   const long long n = problem.samples().size();
-  std::size_t total_locals = 0;
-  for (const MetricEntry& m : problem.metrics()) total_locals += m.metric->locals().size();
-  SampleRecords records;
-  records.status.resize(static_cast<std::size_t>(n));
-  records.has_locals.assign(static_cast<std::size_t>(n), 0);
-  records.locals.setZero(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(total_locals));
+  SampleRecords records = blank_records(problem);
   Eigen::VectorXd free_design(static_cast<Eigen::Index>(problem.dimension()));
   for (std::size_t k = 0; k < problem.dimension(); ++k) {
     free_design[static_cast<Eigen::Index>(k)] = full[problem.design_space().free_indices()[k]];
   }
-  // Called on the pieces' threads: each call writes its own sample's row and entries only.
-  const SampleCallback record = [&](int sample, const SampleQuantities& q, const std::vector<std::vector<double>>& locals) {
-    const std::size_t i = static_cast<std::size_t>(sample);
-    records.status[i] = to_string(q.status);
-    Eigen::Index c = 0;
-    for (const auto& metric_locals : locals) {
-      for (double v : metric_locals) records.locals(sample, c++) = v;
-    }
-    records.has_locals[i] = 1;
-  };
+  const SampleCallback record = record_into(records);  // called on the pieces' threads
   const long long pieces = piece_count(n, threads);
   std::vector<std::unique_ptr<Problem::EvalScratch>> scratch(static_cast<std::size_t>(std::max(1, threads)));
   // A piece stops at its first error; the error of the lowest piece is rethrown, which is the
