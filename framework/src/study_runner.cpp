@@ -390,24 +390,23 @@ void write_best_design_files(const Study& study, const SolverResult& result, con
                              const std::function<void(const std::string&)>& note, Json& doc) {
   const Json& output = study.resolved["output"];
   const BestDesignFiles want = best_design_files(study, options);
-  const bool want_samples = want.samples, want_maps = want.maps, want_groups = want.groups;
   if (!result.best || !want.any()) return;
   const bool reuse = recording && recording->complete() && recording->design() == result.best->design;
   SampleRecords evaluated;
   if (reuse) {
-    note("the solve's records of the " + std::to_string(study.problem->samples().size()) + " samples");
+    note("taking the solve's records of the " + std::to_string(study.problem->samples().size()) + " samples");
   } else {
     note("evaluating the best design on each of the " + std::to_string(study.problem->samples().size()) + " samples");
     evaluated = record_samples(*study.problem, result.best->design, threads);
   }
   const SampleRecords& records = reuse ? recording->records() : evaluated;
-  if (want_groups) write_group_files(study, records, dir, doc);
-  if (want_samples) {
+  if (want.groups) write_group_files(study, records, dir, doc);
+  if (want.samples) {
     note("writing samples.csv");
     write_file_atomically((fs::path(dir) / "samples.csv").string(), samples_csv(*study.problem, records));
     doc["files"]["samples"] = "samples.csv";
   }
-  if (want_maps) {
+  if (want.maps) {
     note("writing maps.csv");
     const PositionMaps maps = position_maps(*study.problem, records);
     write_file_atomically((fs::path(dir) / "maps.csv").string(), maps_csv(maps));
@@ -794,9 +793,10 @@ Json solve_and_write(Study& study, const RunOptions& options, RunSetup& run, std
   }
 
   // A fixed design is the only one the solve can evaluate: its per-sample records are kept for
-  // the outputs instead of evaluating it again (docs/design.md section 11.6).
+  // the outputs instead of evaluating it again (docs/design.md section 11.6). Not on the block
+  // path, which the evaluator does not record.
   std::optional<SolveRecording> recording;
-  if (study.problem->dimension() == 0 && best_design_files(study, options).any()) {
+  if (study.problem->dimension() == 0 && !study.problem->block_path() && best_design_files(study, options).any()) {
     recording.emplace(*study.problem, study.problem->full_design(nullptr));
   }
   const std::string started = iso_time_now();
