@@ -3,6 +3,7 @@
 #include <hapsyn/accel/lanes.hpp>
 #include <hapsyn/accel/metric_acceleration.hpp>
 #include <hapsyn/error.hpp>
+#include <hapsyn/internal/solve_recording.hpp>
 #include <hapsyn/parallel.hpp>
 #include <hapsyn/problem.hpp>
 
@@ -140,8 +141,34 @@ const Evaluation& Evaluator::evaluate_batched(const MechanismModel& model, EvalD
   return out;
 }
 
+// The live SolveRecording of this design over every sample, claimed, or null (the usual case:
+// one atomic load). Only for a study without a block path: the callback adds a copy of each
+// sample's locals to the same computations, so the evaluation is unchanged bit for bit. On the
+// block path a callback would take the chunks to the per-sample path, whose sums of averaging
+// metrics (coverage) can differ from the block path's in the last bit: the solve would change.
+SolveRecording* Evaluator::claim_recording(const double* free_design, const ParallelOptions& options) const {
+  if (options.subset || block_path_ || !SolveRecording::any()) return nullptr;
+  Eigen::VectorXd full(static_cast<Eigen::Index>(space_.size()));
+  space_.expand(free_design, full.data());
+  return SolveRecording::claim(mechanism_.get(), samples_.get(), metrics_, full);
+}
+
 Evaluation Evaluator::evaluate_parallel(const double* free_design, int threads, const ParallelOptions& options) const {
   check_design(free_design);
+  SolveRecording* recording = claim_recording(free_design, options);
+  if (!recording) return evaluate_chunks(free_design, threads, options, nullptr);
+  try {
+    Evaluation e = evaluate_chunks(free_design, threads, options, &recording->callback());
+    recording->finish(e.status == EvalStatus::kFeasible);
+    return e;
+  } catch (...) {
+    recording->finish(false);
+    throw;
+  }
+}
+
+Evaluation Evaluator::evaluate_chunks(const double* free_design, int threads, const ParallelOptions& options,
+                                      const SampleCallback* on_sample) const {
   const std::vector<int>& indices = options.subset ? *options.subset : order_;
   const long long n = static_cast<long long>(indices.size());
   const int chunk_count = static_cast<int>(std::max(1LL, std::min<long long>(options.chunks > 0 ? options.chunks : threads, n)));
@@ -150,6 +177,7 @@ Evaluation Evaluator::evaluate_parallel(const double* free_design, int threads, 
     auto ws = make_eval_data();
     EvalOptions o;
     o.subset = options.subset;
+    o.on_sample = on_sample;
     return evaluate(free_design, *ws, o);
   }
   // Each chunk is a contiguous piece of the sample order; the reductions are merged in chunk
@@ -171,6 +199,7 @@ Evaluation Evaluator::evaluate_parallel(const double* free_design, int threads, 
     spaces[static_cast<std::size_t>(t)] = make_eval_data();
     EvalOptions o;
     o.subset = &chunks[static_cast<std::size_t>(t)];
+    o.on_sample = on_sample;
     evaluate(free_design, *spaces[static_cast<std::size_t>(t)], o);
   });
   Evaluation merged = spaces[0]->result;

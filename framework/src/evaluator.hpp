@@ -49,6 +49,8 @@ struct alignas(64) EvalData {
 /// The evaluation machinery behind Problem (its private implementation): the per-sample path, the
 /// batch path of interpreted metrics, the block path and design lanes, with their per-thread data
 /// (EvalData). Problem forwards its public API here; nothing outside the framework sees it.
+class SolveRecording;  // hapsyn/internal/solve_recording.hpp
+
 class Evaluator {
  public:
   // The public methods are Problem's (hapsyn/problem.hpp carries their contracts); those taking
@@ -105,6 +107,11 @@ class Evaluator {
 
  private:
   void check_design(const double* free_design) const;
+  // evaluate_parallel's two steps: the recording of the solve, if one waits for this design
+  // (hapsyn/internal/solve_recording.hpp), and the chunks, each through `on_sample` when not null.
+  SolveRecording* claim_recording(const double* free_design, const ParallelOptions& options) const;
+  Evaluation evaluate_chunks(const double* free_design, int threads, const ParallelOptions& options,
+                             const SampleCallback* on_sample) const;
   // The steps of evaluate().
   bool constraints_hold(const double* full, EvalData& ws, Evaluation& out) const;
   void accumulate_locals(int sample, EvalData& ws, bool keep_locals) const;

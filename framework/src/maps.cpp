@@ -15,43 +15,6 @@
 
 namespace hapsyn {
 
-SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full) {
-  const SampleSet& samples = problem.samples();
-  std::size_t total_locals = 0;
-  for (const MetricEntry& m : problem.metrics()) total_locals += m.metric->locals().size();
-  SampleRecords records;
-  records.status.resize(static_cast<std::size_t>(samples.size()));
-  records.has_locals.assign(static_cast<std::size_t>(samples.size()), 0);
-  records.locals.setZero(samples.size(), static_cast<Eigen::Index>(total_locals));
-  Eigen::VectorXd free_design(static_cast<Eigen::Index>(problem.dimension()));
-  for (std::size_t k = 0; k < problem.dimension(); ++k) {
-    free_design[static_cast<Eigen::Index>(k)] = full[problem.design_space().free_indices()[k]];
-  }
-  auto ws = problem.make_eval_scratch();
-  std::vector<int> one(1);
-  const SampleCallback record = [&](int sample, const SampleQuantities& q, const std::vector<std::vector<double>>& locals) {
-    const std::size_t i = static_cast<std::size_t>(sample);
-    records.status[i] = to_string(q.status);
-    Eigen::Index c = 0;
-    for (const auto& metric_locals : locals) {
-      for (double v : metric_locals) records.locals(sample, c++) = v;
-    }
-    records.has_locals[i] = 1;
-  };
-  EvalOptions options;
-  options.subset = &one;
-  options.on_sample = &record;
-  for (int current = 0; current < samples.size(); ++current) {
-    one[0] = current;
-    const Evaluation& e = problem.evaluate(free_design.data(), *ws, options);
-    const std::size_t i = static_cast<std::size_t>(current);
-    if (!records.has_locals[i]) {
-      records.status[i] = e.status == EvalStatus::kSampleFailed ? to_string(e.failed_status) : to_string(e.status);
-    }
-  }
-  return records;
-}
-
 std::vector<std::string> local_columns(const Problem& problem) {
   std::vector<std::string> names;
   for (const MetricEntry& m : problem.metrics()) {

@@ -6,6 +6,7 @@
 #include <hapsyn/internal/plot.hpp>
 #include <hapsyn/internal/groups.hpp>
 #include <hapsyn/internal/maps.hpp>
+#include <hapsyn/internal/solve_recording.hpp>
 #include <hapsyn/output_files.hpp>
 #include <hapsyn/parallel.hpp>
 #include <hapsyn/plugin.hpp>
@@ -31,6 +32,7 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <random>
 #include <sstream>
 
@@ -365,25 +367,46 @@ void write_group_files(const Study& study, const SampleRecords& records, const s
   }
 }
 
-// samples.csv, maps.csv and the map plots of the best design, as the options and the file ask,
-// into `dir` (the staging directory); each file written is named in doc["files"]. `note` tells
-// the user what takes long on a big scene.
-void write_best_design_files(const Study& study, const SolverResult& result, const RunOptions& options,
-                             const std::string& dir, const std::function<void(const std::string&)>& note, Json& doc) {
+// Which per-sample files of the best design the options and the file ask for.
+struct BestDesignFiles {
+  bool samples = false, maps = false, groups = false;
+  bool any() const { return samples || maps || groups; }
+};
+BestDesignFiles best_design_files(const Study& study, const RunOptions& options) {
   const Json& output = study.resolved["output"];
-  const bool want_samples = options.write_samples && output.value("samples_csv", true);
-  const bool want_maps = options.write_samples && output.value("maps", true);
-  const bool want_groups = options.write_samples && output.value("groups", true) && !study.problem->samples().groups.empty();
-  if (!result.best || !(want_samples || want_maps || want_groups)) return;
-  note("evaluating the best design on each of the " + std::to_string(study.problem->samples().size()) + " samples");
-  const SampleRecords records = record_samples(*study.problem, result.best->design);
-  if (want_groups) write_group_files(study, records, dir, doc);
-  if (want_samples) {
+  BestDesignFiles want;
+  want.samples = options.write_samples && output.value("samples_csv", true);
+  want.maps = options.write_samples && output.value("maps", true);
+  want.groups = options.write_samples && output.value("groups", true) && !study.problem->samples().groups.empty();
+  return want;
+}
+
+// samples.csv, maps.csv and the map plots of the best design, as the options and the file ask,
+// into `dir` (the staging directory); each file written is named in doc["files"]. The records
+// are the solve's when it recorded this design (a fixed design: `recording`), else one pass on
+// `threads` threads. `note` tells the user what takes long on a big scene.
+void write_best_design_files(const Study& study, const SolverResult& result, const RunOptions& options, int threads,
+                             const SolveRecording* recording, const std::string& dir,
+                             const std::function<void(const std::string&)>& note, Json& doc) {
+  const Json& output = study.resolved["output"];
+  const BestDesignFiles want = best_design_files(study, options);
+  if (!result.best || !want.any()) return;
+  const bool reuse = recording && recording->complete() && recording->design() == result.best->design;
+  SampleRecords evaluated;
+  if (reuse) {
+    note("taking the solve's records of the " + std::to_string(study.problem->samples().size()) + " samples");
+  } else {
+    note("evaluating the best design on each of the " + std::to_string(study.problem->samples().size()) + " samples");
+    evaluated = record_samples(*study.problem, result.best->design, threads);
+  }
+  const SampleRecords& records = reuse ? recording->records() : evaluated;
+  if (want.groups) write_group_files(study, records, dir, doc);
+  if (want.samples) {
     note("writing samples.csv");
     write_file_atomically((fs::path(dir) / "samples.csv").string(), samples_csv(*study.problem, records));
     doc["files"]["samples"] = "samples.csv";
   }
-  if (want_maps) {
+  if (want.maps) {
     note("writing maps.csv");
     const PositionMaps maps = position_maps(*study.problem, records);
     write_file_atomically((fs::path(dir) / "maps.csv").string(), maps_csv(maps));
@@ -662,7 +685,7 @@ void plot_convergence_of(const Study& study, const SolverResult& result, const s
 // Every output of a finished solve, staged then committed. A failure after result.json is
 // staged keeps the solve: result.json is committed with "output_errors" and the error thrown after.
 void write_outputs(const Study& study, const SolverResult& result, const RunOptions& options, const RunSetup& run,
-                   std::ostream* progress, std::ostream& log, Json& doc) {
+                   const SolveRecording* recording, std::ostream* progress, std::ostream& log, Json& doc) {
   const auto t0 = std::chrono::steady_clock::now();
   const bool big = study.problem->samples().size() >= 10000;
   const auto note = [&](const std::string& line) {
@@ -683,7 +706,7 @@ void write_outputs(const Study& study, const SolverResult& result, const RunOpti
       if (study.resolved["output"].value("plots", false)) plot_front_of(study, result, staged.dir(), doc);
     }
     if (study.resolved["output"].value("plots", false)) plot_convergence_of(study, result, staged.dir(), doc);
-    write_best_design_files(study, result, options, staged.dir(), note, doc);
+    write_best_design_files(study, result, options, run.threads, recording, staged.dir(), note, doc);
   } catch (const std::exception& e) {
     errors.push_back(without_component(e));
   }
@@ -769,6 +792,13 @@ Json solve_and_write(Study& study, const RunOptions& options, RunSetup& run, std
     context.stop = options.signal;  // rank 0 alone: its own signal, at once
   }
 
+  // A fixed design is the only one the solve can evaluate: its per-sample records are kept for
+  // the outputs instead of evaluating it again (docs/design.md section 11.6). Not on the block
+  // path, which the evaluator does not record.
+  std::optional<SolveRecording> recording;
+  if (study.problem->dimension() == 0 && !study.problem->block_path() && best_design_files(study, options).any()) {
+    recording.emplace(*study.problem, study.problem->full_design(nullptr));
+  }
   const std::string started = iso_time_now();
   const auto t0 = std::chrono::steady_clock::now();
   SolverResult result = study.solver->solve(*study.problem, context);
@@ -786,7 +816,7 @@ Json solve_and_write(Study& study, const RunOptions& options, RunSetup& run, std
   if (!warnings.empty()) doc["warnings"] = warnings;
   add_indicators(study, result, solve_s, doc);
   try {
-    write_outputs(study, result, options, run, progress, log, doc);
+    write_outputs(study, result, options, run, recording ? &*recording : nullptr, progress, log, doc);
   } catch (...) {
     // The solve outlives a failed write: its best design is in the log at least.
     if (doc.contains("best")) log << "best: " << doc["best"].dump() << "\n";

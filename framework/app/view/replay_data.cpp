@@ -43,7 +43,7 @@ std::vector<int> frame_order(const hapsyn::SampleSet& samples) {
   return order;
 }
 
-// Every sample through the evaluator, one at a time (as samples.csv is made: record_samples).
+// Every sample through the evaluator, one at a time (the records record_samples gives for samples.csv).
 std::vector<FrameRecord> evaluate_samples(const hapsyn::Problem& problem, const Eigen::VectorXd& full, bool with_ratios) {
   const int n = problem.samples().size();
   std::vector<FrameRecord> records(static_cast<std::size_t>(n));

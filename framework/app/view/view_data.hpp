@@ -33,7 +33,7 @@ struct ViewData {
 /// fixed component's value and the midpoint of every free one's bounds (rounded for integer
 /// variables), which is the design `hapsyn run` evaluates for an evaluate-solver
 /// study. The local values: the result's samples.csv when it has one, else the design evaluated
-/// sample by sample as `hapsyn run` does for samples.csv (record_samples). The drawn sample:
+/// at every sample as `hapsyn run` does for samples.csv (record_samples). The drawn sample:
 /// the reachable one nearest the reachable samples' centroid (none drawn when no sample is).
 /// The meshes: load_view_meshes at the drawn sample (default MeshLimits).
 /// \param progress where progress lines and the meshes' warnings go (null: quiet)

@@ -18,8 +18,14 @@ struct SampleRecords {
   Eigen::MatrixXd locals;           ///< samples x (all metrics' locals, in Metric::locals() order)
 };
 
-/// Evaluates `full_design` (all components) sample by sample. \throws Error as Problem::evaluate.
-SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full_design);
+/// Evaluates `full_design` (all components) on every sample: the records are exactly those of
+/// evaluating each sample on its own (its status; its local values where computed), also past a
+/// sample a worst-case evaluation stops at. One pass (docs/design.md section 11.6): contiguous
+/// pieces of the samples on `threads` threads, the model built once per piece, each sample solved
+/// once; after a sample that stops a piece's evaluation the piece resumes at the next one.
+/// The callback writes only its own sample's entries, so the pieces never share a write.
+/// \throws Error as Problem::evaluate: the error of the lowest-numbered sample raising one.
+SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full_design, int threads = 1);
 
 /// The names of the local-value columns of samples.csv, one per local of every metric in order:
 /// "<metric>.<local>", and "<metric>.<local>[k]" for the k-th (from 0) of names that would repeat
