@@ -28,6 +28,15 @@ Eigen::Matrix<double, 3, 2> rotation_basis(const Eigen::Vector3d& k, const Eigen
 // calls, with their rounding-mode switches, took a third of the closed-form IK's time.
 double angle_of(const Eigen::Vector2d& x) { return fast::atan2(x(0), x(1)); }
 
+// Solution i of `out`: the angle of x = r (sin theta, cos theta), r > 0, with its sine and cosine.
+void set_angle(Angles1& out, int i, const Eigen::Vector2d& x) {
+  const std::size_t k = static_cast<std::size_t>(i);
+  out.theta[k] = angle_of(x);
+  const double r = x.norm();
+  out.sine[k] = x(0) / r;
+  out.cosine[k] = x(1) / r;
+}
+
 // (sin t, cos t).
 Eigen::Vector2d unit_of(double t) {
   Eigen::Vector2d x;
@@ -52,14 +61,14 @@ Angles1 solve_unit(const Eigen::Vector2d& a, double b, double scale) {
   if (r2 > 1.0) {
     out.least_squares = true;
     out.count = 1;
-    out.theta[0] = angle_of(x_ls);
+    set_angle(out, 0, x_ls);
     return out;
   }
   const double xi = std::sqrt(1.0 - r2);
   const Eigen::Vector2d perp = Eigen::Vector2d(a(1), -a(0)) / std::sqrt(na2);
   out.count = 2;
-  out.theta[0] = angle_of(x_ls + xi * perp);
-  out.theta[1] = angle_of(x_ls - xi * perp);
+  set_angle(out, 0, x_ls + xi * perp);
+  set_angle(out, 1, x_ls - xi * perp);
   return out;
 }
 
@@ -313,9 +322,13 @@ Angles2 quartic_route(const Eigen::Matrix2d& m1, const Eigen::Matrix2d& m2, cons
 }  // namespace
 
 Eigen::Matrix3d rot(const Eigen::Vector3d& k, double theta) {
-  // Rodrigues: R = cos I + sin [k]x + (1 - cos) k k^T.
   double s, c;
   fast::sin_cos(theta, s, c);
+  return rot(k, s, c);
+}
+
+Eigen::Matrix3d rot(const Eigen::Vector3d& k, double s, double c) {
+  // Rodrigues: R = cos I + sin [k]x + (1 - cos) k k^T.
   Eigen::Matrix3d r = (1.0 - c) * (k * k.transpose());
   r.diagonal().array() += c;
   r(0, 1) -= s * k.z();
@@ -336,7 +349,7 @@ Angles1 sp1(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, const Eigen::V
     out.degenerate = true;
     out.theta[0] = 0.0;
   } else {
-    out.theta[0] = angle_of(x);
+    set_angle(out, 0, x);
   }
   const double tol = 1e-9 * std::max(scale, 1e-300);
   out.least_squares = std::abs(k.dot(p1) - k.dot(p2)) > tol || std::abs(p1.norm() - p2.norm()) > tol;

@@ -22,6 +22,9 @@ namespace hapsyn::plugins::closed_form_ik {
 /// Solutions of a one-angle subproblem (at most 2).
 struct Angles1 {
   std::array<double, 2> theta{};  ///< theta[0..count)
+  /// sin and cos of theta[i] as the subproblem found them (the unit vector it took theta from),
+  /// for rot(k, sine, cosine) without another sin/cos: equal to sin/cos(theta) to about 1e-16.
+  std::array<double, 2> sine{}, cosine{1.0, 1.0};
   int count = 0;
   bool least_squares = false;  ///< no exact solution: theta minimises the subproblem's residual
   bool degenerate = false;     ///< infinitely many solutions (or none depends on theta); one returned
@@ -48,6 +51,8 @@ constexpr double kDegenerateTolerance = 1e-12;
 
 /// R(k, theta) (Rodrigues).
 Eigen::Matrix3d rot(const Eigen::Vector3d& k, double theta);
+/// R(k, theta) from sin theta and cos theta (a unit vector (sine, cosine)).
+Eigen::Matrix3d rot(const Eigen::Vector3d& k, double sine, double cosine);
 
 /// SP1: theta with R(k, theta) p1 = p2. Exact when k.p1 = k.p2 and |p1| = |p2| (to 1e-9 relative
 /// to |p1| + |p2|), else least squares: the theta minimising |R(k, theta) p1 - p2|. Degenerate

@@ -23,18 +23,22 @@ void three_parallel_candidates(const PoeChain& c, const Eigen::Isometry3d& targe
   for (int i = 0; i < t15.count; ++i) {
     const std::size_t a = static_cast<std::size_t>(i);
     const double q1 = -t15.theta1[a], q5 = t15.theta2[a];
-    const Eigen::Matrix3d rr = rot(h[0], q1).transpose() * r06;  // R_234 R_5 R_6
+    const Eigen::Matrix3d r1t = rot(h[0], q1).transpose();
+    const Eigen::Matrix3d rr = r1t * r06;  // R_234 R_5 R_6
     const Eigen::Matrix3d r5 = rot(h[4], q5);
-    // k^T R_5 R_6 = k^T rr: R(h6, -q6) (R_5^T k) = rr^T k (SP1).
-    const double q6 = -sp1(r5.transpose() * k, rr.transpose() * k, h[5]).theta[0];
-    const Eigen::Matrix3d r234 = rr * rot(h[5], q6).transpose() * r5.transpose();
+    // k^T R_5 R_6 = k^T rr: R(h6, -q6) (R_5^T k) = rr^T k (SP1). (The rotations below are built
+    // from the subproblems' own sine and cosine: no sin/cos of the angles again.)
+    const Angles1 t6 = sp1(r5.transpose() * k, rr.transpose() * k, h[5]);
+    const double q6 = -t6.theta[0];
+    const Eigen::Matrix3d r234 = rr * rot(h[5], -t6.sine[0], t6.cosine[0]).transpose() * r5.transpose();
     const double q234 = sp1(ortho, r234 * ortho, k).theta[0];
     // p_12 + R_2 (p_23 + R_3 p_34) = R_1^T v - R_234 (p_45 + R_5 p_56) =: d.
-    const Eigen::Vector3d d = rot(h[0], q1).transpose() * v - r234 * (p[4] + r5 * p[5]) - p[1];
+    const Eigen::Vector3d d = r1t * v - r234 * (p[4] + r5 * p[5]) - p[1];
     const Angles1 t3 = sp3(p[3], -p[2], h[2], d.norm());
     for (int j = 0; j < t3.count; ++j) {
-      const double q3 = t3.theta[static_cast<std::size_t>(j)];
-      const double q2 = sp1(p[2] + rot(h[2], q3) * p[3], d, h[1]).theta[0];
+      const std::size_t b = static_cast<std::size_t>(j);
+      const double q3 = t3.theta[b];
+      const double q2 = sp1(p[2] + rot(h[2], t3.sine[b], t3.cosine[b]) * p[3], d, h[1]).theta[0];
       // h3, h4 may point against k: their angles enter q234 with the sign of h . k.
       const double q4 = (q234 - q2 - std::copysign(1.0, h[2].dot(k)) * q3) * std::copysign(1.0, h[3].dot(k));
       Vector6d q;
