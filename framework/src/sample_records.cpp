@@ -28,7 +28,7 @@ long long piece_count(long long samples, int threads) {
 // solved once and gets the status evaluating it alone would give; a violated design constraint
 // is every sample's status, as it is for each sample alone.
 void record_piece(const Problem& problem, const double* free_design, long long first, long long last,
-                  const SampleCallback& record, Problem::EvalScratch& scratch, SampleRecords& records) {
+                  const SampleCallback& record, const UnreachedSample& unreached, Problem::EvalScratch& scratch) {
   std::vector<int> subset(static_cast<std::size_t>(last - first));
   std::iota(subset.begin(), subset.end(), static_cast<int>(first));
   EvalOptions options;
@@ -37,12 +37,12 @@ void record_piece(const Problem& problem, const double* free_design, long long f
   while (!subset.empty()) {
     const Evaluation& e = problem.evaluate(free_design, scratch, options);
     if (e.status == EvalStatus::kSampleFailed) {
-      records.status[static_cast<std::size_t>(e.failed_sample)] = to_string(e.failed_status);
+      unreached(e.failed_sample, to_string(e.failed_status));
       subset.erase(subset.begin(), std::find(subset.begin(), subset.end(), e.failed_sample) + 1);
       continue;
     }
     if (e.status == EvalStatus::kConstraintViolated) {
-      for (const int sample : subset) records.status[static_cast<std::size_t>(sample)] = to_string(e.status);
+      for (const int sample : subset) unreached(sample, to_string(e.status));
     }
     return;  // kFeasible (kPruned needs pruning options, which are not set)
   }
@@ -50,14 +50,13 @@ void record_piece(const Problem& problem, const double* free_design, long long f
 
 }  // namespace
 
-SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full, int threads) {
+void evaluate_each_sample(const Problem& problem, const Eigen::VectorXd& full, int threads, const SampleCallback& record,
+                          const UnreachedSample& unreached) {
   const long long n = problem.samples().size();
-  SampleRecords records = blank_records(problem);
   Eigen::VectorXd free_design(static_cast<Eigen::Index>(problem.dimension()));
   for (std::size_t k = 0; k < problem.dimension(); ++k) {
     free_design[static_cast<Eigen::Index>(k)] = full[problem.design_space().free_indices()[k]];
   }
-  const SampleCallback record = record_into(records);  // called on the pieces' threads
   const long long pieces = piece_count(n, threads);
   std::vector<std::unique_ptr<Problem::EvalScratch>> scratch(static_cast<std::size_t>(std::max(1, threads)));
   // A piece stops at its first error; the error of the lowest piece is rethrown, which is the
@@ -67,7 +66,7 @@ SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full
     auto& ws = scratch[static_cast<std::size_t>(t)];
     if (!ws) ws = problem.make_eval_scratch();  // made by the thread that uses it
     try {
-      record_piece(problem, free_design.data(), n * p / pieces, n * (p + 1) / pieces, record, *ws, records);
+      record_piece(problem, free_design.data(), n * p / pieces, n * (p + 1) / pieces, record, unreached, *ws);
     } catch (...) {
       errors[static_cast<std::size_t>(p)] = std::current_exception();
     }
@@ -75,6 +74,14 @@ SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full
   for (const std::exception_ptr& e : errors) {
     if (e) std::rethrow_exception(e);
   }
+}
+
+SampleRecords record_samples(const Problem& problem, const Eigen::VectorXd& full, int threads) {
+  SampleRecords records = blank_records(problem);
+  // Both are called on the pieces' threads, each for its own sample only.
+  evaluate_each_sample(problem, full, threads, record_into(records), [&records](int sample, const std::string& status) {
+    records.status[static_cast<std::size_t>(sample)] = status;
+  });
   return records;
 }
 

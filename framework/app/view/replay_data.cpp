@@ -2,6 +2,7 @@
 
 #include <hapsyn/internal/maps.hpp>
 #include <hapsyn/mechanism.hpp>
+#include <hapsyn/parallel.hpp>
 #include <hapsyn/quantities.hpp>
 
 #include <algorithm>
@@ -43,16 +44,10 @@ std::vector<int> frame_order(const hapsyn::SampleSet& samples) {
   return order;
 }
 
-// Every sample through the evaluator, one at a time (the records record_samples gives for samples.csv).
+// Every sample through the evaluator once (record_samples' pass, on every core: the records do not
+// depend on the thread count).
 std::vector<FrameRecord> evaluate_samples(const hapsyn::Problem& problem, const Eigen::VectorXd& full, bool with_ratios) {
-  const int n = problem.samples().size();
-  std::vector<FrameRecord> records(static_cast<std::size_t>(n));
-  Eigen::VectorXd free_design(static_cast<Eigen::Index>(problem.dimension()));
-  for (std::size_t k = 0; k < problem.dimension(); ++k) {
-    free_design[static_cast<Eigen::Index>(k)] = full[problem.design_space().free_indices()[k]];
-  }
-  auto scratch = problem.make_eval_scratch();
-  std::vector<int> one(1);
+  std::vector<FrameRecord> records(static_cast<std::size_t>(problem.samples().size()));
   const hapsyn::SampleCallback record = [&](int sample, const hapsyn::SampleQuantities& q,
                                             const std::vector<std::vector<double>>& locals) {
     FrameRecord& r = records[static_cast<std::size_t>(sample)];
@@ -68,17 +63,9 @@ std::vector<FrameRecord> evaluate_samples(const hapsyn::Problem& problem, const 
     }
     for (const auto& metric_locals : locals) r.locals.insert(r.locals.end(), metric_locals.begin(), metric_locals.end());
   };
-  hapsyn::EvalOptions options;
-  options.subset = &one;
-  options.on_sample = &record;
-  for (int i = 0; i < n; ++i) {
-    one[0] = i;
-    const hapsyn::Evaluation& e = problem.evaluate(free_design.data(), *scratch, options);
-    FrameRecord& r = records[static_cast<std::size_t>(i)];
-    if (!r.has_locals) {
-      r.status = e.status == hapsyn::EvalStatus::kSampleFailed ? hapsyn::to_string(e.failed_status) : hapsyn::to_string(e.status);
-    }
-  }
+  hapsyn::evaluate_each_sample(problem, full, hapsyn::hardware_threads(), record, [&](int sample, const std::string& status) {
+    records[static_cast<std::size_t>(sample)].status = status;
+  });
   return records;
 }
 

@@ -8,6 +8,7 @@
 
 #include <hapsyn/error.hpp>
 #include <hapsyn/internal/maps.hpp>
+#include <hapsyn/parallel.hpp>
 
 #include <boost/filesystem.hpp>
 
@@ -157,7 +158,7 @@ ViewData load_view_data(const std::string& path, const hapsyn::Registry& registr
     records = read_samples_csv(source.samples_csv, problem);
   } else {
     if (progress) *progress << "hapsyn view: evaluating the design on each of the " << problem.samples().size() << " samples\n";
-    records = hapsyn::record_samples(problem, source.design);
+    records = hapsyn::record_samples(problem, source.design, hapsyn::hardware_threads());
     origin = "evaluated";
   }
   const int sample = drawn_sample(problem.samples(), records);

@@ -5,6 +5,7 @@
 #include <hapsyn/problem.hpp>
 
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,17 @@ struct SampleRecords {
   std::vector<char> has_locals;     ///< per sample: 1 when the metrics' local values were computed
   Eigen::MatrixXd locals;           ///< samples x (all metrics' locals, in Metric::locals() order)
 };
+
+/// The status of a sample an evaluation did not reach with its callback (the sample it stopped at,
+/// or every sample of a design that violates a constraint).
+using UnreachedSample = std::function<void(int sample, const std::string& status)>;
+
+/// Evaluates `full_design` (all components) once on every sample, as record_samples below does:
+/// `record` gets every sample the evaluation reaches, `unreached` the others with their status.
+/// Both are called on the pieces' threads, each time for one sample (write only its entries).
+/// \throws Error as Problem::evaluate: the error of the lowest-numbered sample raising one.
+void evaluate_each_sample(const Problem& problem, const Eigen::VectorXd& full_design, int threads,
+                          const SampleCallback& record, const UnreachedSample& unreached);
 
 /// Evaluates `full_design` (all components) on every sample: the records are exactly those of
 /// evaluating each sample on its own (its status; its local values where computed), also past a
