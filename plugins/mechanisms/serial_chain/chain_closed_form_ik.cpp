@@ -2,19 +2,23 @@
 // limits and the selection rules.
 #include "chain_closed_form_ik.hpp"
 
+#include <hapsyn/error.hpp>
+
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 #include <vector>
 
 namespace hapsyn::plugins {
 
 std::string closed_form_applicability(const Chain& chain, const IkTask& task) {
-  if (chain.dof() != 6) {
-    return std::to_string(chain.dof()) + " moving joints (the closed form is for 6 revolute joints)";
+  if (chain.dof() != 6 && chain.dof() != 7) {
+    return std::to_string(chain.dof()) + " moving joints (the closed form is for 6 or 7 revolute joints)";
   }
   for (const ChainJoint& j : chain.joints) {
-    if (j.type != ChainJointType::kRevolute) return "joint " + j.name + " is prismatic (the closed form is for 6 revolute joints)";
+    if (j.type != ChainJointType::kRevolute) return "joint " + j.name + " is prismatic (the closed form is for 6 or 7 revolute joints)";
   }
   if (!task.position || task.orientation != IkTask::Orientation::kFull) return "the task is not the full pose (the closed form needs it)";
   return "";
@@ -30,16 +34,177 @@ closed_form_ik::PoeChain poe_chain_of(const Chain& chain) {
   return closed_form_ik::PoeChain::from_local_frames(origins, axes, chain.tip);
 }
 
-ChainClosedFormIk::ChainClosedFormIk(const Chain& chain) : engine_(poe_chain_of(chain)) {}
+namespace {
+
+std::string show(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+// A 6R whose Jacobian is rank-deficient at every configuration keeps a self-motion: tested at two
+// fixed configurations away from the usual singular ones (no zero or right angle, no symmetry).
+bool full_rank(const closed_form_ik::PoeChain& c) {
+  constexpr double kConfigurations[2][6] = {{0.4, 0.9, -0.7, 1.1, -0.5, 0.8}, {-1.3, 0.35, 1.7, -0.45, 1.2, -2.1}};
+  for (const auto& q : kConfigurations) {
+    Eigen::Isometry3d pose;
+    Eigen::Matrix<double, 6, closed_form_ik::kMaxJoints> jacobian;
+    c.forward_jacobian(q, pose, jacobian);
+    const Eigen::JacobiSVD<Eigen::Matrix<double, 6, 6>> svd(jacobian.leftCols<6>());
+    if (svd.singularValues()(5) > 1e-6 * svd.singularValues()(0)) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+closed_form_ik::PoeChain locked_poe_chain(const Chain& chain, int k, double value) {
+  std::vector<Eigen::Isometry3d> origins;
+  std::vector<Eigen::Vector3d> axes;
+  Eigen::Isometry3d carried = Eigen::Isometry3d::Identity();  // O_k Rot(a_k, value), waiting for the next origin
+  for (int i = 0; i < chain.dof(); ++i) {
+    const ChainJoint& j = chain.joints[static_cast<std::size_t>(i)];
+    if (i == k) {
+      carried = j.origin * Eigen::AngleAxisd(value, j.axis.normalized());
+      continue;
+    }
+    origins.push_back(carried * j.origin);
+    axes.push_back(j.axis);
+    carried = Eigen::Isometry3d::Identity();
+  }
+  return closed_form_ik::PoeChain::from_local_frames(origins, axes, carried * chain.tip);
+}
+
+std::vector<double> redundant_grid(const ChainJoint& joint, int steps) {
+  std::vector<double> grid(static_cast<std::size_t>(steps));
+  const bool full_turn = !std::isfinite(joint.lower) || !std::isfinite(joint.upper) || joint.upper - joint.lower >= 2.0 * M_PI;
+  const double lower = full_turn ? -M_PI : joint.lower;
+  const double step = full_turn ? 2.0 * M_PI / steps : (joint.upper - joint.lower) / (steps - 1);
+  for (int i = 0; i < steps; ++i) grid[static_cast<std::size_t>(i)] = lower + step * i;
+  if (!full_turn) grid.back() = joint.upper;  // exactly the limit, not lower + (steps - 1) step
+  return grid;
+}
+
+std::string redundant_joint_unsuitability(const Chain& chain, int k, closed_form_ik::ChainGeometry* geometry) {
+  const std::string joint = "locking joint " + std::to_string(k + 1) + " (" + chain.joints[static_cast<std::size_t>(k)].name + ")";
+  for (const double value : {0.0, 1.0, -2.0, M_SQRT2}) {
+    const closed_form_ik::PoeChain locked = locked_poe_chain(chain, k, value);
+    const closed_form_ik::ChainGeometry g = closed_form_ik::classify(locked);
+    if (value == 0.0 && geometry != nullptr) *geometry = g;
+    if (g.family == closed_form_ik::IkFamily::kUnsupported) {
+      return joint + " at " + show(value) + " rad leaves a 6R without a closed-form family (" + g.describe() + ")";
+    }
+    if (!full_rank(locked)) {
+      return joint + " leaves a 6R whose Jacobian is rank-deficient everywhere (the self-motion remains; " + g.describe() + ")";
+    }
+  }
+  return "";
+}
+
+int choose_redundant_joint(const Chain& chain) {
+  if (chain.dof() != 7) return -1;
+  constexpr int kOrder[7] = {3, 2, 4, 1, 5, 0, 6};  // 0-based: the middle outward, the shoulder side first
+  for (const bool search_allowed : {false, true}) {
+    for (const int k : kOrder) {
+      closed_form_ik::ChainGeometry g;
+      if (!redundant_joint_unsuitability(chain, k, &g).empty()) continue;
+      if (search_allowed || g.family != closed_form_ik::IkFamily::kSearch1d) return k;
+    }
+  }
+  return -1;
+}
+
+ChainClosedFormIk::ChainClosedFormIk(const Chain& chain, const RedundantJointSettings& redundancy) {
+  if (chain.dof() != 7) {
+    engines_.emplace_back(poe_chain_of(chain));
+    return;
+  }
+  if (redundancy.steps < 2) {
+    throw Error("closed_form_ik", "redundant joint steps = " + std::to_string(redundancy.steps) + ": must be >= 2");
+  }
+  redundant_ = redundancy.joint >= 0 ? redundancy.joint : choose_redundant_joint(chain);
+  if (redundant_ < 0 || redundant_ >= 7) {
+    std::string why;
+    for (int k = 0; k < 7; ++k) why += (why.empty() ? "" : "; ") + redundant_joint_unsuitability(chain, k);
+    throw Error("closed_form_ik", "7R: no joint whose locking leaves a 6R with a closed form (" + why + ")");
+  }
+  const std::string why_not = redundant_joint_unsuitability(chain, redundant_);
+  if (!why_not.empty()) throw Error("closed_form_ik", "7R: " + why_not);
+  grid_ = redundant_grid(chain.joints[static_cast<std::size_t>(redundant_)], redundancy.steps);
+  engines_.reserve(grid_.size());
+  for (const double value : grid_) {
+    try {
+      engines_.emplace_back(locked_poe_chain(chain, redundant_, value));
+    } catch (const Error& e) {
+      throw Error("closed_form_ik", "7R: locking joint " + std::to_string(redundant_ + 1) + " (" +
+                                        chain.joints[static_cast<std::size_t>(redundant_)].name + ") at its grid value " +
+                                        show(value) + " rad: " + std::string(e.what()).substr(e.component().size() + 2));
+    }
+  }
+}
 
 const closed_form_ik::IkSolutions& ChainClosedFormIk::all_solutions(const Eigen::Isometry3d& target,
                                                                    ClosedFormScratch& scratch) const {
-  engine_.solve(target, scratch.engine, scratch.solutions);
+  if (redundant_ >= 0) throw Error("closed_form_ik", "all_solutions() is for 6R chains (a 7R chain's: every_solution())");
+  engine().solve(target, scratch.engine, scratch.solutions);
   return scratch.solutions;
+}
+
+template <class F>
+void ChainClosedFormIk::for_each_redundant(const Eigen::Isometry3d& target, ClosedFormScratch& scratch, F&& f) const {
+  std::array<double, 7> q{};
+  for (std::size_t g = 0; g < engines_.size(); ++g) {
+    engines_[g].solve(target, scratch.engine, scratch.solutions);
+    for (int s = 0; s < scratch.solutions.count; ++s) {
+      const closed_form_ik::Vector6d& six = scratch.solutions.q[static_cast<std::size_t>(s)];
+      for (int i = 0, j = 0; i < 7; ++i) q[static_cast<std::size_t>(i)] = i == redundant_ ? grid_[g] : six(j++);
+      if (f(q.data())) return;
+    }
+  }
+}
+
+std::vector<JointVector> ChainClosedFormIk::every_solution(const Eigen::Isometry3d& target, ClosedFormScratch& scratch) const {
+  std::vector<JointVector> out;
+  if (redundant_ < 0) {
+    const closed_form_ik::IkSolutions& all = all_solutions(target, scratch);
+    for (int s = 0; s < all.count; ++s) out.emplace_back(all.q[static_cast<std::size_t>(s)]);
+    return out;
+  }
+  for_each_redundant(target, scratch, [&out](const double* q) {
+    out.emplace_back(Eigen::Map<const Eigen::Matrix<double, 7, 1>>(q));
+    return false;
+  });
+  return out;
+}
+
+IkStatus ChainClosedFormIk::solve_redundant(const Chain& chain, const Eigen::Isometry3d& target, const double* home,
+                                            bool first_found, double* q, ClosedFormScratch& scratch) const {
+  const bool by_distance = !first_found && home != nullptr;
+  double closest = std::numeric_limits<double>::infinity();
+  bool any = false, found = false;
+  std::array<double, 7> c{};
+  for_each_redundant(target, scratch, [&](const double* solution) {
+    if (!any) std::copy_n(solution, 7, scratch.first.begin());
+    any = true;
+    std::copy_n(solution, 7, c.begin());
+    if (!ik_shift_into_limits(chain, c.data(), kClosedFormLimitTolerance)) return false;
+    const double distance = by_distance ? ik_home_distance(chain, c.data(), home) : 0.0;
+    if (distance < closest) {  // strictly: ties keep the earlier solution
+      closest = distance;
+      std::copy_n(c.data(), 7, q);
+      found = true;
+    }
+    return !by_distance;  // first_found: the first in-limit one ends the search
+  });
+  if (found) return IkStatus::kConverged;
+  if (!any) return IkStatus::kUnreachable;
+  std::copy_n(scratch.first.data(), 7, q);
+  return IkStatus::kJointLimit;
 }
 
 IkStatus ChainClosedFormIk::solve_from_all(const Chain& chain, const Eigen::Isometry3d& target, const double* home,
                                            bool first_found, double* q, ClosedFormScratch& scratch) const {
+  if (redundant_ >= 0) return solve_redundant(chain, target, home, first_found, q, scratch);
   const closed_form_ik::IkSolutions& all = all_solutions(target, scratch);
   if (all.count == 0) return IkStatus::kUnreachable;
   double closest = std::numeric_limits<double>::infinity();
@@ -63,15 +228,16 @@ IkStatus ChainClosedFormIk::solve_from_all(const Chain& chain, const Eigen::Isom
 bool ChainClosedFormIk::polished(const Eigen::Isometry3d& target, const ClosedFormScratch& scratch, int i,
                                  closed_form_ik::Vector6d& out) const {
   out = scratch.engine.candidate[static_cast<std::size_t>(i)];
-  if (!engine_.polish(target, out)) return false;
+  if (!engine().polish(target, out)) return false;
   for (int k = 0; k < 6; ++k) out(k) = std::remainder(out(k), 2.0 * M_PI);  // as the engine's solve() wraps
   return true;
 }
 
 IkStatus ChainClosedFormIk::solve(const Chain& chain, const Eigen::Isometry3d& target, const double* home,
                                   bool first_found, double* q, ClosedFormScratch& scratch) const {
+  if (redundant_ >= 0) return solve_redundant(chain, target, home, first_found, q, scratch);
   constexpr double kRankTolerance = 1e-6;  // [rad] a raw candidate this far outside a limit may polish into it
-  engine_.candidates(target, scratch.engine);
+  engine().candidates(target, scratch.engine);
   const int count = scratch.engine.count;
   const bool by_distance = !first_found && home != nullptr;
   // The ranking: closest_to_home, the candidates inside the limits (insertion sort, stable: ties
