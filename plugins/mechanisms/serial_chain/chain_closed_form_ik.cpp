@@ -95,7 +95,8 @@ std::string redundant_joint_unsuitability(const Chain& chain, int k, closed_form
       return joint + " at " + show(value) + " rad leaves a 6R without a closed-form family (" + g.describe() + ")";
     }
     if (!full_rank(locked)) {
-      return joint + " leaves a 6R whose Jacobian is rank-deficient everywhere (the self-motion remains; " + g.describe() + ")";
+      return joint + " at " + show(value) + " rad leaves a 6R whose Jacobian is rank-deficient everywhere (a self-motion remains; " +
+             g.describe() + ")";
     }
   }
   return "";

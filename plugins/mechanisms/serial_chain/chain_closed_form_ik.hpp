@@ -90,10 +90,11 @@ std::vector<double> redundant_grid(const ChainJoint& joint, int steps);
 
 /// Why locking joint k of a 7R chain does not leave a 6R with a closed form ("" when it does):
 /// the 6R is classified at the angles 0, 1, -2 and sqrt(2) rad (a family other than kUnsupported
-/// at each), and its Jacobian must have full rank at two fixed generic configurations (locking
-/// a joint that does not remove the self-motion, such as the elbow of an arm with spherical
-/// shoulder and wrist, leaves a 6R whose spherical-wrist family would return one representative
-/// of a continuum). `geometry` (may be null) gets the 6R's classification at angle 0.
+/// at each), and at each its Jacobian must have full rank at one of two fixed generic
+/// configurations (locking a joint that does not remove the self-motion, such as the elbow of an
+/// arm with spherical shoulder and wrist, or a joint at a value that aligns its neighbours'
+/// axes, such as an iiwa-like arm's joint 2 at 0, leaves a 6R whose family would return one
+/// representative of a continuum). `geometry` (may be null) gets the 6R's classification at 0.
 std::string redundant_joint_unsuitability(const Chain& chain, int k, closed_form_ik::ChainGeometry* geometry = nullptr);
 
 /// The joint a 7R chain discretises under ik.redundant_joint "auto": joints tried from the
