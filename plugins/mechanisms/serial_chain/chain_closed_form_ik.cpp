@@ -133,13 +133,18 @@ ChainClosedFormIk::ChainClosedFormIk(const Chain& chain, const RedundantJointSet
   if (!why_not.empty()) throw Error("closed_form_ik", "7R: " + why_not);
   grid_ = redundant_grid(chain.joints[static_cast<std::size_t>(redundant_)], redundancy.steps);
   engines_.reserve(grid_.size());
+  const std::string joint = "7R: locking joint " + std::to_string(redundant_ + 1) + " (" +
+                            chain.joints[static_cast<std::size_t>(redundant_)].name + ") at its grid value ";
   for (const double value : grid_) {
+    const closed_form_ik::PoeChain locked = locked_poe_chain(chain, redundant_, value);
     try {
-      engines_.emplace_back(locked_poe_chain(chain, redundant_, value));
+      engines_.emplace_back(locked);
     } catch (const Error& e) {
-      throw Error("closed_form_ik", "7R: locking joint " + std::to_string(redundant_ + 1) + " (" +
-                                        chain.joints[static_cast<std::size_t>(redundant_)].name + ") at its grid value " +
-                                        show(value) + " rad: " + std::string(e.what()).substr(e.component().size() + 2));
+      throw Error("closed_form_ik", joint + show(value) + " rad: " + std::string(e.what()).substr(e.component().size() + 2));
+    }
+    if (!full_rank(locked)) {
+      throw Error("closed_form_ik", joint + show(value) + " rad leaves a 6R whose Jacobian is rank-deficient everywhere (a "
+                                    "self-motion remains; " + engines_.back().geometry().describe() + ")");
     }
   }
 }

@@ -111,7 +111,8 @@ class ChainClosedFormIk {
   /// message carries ChainGeometry::describe(). Call only when closed_form_applicability() is "".
   /// A 7R chain discretises redundancy.joint (or choose_redundant_joint()'s) in redundancy.steps
   /// values; it throws when locking that joint leaves no closed form
-  /// (redundant_joint_unsuitability(), or a grid value's 6R unsupported), naming the joint.
+  /// (redundant_joint_unsuitability(), or a grid value's 6R unsupported or rank-deficient at
+  /// both of its test configurations), naming the joint and the value.
   explicit ChainClosedFormIk(const Chain& chain, const RedundantJointSettings& redundancy = {});
   /// The chain's own settings (ClosedFormChain::redundancy).
   explicit ChainClosedFormIk(const ClosedFormChain& chain) : ChainClosedFormIk(chain, chain.redundancy) {}

@@ -45,8 +45,9 @@ struct SerialChainIkOptions {
     d.add(&SerialChainIkOptions::redundant_joint, "redundant_joint", "auto",
           "7 revolute joints, closed form: the joint discretised (locked at each of redundant_steps values; each "
           "value's 6R solved in closed form, the solutions' union selected from). 'auto': the first of joints 4, 3, "
-          "5, 2, 6, 1, 7 whose locking leaves a 6R with a closed-form family at every angle, one without the 1-D "
-          "search preferred; or a joint's name. Only for 7-joint chains.");
+          "5, 2, 6, 1, 7 whose locking leaves a 6R with a closed-form family and a full-rank Jacobian at the test "
+          "angles 0, 1, -2, sqrt 2 rad (and, at model build, at every grid value), one without the 1-D search "
+          "preferred; or a joint's name. Only for 7-joint chains.");
     d.add(&SerialChainIkOptions::redundant_steps, "redundant_steps", 17,
           "Values of the redundant joint: evenly over its limits, both ends included (over a full turn for an "
           "unlimited joint). Each costs one 6R solve per sample; a solution between two values is not found (the "
