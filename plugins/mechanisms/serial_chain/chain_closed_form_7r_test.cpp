@@ -235,6 +235,10 @@ TEST(ChainClosedFormIk7R, InvalidOnlyWhenEverySolutionLiesOutsideTheLimits) {
   EXPECT_TRUE(ik.every_solution(far, scratch).empty());
   EXPECT_NE(test::error_of([&] { ik.all_solutions(f.tip, scratch); }).find("closed_form_ik: all_solutions() is for 6R chains"),
             std::string::npos);
+  for (const int steps : {1, kMaxRedundantSteps + 1}) {
+    const std::string e = test::error_of([&] { ChainClosedFormIk(narrow, {2, steps}); });
+    EXPECT_NE(e.find("closed_form_ik: redundant joint steps = " + std::to_string(steps) + ": must be in 2..1000"), std::string::npos) << e;
+  }
 }
 
 // The numerical IK (damped least squares, 7 joints, self-motion toward home) as the cross-check:

@@ -120,8 +120,9 @@ ChainClosedFormIk::ChainClosedFormIk(const Chain& chain, const RedundantJointSet
     engines_.emplace_back(poe_chain_of(chain));
     return;
   }
-  if (redundancy.steps < 2) {
-    throw Error("closed_form_ik", "redundant joint steps = " + std::to_string(redundancy.steps) + ": must be >= 2");
+  if (redundancy.steps < 2 || redundancy.steps > kMaxRedundantSteps) {
+    throw Error("closed_form_ik", "redundant joint steps = " + std::to_string(redundancy.steps) + ": must be in 2.." +
+                                      std::to_string(kMaxRedundantSteps));
   }
   redundant_ = redundancy.joint >= 0 ? redundancy.joint : choose_redundant_joint(chain);
   if (redundant_ < 0 || redundant_ >= 7) {
@@ -157,15 +158,14 @@ const closed_form_ik::IkSolutions& ChainClosedFormIk::all_solutions(const Eigen:
 }
 
 template <class F>
-void ChainClosedFormIk::for_each_redundant(const Eigen::Isometry3d& target, ClosedFormScratch& scratch, F&& f) const {
+void ChainClosedFormIk::for_each_redundant(const Eigen::Isometry3d& target, ClosedFormScratch& scratch, int g, F&& f) const {
   std::array<double, 7> q{};
-  for (std::size_t g = 0; g < engines_.size(); ++g) {
-    engines_[g].solve(target, scratch.engine, scratch.solutions);
-    for (int s = 0; s < scratch.solutions.count; ++s) {
-      const closed_form_ik::Vector6d& six = scratch.solutions.q[static_cast<std::size_t>(s)];
-      for (int i = 0, j = 0; i < 7; ++i) q[static_cast<std::size_t>(i)] = i == redundant_ ? grid_[g] : six(j++);
-      if (f(q.data())) return;
-    }
+  const std::size_t at = static_cast<std::size_t>(g);
+  engines_[at].solve(target, scratch.engine, scratch.solutions);
+  for (int s = 0; s < scratch.solutions.count; ++s) {
+    const closed_form_ik::Vector6d& six = scratch.solutions.q[static_cast<std::size_t>(s)];
+    for (int i = 0, j = 0; i < 7; ++i) q[static_cast<std::size_t>(i)] = i == redundant_ ? grid_[at] : six(j++);
+    f(q.data());
   }
 }
 
@@ -176,32 +176,51 @@ std::vector<JointVector> ChainClosedFormIk::every_solution(const Eigen::Isometry
     for (int s = 0; s < all.count; ++s) out.emplace_back(all.q[static_cast<std::size_t>(s)]);
     return out;
   }
-  for_each_redundant(target, scratch, [&out](const double* q) {
-    out.emplace_back(Eigen::Map<const Eigen::Matrix<double, 7, 1>>(q));
-    return false;
-  });
+  for (int g = 0; g < static_cast<int>(grid_.size()); ++g) {
+    for_each_redundant(target, scratch, g, [&out](const double* q) { out.emplace_back(Eigen::Map<const Eigen::Matrix<double, 7, 1>>(q)); });
+  }
   return out;
 }
 
 IkStatus ChainClosedFormIk::solve_redundant(const Chain& chain, const Eigen::Isometry3d& target, const double* home,
                                             bool first_found, double* q, ClosedFormScratch& scratch) const {
   const bool by_distance = !first_found && home != nullptr;
+  const int steps = static_cast<int>(grid_.size());
+  // The visiting order: closest_to_home, by the grid value's own share of the distance to home,
+  // (q_k - home_k)^2, a lower bound of every solution's distance on that value (ties: grid
+  // order); otherwise the grid order.
+  for (int g = 0; g < steps; ++g) {
+    scratch.grid_order[static_cast<std::size_t>(g)] = g;
+    scratch.grid_bound[static_cast<std::size_t>(g)] = by_distance ? std::pow(std::remainder(grid_[static_cast<std::size_t>(g)] - home[redundant_], 2.0 * M_PI), 2) : 0.0;
+  }
+  if (by_distance) {
+    std::sort(scratch.grid_order.begin(), scratch.grid_order.begin() + steps, [&scratch](int a, int b) {
+      const double ka = scratch.grid_bound[static_cast<std::size_t>(a)], kb = scratch.grid_bound[static_cast<std::size_t>(b)];
+      return ka < kb || (ka == kb && a < b);
+    });
+  }
   double closest = std::numeric_limits<double>::infinity();
   bool any = false, found = false;
   std::array<double, 7> c{};
-  for_each_redundant(target, scratch, [&](const double* solution) {
-    if (!any) std::copy_n(solution, 7, scratch.first.begin());
-    any = true;
-    std::copy_n(solution, 7, c.begin());
-    if (!ik_shift_into_limits(chain, c.data(), kClosedFormLimitTolerance)) return false;
-    const double distance = by_distance ? ik_home_distance(chain, c.data(), home) : 0.0;
-    if (distance < closest) {  // strictly: ties keep the earlier solution
-      closest = distance;
-      std::copy_n(c.data(), 7, q);
-      found = true;
-    }
-    return !by_distance;  // first_found: the first in-limit one ends the search
-  });
+  for (int r = 0; r < steps; ++r) {
+    const int g = scratch.grid_order[static_cast<std::size_t>(r)];
+    // No solution on this grid value (nor on the later ones) can beat the pick.
+    if (found && scratch.grid_bound[static_cast<std::size_t>(g)] >= closest) break;
+    for_each_redundant(target, scratch, g, [&](const double* solution) {
+      if (!any) std::copy_n(solution, 7, scratch.first.begin());
+      any = true;
+      if (found && !by_distance) return;
+      std::copy_n(solution, 7, c.begin());
+      if (!ik_shift_into_limits(chain, c.data(), kClosedFormLimitTolerance)) return;
+      const double distance = by_distance ? ik_home_distance(chain, c.data(), home) : 0.0;
+      if (distance < closest) {  // strictly: ties keep the earlier solution
+        closest = distance;
+        std::copy_n(c.data(), 7, q);
+        found = true;
+      }
+    });
+    if (found && !by_distance) break;  // first_found: the first in-limit one ends the search
+  }
   if (found) return IkStatus::kConverged;
   if (!any) return IkStatus::kUnreachable;
   std::copy_n(scratch.first.data(), 7, q);

@@ -47,6 +47,9 @@ namespace hapsyn::plugins {
 /// solutions).
 constexpr double kClosedFormLimitTolerance = 1e-9;
 
+/// Most values a 7R chain's redundant joint may take (ik.redundant_steps' maximum).
+constexpr int kMaxRedundantSteps = 1000;
+
 /// Per-thread scratch of ChainClosedFormIk::solve (no heap).
 struct ClosedFormScratch {
   closed_form_ik::IkScratch engine;
@@ -55,6 +58,8 @@ struct ClosedFormScratch {
   std::array<double, 128> key{};    ///< their distances to home
   std::array<bool, 128> failed{};   ///< candidate i did not polish onto the target (not polished again)
   std::array<double, 7> first{};    ///< 7R: the first solution found (reported with kJointLimit)
+  std::array<int, kMaxRedundantSteps> grid_order{};     ///< 7R: grid values in visiting order
+  std::array<double, kMaxRedundantSteps> grid_bound{};  ///< 7R: (grid value - home)^2 per grid value
 };
 
 /// Why the closed form does not apply to a chain and task ("" when it does: 6 or 7 revolute
@@ -120,8 +125,11 @@ class ChainClosedFormIk {
   /// One target (the tip pose in the base frame). q (n values): kConverged the solution picked
   /// (inside the limits); kJointLimit the first solution found (outside the limits, as the engine
   /// wraps it into (-pi, pi]); kUnreachable q untouched. Allocation-free. 7R: the union over the
-  /// grid (grid values ascending, each in the engine's order), every grid value's 6R solved in
-  /// full (solve_from_all()).
+  /// grid, each grid value's 6R solved in full; first_found (or no home) visits the grid values
+  /// ascending (each in the engine's order), closest_to_home by their own share of the distance,
+  /// (q_k - home_k)^2 (ties: ascending), and stops at the first value whose share is no smaller
+  /// than the best distance so far (no solution there can be closer): exact, about half the
+  /// solves. kJointLimit reports the first solution in the visiting order.
   IkStatus solve(const Chain& chain, const Eigen::Isometry3d& target, const double* home, bool first_found, double* q,
                  ClosedFormScratch& scratch) const;
 
@@ -149,9 +157,9 @@ class ChainClosedFormIk {
   // Polishes raw candidate i; true when it reproduces the target, then wrapped into (-pi, pi] in out.
   bool polished(const Eigen::Isometry3d& target, const ClosedFormScratch& scratch, int i, closed_form_ik::Vector6d& out) const;
 
-  // 7R: the solutions of grid value g's 6R with q_k inserted, through f(q7) until f returns true.
+  // 7R: every solution of grid value g's 6R, q_k inserted, through f(q7) (7 values).
   template <class F>
-  void for_each_redundant(const Eigen::Isometry3d& target, ClosedFormScratch& scratch, F&& f) const;
+  void for_each_redundant(const Eigen::Isometry3d& target, ClosedFormScratch& scratch, int g, F&& f) const;
   IkStatus solve_redundant(const Chain& chain, const Eigen::Isometry3d& target, const double* home, bool first_found,
                            double* q, ClosedFormScratch& scratch) const;
   const closed_form_ik::ClosedFormIk6R& engine() const { return engines_.front(); }

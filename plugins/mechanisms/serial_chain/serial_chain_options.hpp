@@ -52,7 +52,7 @@ struct SerialChainIkOptions {
           "Values of the redundant joint: evenly over its limits, both ends included (over a full turn for an "
           "unlimited joint). Each costs one 6R solve per sample; a solution between two values is not found (the "
           "human_arm scene's joint3_steps likewise).")
-        .range(2, 1000);
+        .range(2, 1000);  // kMaxRedundantSteps (chain_closed_form_ik.hpp)
     d.add(&SerialChainIkOptions::position_tolerance, "position_tolerance", 1e-10, "Converged when the position error is below this.")
         .greater_than(0)
         .maximum(1e-3)
