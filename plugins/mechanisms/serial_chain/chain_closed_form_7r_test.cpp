@@ -3,13 +3,15 @@
 // random in-limit configurations with the redundant joint on a grid value -> forward kinematics
 // (chain_frames, not the engine's) -> IK; the generating configuration among the solutions, the
 // closest-to-home pick against a brute-force search written here, first_found, proved statuses,
-// the numerical IK (solve_ik) as a cross-check, the options, the summary and the errors.
+// the numerical IK (solve_ik) as a cross-check, the options, the summary and the errors; and
+// problems/iiwa7like-gii-evaluate.json through the framework against the GII computed here.
 #include "chain_closed_form_ik.hpp"
 
 #include "haptic6r_comparison.hpp"
 #include "test_support.hpp"
 
 #include <hapsyn/error.hpp>
+#include <hapsyn/internal/study.hpp>
 
 #include <gtest/gtest.h>
 
@@ -368,6 +370,47 @@ TEST(ChainClosedFormIk7R, ErrorsNameTheOptionTheValueAndTheRule) {
                      "joint is for 7 revolute joints)"),
             std::string::npos)
       << six;
+}
+
+// The shipped study through the framework: every pose of its box reachable, and its GII equal to
+// min sigma_min / max sigma_max of the 6 x 7 Jacobian (angular rows x 0.5 m) computed here at the
+// closed form's picks over the same 125 poses (built here from the box's numbers).
+TEST(ChainClosedFormIk7R, ShippedStudyGivesTheGiiComputedFromThePicks) {
+  const Json doc = read_problem_file(std::string(HAPSYN_SOURCE_DIR) + "/problems/iiwa7like-gii-evaluate.json");
+  const Study study = load_study(doc, test::registry());
+  SolverContext context;
+  context.threads = 2;
+  const SolverResult result = study.solver->solve(*study.problem, context);
+  ASSERT_TRUE(result.best.has_value()) << result.message;
+  const Iiwa arm;
+  const ChainClosedFormIk ik(arm.chain(), arm.mechanism.setup().redundancy);
+  ClosedFormScratch scratch;
+  double smallest = INFINITY, largest = 0.0;
+  int poses = 0;
+  for (int i = 0; i < 5; ++i) {
+    for (int j = 0; j < 5; ++j) {
+      for (int k = 0; k < 5; ++k) {
+        Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
+        target.linear() = Eigen::Quaterniond(0, 1, 0, 0).toRotationMatrix();  // the tool pointing down
+        target.translation() << 0.4 + 0.05 * i, -0.1 + 0.05 * j, 0.25 + 0.05 * k;
+        JointVector q(7);
+        ASSERT_EQ(ik.solve(arm.chain(), target, arm.mechanism.setup().home.data(), false, q.data(), scratch), IkStatus::kConverged);
+        ChainFrames f;
+        chain_frames(arm.chain(), q.data(), f);
+        TaskJointMatrix jacobian;
+        chain_jacobian(arm.chain(), f, jacobian);
+        jacobian.topRows(3) *= 0.5;
+        const Eigen::JacobiSVD<TaskJointMatrix> svd(jacobian);
+        smallest = std::min(smallest, svd.singularValues()(5));
+        largest = std::max(largest, svd.singularValues()(0));
+        ++poses;
+      }
+    }
+  }
+  ASSERT_EQ(poses, 125);
+  ASSERT_EQ(result.best->objectives.size(), 1u);
+  EXPECT_NEAR(result.best->objectives[0], smallest / largest, 1e-12);
+  std::printf("[ iiwa7like-gii-evaluate ] gii %.9g (here %.9g)\n", result.best->objectives[0], smallest / largest);
 }
 
 // A 7R without any joint whose lock leaves a family: auto falls back to the numerical IK,
