@@ -6,7 +6,7 @@
 ///
 /// - Applies to 6 or 7 revolute joints and the full-pose task (closed_form_applicability()); a
 ///   6R chain's axes then pick a family (ChainGeometry::describe()) or none.
-/// - 7R (redundant) chains: one joint k is discretised, as the human_arm scene does with its
+/// - 7R (redundant) chains (the free functions below: chain_redundant_joint.cpp): one joint k is discretised, as the human_arm scene does with its
 ///   joint 3: `steps` values over its limits (redundant_grid()), and for each value the 6R left
 ///   with joint k locked there (locked_poe_chain(): its rotation folded into the next joint's
 ///   origin) gets its own engine, built with the model. A target's solutions are the union over
@@ -87,6 +87,11 @@ struct ClosedFormChain : Chain {
 /// joints, Rot(axis_k, value) folded with O_k into the next joint's origin (into the tip for
 /// the last joint). Allocates (model build only).
 closed_form_ik::PoeChain locked_poe_chain(const Chain& chain, int k, double value);
+
+/// Whether a 6R chain's Jacobian has full rank (sigma_min > 1e-6 sigma_max) at one of two fixed
+/// generic configurations (no zero or right angle, no symmetry): false when a self-motion
+/// remains at every configuration. Allocation-free.
+bool generic_full_rank(const closed_form_ik::PoeChain& chain);
 
 /// The values a discretised joint takes: `steps` values evenly over [lower, upper], both ends
 /// included; over [-pi, pi) (pi left out: it is -pi) when the joint has infinite limits or
