@@ -224,8 +224,8 @@ TEST(Cli, RunHeaderListsAChainsMovingJoints) {
   ASSERT_EQ(o.code, 0) << o.out;
   const std::string joints = "3 moving joints world -> stylus_tip: yaw_joint (revolute), shoulder_joint (revolute), "
                              "elbow_joint (revolute); folded: stylus_tip -> forearm; task position; IK selection closest_to_home; IK solver numerical (damped "
-                             "least squares, 8 restarts; no closed form: 3 moving joints (the closed form is for 6 revolute "
-                             "joints))";
+                             "least squares, 8 restarts; no closed form: 3 moving joints (the closed form is for 6 or 7 "
+                             "revolute joints))";
   EXPECT_NE(o.out.find("mechanism serial_chain: " + joints), std::string::npos) << o.out;
   EXPECT_EQ(read_json(dir / "whole" / "result.json")["mechanism_summary"], joints);
   // A tip two links short: a 2-joint chain cannot serve a 3-row position task, and the refusal

@@ -102,6 +102,46 @@ void check_codes(const std::vector<int>& codes, int n, int max, const std::strin
   }
 }
 
+// A 7R chain under ik.solver auto / closed_form: the redundant joint (ik.redundant_joint, or the
+// automatic choice) and its grid; sets closed_form, redundancy and solver_summary.
+void choose_redundant(const SerialChainOptions& o, const Chain& nominal, SerialChainSetup& s) {
+  const std::string numerical = "numerical (damped least squares, " + std::to_string(o.ik.restarts) + " restarts";
+  int k = -1;
+  std::string why_not;
+  if (o.ik.redundant_joint == "auto") {
+    k = choose_redundant_joint(nominal);
+    if (k < 0) {
+      for (int i = 0; i < 7; ++i) why_not += (why_not.empty() ? "" : "; ") + redundant_joint_unsuitability(nominal, i);
+      why_not = "no joint whose locking leaves a 6R with a closed form (" + why_not + ")";
+    }
+  } else {
+    std::string names;
+    for (int i = 0; i < 7; ++i) {
+      const std::string& name = nominal.joints[static_cast<std::size_t>(i)].name;
+      if (name == o.ik.redundant_joint) k = i;
+      names += (names.empty() ? "" : ", ") + name;
+    }
+    const std::string option = "options.ik.redundant_joint = \"" + o.ik.redundant_joint + "\": ";
+    if (k < 0) throw Error(kName, option + "not a moving joint of the chain (its joints: " + names + "; or \"auto\")");
+    why_not = redundant_joint_unsuitability(nominal, k);
+    if (!why_not.empty()) throw Error(kName, option + why_not + "; use another joint or \"auto\"");
+  }
+  if (!why_not.empty()) {
+    if (o.ik.solver == "closed_form") throw Error(kName, "options.ik.solver = \"closed_form\": 7R: " + why_not);
+    s.solver_summary = numerical + "; no closed form: 7R, " + why_not + ")";
+    return;
+  }
+  s.redundancy = {k, o.ik.redundant_steps};
+  const ChainJoint& j = nominal.joints[static_cast<std::size_t>(k)];
+  const std::vector<double> grid = redundant_grid(j, o.ik.redundant_steps);
+  closed_form_ik::ChainGeometry geometry;
+  redundant_joint_unsuitability(nominal, k, &geometry);
+  s.closed_form = true;
+  s.solver_summary = "closed form (7R: joint " + std::to_string(k + 1) + " (" + j.name + ") discretised in " +
+                     std::to_string(grid.size()) + " steps over [" + show(grid.front() / kDeg) + ", " +
+                     show(grid.back() / kDeg) + "] deg, each a 6R of the other joints numbered 1-6: " + geometry.describe() + ")";
+}
+
 // Which IK the nominal chain gets (option ik.solver): sets closed_form and solver_summary.
 void choose_solver(const SerialChainOptions& o, const Chain& nominal, SerialChainSetup& s) {
   const std::string numerical = "numerical (damped least squares, " + std::to_string(o.ik.restarts) + " restarts";
@@ -109,10 +149,18 @@ void choose_solver(const SerialChainOptions& o, const Chain& nominal, SerialChai
     s.solver_summary = numerical + ")";
     return;
   }
+  if (o.ik.redundant_joint != "auto" && nominal.dof() != 7) {
+    throw Error(kName, "options.ik.redundant_joint = \"" + o.ik.redundant_joint + "\": the chain has " +
+                           std::to_string(nominal.dof()) + " moving joints (a redundant joint is for 7 revolute joints)");
+  }
   const std::string why_not = closed_form_applicability(nominal, s.task);
   if (!why_not.empty()) {
     if (o.ik.solver == "closed_form") throw Error(kName, "options.ik.solver = \"closed_form\": " + why_not);
     s.solver_summary = numerical + "; no closed form: " + why_not + ")";
+    return;
+  }
+  if (nominal.dof() == 7) {
+    choose_redundant(o, nominal, s);
     return;
   }
   const closed_form_ik::ChainGeometry geometry = closed_form_ik::classify(poe_chain_of(nominal));

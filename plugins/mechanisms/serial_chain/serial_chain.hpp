@@ -11,7 +11,9 @@
 ///   rows first: pose 6 x n (omega, v), position 3 x n (v), position_axis 5 x n (two omega rows
 ///   orthogonal to the tip axis, then v); all in the base frame B, per joint rate.
 /// - IK (option ik.solver): closed form (chain_closed_form_ik.hpp: every solution) for 6R chains
-///   with the pose task whose axes form a supported family, else numerical (chain_ik.hpp).
+///   with the pose task whose axes form a supported family, and for 7R chains with a joint whose
+///   locking leaves one (discretised: ik.redundant_joint, ik.redundant_steps), else numerical
+///   (chain_ik.hpp).
 /// - Classification: a solution inside the limits -> kReachable, or kSingular when the
 ///   scaled task Jacobian's sigma_min / sigma_max < singularity_tolerance; solutions only
 ///   outside the limits -> kInvalid; none -> kUnreachable. Never a NaN. The closed form proves
@@ -74,6 +76,8 @@ struct SerialChainSetup {
   /// The nominal chain got the closed-form IK (ik.solver auto or closed_form; see SerialChain::summary).
   bool closed_form = false;
   std::string solver_summary;               ///< "closed form (<geometry>)" or "numerical (...)"
+  /// 7R closed form: the discretised joint (resolved at the nominal chain) and its steps.
+  RedundantJointSettings redundancy;
   Eigen::Isometry3d base_from_scene;        ///< T_B^S
   Eigen::Isometry3d sample_to_tip;          ///< (T_E^P)^-1
   JointVector home;                         ///< [rad or m]

@@ -48,7 +48,7 @@ SerialChainModel::SerialChainModel(const double* design, const SerialChainSetup&
   if (!t.meshes().visuals.empty()) mesh_parameters_.assign(design, design + t.parameters().size());
   if (setup.closed_form) {
     try {
-      closed_form_ = std::make_unique<const ChainClosedFormIk>(chain_);
+      closed_form_ = std::make_unique<const ChainClosedFormIk>(chain_, setup.redundancy);
     } catch (const Error& e) {
       // The design moved an axis out of the nominal chain's family.
       if (setup.options.ik.solver == "closed_form") {

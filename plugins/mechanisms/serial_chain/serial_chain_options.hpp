@@ -13,6 +13,8 @@ namespace hapsyn::plugins {
 struct SerialChainIkOptions {
   std::string solver{};
   std::string selection{};
+  std::string redundant_joint{};
+  int redundant_steps{};
   double position_tolerance{};
   double orientation_tolerance{};
   int max_iterations{};
@@ -31,7 +33,8 @@ struct SerialChainIkOptions {
           "numerical IK; 'closed_form' refuses a chain without one (naming its axis geometry); 'numerical' always "
           "the damped least squares. The run header and result.json's mechanism_summary name the solver a chain got. "
           "position_tolerance, orientation_tolerance, max_iterations, restarts, seed and warm_start are the "
-          "numerical IK's.")
+          "numerical IK's. 7 revolute joints: the closed form with one joint discretised (redundant_joint, "
+          "redundant_steps).")
         .one_of({"auto", "closed_form", "numerical"});
     d.add(&SerialChainIkOptions::selection, "selection", "closest_to_home",
           "Which solution a sample gets: the one closest to home (sum of squared joint differences, revolute ones "
@@ -39,6 +42,17 @@ struct SerialChainIkOptions {
           "from 'home' and the restarts (numerical: may miss a closer one), or the first one found (closed form: the "
           "engine's first in-limit solution; numerical: faster). Deterministic either way.")
         .one_of({"closest_to_home", "first_found"});
+    d.add(&SerialChainIkOptions::redundant_joint, "redundant_joint", "auto",
+          "7 revolute joints, closed form: the joint discretised (locked at each of redundant_steps values; each "
+          "value's 6R solved in closed form, the solutions' union selected from). 'auto': the first of joints 4, 3, "
+          "5, 2, 6, 1, 7 whose locking leaves a 6R with a closed-form family and a full-rank Jacobian at the test "
+          "angles 0, 1, -2, sqrt 2 rad (and, at model build, at every grid value), one without the 1-D search "
+          "preferred; or a joint's name. Only for 7-joint chains.");
+    d.add(&SerialChainIkOptions::redundant_steps, "redundant_steps", 17,
+          "Values of the redundant joint: evenly over its limits, both ends included (over a full turn for an "
+          "unlimited joint). Each costs one 6R solve per sample; a solution between two values is not found (the "
+          "human_arm scene's joint3_steps likewise).")
+        .range(2, 1000);  // kMaxRedundantSteps (chain_closed_form_ik.hpp)
     d.add(&SerialChainIkOptions::position_tolerance, "position_tolerance", 1e-10, "Converged when the position error is below this.")
         .greater_than(0)
         .maximum(1e-3)
@@ -61,6 +75,15 @@ struct SerialChainIkOptions {
           "Numerical IK: also start from the previous sample's solution on the same thread. Faster on dense scenes, but the "
           "configuration a sample gets then depends on how samples are split over threads (results repeat for a "
           "given --threads).");
+    using I = SerialChainIkOptions;
+    d.rule({"redundant_joint", "solver"}, "redundant_joint only with solver auto or closed_form", [](const I& o) {
+      return o.solver == "numerical" && o.redundant_joint != "auto" ? std::string("only for the closed form (solver is \"numerical\")")
+                                                                    : std::string();
+    });
+    d.rule({"redundant_steps", "solver"}, "redundant_steps only with solver auto or closed_form", [](const I& o) {
+      return o.solver == "numerical" && o.redundant_steps != 17 ? std::string("only for the closed form (solver is \"numerical\")")
+                                                                : std::string();
+    });
   }
 };
 
