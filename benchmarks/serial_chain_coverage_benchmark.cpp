@@ -1,4 +1,4 @@
-// LIBRARIES: hapsyn_serial_chain_model
+// LIBRARIES: hapsyn_serial_chain_model orocos-kdl
 //
 // Coverage per design of a UR-class arm read from a URDF (share/serial_chain/ur5_like.urdf, the
 // mechanism options of problems/ur5like-coverage-ga.json at the file's design) on the paper's
@@ -10,10 +10,11 @@
 // all in the same run. Also the IK alone per pose on the same arm (chain_ik.hpp and
 // chain_closed_form_ik.hpp, single thread, 1,000 poses from random in-limit configurations):
 // closed form (all solutions, closest to home) against the numerical IK (home + 8 restarts,
-// closest to home; and first found) and, when KDL is found at configure time, KDL's
-// Levenberg-Marquardt position IK (ChainIkSolverPos_LMA, from home, pose tolerance 1e-10) on the
-// same chain and targets. Read the ratios printed at the end, not bare times.
+// closest to home; and first found) and KDL's Levenberg-Marquardt position IK
+// (ChainIkSolverPos_LMA, from home, pose tolerance 1e-10) on the same chain and targets. Read
+// the ratios printed at the end, not bare times.
 #include "common.hpp"
+#include "kdl_chain.hpp"
 
 #include <chain_closed_form_ik.hpp>
 #include <chain_ik.hpp>
@@ -25,11 +26,7 @@
 
 #include <benchmark/benchmark.h>
 
-#ifdef HAPSYN_HAVE_KDL
-#include <kdl/chain.hpp>
-#include <kdl/chainfksolverpos_recursive.hpp>
 #include <kdl/chainiksolverpos_lma.hpp>
-#endif
 
 #include <map>
 #include <string>
@@ -141,36 +138,15 @@ void BM_UrIkNumericalPerPose(benchmark::State& state) {
   state.counters["solved"] = static_cast<double>(solved) / static_cast<double>(state.iterations());
 }
 
-#ifdef HAPSYN_HAVE_KDL
-KDL::Frame kdl_frame(const Eigen::Isometry3d& t) {
-  const Eigen::Matrix3d& r = t.linear();
-  return KDL::Frame(KDL::Rotation(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2)),
-                    KDL::Vector(t.translation().x(), t.translation().y(), t.translation().z()));
-}
-
-// The KDL chain of the benchmark's Chain (revolute joints): segment i turns about the axis through
-// O_i's origin; a last fixed segment holds T_tip.
-KDL::Chain kdl_chain(const hapsyn::plugins::Chain& c) {
-  KDL::Chain k;
-  for (const hapsyn::plugins::ChainJoint& j : c.joints) {
-    const Eigen::Vector3d o = j.origin.translation(), a = j.origin.linear() * j.axis;
-    k.addSegment(KDL::Segment(j.name, KDL::Joint(j.name, KDL::Vector(o.x(), o.y(), o.z()), KDL::Vector(a.x(), a.y(), a.z()),
-                                                 KDL::Joint::RotAxis),
-                              kdl_frame(j.origin)));
-  }
-  k.addSegment(KDL::Segment("tip", KDL::Joint(KDL::Joint::None), kdl_frame(c.tip)));
-  return k;
-}
-
 // KDL's LMA from home. Counter "solved": the share of poses it reports solved (error < 1e-10).
 void BM_UrIkKdlLmaPerPose(benchmark::State& state) {
   const IkCase& c = ik_case();
-  const KDL::Chain chain = kdl_chain(c.chain);
+  const KDL::Chain chain = hapsyn::bench::to_kdl(c.chain);
   KDL::ChainIkSolverPos_LMA solver(chain, 1e-10, 500, 1e-15);
   KDL::JntArray home(6), q(6);
   for (int i = 0; i < 6; ++i) home(static_cast<unsigned>(i)) = c.home[static_cast<std::size_t>(i)];
   std::vector<KDL::Frame> targets;
-  for (const Eigen::Isometry3d& t : c.targets) targets.push_back(kdl_frame(t));
+  for (const Eigen::Isometry3d& t : c.targets) targets.push_back(hapsyn::bench::to_kdl(t));
   std::size_t k = 0;
   long solved = 0;
   for (auto _ : state) {
@@ -179,15 +155,12 @@ void BM_UrIkKdlLmaPerPose(benchmark::State& state) {
   }
   state.counters["solved"] = static_cast<double>(solved) / static_cast<double>(state.iterations());
 }
-#endif
 
 }  // namespace
 
 BENCHMARK(BM_UrIkClosedFormPerPose)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_UrIkNumericalPerPose)->ArgName("first_found")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
-#ifdef HAPSYN_HAVE_KDL
 BENCHMARK(BM_UrIkKdlLmaPerPose)->Unit(benchmark::kMicrosecond);
-#endif
 BENCHMARK(BM_Haptic6RCoveragePerDesign)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_UrUrdfClosedFormCoveragePerDesign)->Unit(benchmark::kMillisecond)->UseRealTime();
 // About 5 s per design: one evaluation.
@@ -201,8 +174,6 @@ int main(int argc, char** argv) {
   hapsyn::bench::compare("BM_Haptic6RCoveragePerDesign/real_time", "BM_UrUrdfClosedFormCoveragePerDesign/real_time");
   hapsyn::bench::compare("BM_UrIkClosedFormPerPose", "BM_UrIkNumericalPerPose/first_found:0");
   hapsyn::bench::compare("BM_UrIkClosedFormPerPose", "BM_UrIkNumericalPerPose/first_found:1");
-#ifdef HAPSYN_HAVE_KDL
   hapsyn::bench::compare("BM_UrIkClosedFormPerPose", "BM_UrIkKdlLmaPerPose");
-#endif
   return hapsyn::bench::run_main(argc, argv);
 }

@@ -16,6 +16,7 @@
 // (CLOCK_THREAD_CPUTIME_ID: preemption on a shared machine is not counted): median and 99th
 // percentile. The table is printed after the runs.
 #include "common.hpp"
+#include "kdl_chain.hpp"
 
 #include <chain_ik.hpp>
 #include <chain_template.hpp>
@@ -107,26 +108,7 @@ Poses make_poses(const Chain& chain) {
   return p;
 }
 
-// KDL's chain of a Chain: a fixed segment O_1, then per joint a segment rotating (sliding) about
-// (along) its axis whose tip is the next joint's origin (T_tip for the last).
-KDL::Frame to_kdl(const Eigen::Isometry3d& t) {
-  const Eigen::Matrix3d& r = t.linear();
-  return KDL::Frame(KDL::Rotation(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2)),
-                    KDL::Vector(t.translation().x(), t.translation().y(), t.translation().z()));
-}
-
-KDL::Chain to_kdl(const Chain& chain) {
-  KDL::Chain k;
-  k.addSegment(KDL::Segment(KDL::Joint(KDL::Joint::None), to_kdl(chain.joints[0].origin)));
-  for (int i = 0; i < chain.dof(); ++i) {
-    const ChainJoint& j = chain.joints[static_cast<std::size_t>(i)];
-    const Eigen::Isometry3d next = i + 1 < chain.dof() ? chain.joints[static_cast<std::size_t>(i) + 1].origin : chain.tip;
-    const KDL::Vector axis(j.axis.x(), j.axis.y(), j.axis.z());
-    const auto type = j.type == ChainJointType::kRevolute ? KDL::Joint::RotAxis : KDL::Joint::TransAxis;
-    k.addSegment(KDL::Segment(KDL::Joint(j.name, KDL::Vector::Zero(), axis, type), to_kdl(next)));
-  }
-  return k;
-}
+using hapsyn::bench::to_kdl;
 
 Eigen::Isometry3d from_kdl(const KDL::Frame& f) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
