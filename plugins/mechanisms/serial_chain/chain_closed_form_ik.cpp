@@ -1,6 +1,7 @@
 // ChainClosedFormIk (chain_closed_form_ik.hpp): the closed_form_ik engine with the chain's joint
 // limits and the selection rules.
 #include "chain_closed_form_ik.hpp"
+#include "number_text.hpp"
 
 #include "shared/closed_form_ik/angles.hpp"
 
@@ -9,7 +10,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <vector>
 
 namespace hapsyn::plugins {
@@ -34,16 +34,6 @@ closed_form_ik::PoeChain poe_chain_of(const Chain& chain) {
   }
   return closed_form_ik::PoeChain::from_local_frames(origins, axes, chain.tip);
 }
-
-namespace {
-
-std::string show(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
-}  // namespace
 
 ChainClosedFormIk::ChainClosedFormIk(const Chain& chain, const RedundantJointSettings& redundancy) {
   if (chain.dof() != 7) {
@@ -71,10 +61,10 @@ ChainClosedFormIk::ChainClosedFormIk(const Chain& chain, const RedundantJointSet
     try {
       engines_.emplace_back(locked);
     } catch (const Error& e) {
-      throw Error("closed_form_ik", joint + show(value) + " rad: " + std::string(e.what()).substr(e.component().size() + 2));
+      throw Error("closed_form_ik", joint + number_text(value) + " rad: " + std::string(e.what()).substr(e.component().size() + 2));
     }
     if (!generic_full_rank(locked)) {
-      throw Error("closed_form_ik", joint + show(value) + " rad leaves a 6R whose Jacobian is rank-deficient everywhere (a "
+      throw Error("closed_form_ik", joint + number_text(value) + " rad leaves a 6R whose Jacobian is rank-deficient everywhere (a "
                                     "self-motion remains; " + engines_.back().geometry().describe() + ")");
     }
   }

@@ -1,22 +1,12 @@
 // The redundant joint of a 7R chain for the closed form (chain_closed_form_ik.hpp): the 6R left
 // when it is locked, its grid, whether locking it leaves a closed form, the automatic choice.
 #include "chain_closed_form_ik.hpp"
+#include "number_text.hpp"
 
 #include <Eigen/SVD>
 #include <cmath>
-#include <sstream>
 
 namespace hapsyn::plugins {
-
-namespace {
-
-std::string show(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
-}  // namespace
 
 bool generic_full_rank(const closed_form_ik::PoeChain& c) {
   constexpr double kConfigurations[2][6] = {{0.4, 0.9, -0.7, 1.1, -0.5, 0.8}, {-1.3, 0.35, 1.7, -0.45, 1.2, -2.1}};
@@ -65,10 +55,10 @@ std::string redundant_joint_unsuitability(const Chain& chain, int k, closed_form
     const closed_form_ik::ChainGeometry g = closed_form_ik::classify(locked);
     if (value == 0.0 && geometry != nullptr) *geometry = g;
     if (g.family == closed_form_ik::IkFamily::kUnsupported) {
-      return joint + " at " + show(value) + " rad leaves a 6R without a closed-form family (" + g.describe() + ")";
+      return joint + " at " + number_text(value) + " rad leaves a 6R without a closed-form family (" + g.describe() + ")";
     }
     if (!generic_full_rank(locked)) {
-      return joint + " at " + show(value) + " rad leaves a 6R whose Jacobian is rank-deficient everywhere (a self-motion remains; " +
+      return joint + " at " + number_text(value) + " rad leaves a 6R whose Jacobian is rank-deficient everywhere (a self-motion remains; " +
              g.describe() + ")";
     }
   }

@@ -1,13 +1,13 @@
 // The serial_chain plugin: its options resolved once into a SerialChainSetup (files read,
 // frames and home posture in SI), and the Mechanism interface (design space, constraints).
 #include "serial_chain.hpp"
+#include "number_text.hpp"
 
 #include <hapsyn/actuator_table.hpp>
 #include <hapsyn/data_file.hpp>
 #include <hapsyn/error.hpp>
 
 #include <cmath>
-#include <sstream>
 
 namespace hapsyn::plugins {
 
@@ -15,12 +15,6 @@ namespace {
 
 constexpr const char* kName = "serial_chain";
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
-
-std::string show(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
 
 // R = Rz(yaw) Ry(pitch) Rx(roll) with the angles in degrees, as URDF's rpy.
 Eigen::Isometry3d pose_from(const std::vector<double>& xyz, const std::vector<double>& rpy_deg) {
@@ -67,9 +61,9 @@ JointVector home_of(const SerialChainOptions& o, const Chain& chain) {
     }
     home(i) = o.home[static_cast<std::size_t>(i)] * scale;
     if (home(i) < j.lower - 1e-12 || home(i) > j.upper + 1e-12) {
-      throw Error(kName, "options.home[" + std::to_string(i) + "] = " + show(o.home[static_cast<std::size_t>(i)]) +
-                             ": outside joint " + j.name + "'s limits [" + show(j.lower / scale) + ", " +
-                             show(j.upper / scale) + "] " + (scale == 1.0 ? "m" : "deg"));
+      throw Error(kName, "options.home[" + std::to_string(i) + "] = " + number_text(o.home[static_cast<std::size_t>(i)]) +
+                             ": outside joint " + j.name + "'s limits [" + number_text(j.lower / scale) + ", " +
+                             number_text(j.upper / scale) + "] " + (scale == 1.0 ? "m" : "deg"));
     }
   }
   return home;
@@ -138,8 +132,8 @@ void choose_redundant(const SerialChainOptions& o, const Chain& nominal, SerialC
   redundant_joint_unsuitability(nominal, k, &geometry);
   s.closed_form = true;
   s.solver_summary = "closed form (7R: joint " + std::to_string(k + 1) + " (" + j.name + ") discretised in " +
-                     std::to_string(grid.size()) + " steps over [" + show(grid.front() / kDeg) + ", " +
-                     show(grid.back() / kDeg) + "] deg, each a 6R of the other joints numbered 1-6: " + geometry.describe() + ")";
+                     std::to_string(grid.size()) + " steps over [" + number_text(grid.front() / kDeg) + ", " +
+                     number_text(grid.back() / kDeg) + "] deg, each a 6R of the other joints numbered 1-6: " + geometry.describe() + ")";
 }
 
 // Which IK the nominal chain gets (option ik.solver): sets closed_form and solver_summary.
