@@ -95,10 +95,10 @@ double pose_error(const Eigen::Isometry3d& target, const Eigen::Isometry3d& pose
 
 // Newton steps on the pose error, then the test against accept_tolerance. The first error comes
 // from the forward kinematics alone: the subproblems' exact candidates already reproduce the
-// pose to about 1e-14, so most need no step (and no Jacobian), and their least-squares answers
-// to unreachable branches miss it by far more than polish_radius: those are dropped unpolished
-// (not in the 1-D search family, whose candidates are approximate)
-// (Newton from there ran all its steps, often diverging, for nothing).
+// pose to about 1e-14, so most need no step (and no Jacobian). Their least-squares answers for
+// branches that do not reach the pose miss it by far more than polish_radius and are dropped
+// unpolished (Newton from there ran all its steps, often diverging, for nothing); the 1-D search
+// family, whose candidates are approximate, polishes every one.
 bool ClosedFormIk6R::polish(const Eigen::Isometry3d& target, Vector6d& q) const {
   Eigen::Isometry3d pose = chain_.forward(q.data());
   Eigen::Matrix<double, 6, kMaxJoints> jacobian;
